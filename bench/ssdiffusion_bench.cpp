@@ -1,0 +1,139 @@
+// Speed against error of ptfilter -ssdiffusion on a lit sphere.
+//
+//   build/bin/ssdiffusion_bench [-n 1000000] [-samples 1000] [-material marble]
+//                               [-profile classic] [-threads 0] [-criteria 1]
+//
+// Makes a sphere of radius 50 mm (unitlength 1) with N points lit by
+// E = max(0, N.L), writes it as .ptc, then for each -maxsolidangle (and each
+// criterion) times read + diffusion + write exactly as ptfilter does, and
+// compares with the exact all-pairs evaluation at `samples` random points:
+// RMS and max of |h - e| / mean(e), worst colour channel.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "sss/error.h"
+#include "sss/point_cloud_io.h"
+#include "sss/ssdiffusion.h"
+#include "sss/synthetic.h"
+#include "sss/tool.h"
+
+namespace {
+
+struct Errors {
+    double rms = 0, max = 0;
+};
+
+Errors compare(const sss::PointCloud& out, const std::vector<std::size_t>& samples,
+               const std::vector<glm::dvec3>& exact) {
+    const sss::Channel* c = out.find_channel("_ssdiffusion");
+    Errors worst;
+    for (int ch = 0; ch < 3; ++ch) {
+        double mean = 0;
+        for (const glm::dvec3& e : exact) mean += e[ch] / double(exact.size());
+        double se = 0, mx = 0;
+        for (std::size_t k = 0; k < samples.size(); ++k) {
+            double d = std::abs(double(c->data[3 * samples[k] + ch]) - exact[k][ch]) / mean;
+            se += d * d / double(samples.size());
+            mx = std::max(mx, d);
+        }
+        worst.rms = std::max(worst.rms, std::sqrt(se));
+        worst.max = std::max(worst.max, mx);
+    }
+    return worst;
+}
+
+int run(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    std::size_t n = 1000000, nsamples = 1000;
+    std::string material = "marble", profile = "classic";
+    int threads = 0;
+    bool criteria = true;
+    std::vector<double> eps_list = {0.25, 0.5, 1, 2, 4};
+    while (!args.done()) {
+        std::string o = args.option();
+        if (o == "n") n = std::size_t(args.positive(o));
+        else if (o == "samples") nsamples = std::size_t(args.positive(o));
+        else if (o == "material") material = args.value(o);
+        else if (o == "profile") profile = args.value(o);
+        else if (o == "threads") threads = args.integer(o, -64, 1024);
+        else if (o == "criteria") criteria = args.integer(o, 0, 1) != 0;
+        else throw sss::UsageError("unknown option -" + o);
+    }
+    sss::ThreadLimit limit(sss::resolve_thread_count(threads));
+
+    sss::SyntheticParams sp;
+    sp.shape = sss::SyntheticShape::Sphere;
+    sp.count = n;
+    sp.size = 50.0;
+    sp.light_dir = {1, 1, 1};
+    const std::string dir = (std::filesystem::temp_directory_path() / "sss_bench").string();
+    std::filesystem::create_directories(dir);
+    const std::string in_path = dir + "/sphere.ptc", out_path = dir + "/sphere_ssd.ptc";
+    sss::write_point_cloud(sss::make_synthetic_cloud(sp), in_path);
+
+    sss::SsDiffusionOptions opt;
+    opt.material.preset = material;
+    if (!sss::parse_profile_kind(profile, opt.profile))
+        throw sss::UsageError("unknown profile " + profile);
+
+    // Exact reference at random sample points.
+    sss::PointCloud cloud = sss::read_point_cloud(in_path);
+    std::mt19937_64 rng(12345);
+    std::vector<std::size_t> samples(nsamples);
+    for (std::size_t& s : samples) s = std::size_t(rng() % cloud.size());
+    sss::DiffusionProblem pb;
+    pb.positions = cloud.positions;
+    pb.normals = cloud.normals;
+    const sss::Channel* area = cloud.find_channel("_area");
+    const sss::Channel* rad = cloud.find_channel("_radiance_t");
+    pb.areas = area->data;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+        pb.irradiance.push_back({rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]});
+    const sss::NamedMaterial* m = sss::find_material(material);
+    for (int ch = 0; ch < 3; ++ch)
+        pb.profiles.push_back(sss::Profile::from_coefficients(
+            opt.profile, {m->sigma_s_prime[ch], m->sigma_a[ch], m->ior}));
+    sss::Stopwatch exact_watch;
+    std::vector<glm::dvec3> exact = sss::evaluate_diffusion_exact(pb, samples);
+    std::printf("# %zu points, sphere r = 50 mm, %s, profile %s, %d threads\n", cloud.size(),
+                material.c_str(), profile.c_str(), sss::resolve_thread_count(threads));
+    std::printf("# exact reference at %zu points: %.1f s\n", nsamples, exact_watch.seconds());
+    std::printf("%-10s %14s %10s %10s %10s %12s %12s\n", "criterion", "maxsolidangle",
+                "wall_s", "diff_s", "rms_%", "max_%", "points/s");
+
+    std::vector<sss::Criterion> crits = {sss::Criterion::Error};
+    if (criteria) {
+        crits.push_back(sss::Criterion::SolidAngleBox);
+        crits.push_back(sss::Criterion::SolidAngleCentroid);
+    }
+    for (sss::Criterion c : crits) {
+        for (double eps : eps_list) {
+            opt.diffusion.criterion = c;
+            opt.diffusion.max_solid_angle = eps;
+            // Timed exactly as ptfilter runs: read, filter, write.
+            sss::Stopwatch watch;
+            sss::PointCloud in = sss::read_point_cloud(in_path);
+            sss::SsDiffusionReport rep;
+            sss::PointCloud out = sss::ssdiffusion(in, opt, &rep);
+            sss::write_point_cloud(out, out_path);
+            double wall = watch.seconds();
+            Errors e = compare(out, samples, exact);
+            std::printf("%-10s %14g %10.3f %10.3f %10.3f %12.3f %12.0f\n",
+                        sss::criterion_name(c), eps, wall, rep.seconds, 100 * e.rms,
+                        100 * e.max, double(in.size()) / rep.seconds);
+            std::fflush(stdout);
+        }
+    }
+    std::filesystem::remove_all(dir);
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) { return sss::run_tool("ssdiffusion_bench", argc, argv, run); }

@@ -1,0 +1,59 @@
+#pragma once
+/// \file error.h
+/// Typed exceptions thrown by the sss library. Tools catch them in one place
+/// (sss::run_tool) and turn them into "<tool> ERROR: ..." lines and exit codes.
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace sss {
+
+/// Base class of every error the library reports.
+class Error : public std::runtime_error {
+public:
+    explicit Error(const std::string& what) : std::runtime_error(what) {}
+};
+
+/// A malformed command line (unknown option, missing or bad value). Exit code 2.
+class UsageError : public Error {
+public:
+    explicit UsageError(const std::string& what) : Error(what) {}
+};
+
+/// A file could not be opened, read or written (operating-system level).
+class IoError : public Error {
+public:
+    IoError(const std::string& path, const std::string& what)
+        : Error(path + ": " + what), m_path(path) {}
+    const std::string& path() const { return m_path; }
+
+private:
+    std::string m_path;
+};
+
+/// A file's content is malformed: bad magic, truncation, inconsistent sizes,
+/// NaN/Inf data. Carries the file name and, for per-point data, the point index.
+class FormatError : public Error {
+public:
+    FormatError(const std::string& path, const std::string& what, int64_t point = -1)
+        : Error(path + ": " + what +
+                (point >= 0 ? " (point " + std::to_string(point) + ")" : "")),
+          m_path(path), m_point(point) {}
+    const std::string& path() const { return m_path; }
+    /// Index of the offending point, or -1 when the error is not about one point.
+    int64_t point() const { return m_point; }
+
+private:
+    std::string m_path;
+    int64_t m_point;
+};
+
+/// A value that is impossible for the physics (negative lengths, albedo
+/// outside [0,1], NaN material parameters, missing channels...).
+class ValueError : public Error {
+public:
+    explicit ValueError(const std::string& what) : Error(what) {}
+};
+
+} // namespace sss

@@ -1,0 +1,196 @@
+// ptfilter: PRMan-compatible point-cloud filter. Only ssdiffusion is offered:
+//   ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc
+// Option parsing only; the work is sss::ssdiffusion().
+
+#include <cstdio>
+#include <algorithm>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/error.h"
+#include "sss/point_cloud_io.h"
+#include "sss/ssdiffusion.h"
+#include "sss/tool.h"
+
+namespace {
+
+const char* kTool = "ptfilter";
+
+void print_help() {
+    std::printf(
+        "usage: ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc\n"
+        "       (also: -filter ssdiffusion)\n"
+        "Subsurface diffusion of baked irradiance (Jensen dipole, hierarchical).\n"
+        "Input .ptc/.ply clouds are merged; the output holds P, N, radius and\n"
+        "color _ssdiffusion. Input and output may be the same file.\n\n"
+        "Material (lengths in mm, scene length = mm x unitlength):\n"
+        "  -material NAME            %s (default marble)\n"
+        "  -scattering R G B         reduced scattering sigma_s' (1/mm)\n"
+        "  -absorption R G B         absorption sigma_a (1/mm)\n"
+        "  -albedo R G B | fromfile  diffuse albedo (or per-point _albedo)\n"
+        "  -diffusemeanfreepath R G B | fromfile   dmfp in mm (or per point)\n"
+        "  -ior N                    relative index of refraction (default: material's)\n"
+        "  -unitlength U             scene units per mm (cm scenes: 0.1; default 1)\n"
+        "Evaluation:\n"
+        "  -maxsolidangle E          time/quality knob, smaller = slower, more\n"
+        "                            accurate (default 1)\n"
+        "  -profile NAME             classic (default), better, burley\n"
+        "  -criterion NAME           error (default), bbox (PRMan), centroid (J&B)\n"
+        "  -exact                    all pairs (slow reference)\n"
+        "Channels and output:\n"
+        "  -areachannel NAME         default _area\n"
+        "  -radiancechannel NAME     default _radiance_t\n"
+        "  -keepchannels 0|1         copy input channels to the output (default 0)\n"
+        "  -compress 0|1             gzip the output .ptc (default 0)\n"
+        "  -ptcversion 0|1|2         .ptc version written (default 0)\n"
+        "Running:\n"
+        "  -threads N                0 = all usable cores (default), <0 = all but N\n"
+        "  -progress 0|1|2           1: material values and timings, ALF_PROGRESS lines;\n"
+        "                            2: also octree statistics\n"
+        "  -organize 0|1             accepted for compatibility; output is unorganized\n"
+        "  --help, --version\n",
+        sss::material_names().c_str());
+}
+
+std::optional<glm::dvec3> triple_or_fromfile(sss::ArgScanner& args, const std::string& opt,
+                                             bool& fromfile) {
+    if (args.peek() == "fromfile") {
+        args.value(opt);
+        fromfile = true;
+        return std::nullopt;
+    }
+    return args.triple(opt);
+}
+
+int run(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    sss::SsDiffusionOptions opt;
+    sss::PointCloudWriteOptions wopt;
+    std::vector<std::string> files;
+    bool have_filter = false;
+    int threads = 0, progress = 0;
+    while (!args.done()) {
+        if (!args.at_option()) {
+            files.push_back(args.positional());
+            continue;
+        }
+        std::string o = args.option();
+        if (o == "help" || o == "h") {
+            print_help();
+            return 0;
+        } else if (o == "version") {
+            std::printf("%s", sss::version_report(kTool).c_str());
+            return 0;
+        } else if (o == "ssdiffusion") {
+            have_filter = true;
+        } else if (o == "filter") {
+            std::string f = args.value(o);
+            if (f != "ssdiffusion")
+                throw sss::UsageError("filter '" + f + "' is not supported (only ssdiffusion)");
+            have_filter = true;
+        } else if (o == "material") {
+            opt.material.preset = args.value(o);
+            if (!sss::find_material(opt.material.preset))
+                throw sss::UsageError("option -material: unknown material '" +
+                                      opt.material.preset + "' (known: " +
+                                      sss::material_names() + ")");
+        } else if (o == "unitlength") {
+            opt.material.unitlength = args.positive(o);
+        } else if (o == "scattering") {
+            opt.material.scattering = args.triple(o);
+        } else if (o == "absorption") {
+            opt.material.absorption = args.triple(o);
+        } else if (o == "albedo") {
+            opt.material.albedo = triple_or_fromfile(args, o, opt.material.albedo_from_file);
+        } else if (o == "diffusemeanfreepath") {
+            opt.material.dmfp = triple_or_fromfile(args, o, opt.material.dmfp_from_file);
+        } else if (o == "ior") {
+            opt.material.ior = args.positive(o);
+        } else if (o == "maxsolidangle") {
+            opt.diffusion.max_solid_angle = args.positive(o);
+        } else if (o == "profile") {
+            std::string p = args.value(o);
+            if (!sss::parse_profile_kind(p, opt.profile))
+                throw sss::UsageError("option -profile: unknown profile '" + p +
+                                      "' (classic, better, burley)");
+        } else if (o == "criterion") {
+            std::string c = args.value(o);
+            if (!sss::parse_criterion(c.c_str(), opt.diffusion.criterion))
+                throw sss::UsageError("option -criterion: unknown criterion '" + c +
+                                      "' (error, bbox, centroid)");
+        } else if (o == "exact") {
+            opt.exact = true;
+        } else if (o == "areachannel") {
+            opt.area_channel = args.value(o);
+        } else if (o == "radiancechannel") {
+            opt.radiance_channel = args.value(o);
+        } else if (o == "keepchannels") {
+            opt.keep_channels = args.integer(o, 0, 1) != 0;
+        } else if (o == "compress") {
+            wopt.compress = args.integer(o, 0, 1) != 0;
+        } else if (o == "ptcversion") {
+            wopt.ptc_version = args.integer(o, 0, 2);
+        } else if (o == "threads") {
+            threads = args.integer(o, -1024, 1024);
+        } else if (o == "progress") {
+            progress = args.integer(o, 0, 2);
+        } else if (o == "Progress") {
+            progress = std::max(progress, 1);
+        } else if (o == "organize") {
+            args.integer(o, 0, 1);
+        } else {
+            throw sss::UsageError("unknown option -" + o);
+        }
+    }
+    if (!have_filter)
+        throw sss::UsageError("no filter given (use -ssdiffusion or -filter ssdiffusion)");
+    if (files.size() < 2)
+        throw sss::UsageError("need at least one input file and an output file");
+    // Check the whole material before reading anything.
+    std::vector<std::string> material = sss::describe_material(opt);
+
+    const std::string out_path = files.back();
+    files.pop_back();
+    sss::ThreadLimit limit(sss::resolve_thread_count(threads));
+    sss::Progress reporter(progress > 0);
+    opt.diffusion.progress = &reporter;
+    sss::Stopwatch watch;
+    if (progress > 0) {
+        for (const std::string& line : material) std::printf("ptfilter: %s\n", line.c_str());
+        std::fflush(stdout);
+    }
+
+    sss::PointCloud cloud = sss::read_point_cloud(files[0]);
+    for (std::size_t i = 1; i < files.size(); ++i) cloud.append(sss::read_point_cloud(files[i]));
+    double read_s = watch.seconds();
+
+    sss::SsDiffusionReport report;
+    sss::PointCloud out = sss::ssdiffusion(cloud, opt, &report);
+    for (const std::string& w : report.warnings) sss::warn(kTool, w);
+    double filter_s = watch.seconds() - read_s;
+
+    sss::write_point_cloud(out, out_path, wopt);
+    if (progress > 0) {
+        std::printf("ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
+                    cloud.size(), sss::resolve_thread_count(threads),
+                    opt.diffusion.max_solid_angle,
+                    sss::criterion_name(opt.diffusion.criterion), opt.exact ? " (exact)" : "");
+        if (progress > 1 && !opt.exact)
+            std::printf("ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
+                        "terms, %.2f disk integrals\n",
+                        report.stats.nodes,
+                        double(report.stats.far_terms) / std::max<std::size_t>(1, cloud.size()),
+                        double(report.stats.near_terms) / std::max<std::size_t>(1, cloud.size()),
+                        double(report.stats.quadrature_terms) /
+                            std::max<std::size_t>(1, cloud.size()));
+        std::printf("ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
+                    read_s, filter_s, watch.seconds() - read_s - filter_s, watch.seconds());
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) { return sss::run_tool(kTool, argc, argv, run); }

@@ -1,0 +1,71 @@
+/// \file main.cpp
+/// ptinfo: prints what is in point cloud files (.ptc or .ply): format,
+/// point count, bounding box, header matrices, channels and per-channel
+/// statistics. The counterpart of `ptviewer -info` and 3Delight `ptcview -info`.
+
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "sss/error.h"
+#include "sss/point_cloud_io.h"
+#include "sss/tool.h"
+
+namespace {
+
+const char* const kTool = "ptinfo";
+
+const char* const kUsage = R"(usage: ptinfo [options] file...
+
+Prints, for each point cloud file (.ply, anything else is read as .ptc):
+path, format and version, whether it is gzip-compressed, point count,
+bounding box, world2eye / world2ndc / image format when they are not the
+defaults, every channel as "<type> <name>" and, with -stats 1, the
+min / mean / max of each channel component and of the radius.
+
+options:
+  -stats 0|1     print per-channel statistics (default 1)
+  -h, --help     this help
+  --version      version information
+
+Exit codes: 0 ok, 1 unreadable or invalid file, 2 bad command line.
+)";
+
+int run(const std::vector<std::string>& args) {
+    bool stats = true;
+    std::vector<std::string> files;
+
+    sss::ArgScanner scan(args);
+    while (!scan.done()) {
+        if (!scan.at_option()) {
+            files.push_back(scan.positional());
+            continue;
+        }
+        const std::string opt = scan.option();
+        if (opt == "h" || opt == "help") {
+            std::cout << kUsage;
+            return 0;
+        } else if (opt == "version") {
+            std::cout << sss::version_report(kTool);
+            return 0;
+        } else if (opt == "stats") {
+            stats = scan.integer(opt, 0, 1) != 0;
+        } else {
+            throw sss::UsageError("unknown option -" + opt);
+        }
+    }
+    if (files.empty()) throw sss::UsageError("missing input file");
+
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        const sss::PointCloud cloud = sss::read_point_cloud(files[i]);
+        std::cout << (i > 0 ? "\n" : "")
+                  << sss::describe_point_cloud(files[i], cloud, stats) << std::flush;
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}
