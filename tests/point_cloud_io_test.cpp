@@ -598,6 +598,10 @@ struct RoundTripCase {
     bool compress;
 };
 
+void PrintTo(const RoundTripCase& c, std::ostream* os) {
+    *os << "version " << c.version << (c.compress ? ", gzip" : ", plain");
+}
+
 class PtcRoundTrip : public ::testing::TestWithParam<RoundTripCase> {};
 
 TEST_P(PtcRoundTrip, ValuesSurvive) {
@@ -660,7 +664,11 @@ INSTANTIATE_TEST_SUITE_P(All, PtcRoundTrip,
                                            RoundTripCase{1, false},
                                            RoundTripCase{2, false},
                                            RoundTripCase{0, true}, RoundTripCase{1, true},
-                                           RoundTripCase{2, true}));
+                                           RoundTripCase{2, true}),
+                         [](const ::testing::TestParamInfo<RoundTripCase>& info) {
+                             return numbered("v", info.param.version,
+                                             info.param.compress ? "_gzip" : "_plain");
+                         });
 
 TEST(PtcRoundTrip, EmptyCloudAndNoChannels) {
     TempDir dir;
