@@ -166,7 +166,15 @@ int run(const std::vector<std::string>& argv) {
     double read_s = watch.seconds();
 
     sss::SsDiffusionReport report;
-    sss::PointCloud out = sss::ssdiffusion(cloud, opt, &report);
+    sss::PointCloud out;
+    try {
+        out = sss::ssdiffusion(cloud, opt, &report);
+    } catch (const sss::ValueError& e) {
+        // Name the input files: the library only sees the merged cloud.
+        std::string names;
+        for (const std::string& f : files) names += (names.empty() ? "" : ", ") + f;
+        throw sss::ValueError(names + ": " + e.what());
+    }
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
     double filter_s = watch.seconds() - read_s;
 

@@ -148,7 +148,10 @@ Profile Profile::from_coefficients(ProfileKind kind, const ChannelCoefficients& 
 }
 
 Profile Profile::from_albedo_dmfp(ProfileKind kind, double albedo, double dmfp, double ior) {
-    if (!(albedo >= 0.0 && albedo < 1.0))
+    // Burley's normalized profile is fine at albedo 1 (spectralon); the dipoles
+    // need alpha' < 1.
+    const double albedo_max = kind == ProfileKind::Burley ? 1.0 : std::nextafter(1.0, 0.0);
+    if (!(albedo >= 0.0 && albedo <= albedo_max))
         throw ValueError("albedo " + std::to_string(albedo) + " is outside [0, 1)");
     if (!(dmfp > 0.0)) throw ValueError("diffuse mean free path must be positive");
     if (!(ior > 0.0 && std::isfinite(ior))) throw ValueError("impossible ior");
