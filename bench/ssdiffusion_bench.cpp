@@ -38,7 +38,8 @@ Errors compare(const sss::PointCloud& out, const std::vector<std::size_t>& sampl
         for (const glm::dvec3& e : exact) mean += e[ch] / double(exact.size());
         double se = 0, mx = 0;
         for (std::size_t k = 0; k < samples.size(); ++k) {
-            double d = std::abs(double(c->data[3 * samples[k] + ch]) - exact[k][ch]) / mean;
+            double d =
+                std::abs(double(c->data[3 * samples[k] + ch]) - exact[k][ch]) / mean;
             se += d * d / double(samples.size());
             mx = std::max(mx, d);
         }
@@ -57,13 +58,20 @@ int run(const std::vector<std::string>& argv) {
     std::vector<double> eps_list = {0.25, 0.5, 1, 2, 4};
     while (!args.done()) {
         std::string o = args.option();
-        if (o == "n") n = std::size_t(args.positive(o));
-        else if (o == "samples") nsamples = std::size_t(args.positive(o));
-        else if (o == "material") material = args.value(o);
-        else if (o == "profile") profile = args.value(o);
-        else if (o == "threads") threads = args.integer(o, -64, 1024);
-        else if (o == "criteria") criteria = args.integer(o, 0, 1) != 0;
-        else throw sss::UsageError("unknown option -" + o);
+        if (o == "n")
+            n = std::size_t(args.positive(o));
+        else if (o == "samples")
+            nsamples = std::size_t(args.positive(o));
+        else if (o == "material")
+            material = args.value(o);
+        else if (o == "profile")
+            profile = args.value(o);
+        else if (o == "threads")
+            threads = args.integer(o, -64, 1024);
+        else if (o == "criteria")
+            criteria = args.integer(o, 0, 1) != 0;
+        else
+            throw sss::UsageError("unknown option -" + o);
     }
     sss::ThreadLimit limit(sss::resolve_thread_count(threads));
 
@@ -72,7 +80,8 @@ int run(const std::vector<std::string>& argv) {
     sp.count = n;
     sp.size = 50.0;
     sp.light_dir = {1, 1, 1};
-    const std::string dir = (std::filesystem::temp_directory_path() / "sss_bench").string();
+    const std::string dir =
+        (std::filesystem::temp_directory_path() / "sss_bench").string();
     std::filesystem::create_directories(dir);
     const std::string in_path = dir + "/sphere.ptc", out_path = dir + "/sphere_ssd.ptc";
     sss::write_point_cloud(sss::make_synthetic_cloud(sp), in_path);
@@ -94,16 +103,19 @@ int run(const std::vector<std::string>& argv) {
     const sss::Channel* rad = cloud.find_channel("_radiance_t");
     pb.areas = area->data;
     for (std::size_t i = 0; i < cloud.size(); ++i)
-        pb.irradiance.push_back({rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]});
+        pb.irradiance.push_back(
+            {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]});
     const sss::NamedMaterial* m = sss::find_material(material);
     for (int ch = 0; ch < 3; ++ch)
         pb.profiles.push_back(sss::Profile::from_coefficients(
             opt.profile, {m->sigma_s_prime[ch], m->sigma_a[ch], m->ior}));
     sss::Stopwatch exact_watch;
     std::vector<glm::dvec3> exact = sss::evaluate_diffusion_exact(pb, samples);
-    std::printf("# %zu points, sphere r = 50 mm, %s, profile %s, %d threads\n", cloud.size(),
-                material.c_str(), profile.c_str(), sss::resolve_thread_count(threads));
-    std::printf("# exact reference at %zu points: %.1f s\n", nsamples, exact_watch.seconds());
+    std::printf("# %zu points, sphere r = 50 mm, %s, profile %s, %d threads\n",
+                cloud.size(), material.c_str(), profile.c_str(),
+                sss::resolve_thread_count(threads));
+    std::printf("# exact reference at %zu points: %.1f s\n", nsamples,
+                exact_watch.seconds());
     std::printf("%-10s %14s %10s %10s %10s %12s %12s\n", "criterion", "maxsolidangle",
                 "wall_s", "diff_s", "rms_%", "max_%", "points/s");
 
@@ -136,4 +148,6 @@ int run(const std::vector<std::string>& argv) {
 
 } // namespace
 
-int main(int argc, char** argv) { return sss::run_tool("ssdiffusion_bench", argc, argv, run); }
+int main(int argc, char** argv) {
+    return sss::run_tool("ssdiffusion_bench", argc, argv, run);
+}

@@ -40,8 +40,9 @@ const sss::NamedMaterial& material(const char* name) {
 }
 
 /// The three channel profiles of a table material at a unit length.
-std::vector<sss::Profile> material_profiles(const char* name, double unitlength = 1.0,
-                                            sss::ProfileKind kind = sss::ProfileKind::Classic) {
+std::vector<sss::Profile>
+material_profiles(const char* name, double unitlength = 1.0,
+                  sss::ProfileKind kind = sss::ProfileKind::Classic) {
     const sss::NamedMaterial& m = material(name);
     std::vector<sss::Profile> out;
     for (int ch = 0; ch < 3; ++ch)
@@ -67,7 +68,8 @@ sss::DiffusionProblem problem_from(const sss::PointCloud& cloud,
     return pb;
 }
 
-sss::PointCloud sphere_cloud(std::size_t n, double radius, glm::dvec3 light = {1, 0.5, 2}) {
+sss::PointCloud sphere_cloud(std::size_t n, double radius,
+                             glm::dvec3 light = {1, 0.5, 2}) {
     sss::SyntheticParams sp;
     sp.shape = sss::SyntheticShape::Sphere;
     sp.count = n;
@@ -103,7 +105,8 @@ std::vector<std::size_t> sample_receivers(std::size_t n, std::size_t count = 200
     std::vector<std::size_t> out;
     if (n == 0) return out;
     count = std::min(count, n);
-    for (std::size_t k = 0; k < count; ++k) out.push_back(k * n / count + (n / count) / 2);
+    for (std::size_t k = 0; k < count; ++k)
+        out.push_back(k * n / count + (n / count) / 2);
     return out;
 }
 
@@ -124,17 +127,21 @@ glm::dvec3 relative_rms(const std::vector<glm::vec3>& h, const std::vector<glm::
     return out;
 }
 
-double max3(const glm::dvec3& v) { return std::max({v.x, v.y, v.z}); }
+double max3(const glm::dvec3& v) {
+    return std::max({v.x, v.y, v.z});
+}
 
 bool all_finite(const std::vector<glm::vec3>& v) {
     for (const glm::vec3& x : v)
-        if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) return false;
+        if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+            return false;
     return true;
 }
 
 bool bitwise_equal(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
     return a.size() == b.size() &&
-           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0);
+           (a.empty() ||
+            std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0);
 }
 
 /// Hierarchical result and its error against the exact one on sampled receivers.
@@ -143,7 +150,8 @@ struct Comparison {
     glm::dvec3 rms;
 };
 
-Comparison compare_with_exact(const sss::DiffusionProblem& pb, const sss::DiffusionOptions& opt,
+Comparison compare_with_exact(const sss::DiffusionProblem& pb,
+                              const sss::DiffusionOptions& opt,
                               std::size_t samples = 200) {
     Comparison c;
     c.h = sss::evaluate_diffusion(pb, opt);
@@ -167,7 +175,8 @@ glm::dvec3 central_median_ratio(const sss::PointCloud& out, double radius,
         std::vector<double> v;
         for (std::size_t i = 0; i < out.size(); ++i) {
             const glm::vec3& p = out.positions[i];
-            if (std::hypot(p.x, p.y) <= radius) v.push_back(ch->data[3 * i + c] / expected[c]);
+            if (std::hypot(p.x, p.y) <= radius)
+                v.push_back(ch->data[3 * i + c] / expected[c]);
         }
         if (v.empty()) throw std::runtime_error("no central points");
         std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -208,13 +217,14 @@ void expect_plane_ratio(const PlaneCase& pc) {
     std::size_t n = 0;
     sss::Stopwatch watch;
     glm::dvec3 r = run_plane(pc, &n);
-    std::printf("  plane %s %s spacing %.2f z_r: %zu points, ratio %.4f %.4f %.4f (%.2f s)\n",
-                pc.material, sss::profile_kind_name(pc.kind), pc.spacing_over_zr, n, r.x, r.y,
-                r.z, watch.seconds());
+    std::printf(
+        "  plane %s %s spacing %.2f z_r: %zu points, ratio %.4f %.4f %.4f (%.2f s)\n",
+        pc.material, sss::profile_kind_name(pc.kind), pc.spacing_over_zr, n, r.x, r.y,
+        r.z, watch.seconds());
     for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(r[c], 1.0, 0.01) << pc.material << " " << sss::profile_kind_name(pc.kind)
-                                     << " spacing " << pc.spacing_over_zr << " z_r, channel "
-                                     << c << " (" << n << " points)";
+        EXPECT_NEAR(r[c], 1.0, 0.01)
+            << pc.material << " " << sss::profile_kind_name(pc.kind) << " spacing "
+            << pc.spacing_over_zr << " z_r, channel " << c << " (" << n << " points)";
 }
 
 } // namespace
@@ -267,8 +277,10 @@ TEST(DiffusionFlatPlane, SamplingSweepEveryChannel) {
         std::vector<sss::Profile> prof = material_profiles(row.material);
         const sss::NamedMaterial& m = material(row.material);
         double spacing = row.spacing_over_red_zr / (m.sigma_s_prime.x + m.sigma_a.x);
-        glm::dvec3 r = run_plane({row.material, sss::ProfileKind::Classic, row.spacing_over_red_zr});
-        std::printf("  sweep %-8s h = %.2f z_r red: ratio %.4f %.4f %.4f at h/z_r %.2f %.2f %.2f\n",
+        glm::dvec3 r =
+            run_plane({row.material, sss::ProfileKind::Classic, row.spacing_over_red_zr});
+        std::printf("  sweep %-8s h = %.2f z_r red: ratio %.4f %.4f %.4f at h/z_r %.2f "
+                    "%.2f %.2f\n",
                     row.material, row.spacing_over_red_zr, r.x, r.y, r.z,
                     spacing / prof[0].core_length(), spacing / prof[1].core_length(),
                     spacing / prof[2].core_length());
@@ -304,7 +316,8 @@ TEST(DiffusionFlatPlane, ScalesWithIrradianceAndUnitlength) {
         o.material.preset = "marble";
         o.material.unitlength = u;
         sss::PointCloud out = sss::ssdiffusion(cloud, o);
-        glm::dvec3 expected(2 * prof[0].total(), 2 * prof[1].total(), 2 * prof[2].total());
+        glm::dvec3 expected(2 * prof[0].total(), 2 * prof[1].total(),
+                            2 * prof[2].total());
         ratio[k] = central_median_ratio(out, dmax * u, expected);
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(ratio[k][c], 1.0, 0.01) << "unitlength " << u << " ch " << c;
@@ -332,8 +345,8 @@ void expect_error_falls(const char* label, const sss::DiffusionProblem& pb) {
     }
     for (int ch = 0; ch < 3; ++ch) {
         EXPECT_LT(err[1][ch], 0.01) << label << " default maxsolidangle, channel " << ch;
-        EXPECT_LT(err[2][ch], err[0][ch]) << label << " channel " << ch
-                                          << ": error must fall with maxsolidangle";
+        EXPECT_LT(err[2][ch], err[0][ch])
+            << label << " channel " << ch << ": error must fall with maxsolidangle";
         EXPECT_LE(err[2][ch], err[1][ch] * 1.05 + 1e-6) << label << " channel " << ch;
     }
 }
@@ -349,13 +362,15 @@ TEST(DiffusionHierarchy, SphereMatchesExact) {
 TEST(DiffusionHierarchy, SmallSphereWideProfileMatchesExact) {
     // The profile is wider than the object (radius 10 mm, marble dmfp 8.5 mm).
     sss::PointCloud cloud = sphere_cloud(20000, 10.0);
-    expect_error_falls("small sphere marble", problem_from(cloud, material_profiles("marble")));
+    expect_error_falls("small sphere marble",
+                       problem_from(cloud, material_profiles("marble")));
 }
 
 TEST(DiffusionHierarchy, ThinBoxMatchesExact) {
     // 60 x 60 x 1 mm slab of marble (thickness << dmfp): light bleeds to the back.
     sss::PointCloud cloud = box_cloud(30000, 60.0, 1.0);
-    expect_error_falls("thin box marble", problem_from(cloud, material_profiles("marble")));
+    expect_error_falls("thin box marble",
+                       problem_from(cloud, material_profiles("marble")));
 }
 
 TEST(DiffusionHierarchy, SkinSphereMatchesExact) {
@@ -366,7 +381,8 @@ TEST(DiffusionHierarchy, SkinSphereMatchesExact) {
 TEST(DiffusionHierarchy, OtherProfilesMatchExact) {
     sss::PointCloud cloud = sphere_cloud(20000, 30.0);
     for (sss::ProfileKind kind : {sss::ProfileKind::Better, sss::ProfileKind::Burley}) {
-        sss::DiffusionProblem pb = problem_from(cloud, material_profiles("marble", 1.0, kind));
+        sss::DiffusionProblem pb =
+            problem_from(cloud, material_profiles("marble", 1.0, kind));
         Comparison c = compare_with_exact(pb, {});
         std::printf("  sphere marble %s: RMS error %.5f %.5f %.5f\n",
                     sss::profile_kind_name(kind), c.rms.x, c.rms.y, c.rms.z);
@@ -378,7 +394,8 @@ TEST(DiffusionHierarchy, OtherProfilesMatchExact) {
 TEST(DiffusionHierarchy, ClassicCriteriaRunAndAreFinite) {
     sss::PointCloud cloud = sphere_cloud(20000, 30.0);
     sss::DiffusionProblem pb = problem_from(cloud, material_profiles("marble"));
-    for (sss::Criterion crit : {sss::Criterion::SolidAngleBox, sss::Criterion::SolidAngleCentroid}) {
+    for (sss::Criterion crit :
+         {sss::Criterion::SolidAngleBox, sss::Criterion::SolidAngleCentroid}) {
         for (double eps : {1.0, 0.25}) {
             sss::DiffusionOptions opt;
             opt.criterion = crit;
@@ -429,7 +446,8 @@ TEST(DiffusionHierarchy, ExactIsPairwiseSum) {
                 if (i == j) {
                     sum += pb.irradiance[j][ch] * prof[ch].disk(std::sqrt(a / kPi));
                 } else {
-                    double r = glm::length(glm::dvec3(pb.positions[i]) - glm::dvec3(pb.positions[j]));
+                    double r = glm::length(glm::dvec3(pb.positions[i]) -
+                                           glm::dvec3(pb.positions[j]));
                     sum += prof[ch].eval(r) * a * pb.irradiance[j][ch];
                 }
             }
@@ -495,10 +513,12 @@ TEST(DiffusionDeterminism, PerPointMaterialsThreadIndependent) {
         a.data.resize(3 * cloud.size());
         for (std::size_t i = 0; i < cloud.size(); ++i)
             for (int c = 0; c < 3; ++c)
-                a.data[3 * i + c] = cloud.positions[i].x > 0 ? 0.8f - 0.2f * c : 0.3f + 0.1f * c;
+                a.data[3 * i + c] =
+                    cloud.positions[i].x > 0 ? 0.8f - 0.2f * c : 0.3f + 0.1f * c;
     }
     {
-        sss::Channel& d = cloud.add_channel("_diffusemeanfreepath", sss::ChannelType::Color);
+        sss::Channel& d =
+            cloud.add_channel("_diffusemeanfreepath", sss::ChannelType::Color);
         d.data.resize(3 * cloud.size());
         for (std::size_t i = 0; i < cloud.size(); ++i)
             for (int c = 0; c < 3; ++c)
@@ -538,8 +558,8 @@ TEST(DiffusionRobustness, EmptyCloud) {
 }
 
 TEST(DiffusionRobustness, SinglePointIsItsOwnDisk) {
-    for (sss::ProfileKind kind :
-         {sss::ProfileKind::Classic, sss::ProfileKind::Better, sss::ProfileKind::Burley}) {
+    for (sss::ProfileKind kind : {sss::ProfileKind::Classic, sss::ProfileKind::Better,
+                                  sss::ProfileKind::Burley}) {
         std::vector<sss::Profile> prof = material_profiles("skin1", 1.0, kind);
         sss::DiffusionProblem pb;
         pb.positions = {{1, 2, 3}};
@@ -553,8 +573,10 @@ TEST(DiffusionRobustness, SinglePointIsItsOwnDisk) {
         ASSERT_EQ(e.size(), 1u);
         for (int ch = 0; ch < 3; ++ch) {
             double expect = pb.irradiance[0][ch] * prof[ch].disk(std::sqrt(2.0 / kPi));
-            EXPECT_NEAR(h[0][ch], expect, 1e-6 * expect) << sss::profile_kind_name(kind) << ch;
-            EXPECT_NEAR(e[0][ch], expect, 1e-12 * expect) << sss::profile_kind_name(kind) << ch;
+            EXPECT_NEAR(h[0][ch], expect, 1e-6 * expect)
+                << sss::profile_kind_name(kind) << ch;
+            EXPECT_NEAR(e[0][ch], expect, 1e-12 * expect)
+                << sss::profile_kind_name(kind) << ch;
         }
     }
 }
@@ -625,7 +647,8 @@ TEST(DiffusionRobustness, FlatRandomCloud) {
         pb.positions.push_back(p);
         pb.normals.push_back({0, 0, 1});
         pb.areas.push_back(area);
-        pb.irradiance.push_back(glm::vec3(p.x > 0 ? 1.0f : 0.1f, 0.5f, 1.0f + 0.05f * p.y));
+        pb.irradiance.push_back(
+            glm::vec3(p.x > 0 ? 1.0f : 0.1f, 0.5f, 1.0f + 0.05f * p.y));
     }
     pb.profiles = prof;
     Comparison c = compare_with_exact(pb, {});
@@ -641,7 +664,8 @@ TEST(DiffusionRobustness, ZeroAreas) {
     std::vector<glm::vec3> h = sss::evaluate_diffusion(pb, {});
     ASSERT_EQ(h.size(), cloud.size());
     for (const glm::vec3& v : h) ASSERT_EQ(v, glm::vec3(0.0f));
-    for (const glm::dvec3& v : sss::evaluate_diffusion_exact(pb, sample_receivers(h.size())))
+    for (const glm::dvec3& v :
+         sss::evaluate_diffusion_exact(pb, sample_receivers(h.size())))
         ASSERT_EQ(v, glm::dvec3(0.0));
     // Every other point with zero area: matches exact.
     pb.areas = areas;
@@ -707,7 +731,8 @@ TEST(DiffusionRobustness, ExtremeMaterials) {
     }
     std::vector<sss::Profile> hi;
     for (int ch = 0; ch < 3; ++ch)
-        hi.push_back(sss::Profile::from_albedo_dmfp(sss::ProfileKind::Classic, 0.999, 5.0, 1.3));
+        hi.push_back(
+            sss::Profile::from_albedo_dmfp(sss::ProfileKind::Classic, 0.999, 5.0, 1.3));
     sss::DiffusionProblem pb = problem_from(cloud, hi);
     Comparison c = compare_with_exact(pb, {});
     EXPECT_TRUE(all_finite(c.h));
@@ -807,8 +832,8 @@ TEST(DiffusionSsdiffusion, ConstantPerPointMaterialEqualsConstantMaterial) {
     const glm::vec3 albedo(0.6f, 0.4f, 0.2f), dmfp(3.0f, 1.5f, 0.7f);
     add_color(cloud, "_albedo", albedo);
     add_color(cloud, "_diffusemeanfreepath", dmfp);
-    for (sss::ProfileKind kind :
-         {sss::ProfileKind::Classic, sss::ProfileKind::Better, sss::ProfileKind::Burley}) {
+    for (sss::ProfileKind kind : {sss::ProfileKind::Classic, sss::ProfileKind::Better,
+                                  sss::ProfileKind::Burley}) {
         sss::SsDiffusionOptions constant;
         constant.profile = kind;
         constant.material.albedo = glm::dvec3(albedo);
@@ -848,7 +873,8 @@ TEST(DiffusionSsdiffusion, VaryingPerPointMaterialMatchesExact) {
         return cloud.positions[i].y > 0 ? 0.9f - 0.1f * float(c) : 0.2f + 0.1f * float(c);
     };
     auto dmfp_of = [&](std::size_t i, int c) {
-        return 1.0f + 0.25f * std::floor(std::abs(cloud.positions[i].x)) + 0.5f * float(c);
+        return 1.0f + 0.25f * std::floor(std::abs(cloud.positions[i].x)) +
+               0.5f * float(c);
     };
     {
         sss::Channel& a = cloud.add_channel("_albedo", sss::ChannelType::Color);
@@ -857,7 +883,8 @@ TEST(DiffusionSsdiffusion, VaryingPerPointMaterialMatchesExact) {
             for (int c = 0; c < 3; ++c) a.data[3 * i + c] = albedo_of(i, c);
     }
     {
-        sss::Channel& d = cloud.add_channel("_diffusemeanfreepath", sss::ChannelType::Color);
+        sss::Channel& d =
+            cloud.add_channel("_diffusemeanfreepath", sss::ChannelType::Color);
         d.data.resize(3 * cloud.size());
         for (std::size_t i = 0; i < cloud.size(); ++i)
             for (int c = 0; c < 3; ++c) d.data[3 * i + c] = dmfp_of(i, c);
@@ -892,7 +919,8 @@ TEST(DiffusionSsdiffusion, VaryingPerPointMaterialMatchesExact) {
     std::vector<std::size_t> rec = sample_receivers(cloud.size(), 300);
     std::vector<glm::dvec3> e = sss::evaluate_diffusion_exact(pb, rec);
     glm::dvec3 rms = relative_rms(h, e, rec);
-    std::printf("  per-point material sphere: RMS error %.5f %.5f %.5f\n", rms.x, rms.y, rms.z);
+    std::printf("  per-point material sphere: RMS error %.5f %.5f %.5f\n", rms.x, rms.y,
+                rms.z);
     for (int c = 0; c < 3; ++c) EXPECT_LT(rms[c], 0.01) << "channel " << c;
 }
 

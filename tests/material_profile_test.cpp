@@ -22,15 +22,17 @@
 
 namespace sss {
 // Readable names for the parameterised tests' ctest entries.
-void PrintTo(ProfileKind kind, std::ostream* os) { *os << profile_kind_name(kind); }
+void PrintTo(ProfileKind kind, std::ostream* os) {
+    *os << profile_kind_name(kind);
+}
 } // namespace sss
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr sss::ProfileKind kAllKinds[] = {sss::ProfileKind::Classic, sss::ProfileKind::Better,
-                                          sss::ProfileKind::Burley};
+constexpr sss::ProfileKind kAllKinds[] = {
+    sss::ProfileKind::Classic, sss::ProfileKind::Better, sss::ProfileKind::Burley};
 
 // ---------------------------------------------------------------------------
 // Independent numerics (no library code involved).
@@ -118,7 +120,8 @@ double better_total_closed_form(double alpha, double eta) {
     double c_phi = 0.25 * (1.0 - two_c1), c_e = 0.5 * (1.0 - three_c2);
     double mu = std::sqrt((1.0 - alpha) * (2.0 - alpha) / 3.0);
     double e = std::exp(-4.0 * A * mu);
-    return 0.5 * alpha * alpha * std::exp(-std::sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha))) *
+    return 0.5 * alpha * alpha *
+           std::exp(-std::sqrt(3.0 * (1.0 - alpha) / (2.0 - alpha))) *
            (c_e * (1.0 + e) + (c_phi / mu) * (1.0 - e));
 }
 
@@ -126,7 +129,8 @@ double better_total_closed_form(double alpha, double eta) {
 double classic_total_of_s(double s, double eta) {
     double f = sss::fresnel_diffuse_reflectance(eta);
     double A = (1.0 + f) / (1.0 - f);
-    return 0.5 * (1.0 - s * s / 3.0) * (1.0 + std::exp(-4.0 / 3.0 * A * s)) * std::exp(-s);
+    return 0.5 * (1.0 - s * s / 3.0) * (1.0 + std::exp(-4.0 / 3.0 * A * s)) *
+           std::exp(-s);
 }
 
 sss::ChannelCoefficients channel(const sss::NamedMaterial& m, int ch) {
@@ -212,7 +216,8 @@ TEST(ProfileMaterialTable, MarbleChickenAndIor) {
     EXPECT_EQ(marble.ior, 1.5);
     EXPECT_EQ(material("chicken1").sigma_a.x, 0.015);
     EXPECT_EQ(material("chicken2").sigma_a.x, 0.018);
-    for (const auto& row : kTableRows) EXPECT_EQ(material(row.name).ior, row.ior) << row.name;
+    for (const auto& row : kTableRows)
+        EXPECT_EQ(material(row.name).ior, row.ior) << row.name;
     EXPECT_EQ(material("spectralon").sigma_a, glm::dvec3(0.0));
 }
 
@@ -314,10 +319,12 @@ TEST(ProfileInversion, AlbedoRoundTripThroughS) {
             EXPECT_GE(s, 0.0);
             EXPECT_LE(s, std::sqrt(3.0) * (1 + 1e-15));
             // Independent formula in s (algorithms.md §2.1).
-            EXPECT_NEAR(classic_total_of_s(s, eta), a, 1e-12) << "eta " << eta << " a " << a;
+            EXPECT_NEAR(classic_total_of_s(s, eta), a, 1e-12)
+                << "eta " << eta << " a " << a;
             // And through the coefficient form (dmfp 1 and 3.7).
             for (double d : {1.0, 3.7}) {
-                sss::ChannelCoefficients c = sss::coefficients_from_albedo_dmfp(a, d, eta);
+                sss::ChannelCoefficients c =
+                    sss::coefficients_from_albedo_dmfp(a, d, eta);
                 EXPECT_GE(c.sigma_s_prime, 0.0);
                 EXPECT_GT(c.sigma_a, 0.0);
                 sss::AlbedoDmfp back = sss::albedo_dmfp_from_coefficients(c);
@@ -339,7 +346,8 @@ TEST(ProfileInversion, MarblePresetAndItsAlbedoDmfpFormAgree) {
     for (sss::ProfileKind kind : {sss::ProfileKind::Classic, sss::ProfileKind::Burley}) {
         for (int ch = 0; ch < 3; ++ch) {
             sss::Profile a = sss::Profile::from_coefficients(kind, channel(m, ch));
-            sss::Profile b = sss::Profile::from_albedo_dmfp(kind, albedo[ch], dmfp[ch], 1.5);
+            sss::Profile b =
+                sss::Profile::from_albedo_dmfp(kind, albedo[ch], dmfp[ch], 1.5);
             EXPECT_NEAR(a.total(), b.total(), 1e-3 * b.total())
                 << sss::profile_kind_name(kind) << " " << ch;
             EXPECT_NEAR(a.dmfp(), b.dmfp(), 1e-3 * b.dmfp())
@@ -405,9 +413,10 @@ TEST_P(ProfileIntegral, FromAlbedoDmfpHasThatAlbedo) {
         for (double a : {1e-4, 0.01, 0.2, 0.5, 0.8, 0.9, 0.99, 0.999}) {
             for (double d : {0.05, 1.0, 8.51}) {
                 sss::Profile p = sss::Profile::from_albedo_dmfp(kind, a, d, ior);
-                EXPECT_NEAR(p.total(), a, 1e-6) << sss::profile_kind_name(kind) << " a " << a
-                                                << " d " << d << " ior " << ior;
-                EXPECT_NEAR(p.dmfp(), d, 1e-6 * d) << sss::profile_kind_name(kind) << " a " << a;
+                EXPECT_NEAR(p.total(), a, 1e-6) << sss::profile_kind_name(kind) << " a "
+                                                << a << " d " << d << " ior " << ior;
+                EXPECT_NEAR(p.dmfp(), d, 1e-6 * d)
+                    << sss::profile_kind_name(kind) << " a " << a;
                 EXPECT_EQ(p.kind(), kind);
             }
         }
@@ -447,7 +456,8 @@ TEST(ProfileClassic, ClosedFormTotalAndZeroDistance) {
     for (const auto& m : sss::material_table()) {
         for (int ch = 0; ch < 3; ++ch) {
             sss::ChannelCoefficients c = channel(m, ch);
-            sss::Profile p = sss::Profile::from_coefficients(sss::ProfileKind::Classic, c);
+            sss::Profile p =
+                sss::Profile::from_coefficients(sss::ProfileKind::Classic, c);
             double st = c.sigma_s_prime + c.sigma_a;
             double s = std::sqrt(3.0 * c.sigma_a / st);
             EXPECT_NEAR(p.total(), classic_total_of_s(s, c.ior), 1e-12) << m.name << ch;
@@ -469,8 +479,8 @@ TEST(ProfileClassic, ClosedFormTotalAndZeroDistance) {
 
 TEST(ProfileBetter, TotalMatchesClosedForm) {
     for (double alpha : {0.5, 0.9, 0.99}) {
-        sss::Profile p =
-            sss::Profile::from_coefficients(sss::ProfileKind::Better, {alpha, 1.0 - alpha, 1.3});
+        sss::Profile p = sss::Profile::from_coefficients(sss::ProfileKind::Better,
+                                                         {alpha, 1.0 - alpha, 1.3});
         double closed = better_total_closed_form(alpha, 1.3);
         // The library's Fresnel moments come from plain Simpson across the
         // critical-angle kink (about 2e-6 relative); 5 digits as in §2.3.
@@ -478,10 +488,11 @@ TEST(ProfileBetter, TotalMatchesClosedForm) {
         // Numeric integral of eval() too.
         double r0, r1;
         integration_range(p, r0, r1);
-        EXPECT_NEAR(numeric_disk(p, r0, r1, 1e-9 * closed), closed, 1e-5 * closed) << alpha;
+        EXPECT_NEAR(numeric_disk(p, r0, r1, 1e-9 * closed), closed, 1e-5 * closed)
+            << alpha;
         // The length scale does not change the total.
-        sss::Profile q = sss::Profile::from_coefficients(sss::ProfileKind::Better,
-                                                         {7.0 * alpha, 7.0 * (1.0 - alpha), 1.3});
+        sss::Profile q = sss::Profile::from_coefficients(
+            sss::ProfileKind::Better, {7.0 * alpha, 7.0 * (1.0 - alpha), 1.3});
         EXPECT_NEAR(q.total(), p.total(), 1e-12);
     }
     // The document's figure at alpha' = 0.5.
@@ -489,17 +500,20 @@ TEST(ProfileBetter, TotalMatchesClosedForm) {
         sss::Profile::from_coefficients(sss::ProfileKind::Better, {0.5, 0.5, 1.3});
     EXPECT_NEAR(half.total(), 0.0289, 5e-5);
     EXPECT_NEAR(better_total_closed_form(0.5, 1.3), 0.0289, 5e-5);
-    // sigma_tr = sqrt(sigma_a / D) with the Grosjean D = (2 sigma_a + sigma_s')/(3 sigma_t'^2).
+    // sigma_tr = sqrt(sigma_a / D) with the Grosjean D = (2 sigma_a + sigma_s')/(3
+    // sigma_t'^2).
     EXPECT_NEAR(half.sigma_tr(), std::sqrt(0.5 / ((2 * 0.5 + 0.5) / 3.0)), 1e-12);
 }
 
 TEST(ProfileBurley, ClosedForms) {
     for (double a : {0.1, 0.33, 0.8}) {
-        sss::Profile p = sss::Profile::from_albedo_dmfp(sss::ProfileKind::Burley, a, 2.0, 1.3);
+        sss::Profile p =
+            sss::Profile::from_albedo_dmfp(sss::ProfileKind::Burley, a, 2.0, 1.3);
         double s = 3.5 + 100.0 * std::pow(a - 0.33, 4);
         double d = 2.0 / s;
         for (double r : {0.01, 0.5, 2.0, 10.0}) {
-            double expect = a * (std::exp(-r / d) + std::exp(-r / (3 * d))) / (8 * kPi * d * r);
+            double expect =
+                a * (std::exp(-r / d) + std::exp(-r / (3 * d))) / (8 * kPi * d * r);
             EXPECT_NEAR(p.eval(r), expect, 1e-12 * expect) << a << " " << r;
             double cdf = 1.0 - 0.25 * std::exp(-r / d) - 0.75 * std::exp(-r / (3 * d));
             EXPECT_NEAR(p.disk(r), a * cdf, 1e-12) << a << " " << r;
@@ -514,7 +528,8 @@ TEST(ProfileBurley, ClosedForms) {
 TEST(ProfileSpectralon, ClassicTotalIsOneAndFinite) {
     const sss::NamedMaterial& m = material("spectralon");
     for (int ch = 0; ch < 3; ++ch) {
-        sss::Profile p = sss::Profile::from_coefficients(sss::ProfileKind::Classic, channel(m, ch));
+        sss::Profile p =
+            sss::Profile::from_coefficients(sss::ProfileKind::Classic, channel(m, ch));
         EXPECT_NEAR(p.alpha_prime(), 1.0, 1e-15);
         EXPECT_NEAR(p.total(), 1.0, 1e-9);
         EXPECT_TRUE(std::isinf(p.dmfp()));
@@ -535,7 +550,8 @@ TEST(ProfileSpectralon, ClassicTotalIsOneAndFinite) {
 TEST(ProfileSpectralon, BetterDipoleIsFiniteAndConserves) {
     const sss::NamedMaterial& m = material("spectralon");
     for (int ch = 0; ch < 3; ++ch) {
-        sss::Profile q = sss::Profile::from_coefficients(sss::ProfileKind::Better, channel(m, ch));
+        sss::Profile q =
+            sss::Profile::from_coefficients(sss::ProfileKind::Better, channel(m, ch));
         EXPECT_NEAR(q.total(), 1.0, 1e-9);
         for (double r : {0.0, 1e-6, 0.01, 1.0, 100.0, 1e6}) {
             EXPECT_TRUE(std::isfinite(q.eval(r))) << r;
@@ -570,25 +586,41 @@ TEST(ProfileSpectralon, BurleyFromCoefficientsIsAccepted) {
 TEST(ProfileBadValues, ProfileConstructorsThrowValueError) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (sss::ProfileKind kind : kAllKinds) {
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, -0.1, 1.0, 1.3), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 1.5, 1.0, 1.3), sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, -0.1, 1.0, 1.3),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 1.5, 1.0, 1.3),
+                     sss::ValueError);
         // Albedo 1 is impossible for the dipoles (alpha' = 1) but valid for Burley.
         if (kind != sss::ProfileKind::Burley)
-            EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 1.0, 1.0, 1.3), sss::ValueError);
+            EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 1.0, 1.0, 1.3),
+                         sss::ValueError);
         else
-            EXPECT_DOUBLE_EQ(sss::Profile::from_albedo_dmfp(kind, 1.0, 1.0, 1.3).total(), 1.0);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, nan, 1.0, 1.3), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, 0.0, 1.3), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, -1.0, 1.3), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, nan, 1.3), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, 1.0, 0.0), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, 1.0, nan), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_coefficients(kind, {nan, 0.1, 1.3}), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_coefficients(kind, {1.0, nan, 1.3}), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_coefficients(kind, {-1.0, 0.1, 1.3}), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_coefficients(kind, {1.0, -0.1, 1.3}), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_coefficients(kind, {kInf, 0.1, 1.3}), sss::ValueError);
-        EXPECT_THROW(sss::Profile::from_coefficients(kind, {1.0, 0.1, 0.0}), sss::ValueError);
+            EXPECT_DOUBLE_EQ(sss::Profile::from_albedo_dmfp(kind, 1.0, 1.0, 1.3).total(),
+                             1.0);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, nan, 1.0, 1.3),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, 0.0, 1.3),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, -1.0, 1.3),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, nan, 1.3),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, 1.0, 0.0),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_albedo_dmfp(kind, 0.5, 1.0, nan),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_coefficients(kind, {nan, 0.1, 1.3}),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_coefficients(kind, {1.0, nan, 1.3}),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_coefficients(kind, {-1.0, 0.1, 1.3}),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_coefficients(kind, {1.0, -0.1, 1.3}),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_coefficients(kind, {kInf, 0.1, 1.3}),
+                     sss::ValueError);
+        EXPECT_THROW(sss::Profile::from_coefficients(kind, {1.0, 0.1, 0.0}),
+                     sss::ValueError);
     }
     EXPECT_THROW(sss::classic_s_from_albedo(-0.1, 1.3), sss::ValueError);
     EXPECT_THROW(sss::classic_s_from_albedo(1.0, 1.3), sss::ValueError);
@@ -654,8 +686,10 @@ TEST(ProfileBadValues, MaterialSpecValidate) {
         try {
             s.validate();
         } catch (const sss::UsageError& e) {
-            EXPECT_NE(std::string(e.what()).find("nosuch"), std::string::npos) << e.what();
-            EXPECT_NE(std::string(e.what()).find("marble"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("nosuch"), std::string::npos)
+                << e.what();
+            EXPECT_NE(std::string(e.what()).find("marble"), std::string::npos)
+                << e.what();
         }
     }
     {

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include <glm/vec3.hpp>
 #include <glm/ext/vector_uint3.hpp>
+#include <glm/vec3.hpp>
 
 #include "sss/profile.h"
 
@@ -36,8 +36,8 @@ const char* criterion_name(Criterion c);
 /// The points and materials of one evaluation, in scene units.
 struct DiffusionProblem {
     std::vector<glm::vec3> positions;
-    std::vector<glm::vec3> normals;  ///< used to orient near-field source disks
-    std::vector<float> areas;        ///< >= 0
+    std::vector<glm::vec3> normals;    ///< used to orient near-field source disks
+    std::vector<float> areas;          ///< >= 0
     std::vector<glm::vec3> irradiance; ///< signed (blockers are negative)
     /// Distinct channel profiles; by default point i uses profiles[0..2] for r, g, b.
     std::vector<Profile> profiles;
@@ -55,9 +55,9 @@ struct DiffusionOptions {
 
 /// Counters of one hierarchical evaluation.
 struct DiffusionStats {
-    std::size_t nodes = 0;        ///< octree nodes
-    std::size_t far_terms = 0;    ///< node expansions evaluated (sum over receivers)
-    std::size_t near_terms = 0;   ///< point-point terms evaluated
+    std::size_t nodes = 0;            ///< octree nodes
+    std::size_t far_terms = 0;        ///< node expansions evaluated (sum over receivers)
+    std::size_t near_terms = 0;       ///< point-point terms evaluated
     std::size_t quadrature_terms = 0; ///< near sources integrated as disks
     double build_seconds = 0;
     double eval_seconds = 0;
@@ -72,8 +72,9 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& problem,
 /// Exact evaluation in double precision, all pairs, at the given receivers
 /// (all points when empty). The same point model as the hierarchical path:
 /// exact self disk, disk integration of close sources.
-std::vector<glm::dvec3> evaluate_diffusion_exact(const DiffusionProblem& problem,
-                                                 const std::vector<std::size_t>& receivers = {},
-                                                 Progress* progress = nullptr);
+std::vector<glm::dvec3>
+evaluate_diffusion_exact(const DiffusionProblem& problem,
+                         const std::vector<std::size_t>& receivers = {},
+                         Progress* progress = nullptr);
 
 } // namespace sss

@@ -66,14 +66,14 @@ ChannelCoefficients coefficients_from_albedo_dmfp(double albedo, double dmfp, do
 /// -albedo/-diffusemeanfreepath replace parts of it.
 struct MaterialSpec {
     std::string preset = "marble";
-    std::optional<glm::dvec3> scattering;   ///< sigma_s', mm^-1
-    std::optional<glm::dvec3> absorption;   ///< sigma_a, mm^-1
-    std::optional<glm::dvec3> albedo;       ///< total diffuse reflectance
-    std::optional<glm::dvec3> dmfp;         ///< diffuse mean free path, mm
-    bool albedo_from_file = false;          ///< per-point _albedo channel
-    bool dmfp_from_file = false;            ///< per-point _diffusemeanfreepath channel
-    std::optional<double> ior;              ///< default: the preset's
-    double unitlength = 1.0;                ///< scene length of one mm
+    std::optional<glm::dvec3> scattering; ///< sigma_s', mm^-1
+    std::optional<glm::dvec3> absorption; ///< sigma_a, mm^-1
+    std::optional<glm::dvec3> albedo;     ///< total diffuse reflectance
+    std::optional<glm::dvec3> dmfp;       ///< diffuse mean free path, mm
+    bool albedo_from_file = false;        ///< per-point _albedo channel
+    bool dmfp_from_file = false;          ///< per-point _diffusemeanfreepath channel
+    std::optional<double> ior;            ///< default: the preset's
+    double unitlength = 1.0;              ///< scene length of one mm
 
     /// True when the material is given as albedo + dmfp (either part).
     bool uses_albedo_form() const {

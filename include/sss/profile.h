@@ -63,14 +63,14 @@ public:
 
 private:
     ProfileKind m_kind = ProfileKind::Classic;
-    double m_alpha = 0;    // reduced albedo (dipoles)
-    double m_sigma_t = 0;  // sigma_t' (dipoles)
-    double m_sigma_tr = 0; // effective transport coefficient
+    double m_alpha = 0;        // reduced albedo (dipoles)
+    double m_sigma_t = 0;      // sigma_t' (dipoles)
+    double m_sigma_tr = 0;     // effective transport coefficient
     double m_zr = 0, m_zv = 0; // dipole depths (zv signed for Better)
     double m_D = 0;            // diffusion coefficient (Better)
     double m_ce = 0, m_cphi = 0;
-    double m_scale = 0;        // alpha'/(4 pi) or alpha'^2/(4 pi); Burley: A
-    double m_d = 0;            // Burley shape length
+    double m_scale = 0; // alpha'/(4 pi) or alpha'^2/(4 pi); Burley: A
+    double m_d = 0;     // Burley shape length
     double m_total = 0;
     double m_core = 0;
     double m_dmfp = 0;

@@ -22,12 +22,13 @@ enum class SyntheticShape {
 /// Parameters of a synthetic cloud.
 struct SyntheticParams {
     SyntheticShape shape = SyntheticShape::Sphere;
-    std::size_t count = 100000;    ///< approximate number of points
-    double size = 50.0;            ///< sphere radius / plane or box side (scene units)
-    double thickness = 5.0;        ///< box only
-    double jitter = 0.0;           ///< plane/box: random offset, fraction of the spacing
-    uint64_t seed = 1;             ///< jitter seed (output is deterministic)
-    glm::dvec3 light_dir{0, 0, 1}; ///< direction towards a distant light (normalised inside)
+    std::size_t count = 100000; ///< approximate number of points
+    double size = 50.0;         ///< sphere radius / plane or box side (scene units)
+    double thickness = 5.0;     ///< box only
+    double jitter = 0.0;        ///< plane/box: random offset, fraction of the spacing
+    uint64_t seed = 1;          ///< jitter seed (output is deterministic)
+    glm::dvec3 light_dir{0, 0,
+                         1}; ///< direction towards a distant light (normalised inside)
     glm::dvec3 light_color{1, 1, 1};
     double ambient = 0.0; ///< constant irradiance added everywhere
 };

@@ -29,6 +29,12 @@ std::string version_report(const std::string& tool);
 int run_tool(const std::string& tool, int argc, char** argv,
              const std::function<int(const std::vector<std::string>&)>& body);
 
+/// Handles the options every tool shares: "-h"/"help" prints usage and
+/// "version" prints version_report(tool), both on stdout. Returns true when
+/// opt (without dashes) was one of them: the tool then exits 0.
+bool standard_option(const std::string& tool, const std::string& opt,
+                     const std::string& usage);
+
 /// Prints "<tool> WARNING: <what>" on stderr.
 void warn(const std::string& tool, const std::string& what);
 

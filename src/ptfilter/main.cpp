@@ -2,8 +2,8 @@
 //   ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc
 // Option parsing only; the work is sss::ssdiffusion().
 
-#include <cstdio>
 #include <algorithm>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,8 +17,10 @@ namespace {
 
 const char* kTool = "ptfilter";
 
-void print_help() {
-    std::printf(
+std::string usage() {
+    char buf[4096];
+    std::snprintf(
+        buf, sizeof buf,
         "usage: ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc\n"
         "       (also: -filter ssdiffusion)\n"
         "Subsurface diffusion of baked irradiance (Jensen dipole, hierarchical).\n"
@@ -46,15 +48,17 @@ void print_help() {
         "  -ptcversion 0|1|2         .ptc version written (default 0)\n"
         "Running:\n"
         "  -threads N                0 = all usable cores (default), <0 = all but N\n"
-        "  -progress 0|1|2           1: material values and timings, ALF_PROGRESS lines;\n"
+        "  -progress 0|1|2           1: material values and timings, ALF_PROGRESS "
+        "lines;\n"
         "                            2: also octree statistics\n"
         "  -organize 0|1             accepted for compatibility; output is unorganized\n"
         "  --help, --version\n",
         sss::material_names().c_str());
+    return buf;
 }
 
-std::optional<glm::dvec3> triple_or_fromfile(sss::ArgScanner& args, const std::string& opt,
-                                             bool& fromfile) {
+std::optional<glm::dvec3> triple_or_fromfile(sss::ArgScanner& args,
+                                             const std::string& opt, bool& fromfile) {
     if (args.peek() == "fromfile") {
         args.value(opt);
         fromfile = true;
@@ -76,25 +80,22 @@ int run(const std::vector<std::string>& argv) {
             continue;
         }
         std::string o = args.option();
-        if (o == "help" || o == "h") {
-            print_help();
-            return 0;
-        } else if (o == "version") {
-            std::printf("%s", sss::version_report(kTool).c_str());
+        if (sss::standard_option(kTool, o, usage())) {
             return 0;
         } else if (o == "ssdiffusion") {
             have_filter = true;
         } else if (o == "filter") {
             std::string f = args.value(o);
             if (f != "ssdiffusion")
-                throw sss::UsageError("filter '" + f + "' is not supported (only ssdiffusion)");
+                throw sss::UsageError("filter '" + f +
+                                      "' is not supported (only ssdiffusion)");
             have_filter = true;
         } else if (o == "material") {
             opt.material.preset = args.value(o);
             if (!sss::find_material(opt.material.preset))
                 throw sss::UsageError("option -material: unknown material '" +
-                                      opt.material.preset + "' (known: " +
-                                      sss::material_names() + ")");
+                                      opt.material.preset +
+                                      "' (known: " + sss::material_names() + ")");
         } else if (o == "unitlength") {
             opt.material.unitlength = args.positive(o);
         } else if (o == "scattering") {
@@ -102,7 +103,8 @@ int run(const std::vector<std::string>& argv) {
         } else if (o == "absorption") {
             opt.material.absorption = args.triple(o);
         } else if (o == "albedo") {
-            opt.material.albedo = triple_or_fromfile(args, o, opt.material.albedo_from_file);
+            opt.material.albedo =
+                triple_or_fromfile(args, o, opt.material.albedo_from_file);
         } else if (o == "diffusemeanfreepath") {
             opt.material.dmfp = triple_or_fromfile(args, o, opt.material.dmfp_from_file);
         } else if (o == "ior") {
@@ -144,7 +146,8 @@ int run(const std::vector<std::string>& argv) {
         }
     }
     if (!have_filter)
-        throw sss::UsageError("no filter given (use -ssdiffusion or -filter ssdiffusion)");
+        throw sss::UsageError(
+            "no filter given (use -ssdiffusion or -filter ssdiffusion)");
     if (files.size() < 2)
         throw sss::UsageError("need at least one input file and an output file");
     // Check the whole material before reading anything.
@@ -157,12 +160,14 @@ int run(const std::vector<std::string>& argv) {
     opt.diffusion.progress = &reporter;
     sss::Stopwatch watch;
     if (progress > 0) {
-        for (const std::string& line : material) std::printf("ptfilter: %s\n", line.c_str());
+        for (const std::string& line : material)
+            std::printf("ptfilter: %s\n", line.c_str());
         std::fflush(stdout);
     }
 
     sss::PointCloud cloud = sss::read_point_cloud(files[0]);
-    for (std::size_t i = 1; i < files.size(); ++i) cloud.append(sss::read_point_cloud(files[i]));
+    for (std::size_t i = 1; i < files.size(); ++i)
+        cloud.append(sss::read_point_cloud(files[i]));
     double read_s = watch.seconds();
 
     sss::SsDiffusionReport report;
@@ -180,20 +185,23 @@ int run(const std::vector<std::string>& argv) {
 
     sss::write_point_cloud(out, out_path, wopt);
     if (progress > 0) {
-        std::printf("ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
-                    cloud.size(), sss::resolve_thread_count(threads),
-                    opt.diffusion.max_solid_angle,
-                    sss::criterion_name(opt.diffusion.criterion), opt.exact ? " (exact)" : "");
+        std::printf(
+            "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
+            cloud.size(), sss::resolve_thread_count(threads),
+            opt.diffusion.max_solid_angle, sss::criterion_name(opt.diffusion.criterion),
+            opt.exact ? " (exact)" : "");
         if (progress > 1 && !opt.exact)
-            std::printf("ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
-                        "terms, %.2f disk integrals\n",
-                        report.stats.nodes,
-                        double(report.stats.far_terms) / std::max<std::size_t>(1, cloud.size()),
-                        double(report.stats.near_terms) / std::max<std::size_t>(1, cloud.size()),
-                        double(report.stats.quadrature_terms) /
-                            std::max<std::size_t>(1, cloud.size()));
-        std::printf("ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
-                    read_s, filter_s, watch.seconds() - read_s - filter_s, watch.seconds());
+            std::printf(
+                "ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
+                "terms, %.2f disk integrals\n",
+                report.stats.nodes,
+                double(report.stats.far_terms) / std::max<std::size_t>(1, cloud.size()),
+                double(report.stats.near_terms) / std::max<std::size_t>(1, cloud.size()),
+                double(report.stats.quadrature_terms) /
+                    std::max<std::size_t>(1, cloud.size()));
+        std::printf(
+            "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
+            read_s, filter_s, watch.seconds() - read_s - filter_s, watch.seconds());
         std::fflush(stdout);
     }
     return 0;
@@ -201,4 +209,6 @@ int run(const std::vector<std::string>& argv) {
 
 } // namespace
 
-int main(int argc, char** argv) { return sss::run_tool(kTool, argc, argv, run); }
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}

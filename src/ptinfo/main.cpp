@@ -42,11 +42,7 @@ int run(const std::vector<std::string>& args) {
             continue;
         }
         const std::string opt = scan.option();
-        if (opt == "h" || opt == "help") {
-            std::cout << kUsage;
-            return 0;
-        } else if (opt == "version") {
-            std::cout << sss::version_report(kTool);
+        if (sss::standard_option(kTool, opt, kUsage)) {
             return 0;
         } else if (opt == "stats") {
             stats = scan.integer(opt, 0, 1) != 0;

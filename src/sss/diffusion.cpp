@@ -11,10 +11,10 @@
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/parallel_sort.h>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
 #include <glm/vector_relational.hpp>
-#include <glm/common.hpp>
 
 #include "sss/error.h"
 #include "sss/tool.h"
@@ -23,18 +23,25 @@ namespace sss {
 
 bool parse_criterion(const char* name, Criterion& out) {
     std::string_view n(name);
-    if (n == "error") out = Criterion::Error;
-    else if (n == "bbox" || n == "prman") out = Criterion::SolidAngleBox;
-    else if (n == "centroid" || n == "jensen") out = Criterion::SolidAngleCentroid;
-    else return false;
+    if (n == "error")
+        out = Criterion::Error;
+    else if (n == "bbox" || n == "prman")
+        out = Criterion::SolidAngleBox;
+    else if (n == "centroid" || n == "jensen")
+        out = Criterion::SolidAngleCentroid;
+    else
+        return false;
     return true;
 }
 
 const char* criterion_name(Criterion c) {
     switch (c) {
-    case Criterion::Error: return "error";
-    case Criterion::SolidAngleBox: return "bbox";
-    case Criterion::SolidAngleCentroid: return "centroid";
+    case Criterion::Error:
+        return "error";
+    case Criterion::SolidAngleBox:
+        return "bbox";
+    case Criterion::SolidAngleCentroid:
+        return "centroid";
     }
     return "?";
 }
@@ -141,7 +148,9 @@ struct Tables {
     }
 };
 
-double q_of_bits(uint32_t bits) { return double(std::bit_cast<float>(bits)); }
+double q_of_bits(uint32_t bits) {
+    return double(std::bit_cast<float>(bits));
+}
 
 Tables build_tables(const std::vector<Profile>& profiles) {
     Tables t;
@@ -218,8 +227,8 @@ struct Node {
     uint32_t child_count = 0;
     uint32_t parent = kNone;
     float area = 0;
-    float radius = 0;   // max |p - c|
-    float max_rho = 0;  // largest source disk radius
+    float radius = 0;  // max |p - c|
+    float max_rho = 0; // largest source disk radius
 };
 
 // Moments of a node about its centroid c, per colour channel.
@@ -227,8 +236,8 @@ struct Expansion {
     glm::vec3 c;
     float phi[3];
     float abs_phi[3];
-    float d[3][3];  // sum A E (p - c)
-    float q[3][6];  // sum A E (p - c)(p - c)^T: xx xy xz yy yz zz
+    float d[3][3];   // sum A E (p - c)
+    float q[3][6];   // sum A E (p - c)(p - c)^T: xx xy xz yy yz zz
     float d_norm[3]; // |d[ch]|
 };
 
@@ -255,7 +264,8 @@ struct Tree {
 Tree build_tree(const DiffusionProblem& pb) {
     Tree tree;
     const std::size_t n = pb.positions.size();
-    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    glm::dvec3 lo(std::numeric_limits<double>::max()),
+        hi(-std::numeric_limits<double>::max());
     for (const glm::vec3& p : pb.positions) {
         lo = glm::min(lo, glm::dvec3(p));
         hi = glm::max(hi, glm::dvec3(p));
@@ -332,7 +342,8 @@ Tree build_tree(const DiffusionProblem& pb) {
         const uint32_t b = node.first, e = node.first + node.count;
         glm::dvec3 wsum_p(0), asum_p(0), psum(0);
         double wsum = 0, asum = 0;
-        glm::dvec3 blo(std::numeric_limits<double>::max()), bhi(-std::numeric_limits<double>::max());
+        glm::dvec3 blo(std::numeric_limits<double>::max()),
+            bhi(-std::numeric_limits<double>::max());
         float max_rho2 = 0;
         for (uint32_t s = b; s < e; ++s) {
             glm::dvec3 p(tree.pos_rho2[s]);
@@ -349,7 +360,9 @@ Tree build_tree(const DiffusionProblem& pb) {
             bhi = glm::max(bhi, p);
             max_rho2 = std::max(max_rho2, tree.pos_rho2[s].w);
         }
-        glm::dvec3 c = wsum > 0 ? wsum_p / wsum : asum > 0 ? asum_p / asum : psum / double(e - b);
+        glm::dvec3 c = wsum > 0   ? wsum_p / wsum
+                       : asum > 0 ? asum_p / asum
+                                  : psum / double(e - b);
         Expansion ex{};
         ex.c = glm::vec3(c);
         double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
@@ -406,7 +419,8 @@ struct ReceiverChannels {
     float near_core2; // smallest core^2 of the three channels
 };
 
-inline void lookup3(const Tables& tables, const ReceiverChannels& rc, float q, float out[3]) {
+inline void lookup3(const Tables& tables, const ReceiverChannels& rc, float q,
+                    float out[3]) {
     Tables::Lookup l = tables.locate(q);
     if (!l.valid) {
         out[0] = out[1] = out[2] = 0.0f;
@@ -419,8 +433,9 @@ inline void lookup3(const Tables& tables, const ReceiverChannels& rc, float q, f
 }
 
 // Contribution of sorted source s to receiver at x (never the receiver itself).
-inline void near_source(const Tree& tree, const Tables& tables, const ReceiverChannels& rc,
-                        const glm::vec3& x, uint32_t s, double acc[3], DiffusionStats& st) {
+inline void near_source(const Tree& tree, const Tables& tables,
+                        const ReceiverChannels& rc, const glm::vec3& x, uint32_t s,
+                        double acc[3], DiffusionStats& st) {
     const glm::vec4& pr = tree.pos_rho2[s];
     const glm::vec4& pa = tree.power_area[s];
     glm::vec3 w = x - glm::vec3(pr);
@@ -453,8 +468,9 @@ inline void near_source(const Tree& tree, const Tables& tables, const ReceiverCh
 }
 
 // Far-field term of a node for a receiver at x.
-inline void far_node(const Tables& tables, const ReceiverChannels& rc, const Expansion& ex,
-                     const glm::vec3& x, bool quadrupole, double acc[3]) {
+inline void far_node(const Tables& tables, const ReceiverChannels& rc,
+                     const Expansion& ex, const glm::vec3& x, bool quadrupole,
+                     double acc[3]) {
     glm::vec3 w = x - ex.c;
     float q = glm::dot(w, w);
     Tables::Lookup l = tables.locate(q);
@@ -478,7 +494,6 @@ inline void far_node(const Tables& tables, const ReceiverChannels& rc, const Exp
         acc[ch] += double(val);
     }
 }
-
 
 // Receivers of one bucket in structure-of-arrays form, so the loops over
 // receivers vectorise (one source or node against all receivers at once).
@@ -524,8 +539,8 @@ void block_far(const Tables& tables, const TableEntry* const t[3], const Expansi
                 float df = T[idx].df + frac * (T[idx + 1].df - T[idx].df);
                 float d2f = T[idx].d2f + frac * (T[idx + 1].d2f - T[idx].d2f);
                 float wd = wx * d0 + wy * d1 + wz * d2;
-                float wqw = wx * (q0 * wx + q1 * wy + q2 * wz) + wy * (q3 * wy + q4 * wz) +
-                            q5 * wz * wz;
+                float wqw = wx * (q0 * wx + q1 * wy + q2 * wz) +
+                            wy * (q3 * wy + q4 * wz) + q5 * wz * wz;
                 val += df * (tr - 2.0f * wd) + 2.0f * d2f * wqw;
             }
             acc[r] += keep * val;
@@ -589,8 +604,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
 
     auto receiver_channels = [&](uint32_t original) {
         ReceiverChannels rc;
-        glm::u32vec3 idx = pb.profile_index.empty() ? glm::u32vec3(0, 1, 2)
-                                                    : pb.profile_index[original];
+        glm::u32vec3 idx =
+            pb.profile_index.empty() ? glm::u32vec3(0, 1, 2) : pb.profile_index[original];
         float core2 = std::numeric_limits<float>::max();
         for (int ch = 0; ch < 3; ++ch) {
             rc.table[ch] = &tables.channels[idx[ch]];
@@ -616,7 +631,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                 buckets.push_back(k);
                 continue;
             }
-            for (uint32_t c = node.child_count; c-- > 0;) stack.push_back(node.child_first + c);
+            for (uint32_t c = node.child_count; c-- > 0;)
+                stack.push_back(node.child_first + c);
         }
     }
 
@@ -630,7 +646,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                              : 0.0;
     double region = 0.0;
     for (const Profile& p : pb.profiles)
-        if (p.total() > 0) region = std::max(region, std::min(p.dmfp(), p.cutoff_radius(1e-3)));
+        if (p.total() > 0)
+            region = std::max(region, std::min(p.dmfp(), p.cutoff_radius(1e-3)));
     // Calibrated so that the default (1) gives well under 1 % RMS error on
     // smooth lit objects (docs/ptfilter.md has the measured table).
     const double tau = 4e-3 * options.max_solid_angle;
@@ -673,9 +690,10 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                 }
                 double tol[3], skip[3];
                 for (int ch = 0; ch < 3; ++ch) {
-                    double level = tree.nodes[up].area > 0
-                                       ? tree.expansions[up].abs_phi[ch] / tree.nodes[up].area
-                                       : 0.0;
+                    double level =
+                        tree.nodes[up].area > 0
+                            ? tree.expansions[up].abs_phi[ch] / tree.nodes[up].area
+                            : 0.0;
                     level = std::max(level, 0.05 * global_abs[ch]);
                     double tot = *std::min_element(bucket_totals[ch].begin(),
                                                    bucket_totals[ch].end());
@@ -706,15 +724,16 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                                 accept = drop = true;
                                 bool mono = true;
                                 // Farthest receiver from the centroid bounds |w|.
-                                glm::vec3 far_corner = glm::max(glm::abs(blo - ex.c),
-                                                                glm::abs(bhi - ex.c));
+                                glm::vec3 far_corner =
+                                    glm::max(glm::abs(blo - ex.c), glm::abs(bhi - ex.c));
                                 double wmax = glm::length(far_corner);
                                 if (l.valid) {
                                     for (int ch = 0; ch < 3; ++ch) {
                                         for (const ChannelTable* ct : bucket_tables[ch]) {
                                             double ap = ex.abs_phi[ch];
                                             uint32_t i = l.index;
-                                            if (ap * r * r * r * ct->error_bound[i] > tol[ch])
+                                            if (ap * r * r * r * ct->error_bound[i] >
+                                                tol[ch])
                                                 accept = false;
                                             if (ap * ct->max_value[i] > skip[ch])
                                                 drop = false;
@@ -722,7 +741,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                                             // quadrupole terms.
                                             double m2 = ap * r * r;
                                             double mono_err =
-                                                ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
+                                                ct->max_d1[i] *
+                                                    (m2 + 2.0 * wmax * ex.d_norm[ch]) +
                                                 2.0 * ct->max_d2[i] * wmax * wmax * m2;
                                             if (mono_err > 0.1 * tol[ch]) mono = false;
                                         }
@@ -760,7 +780,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                 // loops; mixed materials and the classic criteria go receiver by
                 // receiver.
                 bool uniform = !classic && bucket.count <= kMaxBucket &&
-                               bucket_tables[0].size() == 1 && bucket_tables[1].size() == 1 &&
+                               bucket_tables[0].size() == 1 &&
+                               bucket_tables[1].size() == 1 &&
                                bucket_tables[2].size() == 1;
                 if (uniform) {
                     block.count = bucket.count;
@@ -775,30 +796,37 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                     const TableEntry* t[3] = {first_rc.table[0]->entries.data(),
                                               first_rc.table[1]->entries.data(),
                                               first_rc.table[2]->entries.data()};
-                    for (uint32_t k : far_list) block_far<true>(tables, t, tree.expansions[k], block);
+                    for (uint32_t k : far_list)
+                        block_far<true>(tables, t, tree.expansions[k], block);
                     for (uint32_t k : mono_list)
                         block_far<false>(tables, t, tree.expansions[k], block);
                     std::size_t plain = 0;
                     for (uint32_t k : near_list) {
                         const Node& leaf = tree.nodes[k];
                         float d2 = box_distance2(bucket.lo, bucket.hi, leaf.lo, leaf.hi);
-                        if (leaf.max_rho * leaf.max_rho <= kNearKappa2 * (d2 + first_rc.near_core2)) {
+                        if (leaf.max_rho * leaf.max_rho <=
+                            kNearKappa2 * (d2 + first_rc.near_core2)) {
                             block_near(tables, t, tree, leaf.first, leaf.count, block);
                             plain += leaf.count;
                             continue;
                         }
-                        // Close, large source disks: per pair, with quadrature where needed.
+                        // Close, large source disks: per pair, with quadrature where
+                        // needed.
                         for (uint32_t r = 0; r < bucket.count; ++r) {
                             uint32_t s = bucket.first + r;
                             glm::vec3 x(block.x[r], block.y[r], block.z[r]);
                             double acc[3] = {0, 0, 0};
-                            for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
-                                if (j != s) near_source(tree, tables, first_rc, x, j, acc, local);
-                            for (int ch = 0; ch < 3; ++ch) block.acc[ch][r] += float(acc[ch]);
+                            for (uint32_t j = leaf.first; j < leaf.first + leaf.count;
+                                 ++j)
+                                if (j != s)
+                                    near_source(tree, tables, first_rc, x, j, acc, local);
+                            for (int ch = 0; ch < 3; ++ch)
+                                block.acc[ch][r] += float(acc[ch]);
                         }
                     }
                     local.near_terms += plain * bucket.count;
-                    local.far_terms += (far_list.size() + mono_list.size()) * bucket.count;
+                    local.far_terms +=
+                        (far_list.size() + mono_list.size()) * bucket.count;
                     for (uint32_t r = 0; r < bucket.count; ++r) {
                         uint32_t s = bucket.first + r;
                         uint32_t original = tree.order[s];
@@ -812,7 +840,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                         }
                     }
                 } else {
-                    for (uint32_t s = bucket.first; s < bucket.first + bucket.count; ++s) {
+                    for (uint32_t s = bucket.first; s < bucket.first + bucket.count;
+                         ++s) {
                         uint32_t original = tree.order[s];
                         ReceiverChannels rc = pb.profile_index.empty()
                                                   ? first_rc
@@ -830,8 +859,10 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                             far_node(tables, rc, tree.expansions[k], x, false, acc);
                         for (uint32_t k : near_list) {
                             const Node& leaf = tree.nodes[k];
-                            for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
-                                if (j != s) near_source(tree, tables, rc, x, j, acc, local);
+                            for (uint32_t j = leaf.first; j < leaf.first + leaf.count;
+                                 ++j)
+                                if (j != s)
+                                    near_source(tree, tables, rc, x, j, acc, local);
                         }
                         local.far_terms += far_list.size() + mono_list.size();
                         for (int ch = 0; ch < 3; ++ch) {
@@ -855,9 +886,9 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
     return result;
 }
 
-std::vector<glm::dvec3> evaluate_diffusion_exact(const DiffusionProblem& pb,
-                                                 const std::vector<std::size_t>& receivers,
-                                                 Progress* progress) {
+std::vector<glm::dvec3>
+evaluate_diffusion_exact(const DiffusionProblem& pb,
+                         const std::vector<std::size_t>& receivers, Progress* progress) {
     const std::size_t n = pb.positions.size();
     std::vector<std::size_t> rec = receivers;
     if (rec.empty()) {
@@ -868,8 +899,10 @@ std::vector<glm::dvec3> evaluate_diffusion_exact(const DiffusionProblem& pb,
     std::atomic<std::size_t> done{0};
     oneapi::tbb::parallel_for(std::size_t(0), rec.size(), [&](std::size_t r) {
         const std::size_t i = rec[r];
-        glm::u32vec3 idx = pb.profile_index.empty() ? glm::u32vec3(0, 1, 2) : pb.profile_index[i];
-        const Profile* prof[3] = {&pb.profiles[idx[0]], &pb.profiles[idx[1]], &pb.profiles[idx[2]]};
+        glm::u32vec3 idx =
+            pb.profile_index.empty() ? glm::u32vec3(0, 1, 2) : pb.profile_index[i];
+        const Profile* prof[3] = {&pb.profiles[idx[0]], &pb.profiles[idx[1]],
+                                  &pb.profiles[idx[2]]};
         double core2 = std::numeric_limits<double>::max();
         for (int ch = 0; ch < 3; ++ch)
             core2 = std::min(core2, prof[ch]->core_length() * prof[ch]->core_length());
@@ -888,7 +921,8 @@ std::vector<glm::dvec3> evaluate_diffusion_exact(const DiffusionProblem& pb,
             // Same rule as the hierarchical path (in float there).
             if (float(a / kPi) > float(kNearKappa2 * (q + core2))) {
                 glm::dvec3 u, v;
-                glm::dvec3 nj = pb.normals.empty() ? glm::dvec3(0) : glm::dvec3(pb.normals[j]);
+                glm::dvec3 nj =
+                    pb.normals.empty() ? glm::dvec3(0) : glm::dvec3(pb.normals[j]);
                 disk_frame(nj, w, u, v);
                 double sum[3] = {0, 0, 0};
                 for_disk_points(rho, u, v, [&](const glm::dvec3& off, double wt) {

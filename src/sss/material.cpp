@@ -63,7 +63,8 @@ double total_of_s(double s, double k) {
 
 double total_of_s_derivative(double s, double k) {
     double e1 = std::exp(-s), e2 = std::exp(-(1.0 + k) * s);
-    return 0.5 * (-(2.0 * s / 3.0) * (e1 + e2) - (1.0 - s * s / 3.0) * (e1 + (1.0 + k) * e2));
+    return 0.5 *
+           (-(2.0 * s / 3.0) * (e1 + e2) - (1.0 - s * s / 3.0) * (e1 + (1.0 + k) * e2));
 }
 
 } // namespace
@@ -86,7 +87,10 @@ double classic_s_from_albedo(double albedo, double eta) {
     double s = std::clamp((1.0 - albedo) / (1.0 + 0.5 * k), lo, hi);
     for (int it = 0; it < 100; ++it) {
         double g = total_of_s(s, k) - albedo;
-        if (g > 0) lo = s; else hi = s;
+        if (g > 0)
+            lo = s;
+        else
+            hi = s;
         double dg = total_of_s_derivative(s, k);
         double next = s - g / dg;
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
@@ -112,7 +116,8 @@ AlbedoDmfp albedo_dmfp_from_coefficients(const ChannelCoefficients& c) {
     return out;
 }
 
-ChannelCoefficients coefficients_from_albedo_dmfp(double albedo, double dmfp, double ior) {
+ChannelCoefficients coefficients_from_albedo_dmfp(double albedo, double dmfp,
+                                                  double ior) {
     ChannelCoefficients c;
     c.ior = ior;
     double s = classic_s_from_albedo(albedo, ior);

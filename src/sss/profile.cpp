@@ -73,7 +73,8 @@ double exp_diff_over_sigma(double sigma, double a, double delta) {
 // e^{-sigma d0}/d0 - e^{-sigma d}/d for d >= d0 > 0, d - d0 = delta.
 double exp_over_d_diff(double sigma, double d0, double d, double delta) {
     if (d == kInf) return std::exp(-sigma * d0) / d0;
-    // = e^{-s d0} [ 1/d0 - e^{-s delta}/d ] = e^{-s d0} [ delta/(d0 d) + (1 - e^{-s delta})/d ]
+    // = e^{-s d0} [ 1/d0 - e^{-s delta}/d ] = e^{-s d0} [ delta/(d0 d) + (1 - e^{-s
+    // delta})/d ]
     return std::exp(-sigma * d0) * (delta / (d0 * d) - std::expm1(-sigma * delta) / d);
 }
 
@@ -85,18 +86,25 @@ double burley_shape(double albedo) {
 } // namespace
 
 bool parse_profile_kind(std::string_view name, ProfileKind& out) {
-    if (name == "classic" || name == "dipole") out = ProfileKind::Classic;
-    else if (name == "better" || name == "betterdipole") out = ProfileKind::Better;
-    else if (name == "burley" || name == "normalized") out = ProfileKind::Burley;
-    else return false;
+    if (name == "classic" || name == "dipole")
+        out = ProfileKind::Classic;
+    else if (name == "better" || name == "betterdipole")
+        out = ProfileKind::Better;
+    else if (name == "burley" || name == "normalized")
+        out = ProfileKind::Burley;
+    else
+        return false;
     return true;
 }
 
 const char* profile_kind_name(ProfileKind kind) {
     switch (kind) {
-    case ProfileKind::Classic: return "classic";
-    case ProfileKind::Better: return "better";
-    case ProfileKind::Burley: return "burley";
+    case ProfileKind::Classic:
+        return "classic";
+    case ProfileKind::Better:
+        return "better";
+    case ProfileKind::Burley:
+        return "burley";
     }
     return "?";
 }
@@ -147,10 +155,12 @@ Profile Profile::from_coefficients(ProfileKind kind, const ChannelCoefficients& 
     return p;
 }
 
-Profile Profile::from_albedo_dmfp(ProfileKind kind, double albedo, double dmfp, double ior) {
+Profile Profile::from_albedo_dmfp(ProfileKind kind, double albedo, double dmfp,
+                                  double ior) {
     // Burley's normalized profile is fine at albedo 1 (spectralon); the dipoles
     // need alpha' < 1.
-    const double albedo_max = kind == ProfileKind::Burley ? 1.0 : std::nextafter(1.0, 0.0);
+    const double albedo_max =
+        kind == ProfileKind::Burley ? 1.0 : std::nextafter(1.0, 0.0);
     if (!(albedo >= 0.0 && albedo <= albedo_max))
         throw ValueError("albedo " + std::to_string(albedo) + " is outside [0, 1)");
     if (!(dmfp > 0.0)) throw ValueError("diffuse mean free path must be positive");
@@ -169,7 +179,10 @@ Profile Profile::from_albedo_dmfp(ProfileKind kind, double albedo, double dmfp, 
         double lo = 0.0, hi = 1.0; // total falls with u
         for (int it = 0; it < 200 && hi - lo > 1e-16; ++it) {
             double mid = 0.5 * (lo + hi);
-            if (total_of_u(mid) > albedo) lo = mid; else hi = mid;
+            if (total_of_u(mid) > albedo)
+                lo = mid;
+            else
+                hi = mid;
         }
         double u = 0.5 * (lo + hi);
         double sa1 = u * u, ss1 = 1.0 - u * u; // sigma_t' = 1 units
@@ -248,20 +261,23 @@ double Profile::disk(double rho) const {
         double dv = rho == kInf ? kInf : std::sqrt(rho * rho + zv * zv);
         double er = rho == kInf ? kInf : rho * rho / (dr + zr);
         double ev = rho == kInf ? kInf : rho * rho / (dv + zv);
-        // C_E terms: z * (e^{-s|z|}/|z| - e^{-s d}/d); the virtual one is subtracted with z < 0.
+        // C_E terms: z * (e^{-s|z|}/|z| - e^{-s d}/d); the virtual one is subtracted with
+        // z < 0.
         double ce = m_ce * (zr * exp_over_d_diff(s, zr, dr, er) +
                             zv * exp_over_d_diff(s, zv, dv, ev));
         // Fluence terms: [ (e^{-s zr} - e^{-s dr}) - (e^{-s zv} - e^{-s dv}) ] / s
         //              = [ (e^{-s zr} - e^{-s zv}) - (e^{-s dr} - e^{-s dv}) ] / s.
         double near = exp_diff_over_sigma(s, zr, zv - zr);
         double far = 0.0;
-        if (rho != kInf) far = exp_diff_over_sigma(s, dr, (zv * zv - zr * zr) / (dv + dr));
+        if (rho != kInf)
+            far = exp_diff_over_sigma(s, dr, (zv * zv - zr * zr) / (dv + dr));
         double phi = m_cphi / m_D * (near - far);
         return 2.0 * kPi * m_scale * (ce + phi);
     }
     case ProfileKind::Burley: {
         if (rho == kInf) return m_scale;
-        return m_scale * -(0.25 * std::expm1(-rho / m_d) + 0.75 * std::expm1(-rho / (3.0 * m_d)));
+        return m_scale *
+               -(0.25 * std::expm1(-rho / m_d) + 0.75 * std::expm1(-rho / (3.0 * m_d)));
     }
     }
     return 0.0;
@@ -274,7 +290,10 @@ double Profile::cutoff_radius(double fraction) const {
     while (m_total - disk(hi) > target && hi < 1e300) hi *= 2.0;
     for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
         double mid = 0.5 * (lo + hi);
-        if (m_total - disk(mid) > target) lo = mid; else hi = mid;
+        if (m_total - disk(mid) > target)
+            lo = mid;
+        else
+            hi = mid;
     }
     return hi;
 }

@@ -57,7 +57,8 @@ std::vector<Profile> constant_profiles(const SsDiffusionOptions& o) {
         glm::dvec3 ss, sa;
         m.resolve_coefficients(ss, sa);
         for (int ch = 0; ch < 3; ++ch)
-            out.push_back(Profile::from_coefficients(o.profile, {ss[ch] / u, sa[ch] / u, ior}));
+            out.push_back(
+                Profile::from_coefficients(o.profile, {ss[ch] / u, sa[ch] / u, ior}));
     }
     return out;
 }
@@ -68,7 +69,7 @@ std::vector<std::string> describe_material(const SsDiffusionOptions& o) {
     const MaterialSpec& m = o.material;
     std::vector<Profile> p = constant_profiles(o);
     std::vector<std::string> lines;
-    std::string source = m.uses_albedo_form()      ? "albedo/diffusemeanfreepath"
+    std::string source = m.uses_albedo_form()             ? "albedo/diffusemeanfreepath"
                          : (m.scattering || m.absorption) ? "scattering/absorption"
                                                           : "material " + m.preset;
     lines.push_back("material: " + source + ", profile " + profile_kind_name(o.profile) +
@@ -80,7 +81,8 @@ std::vector<std::string> describe_material(const SsDiffusionOptions& o) {
         ss[ch] = p[ch].alpha_prime() * p[ch].sigma_t_prime();
         sa[ch] = p[ch].sigma_t_prime() - ss[ch];
     }
-    lines.push_back("  albedo " + fmt3(albedo) + (m.albedo_from_file ? " (per point from file)" : ""));
+    lines.push_back("  albedo " + fmt3(albedo) +
+                    (m.albedo_from_file ? " (per point from file)" : ""));
     lines.push_back("  diffusemeanfreepath " + fmt3(dmfp) + " (scene units)" +
                     (m.dmfp_from_file ? " (per point from file)" : ""));
     if (o.profile != ProfileKind::Burley) {
@@ -114,37 +116,43 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
         for (std::size_t i = 0; i < n; ++i) {
             float a = area->data[i];
             if (!(a >= 0.0f) || !std::isfinite(a))
-                throw ValueError("channel '" + o.area_channel + "': negative or invalid area " +
-                                 std::to_string(a) + " at point " + std::to_string(i));
+                throw ValueError("channel '" + o.area_channel +
+                                 "': negative or invalid area " + std::to_string(a) +
+                                 " at point " + std::to_string(i));
             pb.areas[i] = a;
         }
     } else {
         rep.warnings.push_back("no '" + o.area_channel +
                                "' channel: using pi * radius^2 as each point's area");
-        for (std::size_t i = 0; i < n; ++i) pb.areas[i] = float(kPi) * in.radii[i] * in.radii[i];
+        for (std::size_t i = 0; i < n; ++i)
+            pb.areas[i] = float(kPi) * in.radii[i] * in.radii[i];
     }
     if (n > 0) {
-        const Channel& rad = require_channel(in, o.radiance_channel, 3, "-radiancechannel");
+        const Channel& rad =
+            require_channel(in, o.radiance_channel, 3, "-radiancechannel");
         for (std::size_t i = 0; i < n; ++i)
-            pb.irradiance[i] = {rad.data[3 * i], rad.data[3 * i + 1], rad.data[3 * i + 2]};
+            pb.irradiance[i] = {rad.data[3 * i], rad.data[3 * i + 1],
+                                rad.data[3 * i + 2]};
     }
 
     // Material: constant, or per point from the _albedo / _diffusemeanfreepath channels.
     const std::vector<Profile> constant = constant_profiles(o);
     if ((m.albedo_from_file || m.dmfp_from_file) && n > 0) {
-        const Channel* ach = m.albedo_from_file
-                                 ? &require_channel(in, o.albedo_channel, 3, "-albedo fromfile")
-                                 : nullptr;
-        const Channel* dch = m.dmfp_from_file ? &require_channel(in, o.dmfp_channel, 3,
-                                                                 "-diffusemeanfreepath fromfile")
-                                              : nullptr;
+        const Channel* ach = m.albedo_from_file ? &require_channel(in, o.albedo_channel,
+                                                                   3, "-albedo fromfile")
+                                                : nullptr;
+        const Channel* dch =
+            m.dmfp_from_file
+                ? &require_channel(in, o.dmfp_channel, 3, "-diffusemeanfreepath fromfile")
+                : nullptr;
         glm::dvec3 albedo0, dmfp0;
         m.resolve_albedo_dmfp(albedo0, dmfp0);
         const double u = m.unitlength, ior = m.resolved_ior();
         bool clamped = false;
         // Quantise per-point values so points share tables; coarsen until the
         // number of distinct profiles fits.
-        for (int albedo_steps = 65536, dmfp_steps = 1024;; albedo_steps /= 2, dmfp_steps /= 2) {
+        for (int albedo_steps = 65536, dmfp_steps = 1024;;
+             albedo_steps /= 2, dmfp_steps /= 2) {
             std::map<std::tuple<int64_t, int64_t>, uint32_t> index;
             std::vector<std::tuple<double, double>> keys;
             pb.profile_index.assign(n, glm::u32vec3(0));
@@ -154,12 +162,14 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
                     double a = ach ? ach->data[3 * i + ch] : albedo0[ch];
                     double d = dch ? dch->data[3 * i + ch] : dmfp0[ch];
                     if (!(a >= 0.0) || !std::isfinite(a))
-                        throw ValueError("channel '" + o.albedo_channel + "': impossible albedo " +
-                                         std::to_string(a) + " at point " + std::to_string(i));
+                        throw ValueError("channel '" + o.albedo_channel +
+                                         "': impossible albedo " + std::to_string(a) +
+                                         " at point " + std::to_string(i));
                     if (!(d > 0.0) || !std::isfinite(d))
-                        throw ValueError("channel '" + o.dmfp_channel +
-                                         "': diffuse mean free path must be positive, got " +
-                                         std::to_string(d) + " at point " + std::to_string(i));
+                        throw ValueError(
+                            "channel '" + o.dmfp_channel +
+                            "': diffuse mean free path must be positive, got " +
+                            std::to_string(d) + " at point " + std::to_string(i));
                     if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
                     int64_t ka = std::llround(a * albedo_steps);
                     int64_t kd = std::llround(std::log2(d) * dmfp_steps);
@@ -175,7 +185,8 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
             if (overflow && albedo_steps > 16) continue;
             pb.profiles.clear();
             for (auto [a, d] : keys)
-                pb.profiles.push_back(Profile::from_albedo_dmfp(o.profile, a, d * u, ior));
+                pb.profiles.push_back(
+                    Profile::from_albedo_dmfp(o.profile, a, d * u, ior));
             rep.distinct_profiles = keys.size();
             break;
         }
@@ -189,11 +200,13 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
 
     std::vector<glm::vec3> result;
     if (o.exact) {
-        std::vector<glm::dvec3> exact = evaluate_diffusion_exact(pb, {}, o.diffusion.progress);
+        std::vector<glm::dvec3> exact =
+            evaluate_diffusion_exact(pb, {}, o.diffusion.progress);
         result.resize(n);
         for (std::size_t i = 0; i < n; ++i) {
             glm::dvec3 v = exact[i];
-            for (int ch = 0; ch < 3; ++ch) result[i][ch] = std::isfinite(v[ch]) ? float(v[ch]) : 0.0f;
+            for (int ch = 0; ch < 3; ++ch)
+                result[i][ch] = std::isfinite(v[ch]) ? float(v[ch]) : 0.0f;
         }
     } else {
         result = evaluate_diffusion(pb, o.diffusion, &rep.stats);

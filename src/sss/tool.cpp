@@ -664,4 +664,17 @@ double Stopwatch::seconds() const {
     return static_cast<double>(now_ns() - m_start_ns) * 1e-9;
 }
 
+bool standard_option(const std::string& tool, const std::string& opt,
+                     const std::string& usage) {
+    if (opt == "h" || opt == "help") {
+        std::fputs(usage.c_str(), stdout);
+    } else if (opt == "version") {
+        std::fputs(version_report(tool).c_str(), stdout);
+    } else {
+        return false;
+    }
+    std::fflush(stdout);
+    return true;
+}
+
 } // namespace sss

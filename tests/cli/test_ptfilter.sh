@@ -23,15 +23,8 @@ fail() {
     failures=$((failures + 1))
 }
 
-# Runs a command, storing its exit status in $rc, stdout in $out, stderr in $err.
-run() {
-    set +e
-    "$@" >"$work/stdout" 2>"$work/stderr"
-    rc=$?
-    set -e
-    out="$(cat "$work/stdout")"
-    err="$(cat "$work/stderr")"
-}
+# shellcheck source=lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 # expect_rc CODE LABEL: checks the last run's exit status.
 expect_rc() {

@@ -14,15 +14,8 @@ fail() {
     exit 1
 }
 
-# Runs a command, storing its exit status in $rc, stdout in $out, stderr in $err.
-run() {
-    set +e
-    "$@" >"$work/stdout" 2>"$work/stderr"
-    rc=$?
-    set -e
-    out="$(cat "$work/stdout")"
-    err="$(cat "$work/stderr")"
-}
+# shellcheck source=lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 expect_rc() {
     [[ "$rc" == "$1" ]] || fail "expected exit $1, got $rc: ${*:2}"$'\n'"stdout: $out"$'\n'"stderr: $err"
