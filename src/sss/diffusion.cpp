@@ -616,10 +616,9 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
         return rc;
     };
 
-    // Receiver buckets: maximal nodes of at most kBucket points share one
+    // Receiver buckets: maximal nodes of at most kMaxBucket points share one
     // traversal. The classic criteria are per receiver, as PRMan does.
     const bool classic = options.criterion != Criterion::Error;
-    const uint32_t bucket_size = 64u;
     std::vector<uint32_t> buckets; // node index
     {
         std::vector<uint32_t> stack{0};
@@ -627,7 +626,7 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
             uint32_t k = stack.back();
             stack.pop_back();
             const Node& node = tree.nodes[k];
-            if (node.count <= bucket_size || node.child_count == 0) {
+            if (node.count <= kMaxBucket || node.child_count == 0) {
                 buckets.push_back(k);
                 continue;
             }
