@@ -44,6 +44,12 @@ public:
     /// Index of the offending point, or -1 when the error is not about one point.
     int64_t point() const { return m_point; }
 
+protected:
+    /// For subclasses that compose their own message (e.g. "file:line: ...").
+    struct Composed {};
+    FormatError(Composed, const std::string& message, const std::string& path)
+        : Error(message), m_path(path), m_point(-1) {}
+
 private:
     std::string m_path;
     int64_t m_point;

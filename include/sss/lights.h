@@ -1,0 +1,64 @@
+#pragma once
+/// \file lights.h
+/// RenderMan's standard light shaders resolved to world space, and the
+/// irradiance they give at a surface point: ambient() + diffuse(N), the sum
+/// over lights of Cl * max(0, N.L), with ray-traced shadows when a light asks
+/// for them.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "sss/ray_tracer.h"
+#include "sss/scene.h"
+
+namespace sss {
+
+/// A light in world space.
+struct Light {
+    enum class Kind { Ambient, Distant, Point, Spot };
+    Kind kind = Kind::Point;
+    glm::dvec3 color{1.0};       ///< intensity * lightcolor
+    glm::dvec3 from{0.0};        ///< world position (point, spot)
+    glm::dvec3 direction{0, 0, 1}; ///< unit direction the light travels (distant, spot): to - from
+    double cone_angle = 0.0;     ///< radians (spot)
+    double cone_delta = 0.0;     ///< radians (spot)
+    double beam_distribution = 2.0; ///< spot
+    bool shadows = false;        ///< ray-traced shadows
+    int samples = 1;             ///< shadow rays per shading point
+    /// Soft shadows: radius of the spherical (point/spot) emitter in world
+    /// units, or the angular radius in radians of a distant light's disk.
+    double size = 0.0;
+    std::string name;            ///< shader name, for messages
+    int scene_index = -1;        ///< index in Scene::lights
+};
+
+/// Resolves every light of the scene (parameter defaults as RenderMan's
+/// standard shaders; "from"/"to" in the light's shader space). Unknown light
+/// shaders give a warning string in `warnings` and an entry with color 0.
+std::vector<Light> resolve_lights(const Scene& scene, std::vector<std::string>* warnings);
+
+/// Irradiance at world point p with unit normal n from the lights listed in
+/// `active` (indices into `lights`): ambient lights add their colour, the
+/// others Cl * max(0, n.L), times the fraction of unoccluded shadow rays when
+/// the light has shadows and `tracer` is given. `seed` picks the sample
+/// pattern (deterministic; pass the point index). `ray_offset` is the origin
+/// offset along n used for shadow rays (world units).
+glm::dvec3 irradiance(const std::vector<Light>& lights, const std::vector<int>& active,
+                      const glm::dvec3& p, const glm::dvec3& n, const RayTracer* tracer,
+                      uint64_t seed, double ray_offset);
+
+/// Batched form used by the baker: irradiance for `count` points (arrays of
+/// positions, normals) into `out`; same values as the scalar form, but
+/// shadow rays are traced in packets. Not internally parallel.
+void irradiance_batch(const std::vector<Light>& lights, const std::vector<int>& active,
+                      const glm::vec3* p, const glm::vec3* n, std::size_t count,
+                      const RayTracer* tracer, uint64_t seed_base, double ray_offset,
+                      glm::dvec3* out);
+
+/// Improved Perlin gradient noise in [0, 1] (RenderMan's noise() range), deterministic.
+double noise3(const glm::dvec3& p);
+
+} // namespace sss

@@ -1,0 +1,63 @@
+#pragma once
+/// \file ray_tracer.h
+/// Ray tracing over the diced scene with Embree 3: occlusion (shadow) queries
+/// for ptbake and render, closest hits for render.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace sss {
+
+/// One shadow ray: origin, unit direction and the [tnear, tfar] interval.
+struct ShadowRay {
+    glm::vec3 origin;
+    glm::vec3 direction;
+    float tnear = 0.0f;
+    float tfar = 0.0f;
+};
+
+/// A closest hit.
+struct RayHit {
+    bool hit = false;
+    float t = 0.0f;
+    uint32_t mesh = 0;     ///< index of the mesh, in add_mesh order
+    uint32_t triangle = 0; ///< triangle index within the mesh
+    float u = 0.0f, v = 0.0f; ///< barycentrics of vertices 1 and 2
+    glm::vec3 geometric_normal{0.0f}; ///< unnormalised, as Embree returns it
+};
+
+/// Triangle meshes in an Embree scene. Build with add_mesh() then commit();
+/// queries are thread-safe after commit(). Results never depend on the
+/// thread count (every query is independent).
+class RayTracer {
+public:
+    RayTracer();
+    ~RayTracer();
+    RayTracer(const RayTracer&) = delete;
+    RayTracer& operator=(const RayTracer&) = delete;
+
+    /// Adds a mesh (3 indices per triangle) and returns its index. Data are copied.
+    uint32_t add_mesh(const std::vector<glm::vec3>& vertices,
+                      const std::vector<uint32_t>& triangles);
+    /// Builds the acceleration structure.
+    void commit();
+
+    /// True if anything is hit in (tnear, tfar).
+    bool occluded(const ShadowRay& ray) const;
+    /// Batch form: hit[i] = occluded(rays[i]); uses Embree packets/streams.
+    void occluded(const ShadowRay* rays, std::size_t count, uint8_t* hit) const;
+    /// Closest hit in (tnear, tfar).
+    RayHit intersect(const ShadowRay& ray) const;
+
+    /// Diagonal of the scene's bounding box (for ray offsets), 0 when empty.
+    float scene_extent() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+} // namespace sss

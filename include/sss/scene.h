@@ -1,0 +1,236 @@
+#pragma once
+/// \file scene.h
+/// The scene layer shared by ptbake and render: what a RIB file describes,
+/// resolved into world space. The RIB reader (rib.h) fills it; the dicer
+/// (dice.h), the lights (lights.h) and the tools read it.
+///
+/// Matrix convention: glm column vectors, p_parent = M * p_child. RenderMan
+/// writes matrices for row vectors (p * M); the 16 numbers of a RIB
+/// `Transform` loaded column-major into a glm::dmat4 give exactly our M, and
+/// `ConcatTransform m` becomes CTM = CTM * m. Camera space is RenderMan's:
+/// left-handed, x right, y up, +z into the screen.
+
+#include <array>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+namespace sss {
+
+using Matrix4 = glm::dmat4;
+
+/// Type of a RIB parameter ("float", "color", ...).
+enum class ParamType {
+    Float,
+    Integer,
+    String,
+    Color,
+    Point,
+    Vector,
+    Normal,
+    HPoint,
+    Matrix
+};
+/// Storage class of a RIB parameter (how many values a primitive carries).
+enum class ParamClass { Constant, Uniform, Varying, Vertex, FaceVarying, FaceVertex };
+
+/// Numbers per element of a type: 1 (float, integer, string), 3 (color,
+/// point, vector, normal), 4 (hpoint) or 16 (matrix).
+int param_type_components(ParamType type);
+const char* param_type_name(ParamType type);
+
+/// One "name" value pair of a RIB parameter list, with its resolved
+/// declaration (inline, `Declare`d or predeclared).
+struct Param {
+    std::string name; ///< bare name, without the inline declaration
+    ParamType type = ParamType::Float;
+    ParamClass storage = ParamClass::Uniform;
+    int array_size = 1;               ///< "float[2] st" -> 2
+    std::vector<double> numbers;      ///< all numbers, in RIB order
+    std::vector<std::string> strings; ///< for String parameters
+
+    /// Numbers per element = param_type_components(type) * array_size.
+    int element_size() const;
+    /// Number of elements given (numbers.size() / element_size(), or strings.size()).
+    std::size_t element_count() const;
+};
+
+/// A parameter list with typed getters. Getters return the default when the
+/// parameter is absent and throw ValueError when it has the wrong type or
+/// too few values.
+class ParamList {
+public:
+    std::vector<Param> items;
+
+    const Param* find(std::string_view name) const;
+    bool has(std::string_view name) const { return find(name) != nullptr; }
+    double get_float(std::string_view name, double fallback) const;
+    int get_int(std::string_view name, int fallback) const; ///< float or integer
+    std::string get_string(std::string_view name, const std::string& fallback) const;
+    /// color, point, vector, normal or 3 floats.
+    glm::dvec3 get_vec3(std::string_view name, const glm::dvec3& fallback) const;
+    /// Adds or replaces a parameter.
+    void set(Param p);
+};
+
+/// A shader call (`Surface`, `LightSource`, ...) with the transform in effect.
+struct ShaderRef {
+    std::string name;
+    ParamList params;
+    Matrix4 shader_to_world{1.0}; ///< the "shader" space: CTM at the call
+    std::string source;           ///< "file.rib:12" of the call
+};
+
+/// A spline basis for bicubic patches: 4x4 matrix (in RenderMan's row-vector
+/// layout, loaded as documented above) and its step. Default-constructed, it
+/// is the power basis; Attributes start with Bezier, the RI default.
+struct Basis {
+    Matrix4 matrix{1.0};
+    int step = 4;
+    std::string name = "power";
+};
+/// The named bases of the RI spec: bezier, b-spline (also "bspline"),
+/// catmull-rom (also "catmullrom"), hermite, power. nullopt if unknown.
+std::optional<Basis> named_basis(std::string_view name);
+
+/// The attribute state of a primitive or light (shared by many primitives).
+struct Attributes {
+    glm::dvec3 color{1.0};           ///< Color (Cs)
+    glm::dvec3 opacity{1.0};         ///< Opacity (Os)
+    int sides = 2;                   ///< Sides 1|2
+    bool orientation_inside = false; ///< Orientation "inside" (after ReverseOrientation)
+    double shading_rate = 1.0;
+    std::string shading_interpolation = "constant";
+    std::optional<ShaderRef> surface; ///< Surface
+    std::vector<int> lights_on;       ///< indices into Scene::lights, ascending
+    /// Every `Attribute "group" params`, by group ("cull", "dice", "identifier"...).
+    std::map<std::string, ParamList> groups;
+    Basis u_basis = *named_basis("bezier");
+    Basis v_basis = *named_basis("bezier");
+    /// `Attribute "identifier" "name"` if given, else "".
+    std::string name() const;
+};
+
+/// The geometric primitives the scene layer knows.
+enum class PrimitiveKind {
+    Polygon,
+    GeneralPolygon,
+    PointsPolygons,
+    PointsGeneralPolygons,
+    SubdivisionMesh,
+    Sphere,
+    Cylinder,
+    Cone,
+    Disk,
+    Torus,
+    Hyperboloid,
+    Paraboloid,
+    Patch,
+    PatchMesh,
+    Teapot
+};
+const char* primitive_kind_name(PrimitiveKind kind);
+
+/// One primitive as the RIB gave it, in its object space.
+struct Primitive {
+    PrimitiveKind kind = PrimitiveKind::Polygon;
+    /// Positional numbers: quadric arguments in RIB order (Sphere: radius zmin
+    /// zmax thetamax; Cylinder: radius zmin zmax thetamax; Cone: height radius
+    /// thetamax; Disk: height radius thetamax; Torus: major minor phimin phimax
+    /// thetamax; Hyperboloid: x1 y1 z1 x2 y2 z2 thetamax; Paraboloid: rmax zmin
+    /// zmax thetamax). Angles in degrees, as in the RIB.
+    std::vector<double> args;
+    /// Topology. GeneralPolygon: nverts per loop. PointsPolygons: nverts per
+    /// face + verts. PointsGeneralPolygons: nloops per face, nverts per loop,
+    /// verts. SubdivisionMesh: nverts per face + verts.
+    std::vector<int> nloops;
+    std::vector<int> nverts;
+    std::vector<int> verts;
+    /// Patch / PatchMesh type ("bicubic" or "bilinear"); SubdivisionMesh scheme.
+    std::string type;
+    /// PatchMesh: vertex counts and wrap modes ("periodic" -> true).
+    int nu = 0;
+    int nv = 0;
+    bool uwrap = false;
+    bool vwrap = false;
+    /// SubdivisionMesh tags: names, nargs (2 per tag: ints, floats), intargs, floatargs.
+    std::vector<std::string> tags;
+    std::vector<int> tag_nargs;
+    std::vector<int> tag_intargs;
+    std::vector<double> tag_floatargs;
+    /// "P", optional "N", "Cs", and anything else given.
+    ParamList params;
+    Matrix4 object_to_world{1.0};
+    std::shared_ptr<const Attributes> attributes;
+    std::string source; ///< "file.rib:12" of the statement
+};
+
+/// A light source instance.
+struct LightInstance {
+    ShaderRef shader;   ///< ambientlight, distantlight, pointlight, spotlight, *_rts...
+    std::string handle; ///< the RIB handle (integer sequence number or string)
+    bool area = false;  ///< declared with AreaLightSource
+};
+
+/// `Display name type mode params`.
+struct DisplaySpec {
+    std::string name;
+    std::string type; ///< "file", "openexr", "tiff", "png", "it", "framebuffer"...
+    std::string mode; ///< "rgba", "rgb", "_radiance_t", "Ci,a"...
+    ParamList params;
+    bool additional = false; ///< the name started with '+'
+};
+
+/// The camera and image options in effect at WorldBegin.
+struct Camera {
+    Matrix4 world_to_camera{1.0};
+    bool perspective = false; ///< RI default projection is orthographic
+    double fov = 90.0;        ///< degrees, perspective only
+    int xres = 640;
+    int yres = 480;
+    double pixel_aspect = 1.0;
+    /// ScreenWindow left right bottom top; nullopt = RI default from the frame aspect.
+    std::optional<std::array<double, 4>> screen_window;
+    double near_clip = 1e-10; ///< Clipping hither
+    double far_clip = 1e30;   ///< Clipping yon
+
+    /// The screen window in effect (given or default).
+    std::array<double, 4> resolved_screen_window() const;
+    /// Length in world (camera) units of one raster pixel at camera-space
+    /// distance `distance` from the eye (perspective) or anywhere (orthographic).
+    double pixel_size_at(double distance) const;
+};
+
+/// Image and render options.
+struct RenderOptions {
+    Camera camera;
+    int pixel_samples[2] = {2, 2};
+    std::vector<DisplaySpec> displays;
+    /// `DisplayChannel "color _radiance_t"` declarations: name -> type string.
+    std::vector<std::pair<std::string, std::string>> display_channels;
+    /// Every `Option "group" params`.
+    std::map<std::string, ParamList> groups;
+    std::string hider;
+    std::optional<int> frame; ///< number of the FrameBegin block read, if any
+};
+
+/// A whole scene (one frame).
+struct Scene {
+    RenderOptions options;
+    std::vector<Primitive> primitives;
+    std::vector<LightInstance> lights;
+    /// CoordinateSystem name -> space-to-world.
+    std::map<std::string, Matrix4> coordinate_systems;
+    /// Non-fatal problems met while reading (unknown statements...), each
+    /// "file.rib:12: ..."; the tool prints them as warnings.
+    std::vector<std::string> warnings;
+    std::string path; ///< the RIB file it was read from
+};
+
+} // namespace sss
