@@ -22,13 +22,17 @@ struct DiceControl {
     double spacing = 0.0;
     /// Camera for ShadingRate dicing (spacing == 0).
     const Camera* camera = nullptr;
+    /// Edge lengths are multiplied by this (>= 1): surfaces that only cast
+    /// shadows need their shape, not micropolygon density.
+    double coarsening = 1.0;
     /// Safety cap: no primitive is diced into more than this many micropolygons
     /// (a ValueError names the primitive instead).
     std::size_t max_micropolygons = 200'000'000;
 
     /// Micropolygon edge length wanted at world point p for a primitive with
     /// the given shading rate: `spacing`, or sqrt(shading_rate) pixels of the
-    /// camera at p's distance from the eye (never below the near clip).
+    /// camera at p's distance from the eye (never below the near clip); times
+    /// `coarsening`.
     double edge_length_at(const glm::dvec3& world_p, double shading_rate) const;
 };
 
