@@ -20,19 +20,20 @@ namespace sss {
 struct Light {
     enum class Kind { Ambient, Distant, Point, Spot };
     Kind kind = Kind::Point;
-    glm::dvec3 color{1.0};       ///< intensity * lightcolor
-    glm::dvec3 from{0.0};        ///< world position (point, spot)
-    glm::dvec3 direction{0, 0, 1}; ///< unit direction the light travels (distant, spot): to - from
-    double cone_angle = 0.0;     ///< radians (spot)
-    double cone_delta = 0.0;     ///< radians (spot)
+    glm::dvec3 color{1.0}; ///< intensity * lightcolor
+    glm::dvec3 from{0.0};  ///< world position (point, spot)
+    glm::dvec3 direction{
+        0, 0, 1}; ///< unit direction the light travels (distant, spot): to - from
+    double cone_angle = 0.0;        ///< radians (spot)
+    double cone_delta = 0.0;        ///< radians (spot)
     double beam_distribution = 2.0; ///< spot
-    bool shadows = false;        ///< ray-traced shadows
-    int samples = 1;             ///< shadow rays per shading point
+    bool shadows = false;           ///< ray-traced shadows
+    int samples = 1;                ///< shadow rays per shading point
     /// Soft shadows: radius of the spherical (point/spot) emitter in world
     /// units, or the angular radius in radians of a distant light's disk.
     double size = 0.0;
-    std::string name;            ///< shader name, for messages
-    int scene_index = -1;        ///< index in Scene::lights
+    std::string name;     ///< shader name, for messages
+    int scene_index = -1; ///< index in Scene::lights
 };
 
 /// Resolves every light of the scene (parameter defaults as RenderMan's
@@ -52,7 +53,9 @@ glm::dvec3 irradiance(const std::vector<Light>& lights, const std::vector<int>& 
 
 /// Batched form used by the baker: irradiance for `count` points (arrays of
 /// positions, normals) into `out`; same values as the scalar form, but
-/// shadow rays are traced in packets. Not internally parallel.
+/// shadow rays are traced in packets. Point i uses the seed seed_base + i, so
+/// out[i] == irradiance(..., p[i], n[i], tracer, seed_base + i, ray_offset)
+/// exactly. Not internally parallel.
 void irradiance_batch(const std::vector<Light>& lights, const std::vector<int>& active,
                       const glm::vec3* p, const glm::vec3* n, std::size_t count,
                       const RayTracer* tracer, uint64_t seed_base, double ray_offset,

@@ -23,9 +23,9 @@ struct ShadowRay {
 struct RayHit {
     bool hit = false;
     float t = 0.0f;
-    uint32_t mesh = 0;     ///< index of the mesh, in add_mesh order
-    uint32_t triangle = 0; ///< triangle index within the mesh
-    float u = 0.0f, v = 0.0f; ///< barycentrics of vertices 1 and 2
+    uint32_t mesh = 0;                ///< index of the mesh, in add_mesh order
+    uint32_t triangle = 0;            ///< triangle index within the mesh
+    float u = 0.0f, v = 0.0f;         ///< barycentrics of vertices 1 and 2
     glm::vec3 geometric_normal{0.0f}; ///< unnormalised, as Embree returns it
 };
 
