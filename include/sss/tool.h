@@ -74,6 +74,14 @@ private:
     std::size_t m_pos = 0;
 };
 
+struct MaterialSpec;
+/// Parses the PRMan material options shared by ptfilter and ptbake
+/// (-material, -unitlength, -scattering, -absorption, -albedo r g b|fromfile,
+/// -diffusemeanfreepath r g b|fromfile, -ior) into spec. Returns false when
+/// opt is not one of them; allow_fromfile = false rejects `fromfile`.
+bool material_option(ArgScanner& args, const std::string& opt, MaterialSpec& spec,
+                     bool allow_fromfile = true);
+
 /// Resolves a -threads value: N > 0 is exact, 0 = every usable core (CPU
 /// affinity and cgroup quota aware), N < 0 = usable cores minus |N| (at least 1).
 int resolve_thread_count(int requested);

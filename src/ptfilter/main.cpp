@@ -57,16 +57,6 @@ std::string usage() {
     return buf;
 }
 
-std::optional<glm::dvec3> triple_or_fromfile(sss::ArgScanner& args,
-                                             const std::string& opt, bool& fromfile) {
-    if (args.peek() == "fromfile") {
-        args.value(opt);
-        fromfile = true;
-        return std::nullopt;
-    }
-    return args.triple(opt);
-}
-
 int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::SsDiffusionOptions opt;
@@ -90,25 +80,8 @@ int run(const std::vector<std::string>& argv) {
                 throw sss::UsageError("filter '" + f +
                                       "' is not supported (only ssdiffusion)");
             have_filter = true;
-        } else if (o == "material") {
-            opt.material.preset = args.value(o);
-            if (!sss::find_material(opt.material.preset))
-                throw sss::UsageError("option -material: unknown material '" +
-                                      opt.material.preset +
-                                      "' (known: " + sss::material_names() + ")");
-        } else if (o == "unitlength") {
-            opt.material.unitlength = args.positive(o);
-        } else if (o == "scattering") {
-            opt.material.scattering = args.triple(o);
-        } else if (o == "absorption") {
-            opt.material.absorption = args.triple(o);
-        } else if (o == "albedo") {
-            opt.material.albedo =
-                triple_or_fromfile(args, o, opt.material.albedo_from_file);
-        } else if (o == "diffusemeanfreepath") {
-            opt.material.dmfp = triple_or_fromfile(args, o, opt.material.dmfp_from_file);
-        } else if (o == "ior") {
-            opt.material.ior = args.positive(o);
+        } else if (sss::material_option(args, o, opt.material)) {
+            continue;
         } else if (o == "maxsolidangle") {
             opt.diffusion.max_solid_angle = args.positive(o);
         } else if (o == "profile") {

@@ -4,6 +4,9 @@
 
 #include "sss/tool.h"
 
+#include "sss/error.h"
+#include "sss/material.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -674,6 +677,47 @@ bool standard_option(const std::string& tool, const std::string& opt,
         return false;
     }
     std::fflush(stdout);
+    return true;
+}
+
+namespace {
+
+std::optional<glm::dvec3> triple_or_fromfile(ArgScanner& args, const std::string& opt,
+                                             bool& fromfile, bool allow) {
+    if (args.peek() == "fromfile") {
+        if (!allow)
+            throw UsageError("option -" + opt + ": fromfile is not available here");
+        args.value(opt);
+        fromfile = true;
+        return std::nullopt;
+    }
+    return args.triple(opt);
+}
+
+} // namespace
+
+bool material_option(ArgScanner& args, const std::string& o, MaterialSpec& m,
+                     bool allow_fromfile) {
+    if (o == "material") {
+        m.preset = args.value(o);
+        if (!find_material(m.preset))
+            throw UsageError("option -material: unknown material '" + m.preset +
+                             "' (known: " + material_names() + ")");
+    } else if (o == "unitlength") {
+        m.unitlength = args.positive(o);
+    } else if (o == "scattering") {
+        m.scattering = args.triple(o);
+    } else if (o == "absorption") {
+        m.absorption = args.triple(o);
+    } else if (o == "albedo") {
+        m.albedo = triple_or_fromfile(args, o, m.albedo_from_file, allow_fromfile);
+    } else if (o == "diffusemeanfreepath") {
+        m.dmfp = triple_or_fromfile(args, o, m.dmfp_from_file, allow_fromfile);
+    } else if (o == "ior") {
+        m.ior = args.positive(o);
+    } else {
+        return false;
+    }
     return true;
 }
 
