@@ -92,7 +92,7 @@ std::string scene_text(const std::vector<DomeLight>& lights, int rings, int segm
     rib << "] \"N\" [";
     for (const glm::dvec3& p : v) rib << p.x << ' ' << p.y << ' ' << p.z << ' ';
     rib << "]\n";
-    rib << "Polygon \"P\" [-4 -1 -4  4 -1 -4  4 -1 4  -4 -1 4]\n";
+    rib << "Polygon \"P\" [-4 -1 -4  -4 -1 4  4 -1 4  4 -1 -4]\n"; // faces +y
     rib << "WorldEnd\n";
     return rib.str();
 }

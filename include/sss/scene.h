@@ -44,6 +44,8 @@ enum class ParamClass { Constant, Uniform, Varying, Vertex, FaceVarying, FaceVer
 /// point, vector, normal), 4 (hpoint) or 16 (matrix).
 int param_type_components(ParamType type);
 const char* param_type_name(ParamType type);
+/// RIB spelling of a storage class ("uniform", "facevarying", ...).
+const char* param_class_name(ParamClass storage);
 
 /// One "name" value pair of a RIB parameter list, with its resolved
 /// declaration (inline, `Declare`d or predeclared).

@@ -82,6 +82,21 @@ struct MaterialSpec;
 bool material_option(ArgScanner& args, const std::string& opt, MaterialSpec& spec,
                      bool allow_fromfile = true);
 
+/// The options of every tool that runs a job: -threads N, -progress 0|1|2
+/// and its alias -Progress (= 1).
+struct RunOptions {
+    int threads = 0;
+    int progress = 0;
+};
+/// Parses one of them into run; false when opt is not one of them.
+bool run_option(ArgScanner& args, const std::string& opt, RunOptions& run);
+
+struct PointCloudWriteOptions;
+/// Parses the point-cloud output options (-compress 0|1, -ptcversion 0|1|2);
+/// false when opt is not one of them.
+bool write_option(ArgScanner& args, const std::string& opt,
+                  PointCloudWriteOptions& write);
+
 /// Resolves a -threads value: N > 0 is exact, 0 = every usable core (CPU
 /// affinity and cgroup quota aware), N < 0 = usable cores minus |N| (at least 1).
 int resolve_thread_count(int requested);

@@ -61,7 +61,7 @@ int run(const std::vector<std::string>& argv) {
     sss::MaterialSpec material;
     bool have_material = false;
     std::vector<std::string> files;
-    int threads = 0, progress = 0;
+    sss::RunOptions running;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -85,16 +85,10 @@ int run(const std::vector<std::string>& argv) {
             }
         } else if (o == "mfpfraction") {
             opt.mfp_fraction = args.positive(o);
-        } else if (o == "compress") {
-            opt.write.compress = args.integer(o, 0, 1) != 0;
-        } else if (o == "ptcversion") {
-            opt.write.ptc_version = args.integer(o, 0, 2);
-        } else if (o == "threads") {
-            threads = args.integer(o, -1024, 1024);
-        } else if (o == "progress") {
-            progress = args.integer(o, 0, 2);
-        } else if (o == "Progress") {
-            progress = std::max(progress, 1);
+        } else if (sss::write_option(args, o, opt.write)) {
+            continue;
+        } else if (sss::run_option(args, o, running)) {
+            continue;
         } else {
             throw sss::UsageError("unknown option -" + o);
         }
@@ -112,8 +106,8 @@ int run(const std::vector<std::string>& argv) {
     if (!opt.output.empty())
         opt.output = sss::expand_frame_pattern(opt.output, opt.frame, "option -o");
 
-    sss::ThreadLimit limit(sss::resolve_thread_count(threads));
-    sss::Progress reporter(progress > 0);
+    sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
+    sss::Progress reporter(running.progress > 0);
     opt.progress = &reporter;
     sss::Stopwatch watch;
 
@@ -125,7 +119,7 @@ int run(const std::vector<std::string>& argv) {
 
     sss::BakeReport report = sss::bake_scene(scene, opt);
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
-    if (progress > 0) {
+    if (running.progress > 0) {
         std::printf("ptbake: %s: %zu primitives, %zu lights, %zu baked, %zu occluders "
                     "(%zu triangles, %zu shadowed lights)\n",
                     rib.c_str(), scene.primitives.size(), scene.lights.size(),
@@ -143,7 +137,7 @@ int run(const std::vector<std::string>& argv) {
                     "write %.3f s, total %.3f s, threads %d\n",
                     read_s, report.dice_seconds, report.trace_build_seconds,
                     report.light_seconds, report.write_seconds, watch.seconds(),
-                    sss::resolve_thread_count(threads));
+                    sss::resolve_thread_count(running.threads));
         std::fflush(stdout);
     }
     return 0;

@@ -63,7 +63,7 @@ int run(const std::vector<std::string>& argv) {
     sss::PointCloudWriteOptions wopt;
     std::vector<std::string> files;
     bool have_filter = false;
-    int threads = 0, progress = 0;
+    sss::RunOptions running;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -102,16 +102,10 @@ int run(const std::vector<std::string>& argv) {
             opt.radiance_channel = args.value(o);
         } else if (o == "keepchannels") {
             opt.keep_channels = args.integer(o, 0, 1) != 0;
-        } else if (o == "compress") {
-            wopt.compress = args.integer(o, 0, 1) != 0;
-        } else if (o == "ptcversion") {
-            wopt.ptc_version = args.integer(o, 0, 2);
-        } else if (o == "threads") {
-            threads = args.integer(o, -1024, 1024);
-        } else if (o == "progress") {
-            progress = args.integer(o, 0, 2);
-        } else if (o == "Progress") {
-            progress = std::max(progress, 1);
+        } else if (sss::write_option(args, o, wopt)) {
+            continue;
+        } else if (sss::run_option(args, o, running)) {
+            continue;
         } else if (o == "organize") {
             args.integer(o, 0, 1);
         } else {
@@ -128,11 +122,11 @@ int run(const std::vector<std::string>& argv) {
 
     const std::string out_path = files.back();
     files.pop_back();
-    sss::ThreadLimit limit(sss::resolve_thread_count(threads));
-    sss::Progress reporter(progress > 0);
+    sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
+    sss::Progress reporter(running.progress > 0);
     opt.diffusion.progress = &reporter;
     sss::Stopwatch watch;
-    if (progress > 0) {
+    if (running.progress > 0) {
         for (const std::string& line : material)
             std::printf("ptfilter: %s\n", line.c_str());
         std::fflush(stdout);
@@ -157,13 +151,13 @@ int run(const std::vector<std::string>& argv) {
     double filter_s = watch.seconds() - read_s;
 
     sss::write_point_cloud(out, out_path, wopt);
-    if (progress > 0) {
+    if (running.progress > 0) {
         std::printf(
             "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
-            cloud.size(), sss::resolve_thread_count(threads),
+            cloud.size(), sss::resolve_thread_count(running.threads),
             opt.diffusion.max_solid_angle, sss::criterion_name(opt.diffusion.criterion),
             opt.exact ? " (exact)" : "");
-        if (progress > 1 && !opt.exact)
+        if (running.progress > 1 && !opt.exact)
             std::printf(
                 "ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
                 "terms, %.2f disk integrals\n",

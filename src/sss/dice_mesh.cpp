@@ -87,27 +87,7 @@ std::vector<glm::dvec3> read_positions(const Primitive& prim) {
     return points;
 }
 
-namespace {
-
-const char* class_name(ParamClass c) {
-    switch (c) {
-    case ParamClass::Constant:
-        return "constant";
-    case ParamClass::Uniform:
-        return "uniform";
-    case ParamClass::Varying:
-        return "varying";
-    case ParamClass::Vertex:
-        return "vertex";
-    case ParamClass::FaceVarying:
-        return "facevarying";
-    case ParamClass::FaceVertex:
-        return "facevertex";
-    }
-    return "?";
-}
-
-} // namespace
+namespace {} // namespace
 
 CornerVec3::CornerVec3(const Primitive& prim, std::string_view name, std::size_t faces,
                        std::size_t points, std::size_t corners) {
@@ -136,7 +116,7 @@ CornerVec3::CornerVec3(const Primitive& prim, std::string_view name, std::size_t
         break;
     }
     if (p->element_count() < needed)
-        throw_mesh_error(prim, quoted + " (" + class_name(p->storage) + ") has " +
+        throw_mesh_error(prim, quoted + " (" + param_class_name(p->storage) + ") has " +
                                    std::to_string(p->element_count()) + " values, " +
                                    std::to_string(needed) + " needed");
     for (std::size_t i = 0; i < 3 * needed; ++i)

@@ -385,24 +385,6 @@ std::optional<ParamClass> class_from_name(std::string_view c) {
     return std::nullopt;
 }
 
-const char* class_name(ParamClass c) {
-    switch (c) {
-    case ParamClass::Constant:
-        return "constant";
-    case ParamClass::Uniform:
-        return "uniform";
-    case ParamClass::Varying:
-        return "varying";
-    case ParamClass::Vertex:
-        return "vertex";
-    case ParamClass::FaceVarying:
-        return "facevarying";
-    case ParamClass::FaceVertex:
-        return "facevertex";
-    }
-    return "?";
-}
-
 /// Parses "[class] type[[n]] [name]". Returns an error message or "" on success.
 std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
                        std::string* name, std::string* type_text = nullptr) {
@@ -1862,8 +1844,8 @@ private:
             if (p.name == "P") continue;
             std::size_t want = expected_for(p.storage, n);
             if (p.element_count() != want)
-                fail(s, "parameter \"" + p.name + "\" (" + class_name(p.storage) + " " +
-                            param_type_name(p.type) + ") has " +
+                fail(s, "parameter \"" + p.name + "\" (" + param_class_name(p.storage) +
+                            " " + param_type_name(p.type) + ") has " +
                             std::to_string(p.element_count()) + " values, expected " +
                             std::to_string(want));
         }

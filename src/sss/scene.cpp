@@ -31,6 +31,24 @@ int param_type_components(ParamType type) {
     return 1;
 }
 
+const char* param_class_name(ParamClass c) {
+    switch (c) {
+    case ParamClass::Constant:
+        return "constant";
+    case ParamClass::Uniform:
+        return "uniform";
+    case ParamClass::Varying:
+        return "varying";
+    case ParamClass::Vertex:
+        return "vertex";
+    case ParamClass::FaceVarying:
+        return "facevarying";
+    case ParamClass::FaceVertex:
+        return "facevertex";
+    }
+    return "?";
+}
+
 const char* param_type_name(ParamType type) {
     switch (type) {
     case ParamType::Float:

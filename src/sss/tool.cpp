@@ -6,6 +6,7 @@
 
 #include "sss/error.h"
 #include "sss/material.h"
+#include "sss/point_cloud_io.h"
 
 #include <algorithm>
 #include <cctype>
@@ -715,6 +716,30 @@ bool material_option(ArgScanner& args, const std::string& o, MaterialSpec& m,
         m.dmfp = triple_or_fromfile(args, o, m.dmfp_from_file, allow_fromfile);
     } else if (o == "ior") {
         m.ior = args.positive(o);
+    } else {
+        return false;
+    }
+    return true;
+}
+
+bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
+    if (o == "threads") {
+        run.threads = args.integer(o, -1024, 1024);
+    } else if (o == "progress") {
+        run.progress = args.integer(o, 0, 2);
+    } else if (o == "Progress") {
+        run.progress = std::max(run.progress, 1);
+    } else {
+        return false;
+    }
+    return true;
+}
+
+bool write_option(ArgScanner& args, const std::string& o, PointCloudWriteOptions& write) {
+    if (o == "compress") {
+        write.compress = args.integer(o, 0, 1) != 0;
+    } else if (o == "ptcversion") {
+        write.ptc_version = args.integer(o, 0, 2);
     } else {
         return false;
     }

@@ -19,24 +19,11 @@ work="$(mktemp -d "${TMPDIR:-/tmp}/sss_test_ptbake.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 cd "$work"
 
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-
 # shellcheck source=lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+# shellcheck source=checks.sh
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
-expect_rc() {
-    if [[ "$rc" != "$1" ]]; then
-        fail "$2: expected exit $1, got $rc"$'\n'"  stdout: ${out:0:400}"$'\n'"  stderr: $err"
-        return 1
-    fi
-}
-
-points() { "$ptinfo" "$1" 2>/dev/null | sed -n 's/^points: *//p'; }
-has_channel() { "$ptinfo" "$1" 2>/dev/null | grep -Eq "^ *$2\$"; }
 # channel_stat FILE CHANNEL-LINE FIELD [ROW]: min/mean/max of a channel from ptinfo.
 channel_stat() {
     "$ptinfo" "$1" | grep -A"${4:-1}" "^ *$2\$" | sed -n "$((${4:-1} + 1))p" |
@@ -176,8 +163,4 @@ expect_rc 1 "bad parameter" || true
 cmp -s sphere.ptc keep.ptc || fail "a failed bake changed an existing output"
 ls -a | grep -q '\.tmp$' && fail "temporary files left behind: $(ls -a | grep '\.tmp$')"
 
-if ((failures > 0)); then
-    echo "$failures check(s) failed" >&2
-    exit 1
-fi
-echo "all ptbake CLI checks passed"
+finish_checks ptbake

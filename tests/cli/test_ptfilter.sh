@@ -17,32 +17,10 @@ work="$(mktemp -d "${TMPDIR:-/tmp}/sss_test_ptfilter.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 cd "$work"
 
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-
 # shellcheck source=lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
-
-# expect_rc CODE LABEL: checks the last run's exit status.
-expect_rc() {
-    if [[ "$rc" != "$1" ]]; then
-        fail "$2: expected exit $1, got $rc"$'\n'"  stdout: ${out:0:400}"$'\n'"  stderr: $err"
-        return 1
-    fi
-}
-
-# points FILE: the point count ptinfo reports ("" if unreadable).
-points() {
-    "$ptinfo" "$1" 2>/dev/null | sed -n 's/^points: *//p'
-}
-
-# has_channel FILE "color _ssdiffusion"
-has_channel() {
-    "$ptinfo" "$1" 2>/dev/null | grep -Eq "^ *$2\$"
-}
+# shellcheck source=checks.sh
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
 # Entries of a folder other than the given names (temporaries, stray outputs).
 extra_files() { # folder name...
@@ -312,8 +290,4 @@ run "$ptfilter" -ssdiffusion -exact small.ptc exact.ptc
 expect_rc 0 "-exact" || true
 rm -f opts.ptc exact.ptc
 
-if ((failures > 0)); then
-    echo "$failures check(s) failed" >&2
-    exit 1
-fi
-echo "all ptfilter CLI checks passed"
+finish_checks ptfilter

@@ -1,0 +1,37 @@
+# Check helpers for CLI tests that run every check and report all failures
+# (sourced after lib.sh). Call finish_checks NAME at the end.
+
+failures=0
+
+# fail MESSAGE: records a failed check.
+fail() {
+    echo "FAIL: $*" >&2
+    failures=$((failures + 1))
+}
+
+# expect_rc CODE LABEL: checks the last run's exit status.
+expect_rc() {
+    if [[ "$rc" != "$1" ]]; then
+        fail "$2: expected exit $1, got $rc"$'\n'"  stdout: ${out:0:400}"$'\n'"  stderr: $err"
+        return 1
+    fi
+}
+
+# points FILE: the point count ptinfo reports ("" if unreadable). Needs $ptinfo.
+points() {
+    "$ptinfo" "$1" 2>/dev/null | sed -n 's/^points: *//p'
+}
+
+# has_channel FILE "color _ssdiffusion"
+has_channel() {
+    "$ptinfo" "$1" 2>/dev/null | grep -Eq "^ *$2\$"
+}
+
+# finish_checks NAME: exits 1 if any check failed.
+finish_checks() {
+    if ((failures > 0)); then
+        echo "$failures check(s) failed" >&2
+        exit 1
+    fi
+    echo "all $1 CLI checks passed"
+}
