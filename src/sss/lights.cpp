@@ -76,6 +76,7 @@
 #include <glm/matrix.hpp>
 #include <glm/vec4.hpp>
 
+#include "hash.h"
 #include "sss/error.h"
 
 namespace sss {
@@ -211,13 +212,6 @@ bool resolve_one(const ShaderRef& shader, const std::string& where, Light& light
 // ---------------------------------------------------------------------------
 // Irradiance
 
-uint64_t mix64(uint64_t z) {
-    z += 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
 /// Uniform in [0, 1) from the top 53 bits.
 double unit_double(uint64_t h) {
     return static_cast<double>(h >> 11) * 0x1.0p-53;
@@ -351,14 +345,15 @@ ShadowRay ray_to(const glm::dvec3& origin, const glm::dvec3& target) {
 
     glm::dvec3 t1, t2;
     basis_around(inc.to_light, &t1, &t2);
-    const uint64_t h =
-        mix64(seed ^ mix64(0x6c69676874ull + static_cast<uint64_t>(pl.index)));
+    const uint64_t h = detail::splitmix64(
+        seed ^ detail::splitmix64(0x6c69676874ull + static_cast<uint64_t>(pl.index)));
     const double rotation = unit_double(h);
     const double cos_max = std::cos(l.size); // distant: cone half-angle
     for (int k = 0; k < pl.rays; ++k) {
         // Stratified in area: sample k lies in the k-th of `rays` equal rings.
         const double radial =
-            (k + unit_double(mix64(h + 1 + static_cast<uint64_t>(k)))) / pl.rays;
+            (k + unit_double(detail::splitmix64(h + 1 + static_cast<uint64_t>(k)))) /
+            pl.rays;
         double turn = rotation + k * 0.6180339887498949; // golden-ratio spiral
         turn -= std::floor(turn);
         const double phi = 2.0 * kPi * turn;

@@ -11,6 +11,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "hash.h"
 #include "sss/error.h"
 #include "sss/lights.h"
 
@@ -21,13 +22,6 @@ namespace {
 /// The permutation, stored twice so that p[p[x] + y] needs no wrapping.
 using PermutationTable = std::array<uint8_t, 512>;
 
-uint64_t splitmix64(uint64_t& state) {
-    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
 PermutationTable make_permutation() {
     std::array<uint8_t, 256> p{};
     for (int i = 0; i < 256; ++i) p[i] = static_cast<uint8_t>(i);
@@ -36,7 +30,8 @@ PermutationTable make_permutation() {
     uint64_t state = 0x73737320'6e6f6973ull; // "sss nois"
     for (int i = 255; i > 0; --i) {
         // Multiply-shift maps 32 random bits onto [0, i]; the tiny bias is harmless here.
-        const uint64_t r = splitmix64(state) >> 32;
+        const uint64_t r = detail::splitmix64(state) >> 32;
+        state += detail::kSplitMixIncrement;
         const int j = static_cast<int>((r * static_cast<uint64_t>(i + 1)) >> 32);
         std::swap(p[i], p[j]);
     }

@@ -11,6 +11,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "hash.h"
 #include "sss/error.h"
 
 namespace sss {
@@ -25,18 +26,12 @@ struct Sample {
     double radius;
 };
 
-uint64_t splitmix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
 /// Uniform number in [0, 1) keyed by (seed, point index, dimension): the same
 /// point gets the same jitter whatever order points are generated in.
 double hash_uniform(uint64_t seed, uint64_t index, uint64_t dim) {
-    uint64_t x = splitmix64(splitmix64(seed) ^ (index * 0xd1b54a32d192ed03ull));
-    x = splitmix64(x + dim);
+    uint64_t x =
+        detail::splitmix64(detail::splitmix64(seed) ^ (index * 0xd1b54a32d192ed03ull));
+    x = detail::splitmix64(x + dim);
     return static_cast<double>(x >> 11) * 0x1.0p-53;
 }
 

@@ -4,6 +4,7 @@
 
 #include "sss/tool.h"
 
+#include "hash.h"
 #include "sss/error.h"
 #include "sss/material.h"
 #include "sss/point_cloud_io.h"
@@ -139,14 +140,6 @@ std::string errno_text(int err) {
     return std::strerror(err);
 }
 
-// splitmix64: a small, well-mixed 64-bit hash used for temporary names.
-uint64_t splitmix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
 std::string random_alnum(int n) {
     static const uint64_t seed = [] {
         std::random_device rd;
@@ -158,12 +151,12 @@ std::string random_alnum(int n) {
     static std::atomic<uint64_t> counter{0};
     static const char alphabet[] =
         "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz";
-    uint64_t x = splitmix64(seed + 0x632be59bd9b4e019ull * counter.fetch_add(1));
+    uint64_t x = detail::splitmix64(seed + 0x632be59bd9b4e019ull * counter.fetch_add(1));
     std::string out;
     for (int i = 0; i < n; ++i) {
         out += alphabet[x % 62];
         x /= 62;
-        if (x == 0) x = splitmix64(seed ^ uint64_t(i));
+        if (x == 0) x = detail::splitmix64(seed ^ uint64_t(i));
     }
     return out;
 }
