@@ -155,6 +155,8 @@ int main(int argc, char** argv) {
     const sss::Channel* rad = cloud.find_channel("_radiance_t");
     double sum2 = 0, sum_ref = 0, worst = 0;
     std::size_t rays = 0, mismatched = 0;
+    std::size_t plate_points = 0, plate_bad = 0, sphere_bad = 0;
+    double plate_sum2 = 0, sphere_sum2 = 0;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         glm::dvec3 p(cloud.positions[i]), n(cloud.normals[i]);
         bool plate = p.y < -0.999 && std::abs(n.y - 1.0) < 1e-6;
@@ -170,8 +172,16 @@ int main(int argc, char** argv) {
         double e = got - ref;
         sum2 += e * e;
         sum_ref += ref;
-        if (std::abs(e) > 0.5 * 2.0 / nlights * 0.1)
-            ++mismatched; // off by > 5% of one light
+        const bool bad = std::abs(e) > 0.05 * 2.0 / nlights; // off by > 5% of one light
+        mismatched += bad;
+        if (plate) {
+            ++plate_points;
+            plate_bad += bad;
+            plate_sum2 += e * e;
+        } else {
+            sphere_bad += bad;
+            sphere_sum2 += e * e;
+        }
         worst = std::max(worst, std::abs(e));
     }
     const double mean_ref = sum_ref / cloud.size();
@@ -191,5 +201,14 @@ int main(int argc, char** argv) {
         "%.3f %% of points off by more than 5 %% of one light\n",
         100.0 * std::sqrt(sum2 / cloud.size()) / mean_ref, worst, mean_ref,
         100.0 * mismatched / cloud.size());
+    const std::size_t sphere_points = cloud.size() - plate_points;
+    std::printf(
+        "  plate %zu points: RMS %.3f %%, %.3f %% off; sphere %zu points: RMS %.3f %%, "
+        "%.3f %% off\n",
+        plate_points, 100.0 * std::sqrt(plate_sum2 / plate_points) / mean_ref,
+        100.0 * plate_bad / plate_points, sphere_points,
+        100.0 * std::sqrt(sphere_sum2 / std::max<std::size_t>(1, sphere_points)) /
+            mean_ref,
+        100.0 * sphere_bad / std::max<std::size_t>(1, sphere_points));
     return 0;
 }

@@ -303,3 +303,67 @@ TEST(Bake, ClearErrors) {
              opt),
         sss::ValueError);
 }
+
+TEST(Bake, CurvedSurfacesDoNotShadowThemselves) {
+    // A convex sphere: every point facing a shadowed light is fully lit, at
+    // coarse and fine dicing (the traced triangles are chords inside it).
+    for (double spacing : {0.2, 0.05}) {
+        const std::string world =
+            "LightSource \"distantlight\" 1 \"from\" [1 2 -3] \"to\" [0 0 0]\n"
+            "  \"string shadowname\" [\"raytrace\"]\n"
+            "Surface \"bake_radiance_t\" \"string filename\" [\"s.ptc\"]\n"
+            "Sphere 1 -1 1 360\n";
+        sss::BakeOptions opt;
+        opt.spacing = spacing;
+        auto files = bake(scene_of(world), opt);
+        const sss::PointCloud& c = files.at(0).second;
+        const sss::Channel* r = c.find_channel("_radiance_t");
+        const glm::dvec3 l = glm::normalize(glm::dvec3(1, 2, -3));
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < c.size(); ++i) {
+            double expect = std::max(0.0, glm::dot(glm::dvec3(c.normals[i]), l));
+            if (std::abs(r->data[3 * i] - expect) > 1e-5) ++wrong;
+        }
+        EXPECT_EQ(wrong, 0u) << "spacing " << spacing << ", " << c.size() << " points";
+    }
+}
+
+TEST(Bake, FlatReceiverShadowEdgeIsWhereGeometrySaysIt) {
+    // A sphere of radius 1 touching a plate, lit at 45 degrees: a plate point
+    // is shadowed exactly when its ray to the light passes within 1 of the
+    // centre. Ray offsets must not move that edge (a 45-degree light moves it
+    // by as much as the offset).
+    const std::string world =
+        "LightSource \"distantlight\" 1 \"from\" [1 1 0] \"to\" [0 0 0]\n"
+        "  \"string shadowname\" [\"raytrace\"]\n"
+        "AttributeBegin\n"
+        "Surface \"bake_radiance_t\" \"string filename\" [\"p.ptc\"]\n"
+        "Polygon \"P\" [-2 -1 -2  -2 -1 2  2 -1 2  2 -1 -2]\n"
+        "AttributeEnd\n"
+        "Surface \"matte\"\n"
+        "Sphere 1 -1 1 360\n";
+    sss::BakeOptions opt;
+    opt.spacing = 0.02;
+    auto files = bake(scene_of(world), opt);
+    const sss::PointCloud& c = files.at(0).second;
+    const sss::Channel* r = c.find_channel("_radiance_t");
+    const glm::dvec3 l = glm::normalize(glm::dvec3(1, 1, 0));
+    std::size_t wrong = 0, near_edge = 0, shadowed = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        glm::dvec3 p(c.positions[i]);
+        double along = glm::dot(-p, l);
+        double miss = along > 0.0 ? glm::length(p + along * l) : glm::length(p);
+        // The occluder is diced 8x coarser than the plate: its outline is a
+        // polygon inscribed in the sphere, within about 0.003 of it.
+        if (std::abs(miss - 1.0) < 0.005) {
+            ++near_edge;
+            continue;
+        }
+        float expect = miss < 1.0 ? 0.0f : float(l.y);
+        shadowed += miss < 1.0;
+        if (std::abs(r->data[3 * i] - expect) > 1e-5f) ++wrong;
+    }
+    EXPECT_GT(near_edge, 0u);
+    EXPECT_GT(shadowed, 1000u);
+    EXPECT_EQ(wrong, 0u) << "of " << c.size() << " points";
+}

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec4.hpp>
@@ -232,6 +233,30 @@ void store_matrix(const Matrix4& m, std::array<float, 16>& out) {
     for (int i = 0; i < 16; ++i) out[i] = static_cast<float>(p[i]);
 }
 
+// How far off the surface shadow rays start, for points [begin, end) of a
+// diced surface. The traced triangles are chords of curved surfaces, up to a
+// sagitta r^2 kappa / 2 away from the micropolygon centres (r: micropolygon
+// radius, kappa: curvature), so rays start a little beyond that: kappa is
+// estimated from the normal change between neighbouring points of the chunk.
+// Flat surfaces get only a rounding-sized offset, so shadows stay where they
+// are; at creases and corners the estimate is capped at half a radius.
+double shadow_ray_offset(const DicedSurface& d, std::size_t begin, std::size_t end,
+                         double extent) {
+    double rmax = 0.0, kappa = 0.0;
+    for (std::size_t i = begin; i < end; ++i) {
+        rmax = std::max(rmax, double(d.radii[i]));
+        if (i + 1 < end) {
+            const double dist = glm::length(glm::dvec3(d.centers[i + 1] - d.centers[i]));
+            const double limit = 3.0 * std::max(d.radii[i], d.radii[i + 1]);
+            if (dist > 0.0 && dist < limit)
+                kappa = std::max(
+                    kappa,
+                    glm::length(glm::dvec3(d.normals[i + 1] - d.normals[i])) / dist);
+        }
+    }
+    return 1e-5 * extent + std::min(0.5 * rmax, kappa * rmax * rmax);
+}
+
 } // namespace
 
 double material_mean_free_path(const MaterialSpec& material) {
@@ -401,11 +426,8 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         const Chunk& ch = chunks[c];
         const BakeJob& job = jobs[ch.job];
         const DicedSurface& d = diced[job.prim];
-        float rmax = 0.0f;
-        for (std::size_t i = ch.begin; i < ch.end; ++i) rmax = std::max(rmax, d.radii[i]);
-        // Off the surface by a fraction of a micropolygon: the triangles are
-        // chords of curved surfaces and must not shadow their own points.
-        const double offset = 1e-5 * extent + 0.5 * rmax;
+        const double offset =
+            shadow_ray_offset(d, ch.begin, ch.end, static_cast<double>(extent));
         irradiance_batch(lights, scene.primitives[job.prim].attributes->lights_on,
                          d.centers.data() + ch.begin, d.normals.data() + ch.begin,
                          ch.end - ch.begin, tracer.get(), first_point[ch.job] + ch.begin,
