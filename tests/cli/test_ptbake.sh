@@ -60,6 +60,17 @@ if expect_rc 0 "sphere bake"; then
     [[ -z "$out" ]] || fail "bake without -progress printed: $out"
 fi
 
+# Analytic torus: area 4 pi^2 R r; a point light on the axis lights the top
+# of the tube (at most I cos / d^2 < 1) and the shadowed underside is 0.
+cp "$scenes/analytic/torus.rib" .
+run "$ptbake" torus.rib
+if expect_rc 0 "torus bake"; then
+    near "$(total_area torus.ptc)" 39.478418 0.005 || fail "torus area $(total_area torus.ptc) != 4 pi^2 R r"
+    [[ "$(channel_stat torus.ptc "color _radiance_t" min)" == "0" ]] || fail "torus: no unlit points"
+    max="$(channel_stat torus.ptc "color _radiance_t" max)"
+    awk -v m="$max" 'BEGIN { exit !(m > 0.68 && m < 1.0) }' || fail "torus max radiance $max"
+fi
+
 # ptbake | ptfilter end to end.
 run "$ptfilter" -ssdiffusion -material marble -unitlength 10 sphere.ptc sphere_ssd.ptc
 if expect_rc 0 "ptfilter on a bake"; then
