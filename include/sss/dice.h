@@ -50,6 +50,19 @@ struct DicedSurface {
     std::vector<uint32_t> triangles;       ///< 3 vertex indices per triangle
 
     std::size_t size() const { return centers.size(); }
+    /// Sizes every array: `micropolygons` entries (colours only when
+    /// with_colors), `vertices` vertices and `triangles` triangles.
+    void resize(std::size_t micropolygons, std::size_t vertex_count,
+                std::size_t triangle_count, bool with_colors) {
+        centers.resize(micropolygons);
+        normals.resize(micropolygons);
+        areas.resize(micropolygons);
+        radii.resize(micropolygons);
+        colors.resize(with_colors ? micropolygons : 0);
+        vertices.resize(vertex_count);
+        vertex_normals.resize(vertex_count);
+        triangles.resize(3 * triangle_count);
+    }
 };
 
 /// Dices one primitive. Throws ValueError (naming prim.source) on malformed

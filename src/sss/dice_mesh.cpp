@@ -257,16 +257,7 @@ struct SurfaceWriter {
     [[noreturn]] static void overflow() {
         throw std::logic_error("dice_mesh: more micropolygons than counted");
     }
-    void finish() {
-        out.centers.resize(mp);
-        out.normals.resize(mp);
-        out.areas.resize(mp);
-        out.radii.resize(mp);
-        if (with_colors) out.colors.resize(mp);
-        out.vertices.resize(vertex);
-        out.vertex_normals.resize(vertex);
-        out.triangles.resize(3 * triangle);
-    }
+    void finish() { out.resize(mp, vertex, triangle, with_colors); }
 };
 
 void allocate(const Primitive& prim, DicedSurface& out, std::size_t micropolygons,
@@ -274,14 +265,7 @@ void allocate(const Primitive& prim, DicedSurface& out, std::size_t micropolygon
     if (vertices > std::numeric_limits<uint32_t>::max())
         throw_mesh_error(prim,
                          "diced surface has more vertices than 32-bit indices address");
-    out.centers.resize(micropolygons);
-    out.normals.resize(micropolygons);
-    out.areas.resize(micropolygons);
-    out.radii.resize(micropolygons);
-    if (with_colors) out.colors.resize(micropolygons);
-    out.vertices.resize(vertices);
-    out.vertex_normals.resize(vertices);
-    out.triangles.resize(3 * triangles);
+    out.resize(micropolygons, vertices, triangles, with_colors);
 }
 
 glm::dvec3 bilinear(const std::array<glm::dvec3, 4>& c, double u, double v) {
