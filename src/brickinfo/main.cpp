@@ -1,0 +1,258 @@
+/// \file main.cpp
+/// brickinfo: what is in a brick map (.bkm), pictures of it, and lookups
+/// over a point cloud to measure its error:
+///   brickinfo [options] file.bkm
+/// Option parsing around sss::describe_brick_map, write_brick_map_picture
+/// and lookup_brick_map_cloud.
+
+#include <cctype>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/brickmap.h"
+#include "sss/brickmap_tools.h"
+#include "sss/error.h"
+#include "sss/frame_pattern.h"
+#include "sss/point_cloud_io.h"
+#include "sss/tool.h"
+
+namespace {
+
+const char* const kTool = "brickinfo";
+
+const char* const kUsage = R"(usage: brickinfo [options] file.bkm
+
+Prints the map's format version, channels, bounding box and root cube, build
+settings, provenance and, per level, the bricks and samples with data.
+See docs/brickinfo.md.
+
+options:
+  -info 0|1                print the report (default 1)
+  -picture out.png         write a PNG picture of the map:
+    -level D|all           the samples of depth D, seen down an axis; per
+                           pixel the front-most sample; all (default): every
+                           depth, each pixel showing the finest data there
+    -axis x|y|z|-x|-y|-z   the side the viewer is on (default z: from +z)
+    -slice x|y|z VALUE     instead: lookups on the plane x|y|z = VALUE
+    -channel NAME          the channel shown (default: the map's first)
+    -tree T|all            one octree, 0 (no normal) or 1..6 (+x -x +y -y +z
+                           -z), or all of them (default all)
+    -size PIXELS           the picture's longer side, 16..4096 (default 512)
+  -lookup in.ptc out.ptc   evaluate the map at every point of a cloud (with
+                           its normals) and write P, N, radius and the map's
+                           channels to out.ptc (.ptc or .ply)
+    -filterradius R        lookup filter radius (default: each point's radius
+                           for -lookup, 0 = the finest data for -slice)
+    -filterscale S         -lookup: multiplies the point radius (default 1)
+    -compare 0|1           also print the RMS and largest difference to the
+                           input's channels of the same name (default 0)
+    -compress 0|1, -ptcversion 0|1|2   .ptc output options
+  -frame N                 frame number: expands %04d, #### and $F4 in file names
+  -threads N               worker threads, 0 = all usable cores (default 0)
+  -progress 0|1|2          ALF_PROGRESS lines during -lookup
+  -h, --help               this help
+  --version                version information
+
+Exit codes: 0 ok, 1 unreadable or corrupt map or cloud, failed output, 2 bad
+command line.
+)";
+
+int axis_index(const std::string& opt, const std::string& word) {
+    if (word == "x") return 0;
+    if (word == "y") return 1;
+    if (word == "z") return 2;
+    throw sss::UsageError("option -" + opt + ": '" + word + "' is not x, y or z");
+}
+
+bool ends_with_png(const std::string& path) {
+    if (path.size() < 4) return false;
+    std::string ext = path.substr(path.size() - 4);
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext == ".png";
+}
+
+int run(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    sss::RunOptions running;
+    sss::PointCloudWriteOptions wopt;
+    sss::BrickMapPictureOptions picture;
+    sss::BrickMapCloudLookupOptions lookup;
+    std::vector<std::string> files;
+    std::string picture_path, lookup_in, lookup_out;
+    bool info = true, have_level = false, have_slice = false, have_axis = false;
+    bool picture_option = false; // an option that only makes sense with -picture
+    std::optional<float> filter_radius;
+    bool have_filterscale = false, have_compare = false;
+    std::optional<int> frame;
+    while (!args.done()) {
+        if (!args.at_option()) {
+            files.push_back(args.positional());
+            continue;
+        }
+        const std::string o = args.option();
+        if (sss::standard_option(kTool, o, kUsage)) {
+            return 0;
+        } else if (o == "info") {
+            info = args.integer(o, 0, 1) != 0;
+        } else if (o == "picture") {
+            picture_path = args.value(o);
+        } else if (o == "level") {
+            if (args.peek() == "all") {
+                args.value(o);
+                picture.level = -1;
+            } else {
+                picture.level = args.integer(o, 0, 30);
+            }
+            have_level = picture_option = true;
+        } else if (o == "axis") {
+            // "-z" is a value here, not an option.
+            if (args.done()) throw sss::UsageError("option -axis needs a value");
+            const std::string word = args.positional();
+            const bool signed_word =
+                word.size() == 2 && (word[0] == '-' || word[0] == '+');
+            picture.view_from_negative = signed_word && word[0] == '-';
+            const std::string a = signed_word ? word.substr(1) : word;
+            if (a != "x" && a != "y" && a != "z")
+                throw sss::UsageError("option -axis: '" + word +
+                                      "' is not x, y, z, -x, -y or -z");
+            picture.axis = axis_index(o, a);
+            have_axis = picture_option = true;
+        } else if (o == "slice") {
+            picture.mode = sss::BrickMapPictureMode::Slice;
+            picture.axis = axis_index(o, args.value(o));
+            picture.slice = args.number(o);
+            have_slice = picture_option = true;
+        } else if (o == "channel") {
+            picture.channel = args.value(o);
+            picture_option = true;
+        } else if (o == "tree") {
+            if (args.peek() == "all") {
+                args.value(o);
+                picture.tree = -1;
+            } else {
+                picture.tree = args.integer(o, 0, 6);
+            }
+            picture_option = true;
+        } else if (o == "size") {
+            picture.size = args.integer(o, 16, 4096);
+            picture_option = true;
+        } else if (o == "lookup") {
+            lookup_in = args.value(o);
+            lookup_out = args.value(o);
+        } else if (o == "filterradius") {
+            filter_radius = float(args.non_negative(o));
+        } else if (o == "filterscale") {
+            lookup.filter_scale = float(args.positive(o));
+            have_filterscale = true;
+        } else if (o == "compare") {
+            lookup.compare = args.integer(o, 0, 1) != 0;
+            have_compare = true;
+        } else if (o == "frame") {
+            frame = args.integer(o, -1000000, 1000000);
+        } else if (sss::write_option(args, o, wopt)) {
+            continue;
+        } else if (sss::run_option(args, o, running)) {
+            continue;
+        } else {
+            throw sss::UsageError("unknown option -" + o);
+        }
+    }
+    if (files.size() != 1)
+        throw sss::UsageError(files.empty()
+                                  ? "no brick map given (usage: brickinfo file.bkm)"
+                                  : "more than one brick map given");
+    if (picture_option && picture_path.empty())
+        throw sss::UsageError(
+            "-level, -axis, -slice, -channel, -tree and -size need -picture");
+    if (have_level && have_slice)
+        throw sss::UsageError("-level and -slice exclude each other");
+    if (have_axis && have_slice)
+        throw sss::UsageError("-axis is for -level pictures; -slice names its own axis");
+    if ((have_filterscale || have_compare) && lookup_in.empty())
+        throw sss::UsageError("-filterscale and -compare need -lookup");
+    if (filter_radius && lookup_in.empty() && !have_slice)
+        throw sss::UsageError("-filterradius needs -lookup or -slice");
+    if (!picture_path.empty() && !ends_with_png(picture_path))
+        throw sss::UsageError("option -picture: '" + picture_path +
+                              "' does not end in .png (pictures are PNG files)");
+
+    const std::string map_path = sss::expand_frame_pattern(files[0], frame, "brick map");
+    if (!picture_path.empty())
+        picture_path = sss::expand_frame_pattern(picture_path, frame, "option -picture");
+    if (!lookup_in.empty()) {
+        lookup_in = sss::expand_frame_pattern(lookup_in, frame, "option -lookup");
+        lookup_out = sss::expand_frame_pattern(lookup_out, frame, "option -lookup");
+    }
+    if (filter_radius) {
+        lookup.filter_radius = *filter_radius;
+        picture.filter_radius = *filter_radius;
+    }
+
+    sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
+    const sss::BrickMap map(map_path);
+    if (info) {
+        std::fputs(sss::describe_brick_map(map_path, map).c_str(), stdout);
+        std::fflush(stdout);
+    }
+
+    if (!picture_path.empty()) {
+        const sss::BrickMapPictureReport r =
+            sss::write_brick_map_picture(map, picture, picture_path);
+        std::printf("brickinfo: wrote %s: %d x %d, %s; %zu pixels with data",
+                    picture_path.c_str(), r.width, r.height, r.description.c_str(),
+                    r.pixels_with_data);
+        if (picture.mode == sss::BrickMapPictureMode::Level)
+            std::printf(", %zu samples drawn", r.samples_drawn);
+        std::printf("\n");
+        std::fflush(stdout);
+        if (r.pixels_with_data == 0)
+            sss::warn(kTool, picture_path + ": no data in the picture (" +
+                                 (have_slice ? "does the plane cross the map? " : "") +
+                                 "does the tree hold data?)");
+    }
+
+    if (!lookup_in.empty()) {
+        const sss::PointCloud cloud = sss::read_point_cloud(lookup_in);
+        sss::Progress reporter(running.progress > 0);
+        lookup.progress = &reporter;
+        const sss::Stopwatch watch;
+        sss::BrickMapCloudLookupReport report;
+        const sss::PointCloud out =
+            sss::lookup_brick_map_cloud(map, cloud, lookup, &report);
+        const double seconds = watch.seconds();
+        sss::write_point_cloud(out, lookup_out, wopt);
+        char radius[64];
+        if (lookup.filter_radius >= 0.0f)
+            std::snprintf(radius, sizeof radius, "%g", double(lookup.filter_radius));
+        else
+            std::snprintf(radius, sizeof radius, "point radius x %g",
+                          double(lookup.filter_scale));
+        std::printf(
+            "brickinfo: lookup %s -> %s: %zu points, %zu without data, filter radius "
+            "%s, %.3f s\n",
+            lookup_in.c_str(), lookup_out.c_str(), report.points, report.misses, radius,
+            seconds);
+        for (const sss::ChannelDifference& d : report.differences)
+            std::printf(
+                "brickinfo: compare %s: rms %.6g max %.6g (input rms %.6g, relative "
+                "rms %.4g%%)\n",
+                d.name.c_str(), d.rms, d.max_abs, d.reference_rms,
+                d.reference_rms > 0.0 ? 100.0 * d.rms / d.reference_rms : 0.0);
+        for (const std::string& name : report.not_compared)
+            std::printf("brickinfo: compare %s: not in %s (or another type)\n",
+                        name.c_str(), lookup_in.c_str());
+        std::fflush(stdout);
+        if (report.misses > 0)
+            sss::warn(kTool, lookup_in + ": " + std::to_string(report.misses) +
+                                 " points have no map data around them (written as 0)");
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}

@@ -1,0 +1,139 @@
+/// \file main.cpp
+/// brickmake: PRMan-compatible brick map builder,
+///   brickmake [options] in.ptc [more.ptc ...] out.bkm
+/// Option parsing around sss::make_brick_map_from_files.
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/brickmap.h"
+#include "sss/brickmap_tools.h"
+#include "sss/error.h"
+#include "sss/frame_pattern.h"
+#include "sss/tool.h"
+
+namespace {
+
+const char* const kTool = "brickmake";
+
+const char* const kUsage = R"(usage: brickmake [options] in.ptc [more.ptc ...] out.bkm
+
+Builds a brick map (sparse octrees of 8x8x8-sample bricks, see docs/brickmake.md)
+from point clouds (.ptc or .ply; several are merged, channels matched by name).
+The output is written atomically.
+
+options:
+  -maxerror E            largest error allowed when a brick is left out in favour
+                         of its parent, in the channels' units (default 0.002)
+  -maxdepth D            deepest octree level, 0..20 (default 15)
+  -radiusscale S         multiplies the point radii: > 1 blurs and shrinks the
+                         map; < 1 is not recommended (default 1)
+  -ignorenormals 0|1     1: one octree, normals ignored (default 0: the two
+                         sides of thin surfaces are kept apart)
+  -omitgeometry 0|1      1: leave out occupancy data (default 0)
+  -channels A,B,...      channels to store (default: every float and color)
+  -newer 0|1             1: do nothing when out.bkm is newer than every input
+  -frame N               frame number: expands %04d, #### and $F4 in file names
+  -splitangle DEG        PRMan 12.5 option; accepted and ignored
+  -threads N             worker threads, 0 = all usable cores (default 0)
+  -progress 0|1|2        1: counts, size and time, ALF_PROGRESS lines; 2: also
+                         the bricks per level (-Progress = 1)
+  -h, --help             this help
+  --version              version information
+
+Exit codes: 0 ok (or nothing to do with -newer 1), 1 bad input or failed
+build, 2 bad command line.
+)";
+
+int run(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    sss::BrickMapBuildOptions opt;
+    sss::RunOptions running;
+    std::vector<std::string> files;
+    bool newer = false;
+    std::optional<int> frame;
+    while (!args.done()) {
+        if (!args.at_option()) {
+            files.push_back(args.positional());
+            continue;
+        }
+        const std::string o = args.option();
+        if (sss::standard_option(kTool, o, kUsage)) {
+            return 0;
+        } else if (o == "maxerror") {
+            opt.max_error = args.non_negative(o);
+        } else if (o == "maxdepth") {
+            opt.max_depth = args.integer(o, 0, 20);
+        } else if (o == "radiusscale") {
+            opt.radius_scale = args.positive(o);
+        } else if (o == "ignorenormals") {
+            opt.ignore_normals = args.integer(o, 0, 1) != 0;
+        } else if (o == "omitgeometry") {
+            opt.omit_geometry = args.integer(o, 0, 1) != 0;
+        } else if (o == "channels") {
+            opt.channels = sss::split_channel_list(args.value(o), o);
+        } else if (o == "newer") {
+            newer = args.integer(o, 0, 1) != 0;
+        } else if (o == "frame") {
+            frame = args.integer(o, -1000000, 1000000);
+        } else if (o == "splitangle") {
+            args.number(o);
+            sss::warn(kTool, "-splitangle is ignored: the sides of a surface are always "
+                             "kept apart by normal direction (see -ignorenormals)");
+        } else if (sss::run_option(args, o, running)) {
+            continue;
+        } else {
+            throw sss::UsageError("unknown option -" + o);
+        }
+    }
+    if (files.size() < 2)
+        throw sss::UsageError(files.empty()
+                                  ? "no input and output files given"
+                                  : "need at least one input file and an output file");
+    for (std::string& f : files) f = sss::expand_frame_pattern(f, frame, "file name");
+    const std::string out_path = files.back();
+    files.pop_back();
+    if (opt.radius_scale < 1.0)
+        sss::warn(kTool, "-radiusscale below 1 makes large and inefficient brick maps");
+
+    if (newer && sss::output_is_newer(out_path, files)) {
+        std::printf("brickmake: %s is newer than its inputs; nothing to do\n",
+                    out_path.c_str());
+        return 0;
+    }
+
+    const int threads = sss::resolve_thread_count(running.threads);
+    sss::ThreadLimit limit(threads);
+    sss::Progress reporter(running.progress > 0);
+    opt.progress = &reporter;
+    opt.provenance = sss::command_line_provenance(kTool, argv);
+    const sss::Stopwatch watch;
+
+    const sss::BrickMapBuildReport report =
+        sss::make_brick_map_from_files(files, opt, out_path);
+    if (running.progress > 0) {
+        std::printf(
+            "brickmake: %s: %zu points, %zu bricks (%zu before pruning), %llu bytes\n",
+            out_path.c_str(), report.points, report.bricks_written,
+            report.bricks_before_pruning,
+            static_cast<unsigned long long>(report.file_size));
+        if (running.progress > 1) {
+            const sss::BrickMap map(out_path);
+            for (const sss::BrickMapLevel& l : map.info().levels)
+                std::printf("brickmake: depth %d: %zu bricks, %zu samples\n", l.depth,
+                            l.bricks, l.samples);
+        }
+        std::printf("brickmake: build %.3f s, total %.3f s (with reading), threads %d\n",
+                    report.seconds, watch.seconds(), threads);
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}
