@@ -52,8 +52,9 @@ int main(int argc, char** argv) {
         } else if (o == "-maxerror" && i + 1 < argc) {
             errors.push_back(std::atof(argv[++i]));
         } else {
-            std::fprintf(stderr,
-                         "usage: brickmap_bench [-n POINTS] [-lookups N] [-maxerror E ...]\n");
+            std::fprintf(
+                stderr,
+                "usage: brickmap_bench [-n POINTS] [-lookups N] [-maxerror E ...]\n");
             return 2;
         }
     }
@@ -73,16 +74,18 @@ int main(int argc, char** argv) {
     double mean = 0;
     for (std::size_t i = 0; i < cloud.size(); ++i) mean += ssd->data[3 * i];
     mean /= double(cloud.size());
-    std::printf("brickmap_bench: %zu-point _ssdiffusion sphere (r = 50, marble), prepared in "
-                "%.1f s; red mean %.4f; %d threads\n",
-                cloud.size(), prep.seconds(), mean, threads);
+    std::printf(
+        "brickmap_bench: %zu-point _ssdiffusion sphere (r = 50, marble), prepared in "
+        "%.1f s; red mean %.4f; %d threads\n",
+        cloud.size(), prep.seconds(), mean, threads);
 
     const std::string path =
         (std::filesystem::temp_directory_path() / "sss_brickmap_bench.bkm").string();
-    std::printf("| maxerror | build s | file MB | bricks | lookups/s 1 core | random order "
-                "1 core | lookups/s %d threads | RMS err | 99%% err | max err | max / mean | "
-                "misses |\n",
-                threads);
+    std::printf(
+        "| maxerror | build s | file MB | bricks | lookups/s 1 core | random order "
+        "1 core | lookups/s %d threads | RMS err | 99%% err | max err | max / mean | "
+        "misses |\n",
+        threads);
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (double e : errors) {
         Result r;
@@ -151,12 +154,12 @@ int main(int argc, char** argv) {
         r.rms = std::sqrt(sum2 / std::max<std::size_t>(1, err.size()));
         r.p99 = err.empty() ? 0 : err[std::size_t(0.99 * (err.size() - 1))];
         r.max = err.empty() ? 0 : err.back();
-        std::printf("| %g | %.2f | %.1f | %zu | %.2f M | %.2f M | %.2f M | %.5f | %.5f | %.5f | "
-                    "%.2f %% | %zu |\n",
-                    e, r.build_s, r.bytes / 1048576.0, r.bricks, r.lookups_per_s_1 * 1e-6,
-                    r.lookups_per_s_random * 1e-6,
-                    r.lookups_per_s_all * 1e-6, r.rms, r.p99, r.max, 100.0 * r.max / mean,
-                    r.misses);
+        std::printf(
+            "| %g | %.2f | %.1f | %zu | %.2f M | %.2f M | %.2f M | %.5f | %.5f | %.5f | "
+            "%.2f %% | %zu |\n",
+            e, r.build_s, r.bytes / 1048576.0, r.bricks, r.lookups_per_s_1 * 1e-6,
+            r.lookups_per_s_random * 1e-6, r.lookups_per_s_all * 1e-6, r.rms, r.p99,
+            r.max, 100.0 * r.max / mean, r.misses);
         std::fflush(stdout);
     }
     std::filesystem::remove(path);

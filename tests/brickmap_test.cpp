@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -36,25 +38,7 @@ namespace {
 
 using Bytes = std::vector<unsigned char>;
 
-class TempDir {
-public:
-    TempDir() {
-        static int counter = 0;
-        m_path =
-            fs::temp_directory_path() / ("sss_bkm_test_" + std::to_string(::getpid()) +
-                                         "_" + std::to_string(counter++));
-        fs::remove_all(m_path);
-        fs::create_directories(m_path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    std::string file(const std::string& name) const { return (m_path / name).string(); }
-
-private:
-    fs::path m_path;
-};
+using sss::test::TempDir;
 
 Bytes read_bytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.h"
+
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -39,26 +41,7 @@ using Bytes = std::vector<unsigned char>;
 // Helpers
 // ---------------------------------------------------------------------------
 
-class TempDir {
-public:
-    TempDir() {
-        static int counter = 0;
-        m_path =
-            fs::temp_directory_path() / ("sss_pcio_test_" + std::to_string(::getpid()) +
-                                         "_" + std::to_string(counter++));
-        fs::remove_all(m_path);
-        fs::create_directories(m_path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    std::string file(const std::string& name) const { return (m_path / name).string(); }
-    const fs::path& path() const { return m_path; }
-
-private:
-    fs::path m_path;
-};
+using sss::test::TempDir;
 
 /// prefix + number + suffix; built with += (g++ 12 warns falsely on "x" + to_string).
 std::string numbered(const char* prefix, long long n, const char* suffix) {

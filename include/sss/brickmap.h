@@ -30,9 +30,9 @@ namespace sss {
 
 /// brickmake's options (PRMan names).
 struct BrickMapBuildOptions {
-    double max_error = 0.002;   ///< -maxerror: absolute, in the channel's units
-    int max_depth = 15;         ///< -maxdepth
-    double radius_scale = 1.0;  ///< -radiusscale
+    double max_error = 0.002;    ///< -maxerror: absolute, in the channel's units
+    int max_depth = 15;          ///< -maxdepth
+    double radius_scale = 1.0;   ///< -radiusscale
     bool ignore_normals = false; ///< -ignorenormals 1: one tree, normals ignored
     bool omit_geometry = false;  ///< -omitgeometry 1: no occupancy data (see docs)
     /// Channels to store; empty = every float and color channel of the input.
@@ -56,13 +56,13 @@ struct BrickMapLevel {
 struct BrickMapInfo {
     uint32_t version = 0;
     std::vector<std::pair<std::string, ChannelType>> channels; ///< float or color
-    int data_size = 0;             ///< floats per sample
-    glm::dvec3 bbox_min{0.0};      ///< of the input points
+    int data_size = 0;                                         ///< floats per sample
+    glm::dvec3 bbox_min{0.0};                                  ///< of the input points
     glm::dvec3 bbox_max{0.0};
-    glm::dvec3 cube_min{0.0};      ///< the root cube (all trees)
+    glm::dvec3 cube_min{0.0}; ///< the root cube (all trees)
     double cube_side = 0.0;
-    int max_depth = 0;             ///< as built (-maxdepth)
-    double max_error = 0.0;        ///< as built
+    int max_depth = 0;      ///< as built (-maxdepth)
+    double max_error = 0.0; ///< as built
     bool ignore_normals = false;
     bool omit_geometry = false;
     std::array<float, 16> world_to_eye{};

@@ -3,6 +3,7 @@
 /// Reading and writing point clouds: Pixar .ptc (versions 0-2, plain or gzip)
 /// and binary little-endian .ply. The format is chosen by file extension.
 
+#include <array>
 #include <string>
 
 #include "sss/point_cloud.h"
@@ -42,6 +43,13 @@ struct ChannelStats {
 /// The first entry is the pseudo-channel "radius" (type Float), then the
 /// channels in order. Sums are accumulated in double; all zero when empty.
 std::vector<ChannelStats> channel_stats(const PointCloud& cloud);
+
+/// Text helpers shared by the info tools (ptinfo, brickinfo): a number with
+/// "%.6g", a 4x4 matrix as "a b c d | e f g h | ..." (stored order), and
+/// whether a stored matrix is the identity.
+std::string short_float(double v);
+std::string matrix_text(const std::array<float, 16>& m);
+bool is_identity(const std::array<float, 16>& m);
 
 /// The report ptinfo prints for a cloud read from path: file format and
 /// version, compression, point count, bbox, header matrices and image format

@@ -28,33 +28,8 @@ namespace sss {
 
 namespace {
 
-std::string short_float(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
-}
-
 std::string triple_text(const glm::dvec3& v) {
     return short_float(v.x) + " " + short_float(v.y) + " " + short_float(v.z);
-}
-
-bool is_identity(const std::array<float, 16>& m) {
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c)
-            if (m[r * 4 + c] != (r == c ? 1.0f : 0.0f)) return false;
-    return true;
-}
-
-std::string matrix_text(const std::array<float, 16>& m) {
-    std::string s;
-    for (int r = 0; r < 4; ++r) {
-        if (r > 0) s += " |";
-        for (int c = 0; c < 4; ++c) {
-            s += ' ';
-            s += short_float(m[r * 4 + c]);
-        }
-    }
-    return s;
 }
 
 /// Tree names in the order of brickmap.h: 0 = no normal, then +x -x +y -y +z -z.

@@ -336,8 +336,6 @@ std::vector<ChannelStats> channel_stats(const PointCloud& cloud) {
     return out;
 }
 
-namespace {
-
 bool is_identity(const std::array<float, 16>& m) {
     for (int r = 0; r < 4; ++r) {
         for (int c = 0; c < 4; ++c) {
@@ -364,6 +362,8 @@ std::string matrix_text(const std::array<float, 16>& m) {
     }
     return s;
 }
+
+namespace {
 
 const char* component_label(ChannelType type, int c) {
     static const char* const xyz[] = {"x", "y", "z"};
