@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,10 +84,12 @@ bool material_option(ArgScanner& args, const std::string& opt, MaterialSpec& spe
                      bool allow_fromfile = true);
 
 /// The options of every tool that runs a job: -threads N, -progress 0|1|2
-/// and its alias -Progress (= 1).
+/// and its alias -Progress (= 1), and -frame N for frame patterns in paths
+/// (frame_pattern.h).
 struct RunOptions {
     int threads = 0;
     int progress = 0;
+    std::optional<int> frame;
 };
 /// Parses one of them into run; false when opt is not one of them.
 bool run_option(ArgScanner& args, const std::string& opt, RunOptions& run);

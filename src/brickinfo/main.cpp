@@ -85,7 +85,6 @@ int run(const std::vector<std::string>& argv) {
     bool picture_option = false; // an option that only makes sense with -picture
     std::optional<float> filter_radius;
     bool have_filterscale = false, have_compare = false;
-    std::optional<int> frame;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -149,8 +148,6 @@ int run(const std::vector<std::string>& argv) {
         } else if (o == "compare") {
             lookup.compare = args.integer(o, 0, 1) != 0;
             have_compare = true;
-        } else if (o == "frame") {
-            frame = args.integer(o, -1000000, 1000000);
         } else if (sss::write_option(args, o, wopt)) {
             continue;
         } else if (sss::run_option(args, o, running)) {
@@ -178,12 +175,15 @@ int run(const std::vector<std::string>& argv) {
         throw sss::UsageError("option -picture: '" + picture_path +
                               "' does not end in .png (pictures are PNG files)");
 
-    const std::string map_path = sss::expand_frame_pattern(files[0], frame, "brick map");
+    const std::string map_path =
+        sss::expand_frame_pattern(files[0], running.frame, "brick map");
     if (!picture_path.empty())
-        picture_path = sss::expand_frame_pattern(picture_path, frame, "option -picture");
+        picture_path =
+            sss::expand_frame_pattern(picture_path, running.frame, "option -picture");
     if (!lookup_in.empty()) {
-        lookup_in = sss::expand_frame_pattern(lookup_in, frame, "option -lookup");
-        lookup_out = sss::expand_frame_pattern(lookup_out, frame, "option -lookup");
+        lookup_in = sss::expand_frame_pattern(lookup_in, running.frame, "option -lookup");
+        lookup_out =
+            sss::expand_frame_pattern(lookup_out, running.frame, "option -lookup");
     }
     if (filter_radius) {
         lookup.filter_radius = *filter_radius;

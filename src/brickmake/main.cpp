@@ -53,7 +53,6 @@ int run(const std::vector<std::string>& argv) {
     sss::RunOptions running;
     std::vector<std::string> files;
     bool newer = false;
-    std::optional<int> frame;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -76,8 +75,6 @@ int run(const std::vector<std::string>& argv) {
             opt.channels = sss::split_channel_list(args.value(o), o);
         } else if (o == "newer") {
             newer = args.integer(o, 0, 1) != 0;
-        } else if (o == "frame") {
-            frame = args.integer(o, -1000000, 1000000);
         } else if (o == "splitangle") {
             args.number(o);
             sss::warn(kTool, "-splitangle is ignored: the sides of a surface are always "
@@ -92,7 +89,8 @@ int run(const std::vector<std::string>& argv) {
         throw sss::UsageError(files.empty()
                                   ? "no input and output files given"
                                   : "need at least one input file and an output file");
-    for (std::string& f : files) f = sss::expand_frame_pattern(f, frame, "file name");
+    for (std::string& f : files)
+        f = sss::expand_frame_pattern(f, running.frame, "file name");
     const std::string out_path = files.back();
     files.pop_back();
     if (opt.radius_scale < 1.0)

@@ -74,8 +74,6 @@ int run(const std::vector<std::string>& argv) {
             have_material = true;
         } else if (o == "o") {
             opt.output = args.value(o);
-        } else if (o == "frame") {
-            opt.frame = args.integer(o, -1000000, 1000000);
         } else if (o == "spacing") {
             if (args.peek() == "mfp") {
                 args.value(o);
@@ -102,6 +100,7 @@ int run(const std::vector<std::string>& argv) {
         material.validate();
         opt.material = material;
     }
+    opt.frame = running.frame;
     const std::string rib = sss::expand_frame_pattern(files[0], opt.frame, "scene");
     if (!opt.output.empty())
         opt.output = sss::expand_frame_pattern(opt.output, opt.frame, "option -o");

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sss/error.h"
+#include "sss/frame_pattern.h"
 #include "sss/point_cloud_io.h"
 #include "sss/ssdiffusion.h"
 #include "sss/tool.h"
@@ -48,6 +49,7 @@ std::string usage() {
         "  -ptcversion 0|1|2         .ptc version written (default 0)\n"
         "Running:\n"
         "  -threads N                0 = all usable cores (default), <0 = all but N\n"
+        "  -frame N                  expands %%04d, #### and $F4 in the file names\n"
         "  -progress 0|1|2           1: material values and timings, ALF_PROGRESS "
         "lines;\n"
         "                            2: also octree statistics\n"
@@ -120,6 +122,8 @@ int run(const std::vector<std::string>& argv) {
     // Check the whole material before reading anything.
     std::vector<std::string> material = sss::describe_material(opt);
 
+    for (std::string& f : files)
+        f = sss::expand_frame_pattern(f, running.frame, "file name");
     const std::string out_path = files.back();
     files.pop_back();
     sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));

@@ -722,6 +722,8 @@ bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
         run.progress = args.integer(o, 0, 2);
     } else if (o == "Progress") {
         run.progress = std::max(run.progress, 1);
+    } else if (o == "frame") {
+        run.frame = args.integer(o, -1000000, 1000000);
     } else {
         return false;
     }

@@ -290,4 +290,14 @@ run "$ptfilter" -ssdiffusion -exact small.ptc exact.ptc
 expect_rc 0 "-exact" || true
 rm -f opts.ptc exact.ptc
 
+# -frame expands frame patterns in every file name.
+cp small.ptc small.0042.ptc
+run "$ptfilter" -ssdiffusion -frame 42 small.####.ptc 'framed.%04d.ptc'
+if expect_rc 0 "-frame 42"; then
+    [[ -s framed.0042.ptc ]] || fail "-frame 42 did not write framed.0042.ptc"
+fi
+run "$ptfilter" -ssdiffusion small.####.ptc framed.ptc
+expect_rc 2 "pattern without -frame" || true
+rm -f small.0042.ptc framed.0042.ptc
+
 finish_checks ptfilter
