@@ -231,7 +231,9 @@ View make_view(int axis, bool from_negative, const glm::dvec3& lo, const glm::dv
     glm::dvec3 world_up(0.0);
     world_up[axis == 2 ? 1 : 2] = 1.0;
     v.up = world_up;
-    v.right = glm::cross(-v.toward, v.up); // camera right = forward x up
+    // Left-handed, as RenderMan's camera: right = up x forward, so a view from
+    // -z (a default camera's side) has +x to the right and +y up.
+    v.right = glm::cross(v.up, -v.toward);
     // The box's extent on the screen axes (they are signed world axes).
     double umin = std::numeric_limits<double>::max(), umax = -umin;
     double vmin = umin, vmax = -umin;
