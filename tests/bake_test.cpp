@@ -367,3 +367,34 @@ TEST(Bake, FlatReceiverShadowEdgeIsWhereGeometrySaysIt) {
     EXPECT_GT(shadowed, 1000u);
     EXPECT_EQ(wrong, 0u) << "of " << c.size() << " points";
 }
+
+TEST(Bake, SpacingFromEachObjectsOwnMaterial) {
+    // Without -material, -spacing mfp dices each bake_sss_params object at its
+    // own smallest mean free path (dmfp in mm, scene units from unitlength).
+    const std::string world =
+        "LightSource \"ambientlight\" 1\n"
+        "Surface \"bake_sss_params\" \"string filename\" [\"m.ptc\"]\n"
+        "  \"color albedo\" [0.8 0.8 0.8] \"color dmfp\" [2 2 2]\n"
+        "Sphere 5 -5 5 360\n";
+    sss::BakeOptions opt;
+    opt.spacing_from_material = true;
+    opt.unitlength = 0.1; // cm scene: 1 mm = 0.1 units
+    sss::MaterialSpec m;
+    m.albedo = glm::dvec3(0.8);
+    m.dmfp = glm::dvec3(2.0);
+    m.unitlength = 0.1;
+    const double mfp = sss::material_mean_free_path(m);
+    sss::BakeReport report;
+    bake(scene_of(world), opt, &report);
+    EXPECT_LE(report.max_spacing, mfp * 1.0001);
+    EXPECT_GT(report.max_spacing, mfp * 0.5);
+    for (const std::string& w : report.warnings)
+        EXPECT_EQ(w.find("mean free path"), std::string::npos) << w;
+
+    // An object without material parameters cannot pick its spacing.
+    EXPECT_THROW(
+        bake(scene_of("Surface \"bake_radiance_t\" \"string filename\" [\"x.ptc\"]\n"
+                      "Sphere 1 -1 1 360\n"),
+             opt),
+        sss::UsageError);
+}

@@ -33,13 +33,18 @@ namespace sss {
 struct BakeOptions {
     /// > 0: micropolygon edge length in scene units (-spacing LEN). 0: ShadingRate.
     double spacing = 0.0;
-    /// Pick the spacing from `material`: its smallest mean free path
-    /// 1/sigma_t' in scene units, times mfp_fraction (-spacing mfp).
+    /// Pick the spacing from the material (-spacing mfp): its smallest mean
+    /// free path 1/sigma_t' in scene units, times mfp_fraction. Without
+    /// `material`, each bake_sss_params object uses its own albedo/dmfp range
+    /// (other bake shaders then have no material: UsageError).
     bool spacing_from_material = false;
     double mfp_fraction = 1.0;
     /// The material the bake is for (-material ...): enables the spacing
     /// check (a warning when points are farther apart than its mean free path).
     std::optional<MaterialSpec> material;
+    /// Scene length of one mm (-unitlength), for bake_sss_params' dmfp (mm)
+    /// when no `material` is given.
+    double unitlength = 1.0;
     std::optional<int> frame; ///< -frame N, for frame patterns in file names
     std::string output;       ///< -o: every bake goes to this one file
     PointCloudWriteOptions write;
@@ -72,7 +77,7 @@ struct BakeReport {
 };
 
 /// Smallest mean free path 1/sigma_t' over the colour channels of a
-/// material, in scene units (mm / unitlength... see material.h).
+/// material, in scene units (mm x unitlength, see material.h).
 double material_mean_free_path(const MaterialSpec& material);
 
 /// Bakes the scene and writes its point clouds (atomically). Throws

@@ -61,6 +61,30 @@ void irradiance_batch(const std::vector<Light>& lights, const std::vector<int>& 
                       const RayTracer* tracer, uint64_t seed_base, double ray_offset,
                       glm::dvec3* out);
 
+/// One light as a shader's illuminance loop sees it at a shaded point.
+struct LightSample {
+    /// Cl: the light arriving at the point (intensity, colour, falloff, spot
+    /// cone and beam, times the unoccluded fraction of its shadow rays), without
+    /// the N.L cosine.
+    glm::dvec3 color{0.0};
+    /// L: unit vector from the point towards the light's centre (zero for
+    /// ambient lights).
+    glm::dvec3 direction{0.0};
+    bool ambient = false; ///< an ambient light: no direction, added whatever the normal
+    int light = -1;       ///< index in the lights vector
+};
+
+/// The lights of `active` one by one, for shaders that need Cl and L per light
+/// (specular()): `out` is cleared and gets, in `active` order, every ambient
+/// light and every other light that reaches the front of the surface (n.L > 0,
+/// inside a spot's cone, colour not 0), as RenderMan's illuminance(P, n, PI/2)
+/// loop sees them. Shadow rays, seeds and ray offsets are those of
+/// irradiance(), so irradiance(...) equals the sum of the ambient colours plus
+/// the sum of color * dot(n, direction) over the others (up to rounding).
+void light_samples(const std::vector<Light>& lights, const std::vector<int>& active,
+                   const glm::dvec3& p, const glm::dvec3& n, const RayTracer* tracer,
+                   uint64_t seed, double ray_offset, std::vector<LightSample>& out);
+
 /// Improved Perlin gradient noise in [0, 1] (RenderMan's noise() range), deterministic.
 double noise3(const glm::dvec3& p);
 

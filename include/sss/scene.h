@@ -117,6 +117,10 @@ struct Attributes {
     Basis v_basis = *named_basis("bezier");
     /// `Attribute "identifier" "name"` if given, else "".
     std::string name() const;
+    /// Whether `Attribute "visibility" kind` ("camera", "transmission",
+    /// "diffuse"...) leaves the object visible: only an explicit 0 (or
+    /// "transparent") turns it off, so objects cast shadows by default.
+    bool visible_to(const char* kind) const;
 };
 
 /// The geometric primitives the scene layer knows.
@@ -204,6 +208,9 @@ struct Camera {
 
     /// The screen window in effect (given or default).
     std::array<double, 4> resolved_screen_window() const;
+    /// RenderMan's world-to-NDC matrix: x, y in [0, 1] over the screen
+    /// window, y down (what bake3d and EXR headers record).
+    Matrix4 world_to_ndc() const;
     /// Length in world (camera) units of one raster pixel at camera-space
     /// distance `distance` from the eye (perspective) or anywhere (orthographic).
     double pixel_size_at(double distance) const;

@@ -71,7 +71,9 @@ int run(const std::vector<std::string>& argv) {
         if (sss::standard_option(kTool, o, usage())) {
             return 0;
         } else if (sss::material_option(args, o, material, false)) {
-            have_material = true;
+            // -unitlength and -ior alone describe units, not a material.
+            have_material = have_material || (o != "unitlength" && o != "ior");
+            opt.unitlength = material.unitlength;
         } else if (o == "o") {
             opt.output = args.value(o);
         } else if (o == "spacing") {
@@ -94,8 +96,6 @@ int run(const std::vector<std::string>& argv) {
     if (files.size() != 1)
         throw sss::UsageError(files.empty() ? "no scene given (usage: ptbake scene.rib)"
                                             : "more than one scene given");
-    if (opt.spacing_from_material && !have_material)
-        throw sss::UsageError("-spacing mfp needs a material (-material NAME ...)");
     if (have_material) {
         material.validate();
         opt.material = material;

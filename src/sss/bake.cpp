@@ -169,18 +169,6 @@ BakeJob make_job(const Scene& scene, std::size_t index, BakeShader kind,
     return job;
 }
 
-// Objects cast shadows unless `Attribute "visibility" "transmission"` says not.
-bool casts_shadows(const Primitive& prim) {
-    auto it = prim.attributes->groups.find("visibility");
-    if (it == prim.attributes->groups.end()) return true;
-    const Param* p = it->second.find("transmission");
-    if (!p) return true;
-    if (p->type == ParamType::String)
-        return p->strings.empty() ||
-               (p->strings[0] != "transparent" && p->strings[0] != "0");
-    return p->numbers.empty() || p->numbers[0] != 0.0;
-}
-
 double mfp_mm(const MaterialSpec& m, const glm::dvec3* albedo, const glm::dvec3* dmfp) {
     double best = std::numeric_limits<double>::infinity();
     for (int i = 0; i < 3; ++i) {
@@ -203,29 +191,6 @@ double mfp_mm(const MaterialSpec& m, const glm::dvec3* albedo, const glm::dvec3*
         if (st > 0.0) best = std::min(best, 1.0 / st);
     }
     return best;
-}
-
-// RenderMan's world-to-NDC matrix of the camera (x, y in [0, 1], y down).
-Matrix4 world_to_ndc(const Camera& cam) {
-    auto sw = cam.resolved_screen_window();
-    const double l = sw[0], r = sw[1], b = sw[2], t = sw[3];
-    Matrix4 proj(1.0);
-    if (cam.perspective) {
-        const double c = 1.0 / std::tan(glm::radians(cam.fov) * 0.5);
-        const double n = cam.near_clip, f = cam.far_clip;
-        proj = Matrix4(0.0);
-        proj[0][0] = c;
-        proj[1][1] = c;
-        proj[2][2] = f / (f - n);
-        proj[3][2] = -f * n / (f - n);
-        proj[2][3] = 1.0;
-    }
-    Matrix4 s(1.0);
-    s[0][0] = 1.0 / (r - l);
-    s[3][0] = -l / (r - l);
-    s[1][1] = -1.0 / (t - b);
-    s[3][1] = t / (t - b);
-    return s * proj * cam.world_to_camera;
 }
 
 void store_matrix(const Matrix4& m, std::array<float, 16>& out) {
@@ -277,11 +242,11 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     if (options.material) {
         material_mfp = material_mean_free_path(*options.material);
         if (options.spacing_from_material) spacing = *material_mfp * options.mfp_fraction;
-    } else if (options.spacing_from_material) {
-        throw UsageError("-spacing mfp needs a material (-material NAME ...)");
     }
     if (!(spacing >= 0.0) || !std::isfinite(spacing))
         throw ValueError("impossible spacing " + std::to_string(spacing));
+    if (!(options.unitlength > 0.0) || !std::isfinite(options.unitlength))
+        throw ValueError("impossible unitlength " + std::to_string(options.unitlength));
 
     std::vector<std::string> light_warnings;
     const std::vector<Light> lights = resolve_lights(scene, &light_warnings);
@@ -310,7 +275,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
                     "' (known: bake_radiance_t, bake_sss_params, "
                     "bake_constant); the object only casts shadows");
         }
-        occluder[i] = any_shadows && casts_shadows(prim);
+        occluder[i] = any_shadows && prim.attributes->visible_to("transmission");
         if (kind) {
             job_of[i] = static_cast<int>(jobs.size());
             jobs.push_back(make_job(scene, i, *kind, options, frame));
@@ -322,6 +287,25 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
             scene.path +
             ": nothing to bake (no primitive has a bake shader: Surface "
             "\"bake_radiance_t\", \"bake_sss_params\" or \"bake_constant\")");
+
+    // The mean free path each job's points should respect: the -material's,
+    // else a bake_sss_params object's own (the smallest over its range).
+    std::vector<std::optional<double>> job_mfp(jobs.size(), material_mfp);
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        const BakeJob& job = jobs[j];
+        if (job.kind != BakeShader::SssParams) continue;
+        MaterialSpec m = options.material ? *options.material : MaterialSpec{};
+        const double unit = options.material ? m.unitlength : options.unitlength;
+        const double a = mfp_mm(m, &job.albedo, &job.dmfp) * unit;
+        const double b = mfp_mm(m, &job.albedo2, &job.dmfp2) * unit;
+        job_mfp[j] = std::min(job_mfp[j].value_or(a), std::min(a, b));
+    }
+    if (options.spacing_from_material && !options.material)
+        for (std::size_t j = 0; j < jobs.size(); ++j)
+            if (!job_mfp[j])
+                throw UsageError(scene.primitives[jobs[j].prim].source +
+                                 ": -spacing mfp needs a material (-material NAME ...) "
+                                 "for objects baked without bake_sss_params");
 
     // Dice what is baked or casts shadows; the rest is not needed.
     DiceControl control;
@@ -338,8 +322,15 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     tbb::parallel_for(std::size_t(0), to_dice.size(), [&](std::size_t k) {
         try {
             const std::size_t i = to_dice[k];
-            diced[i] = dice_primitive(scene.primitives[i],
-                                      job_of[i] >= 0 ? control : occluder_control);
+            if (job_of[i] < 0) {
+                diced[i] = dice_primitive(scene.primitives[i], occluder_control);
+            } else if (options.spacing_from_material && !options.material) {
+                DiceControl own = control;
+                own.spacing = *job_mfp[job_of[i]] * options.mfp_fraction;
+                diced[i] = dice_primitive(scene.primitives[i], own);
+            } else {
+                diced[i] = dice_primitive(scene.primitives[i], control);
+            }
         } catch (const std::exception& e) {
             dice_errors[k] = e.what();
         }
@@ -365,14 +356,8 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         }
         report.min_spacing = std::min(report.min_spacing, std::sqrt(lo));
         report.max_spacing = std::max(report.max_spacing, std::sqrt(hi));
-        std::optional<double> mfp = material_mfp;
-        if (job.kind == BakeShader::SssParams) {
-            MaterialSpec m = options.material ? *options.material : MaterialSpec{};
-            double unit = m.unitlength;
-            double a = mfp_mm(m, &job.albedo, &job.dmfp) * unit;
-            double b = mfp_mm(m, &job.albedo2, &job.dmfp2) * unit;
-            mfp = std::min(mfp.value_or(a), std::min(a, b));
-        }
+        const std::optional<double> mfp =
+            job_mfp[static_cast<std::size_t>(&job - jobs.data())];
         // sqrt(area) is the edge of a square micropolygon: the point spacing.
         if (mfp && std::sqrt(hi) > *mfp * 1.0001) {
             char buf[256];
@@ -473,7 +458,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         for (const std::string& c : file_channels[f])
             cloud.add_channel(c, ChannelType::Color);
         store_matrix(cam.world_to_camera, cloud.world_to_eye);
-        store_matrix(world_to_ndc(cam), cloud.world_to_ndc);
+        store_matrix(cam.world_to_ndc(), cloud.world_to_ndc);
         cloud.format = {float(cam.xres), float(cam.yres), float(cam.pixel_aspect)};
     }
     std::vector<std::size_t> fill(files.size(), 0);

@@ -58,6 +58,9 @@
 /// with N.L <= 0 are skipped without a ray) with tnear 0, and end just short
 /// of the sample point (1e-4 relative) or at infinity for distant lights.
 ///
+/// light_samples() is the same evaluation light by light (Cl and L apart, for
+/// specular()), with the same shadow rays.
+///
 /// Unknown shader names (including area light shaders) warn
 /// "file:line: unknown light shader 'x', ignored" and resolve to an
 /// ambient light of colour 0.
@@ -265,6 +268,7 @@ double smoothstep(double e0, double e1, double x) {
 /// Where a non-ambient light is, seen from a shaded point.
 struct Incidence {
     glm::dvec3 value{0.0};    ///< Cl * n.L, before shadowing
+    glm::dvec3 color{0.0};    ///< Cl, before shadowing (for light_samples)
     glm::dvec3 to_light{0.0}; ///< unit, towards the light's centre
 };
 
@@ -284,6 +288,7 @@ struct Incidence {
         out->to_light = -pl.axis;
         const double cosine = glm::dot(n, out->to_light);
         if (!(cosine > 0.0)) return false;
+        out->color = l.color;
         out->value = l.color * cosine;
         return true;
     }
@@ -300,6 +305,7 @@ struct Incidence {
         if (cone == 0.0) return false;
         cl *= std::pow(std::max(cosangle, 0.0), l.beam_distribution) * cone;
     }
+    out->color = cl;
     out->value = cl * cosine;
     return true;
 }
@@ -443,6 +449,54 @@ glm::dvec3 irradiance(const std::vector<Light>& lights, const std::vector<int>& 
         accumulate(e, inc.value, fraction);
     }
     return e;
+}
+
+void light_samples(const std::vector<Light>& lights, const std::vector<int>& active,
+                   const glm::dvec3& p, const glm::dvec3& n, const RayTracer* tracer,
+                   uint64_t seed, double ray_offset, std::vector<LightSample>& out) {
+    out.clear();
+    // Up to 16 shadow rays on the stack (a small array: it is constructed on
+    // every call); soft lights with more use the heap.
+    constexpr int kStackRays = 16;
+    ShadowRay stack_rays[kStackRays];
+    uint8_t stack_hits[kStackRays];
+    std::vector<ShadowRay> heap_rays;
+    std::vector<uint8_t> heap_hits;
+    for (int index : active) {
+        const PreparedLight pl = prepare(lights, index, tracer);
+        LightSample sample;
+        sample.light = index;
+        if (pl.light->kind == Light::Kind::Ambient) {
+            sample.ambient = true;
+            sample.color = pl.light->color;
+            out.push_back(sample);
+            continue;
+        }
+        Incidence inc;
+        if (!incidence(pl, p, n, &inc)) continue;
+        double fraction = 1.0;
+        if (pl.traced) {
+            ShadowRay* rays = stack_rays;
+            uint8_t* hits = stack_hits;
+            if (pl.rays > kStackRays) {
+                heap_rays.resize(pl.rays);
+                heap_hits.resize(pl.rays);
+                rays = heap_rays.data();
+                hits = heap_hits.data();
+            }
+            shadow_rays(pl, p, n, inc, seed, ray_offset, rays);
+            // One ray: rtcOccluded1 is cheaper than a stream of one, and gives
+            // the same answer (ray_tracer.cpp).
+            if (pl.rays == 1)
+                hits[0] = tracer->occluded(rays[0]) ? 1 : 0;
+            else
+                tracer->occluded(rays, static_cast<std::size_t>(pl.rays), hits);
+            fraction = visible_fraction(hits, pl.rays);
+        }
+        sample.color = inc.color * fraction;
+        sample.direction = inc.to_light;
+        out.push_back(sample);
+    }
 }
 
 void irradiance_batch(const std::vector<Light>& lights, const std::vector<int>& active,

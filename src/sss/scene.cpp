@@ -272,4 +272,36 @@ double Camera::pixel_size_at(double distance) const {
            static_cast<double>(xres);
 }
 
+bool Attributes::visible_to(const char* kind) const {
+    auto it = groups.find("visibility");
+    if (it == groups.end()) return true;
+    const Param* p = it->second.find(kind);
+    if (!p) return true;
+    if (p->type == ParamType::String)
+        return p->strings.empty() ||
+               (p->strings[0] != "transparent" && p->strings[0] != "0");
+    return p->numbers.empty() || p->numbers[0] != 0.0;
+}
+
+Matrix4 Camera::world_to_ndc() const {
+    const auto sw = resolved_screen_window();
+    Matrix4 proj(1.0);
+    if (perspective) {
+        const double c = 1.0 / std::tan(fov * 3.14159265358979323846 / 360.0);
+        const double n = near_clip, f = far_clip;
+        proj = Matrix4(0.0);
+        proj[0][0] = c;
+        proj[1][1] = c;
+        proj[2][2] = f / (f - n);
+        proj[3][2] = -f * n / (f - n);
+        proj[2][3] = 1.0;
+    }
+    Matrix4 screen_to_ndc(1.0);
+    screen_to_ndc[0][0] = 1.0 / (sw[1] - sw[0]);
+    screen_to_ndc[3][0] = -sw[0] / (sw[1] - sw[0]);
+    screen_to_ndc[1][1] = -1.0 / (sw[3] - sw[2]);
+    screen_to_ndc[3][1] = sw[3] / (sw[3] - sw[2]);
+    return screen_to_ndc * proj * world_to_camera;
+}
+
 } // namespace sss

@@ -1,0 +1,139 @@
+/// \file main.cpp
+/// render: ray traces a RIB scene with the built-in surface shaders (brick-map
+/// and point-cloud _ssdiffusion lookups included) and writes its Displays,
+/// beauty and AOVs. Option parsing around sss::read_rib and sss::render_scene.
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "sss/error.h"
+#include "sss/frame_pattern.h"
+#include "sss/render.h"
+#include "sss/rib.h"
+#include "sss/tool.h"
+
+namespace {
+
+const char* const kTool = "render";
+
+std::string usage() {
+    return "usage: render [options] scene.rib\n"
+           "\n"
+           "Ray traces the scene (Embree) with the built-in surface shaders constant,\n"
+           "matte, plastic, read_ssdiffusion and skin, the standard lights with\n"
+           "ray-traced shadows, and writes every Display: the beauty in R, G, B, A and\n"
+           "the AOVs (ambient, diffuse, specular, sss, occlusion) as layers of one\n"
+           "OpenEXR file. See docs/render.md.\n"
+           "\n"
+           "options:\n"
+           "  -o IMAGE               write the primary Display into IMAGE instead\n"
+           "  -frame N               frame number: selects FrameBegin N and expands\n"
+           "                         %04d, #### and $F4 in file names\n"
+           "  -res X Y               image size instead of Format (quick previews)\n"
+           "  -samples N             N x N pixel samples instead of PixelSamples\n"
+           "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
+           "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
+           "  -h, --help             this help\n"
+           "  --version              version information\n"
+           "\n"
+           "Exit codes: 0 ok, 1 bad scene or failed render, 2 bad command line.\n";
+}
+
+/// The command line as a shell would take it back (for image metadata).
+std::string quoted_command_line(const std::vector<std::string>& argv) {
+    std::string line = kTool;
+    for (const std::string& a : argv) {
+        line += ' ';
+        const bool plain =
+            !a.empty() &&
+            a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMN"
+                                "OPQRSTUVWXYZ0123456789-_./=+,:%#@") == std::string::npos;
+        if (plain) {
+            line += a;
+            continue;
+        }
+        line += '\'';
+        for (char c : a) line += c == '\'' ? std::string("'\\''") : std::string(1, c);
+        line += '\'';
+    }
+    return line;
+}
+
+int run(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    sss::RenderJobOptions opt;
+    sss::RunOptions running;
+    std::vector<std::string> files;
+    while (!args.done()) {
+        if (!args.at_option()) {
+            files.push_back(args.positional());
+            continue;
+        }
+        const std::string o = args.option();
+        if (sss::standard_option(kTool, o, usage())) {
+            return 0;
+        } else if (o == "o") {
+            opt.output = args.value(o);
+        } else if (o == "res") {
+            opt.xres = args.integer(o, 1, 65536);
+            opt.yres = args.integer(o, 1, 65536);
+        } else if (o == "samples") {
+            opt.pixel_samples = args.integer(o, 1, 64);
+        } else if (sss::run_option(args, o, running)) {
+            continue;
+        } else {
+            throw sss::UsageError("unknown option -" + o);
+        }
+    }
+    if (files.size() != 1)
+        throw sss::UsageError(files.empty() ? "no scene given (usage: render scene.rib)"
+                                            : "more than one scene given");
+    opt.frame = running.frame;
+    opt.command_line = quoted_command_line(argv);
+    const std::string rib = sss::expand_frame_pattern(files[0], opt.frame, "scene");
+
+    const int threads = sss::resolve_thread_count(running.threads);
+    sss::ThreadLimit limit(threads);
+    sss::Progress reporter(running.progress > 0);
+    opt.progress = &reporter;
+    sss::Stopwatch watch;
+
+    sss::RibReadOptions ropt;
+    ropt.frame = opt.frame;
+    const sss::Scene scene = sss::read_rib(rib, ropt);
+    for (const std::string& w : scene.warnings) sss::warn(kTool, w);
+    const double read_s = watch.seconds();
+
+    const sss::RenderReport report = sss::render_scene(scene, opt);
+    for (const std::string& w : report.warnings) sss::warn(kTool, w);
+    if (running.progress > 0) {
+        const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;
+        const int yres = opt.yres > 0 ? opt.yres : scene.options.camera.yres;
+        const int nx =
+            opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[0];
+        const int ny =
+            opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[1];
+        std::printf(
+            "render: %s: %zu primitives, %zu lights, %zu triangles, %dx%d pixels, "
+            "%dx%d samples\n",
+            rib.c_str(), scene.primitives.size(), scene.lights.size(), report.triangles,
+            xres, yres, nx, ny);
+        std::printf("render: %zu camera rays, %zu shadow and occlusion rays\n",
+                    report.camera_rays, report.shadow_rays);
+        for (const std::string& f : report.files)
+            std::printf("render: wrote %s\n", f.c_str());
+        std::printf("render: read %.3f s, setup %.3f s, render %.3f s, write %.3f s, "
+                    "total %.3f s, threads %d\n",
+                    read_s, report.setup_seconds, report.render_seconds,
+                    report.write_seconds, watch.seconds(), threads);
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}
