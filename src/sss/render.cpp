@@ -631,7 +631,10 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
         }
     if (!options.output.empty()) {
         if (primary >= 0) {
+            // -o names a file: its extension picks the format, whatever
+            // the Display's type said.
             displays[primary].name = options.output;
+            displays[primary].type = "file";
         } else {
             DisplaySpec d;
             d.name = options.output;
