@@ -7,9 +7,9 @@
 /// distant-light shadow rays per point (AVX-512 host), per core:
 /// rtcOccluded1 9.7 Mrays/s, rtcOccluded4 9.8, rtcOccluded8 12.2,
 /// rtcOccluded16 12.6, rtcOccluded1M 16.9 (33.6 on two cores; the "coherent"
-/// context flag made every form slower). The answer for a ray does not depend on which rays it
-/// is traced with: per-ray results were identical across rtcOccluded1,
-/// packets and streams of any size on 18.7M rays.
+/// context flag made every form slower). The answer for a ray does not depend on which
+/// rays it is traced with: per-ray results were identical across rtcOccluded1, packets
+/// and streams of any size on 18.7M rays.
 
 #include "sss/ray_tracer.h"
 
@@ -229,7 +229,8 @@ void RayTracer::occluded(const ShadowRay* rays, std::size_t count, uint8_t* hit)
         }
         rtcOccluded1M(m_impl->scene, &context, chunk, static_cast<unsigned>(n),
                       sizeof(RTCRay));
-        for (std::size_t i = 0; i < n; ++i) hit[begin + i] = was_occluded(chunk[i]) ? 1 : 0;
+        for (std::size_t i = 0; i < n; ++i)
+            hit[begin + i] = was_occluded(chunk[i]) ? 1 : 0;
     }
 }
 
