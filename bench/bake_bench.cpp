@@ -20,6 +20,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "latlong_mesh.h"
 #include "sss/bake.h"
 #include "sss/rib.h"
 #include "sss/tool.h"
@@ -69,29 +70,7 @@ std::string scene_text(const std::vector<DomeLight>& lights, int rings, int segm
         }
     }
     v.push_back({0, -1, 0});
-    auto ring = [&](int j, int i) { return 1 + (j - 1) * segments + (i % segments); };
-    std::ostringstream nverts, verts;
-    for (int i = 0; i < segments; ++i) {
-        nverts << "3 ";
-        verts << 0 << ' ' << ring(1, i + 1) << ' ' << ring(1, i) << ' ';
-    }
-    for (int j = 1; j < rings - 1; ++j)
-        for (int i = 0; i < segments; ++i) {
-            nverts << "4 ";
-            verts << ring(j, i) << ' ' << ring(j, i + 1) << ' ' << ring(j + 1, i + 1)
-                  << ' ' << ring(j + 1, i) << ' ';
-        }
-    const int south = static_cast<int>(v.size()) - 1;
-    for (int i = 0; i < segments; ++i) {
-        nverts << "3 ";
-        verts << south << ' ' << ring(rings - 1, i) << ' ' << ring(rings - 1, i + 1)
-              << ' ';
-    }
-    rib << "PointsPolygons [" << nverts.str() << "] [" << verts.str() << "] \"P\" [";
-    for (const glm::dvec3& p : v) rib << p.x << ' ' << p.y << ' ' << p.z << ' ';
-    rib << "] \"N\" [";
-    for (const glm::dvec3& p : v) rib << p.x << ' ' << p.y << ' ' << p.z << ' ';
-    rib << "]\n";
+    rib << bench::latlong_points_polygons(v, v, rings, segments);  // unit sphere: N = P
     rib << "Polygon \"P\" [-4 -1 -4  -4 -1 4  4 -1 4  4 -1 -4]\n"; // faces +y
     rib << "WorldEnd\n";
     return rib.str();

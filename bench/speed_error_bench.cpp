@@ -69,6 +69,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
+#include "latlong_mesh.h"
 #include "sss/bake.h"
 #include "sss/brickmap.h"
 #include "sss/error.h"
@@ -254,7 +255,6 @@ std::string rough_scene_text() {
     for (int j = 1; j < rings; ++j)
         for (int i = 0; i < segments; ++i) add(j, i);
     add(rings, 0);
-    auto ring = [&](int j, int i) { return 1 + (j - 1) * segments + (i % segments); };
     std::ostringstream rib;
     rib.precision(8);
     rib << "Format 512 512 1\nProjection \"perspective\" \"fov\" 40\n"
@@ -263,28 +263,8 @@ std::string rough_scene_text() {
            "LightSource \"distantlight\" 2 \"from\" [1 1 1] \"to\" [0 0 0] "
            "\"intensity\" [1] \"string shadowname\" [\"raytrace\"]\n"
            "Surface \"bake_radiance_t\" \"string filename\" [\"rough.ptc\"]\n";
-    std::ostringstream nverts, verts;
-    for (int i = 0; i < segments; ++i) {
-        nverts << "3 ";
-        verts << 0 << ' ' << ring(1, i + 1) << ' ' << ring(1, i) << ' ';
-    }
-    for (int j = 1; j < rings - 1; ++j)
-        for (int i = 0; i < segments; ++i) {
-            nverts << "4 ";
-            verts << ring(j, i) << ' ' << ring(j, i + 1) << ' ' << ring(j + 1, i + 1)
-                  << ' ' << ring(j + 1, i) << ' ';
-        }
-    const int south = int(v.size()) - 1;
-    for (int i = 0; i < segments; ++i) {
-        nverts << "3 ";
-        verts << south << ' ' << ring(rings - 1, i) << ' ' << ring(rings - 1, i + 1)
-              << ' ';
-    }
-    rib << "PointsPolygons [" << nverts.str() << "] [" << verts.str() << "] \"P\" [";
-    for (const glm::dvec3& p : v) rib << p.x << ' ' << p.y << ' ' << p.z << ' ';
-    rib << "] \"N\" [";
-    for (const glm::dvec3& p : n) rib << p.x << ' ' << p.y << ' ' << p.z << ' ';
-    rib << "]\nWorldEnd\n";
+    rib << bench::latlong_points_polygons(v, n, rings, segments);
+    rib << "WorldEnd\n";
     return rib.str();
 }
 
