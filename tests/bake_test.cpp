@@ -120,6 +120,9 @@ TEST(Bake, ObjectsShareOrSplitFilesAndOptionOOverrides) {
     sss::BakeOptions opt;
     opt.spacing = 0.1;
     opt.frame = 12;
+    // The files are known before baking (-newer 1), in the same order.
+    EXPECT_EQ(sss::bake_output_files(scene_of(world), opt),
+              (std::vector<std::string>{"a.ptc", "b.0012.ptc"}));
     auto files = bake(scene_of(world), opt);
     ASSERT_EQ(files.size(), 2u);
     EXPECT_EQ(files[0].first, "a.ptc");
@@ -130,6 +133,8 @@ TEST(Bake, ObjectsShareOrSplitFilesAndOptionOOverrides) {
     for (float v : r->data) EXPECT_FLOAT_EQ(v, 0.5f);
 
     opt.output = "all.ptc";
+    EXPECT_EQ(sss::bake_output_files(scene_of(world), opt),
+              std::vector<std::string>{"all.ptc"});
     files = bake(scene_of(world), opt);
     ASSERT_EQ(files.size(), 1u);
     EXPECT_EQ(files[0].first, "all.ptc");
@@ -139,6 +144,7 @@ TEST(Bake, ObjectsShareOrSplitFilesAndOptionOOverrides) {
     opt.output.clear();
     opt.frame.reset();
     EXPECT_THROW(bake(scene_of(world), opt), sss::UsageError);
+    EXPECT_THROW(sss::bake_output_files(scene_of(world), opt), sss::UsageError);
 }
 
 TEST(Bake, ConstantBakesNegativeColourIntoTheSharedFile) {

@@ -448,3 +448,33 @@ TEST(RenderOutput, WritesDisplaysWithLayersMetadataAndFramePatterns) {
     const sss::RenderReport again = sss::render_scene(scene, opt);
     EXPECT_EQ(again.files[0], dir.file("other.7.exr"));
 }
+
+TEST(RenderOutput, FilesReadAndWrittenAreKnownBeforeRendering) {
+    // Two diffusion shaders on one map (listed once), one on another, with a
+    // frame pattern; a primary and an additional Display, and an "it" one.
+    const sss::Scene scene =
+        scene_of("Surface \"read_ssdiffusion\" \"string filename\" [\"m.####.bkm\"]\n"
+                 "Sphere 1 -1 1 360\n"
+                 "Surface \"skin\" \"string filename\" [\"m.####.bkm\"]\n"
+                 "Sphere 0.5 -0.5 0.5 360\n"
+                 "Surface \"read_ssdiffusion\" \"string filename\" [\"n.ptc\"]\n"
+                 "Disk 0 1 360\n"
+                 "Surface \"matte\"\nDisk 0 2 360\n",
+                 "Display \"img.$F4.exr\" \"openexr\" \"rgba\"\n"
+                 "Display \"+sss.png\" \"png\" \"sss\"\n"
+                 "Display \"+view\" \"it\" \"rgb\"\n");
+    sss::RenderJobOptions opt;
+    opt.frame = 5;
+    sss::RenderFiles files = sss::render_files(scene, opt);
+    EXPECT_EQ(files.inputs, (std::vector<std::string>{"m.0005.bkm", "n.ptc"}));
+    EXPECT_EQ(files.outputs,
+              (std::vector<std::string>{"img.0005.exr", "sss.png", "view.exr"}));
+    // -o replaces the primary Display's file.
+    opt.output = "beauty.png";
+    files = sss::render_files(scene, opt);
+    EXPECT_EQ(files.outputs,
+              (std::vector<std::string>{"beauty.png", "sss.png", "view.exr"}));
+    // Without Displays: "<scene>.exr".
+    EXPECT_EQ(sss::render_files(scene_of(""), {}).outputs,
+              std::vector<std::string>{"test.exr"});
+}

@@ -882,6 +882,12 @@ TEST(RibArchives, ReadArchiveIsRelativeToTheIncludingFile) {
     auto scene = sss::read_rib(main.string());
     ASSERT_EQ(scene.primitives.size(), 2u);
     EXPECT_EQ(scene.path, main.string());
+    // Every file read, once, in first-read order: the inputs of -newer.
+    ASSERT_EQ(scene.sources.size(), 3u);
+    EXPECT_EQ(scene.sources[0], main.string());
+    EXPECT_NE(scene.sources[1].find("parts/a.rib"), std::string::npos);
+    EXPECT_NE(scene.sources[2].find("b.rib"), std::string::npos);
+    EXPECT_TRUE(sss::parse_rib("WorldBegin\nWorldEnd\n", "t.rib").sources.empty());
     EXPECT_NE(scene.primitives[0].source.find("b.rib:1"), std::string::npos);
     expect_near(apply(scene.primitives[0].object_to_world, {0, 0, 0}), {0, 1, 0});
     EXPECT_EQ(scene.primitives[1].object_to_world, sss::Matrix4(1.0));

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -503,6 +504,44 @@ TEST(AtomicOutputDeathTest, SignalRemovesTemporaries) {
     EXPECT_EXIT(body(), testing::KilledBySignal(SIGTERM), "");
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"a.ptc"});
     EXPECT_EQ(read_text(target), "old");
+}
+
+// ---------------------------------------------------------------------------
+// -newer 1
+// ---------------------------------------------------------------------------
+
+TEST(OutputsUpToDate, StrictlyNewerThanEveryInputAndAllPresent) {
+    TempFolder dir;
+    const auto at = [&](const std::string& name, int seconds_ago) {
+        const std::string path = (dir.path() / name).string();
+        std::ofstream(path) << name;
+        fs::last_write_time(path, fs::file_time_type::clock::now() -
+                                      std::chrono::seconds(seconds_ago));
+        return path;
+    };
+    const std::string in1 = at("in1", 300), in2 = at("in2", 200);
+    const std::string out1 = at("out1", 100), out2 = at("out2", 100);
+    testing::internal::CaptureStdout();
+    EXPECT_TRUE(sss::outputs_up_to_date("tool", {out1, out2}, {in1, in2}));
+    EXPECT_NE(testing::internal::GetCapturedStdout().find("nothing to do"),
+              std::string::npos);
+
+    testing::internal::CaptureStdout();
+    // One input as new as an output: not strictly newer.
+    fs::last_write_time(in2, fs::last_write_time(out2));
+    EXPECT_FALSE(sss::outputs_up_to_date("tool", {out1, out2}, {in1, in2}));
+    // A missing output or input, or no outputs at all: the job runs.
+    EXPECT_FALSE(
+        sss::outputs_up_to_date("tool", {out1, (dir.path() / "x").string()}, {in1}));
+    EXPECT_FALSE(sss::outputs_up_to_date("tool", {out1}, {(dir.path() / "y").string()}));
+    EXPECT_FALSE(sss::outputs_up_to_date("tool", {}, {in1}));
+    // A folder is not an output file.
+    EXPECT_FALSE(sss::outputs_up_to_date("tool", {dir.path().string()}, {in1}));
+    EXPECT_EQ(testing::internal::GetCapturedStdout(), "") << "only a skip prints";
+    // No inputs (an in-memory scene): an existing output is up to date.
+    testing::internal::CaptureStdout();
+    EXPECT_TRUE(sss::outputs_up_to_date("tool", {out1}, {}));
+    testing::internal::GetCapturedStdout();
 }
 
 // ---------------------------------------------------------------------------

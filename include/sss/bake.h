@@ -84,6 +84,12 @@ double material_mean_free_path(const MaterialSpec& material);
 /// ValueError / UsageError / IoError with the primitive's source location.
 BakeReport bake_scene(const Scene& scene, const BakeOptions& options);
 
+/// The files bake_scene would write, in first-use order, without baking
+/// (for -newer 1). Throws ValueError like bake_scene for a bake shader
+/// without a "filename" when options.output is empty.
+std::vector<std::string> bake_output_files(const Scene& scene,
+                                           const BakeOptions& options);
+
 /// Bakes without writing: the clouds by output path, in first-use order.
 std::vector<std::pair<std::string, PointCloud>>
 bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report);

@@ -21,11 +21,6 @@ namespace sss {
 // brickmake
 // ---------------------------------------------------------------------------
 
-/// True when output exists and was modified after every input (brickmake
-/// -newer 1: nothing to do). False when the output or any input is missing,
-/// so that the build runs and reports a missing input itself.
-bool output_is_newer(const std::string& output, const std::vector<std::string>& inputs);
-
 /// "tool version args...": the provenance stored in a map, with arguments
 /// that need it quoted for a POSIX shell so the line can be re-run.
 std::string command_line_provenance(const std::string& tool,

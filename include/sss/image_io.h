@@ -74,6 +74,11 @@ struct DisplayTarget {
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
                               bool primary);
 
+/// The file a Display writes (resolve_display's path, without the image):
+/// its name, plus ".exr" for an "it"/"framebuffer" display whose name has no
+/// image extension.
+std::string display_file(const DisplaySpec& display);
+
 /// Writes the target atomically (AtomicOutput) with OIIO. OpenEXR: linear,
 /// half or float, with the metadata. PNG, TIFF, JPEG: 8-bit sRGB-encoded,
 /// colour divided by alpha (straight alpha), clamped to [0, 1]. Throws

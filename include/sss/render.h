@@ -45,6 +45,13 @@ struct RenderReport {
 Image render_image(const Scene& scene, const RenderJobOptions& options,
                    RenderReport* report);
 
+/// The files a render job reads and writes, without rendering (for -newer 1).
+struct RenderFiles {
+    std::vector<std::string> inputs;  ///< scene.sources, then the diffusion files
+    std::vector<std::string> outputs; ///< every Display's file
+};
+RenderFiles render_files(const Scene& scene, const RenderJobOptions& options);
+
 /// render_image, then writes every Display of the scene (the primary one
 /// replaced by options.output when given; no Display: "<scene>.exr").
 RenderReport render_scene(const Scene& scene, const RenderJobOptions& options);

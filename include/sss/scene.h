@@ -240,6 +240,10 @@ struct Scene {
     /// "file.rib:12: ..."; the tool prints them as warnings.
     std::vector<std::string> warnings;
     std::string path; ///< the RIB file it was read from
+    /// Every file the scene was read from: the RIB (when read from a file),
+    /// then each ReadArchive / DelayedReadArchive file and OBJ mesh once, in
+    /// first-read order. The inputs of `-newer 1`.
+    std::vector<std::string> sources;
 };
 
 } // namespace sss

@@ -94,6 +94,15 @@ struct RunOptions {
 /// Parses one of them into run; false when opt is not one of them.
 bool run_option(ArgScanner& args, const std::string& opt, RunOptions& run);
 
+/// The `-newer 1` test of ptfilter, brickmake, ptbake and render: true when
+/// every output exists and was modified strictly after every input (file
+/// system time, full resolution). Then it prints "<tool>: OUT is newer than
+/// its inputs; nothing to do" on stdout and the tool exits 0 without work.
+/// False when an output or an input is missing (the job then runs and
+/// reports a missing input itself), or when there are no outputs.
+bool outputs_up_to_date(const std::string& tool, const std::vector<std::string>& outputs,
+                        const std::vector<std::string>& inputs);
+
 struct PointCloudWriteOptions;
 /// Parses the point-cloud output options (-compress 0|1, -ptcversion 0|1|2);
 /// false when opt is not one of them.

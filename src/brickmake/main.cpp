@@ -96,11 +96,7 @@ int run(const std::vector<std::string>& argv) {
     if (opt.radius_scale < 1.0)
         sss::warn(kTool, "-radiusscale below 1 makes large and inefficient brick maps");
 
-    if (newer && sss::output_is_newer(out_path, files)) {
-        std::printf("brickmake: %s is newer than its inputs; nothing to do\n",
-                    out_path.c_str());
-        return 0;
-    }
+    if (newer && sss::outputs_up_to_date(kTool, {out_path}, files)) return 0;
 
     const int threads = sss::resolve_thread_count(running.threads);
     sss::ThreadLimit limit(threads);

@@ -45,6 +45,8 @@ std::string usage() {
         "                         free path\n"
         "  -compress 0|1          gzip the .ptc (default 0)\n"
         "  -ptcversion 0|1|2      .ptc version written (default 0)\n"
+        "  -newer 0|1             1: do nothing when every cloud the scene bakes is\n"
+        "                         newer than the RIB and every archive it reads\n"
         "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
         "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
         "  -h, --help             this help\n"
@@ -62,6 +64,7 @@ int run(const std::vector<std::string>& argv) {
     bool have_material = false;
     std::vector<std::string> files;
     sss::RunOptions running;
+    bool newer = false;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -85,6 +88,8 @@ int run(const std::vector<std::string>& argv) {
             }
         } else if (o == "mfpfraction") {
             opt.mfp_fraction = args.positive(o);
+        } else if (o == "newer") {
+            newer = args.integer(o, 0, 1) != 0;
         } else if (sss::write_option(args, o, opt.write)) {
             continue;
         } else if (sss::run_option(args, o, running)) {
@@ -115,6 +120,9 @@ int run(const std::vector<std::string>& argv) {
     sss::Scene scene = sss::read_rib(rib, ropt);
     for (const std::string& w : scene.warnings) sss::warn(kTool, w);
     const double read_s = watch.seconds();
+    if (newer &&
+        sss::outputs_up_to_date(kTool, sss::bake_output_files(scene, opt), scene.sources))
+        return 0;
 
     sss::BakeReport report = sss::bake_scene(scene, opt);
     for (const std::string& w : report.warnings) sss::warn(kTool, w);

@@ -53,6 +53,8 @@ std::string usage() {
         "  -progress 0|1|2           1: material values and timings, ALF_PROGRESS "
         "lines;\n"
         "                            2: also octree statistics\n"
+        "  -newer 0|1                1: do nothing when out.ptc is newer than every\n"
+        "                            input (exit 0)\n"
         "  -organize 0|1             accepted for compatibility; output is unorganized\n"
         "  --help, --version\n",
         sss::material_names().c_str());
@@ -66,6 +68,7 @@ int run(const std::vector<std::string>& argv) {
     std::vector<std::string> files;
     bool have_filter = false;
     sss::RunOptions running;
+    bool newer = false;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -108,6 +111,8 @@ int run(const std::vector<std::string>& argv) {
             continue;
         } else if (sss::run_option(args, o, running)) {
             continue;
+        } else if (o == "newer") {
+            newer = args.integer(o, 0, 1) != 0;
         } else if (o == "organize") {
             args.integer(o, 0, 1);
         } else {
@@ -126,6 +131,7 @@ int run(const std::vector<std::string>& argv) {
         f = sss::expand_frame_pattern(f, running.frame, "file name");
     const std::string out_path = files.back();
     files.pop_back();
+    if (newer && sss::outputs_up_to_date(kTool, {out_path}, files)) return 0;
     sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
     sss::Progress reporter(running.progress > 0);
     opt.diffusion.progress = &reporter;

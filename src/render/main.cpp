@@ -32,6 +32,8 @@ std::string usage() {
            "                         %04d, #### and $F4 in file names\n"
            "  -res X Y               image size instead of Format (quick previews)\n"
            "  -samples N             N x N pixel samples instead of PixelSamples\n"
+           "  -newer 0|1             1: do nothing when every image is newer than the\n"
+           "                         RIB, its archives and the maps its shaders read\n"
            "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
            "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
            "  -h, --help             this help\n"
@@ -65,6 +67,7 @@ int run(const std::vector<std::string>& argv) {
     sss::RenderJobOptions opt;
     sss::RunOptions running;
     std::vector<std::string> files;
+    bool newer = false;
     while (!args.done()) {
         if (!args.at_option()) {
             files.push_back(args.positional());
@@ -80,6 +83,8 @@ int run(const std::vector<std::string>& argv) {
             opt.yres = args.integer(o, 1, 65536);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
+        } else if (o == "newer") {
+            newer = args.integer(o, 0, 1) != 0;
         } else if (sss::run_option(args, o, running)) {
             continue;
         } else {
@@ -104,6 +109,10 @@ int run(const std::vector<std::string>& argv) {
     const sss::Scene scene = sss::read_rib(rib, ropt);
     for (const std::string& w : scene.warnings) sss::warn(kTool, w);
     const double read_s = watch.seconds();
+    if (newer) {
+        const sss::RenderFiles io = sss::render_files(scene, opt);
+        if (sss::outputs_up_to_date(kTool, io.outputs, io.inputs)) return 0;
+    }
 
     const sss::RenderReport report = sss::render_scene(scene, opt);
     for (const std::string& w : report.warnings) sss::warn(kTool, w);

@@ -99,6 +99,18 @@ void check_declared_type(const Scene& scene, const std::string& channel,
     }
 }
 
+/// The file a baked primitive goes to: -o, else its shader's "filename".
+std::string bake_file(const Primitive& prim, const BakeOptions& options,
+                      std::optional<int> frame) {
+    if (!options.output.empty()) return options.output;
+    const ShaderRef& sh = *prim.attributes->surface;
+    const std::string where = prim.source + ": " + sh.name;
+    std::string name = sh.params.get_string("filename", "");
+    if (name.empty())
+        throw ValueError(where + " has no \"filename\" (give one, or ptbake -o FILE)");
+    return expand_frame_pattern(name, frame, where + " filename");
+}
+
 BakeJob make_job(const Scene& scene, std::size_t index, BakeShader kind,
                  const BakeOptions& options, std::optional<int> frame) {
     const Primitive& prim = scene.primitives[index];
@@ -108,15 +120,7 @@ BakeJob make_job(const Scene& scene, std::size_t index, BakeShader kind,
     job.prim = index;
     job.kind = kind;
 
-    if (!options.output.empty()) {
-        job.file = options.output;
-    } else {
-        std::string name = sh.params.get_string("filename", "");
-        if (name.empty())
-            throw ValueError(where +
-                             " has no \"filename\" (give one, or ptbake -o FILE)");
-        job.file = expand_frame_pattern(name, frame, where + " filename");
-    }
+    job.file = bake_file(prim, options, frame);
 
     const std::vector<std::string> produced = produced_channels(kind);
     std::string list = sh.params.get_string("displaychannels", "");
@@ -515,6 +519,20 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         for (const Channel& c : files[f].second.channels)
             report.files[f].channels.push_back(std::string(channel_type_name(c.type)) +
                                                " " + c.name);
+    }
+    return files;
+}
+
+std::vector<std::string> bake_output_files(const Scene& scene,
+                                           const BakeOptions& options) {
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    std::vector<std::string> files;
+    for (const Primitive& prim : scene.primitives) {
+        const auto& surf = prim.attributes->surface;
+        if (!surf || !bake_shader_kind(surf->name)) continue;
+        std::string file = bake_file(prim, options, frame);
+        if (std::find(files.begin(), files.end(), file) == files.end())
+            files.push_back(std::move(file));
     }
     return files;
 }

@@ -69,19 +69,6 @@ bool ends_with_png(const std::string& path) {
 // brickmake
 // ---------------------------------------------------------------------------
 
-bool output_is_newer(const std::string& output, const std::vector<std::string>& inputs) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (!fs::is_regular_file(output, ec) || ec) return false;
-    const fs::file_time_type out_time = fs::last_write_time(output, ec);
-    if (ec) return false;
-    for (const std::string& in : inputs) {
-        const fs::file_time_type in_time = fs::last_write_time(in, ec);
-        if (ec || !(out_time > in_time)) return false;
-    }
-    return true;
-}
-
 std::string command_line_provenance(const std::string& tool,
                                     const std::vector<std::string>& args) {
     std::string line = tool + " " + version_string();

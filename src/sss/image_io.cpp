@@ -185,6 +185,16 @@ std::string join(const std::vector<std::string>& list, const char* sep) {
 
 } // namespace
 
+std::string display_file(const DisplaySpec& display) {
+    // There is no window here: "it"/"framebuffer" write an OpenEXR file, and a
+    // name without an image extension ("view", "shot.0042") gets ".exr".
+    const std::string type = lower(display.type);
+    if ((type == "it" || type == "framebuffer") &&
+        format_from_extension(display.name).empty())
+        return display.name + ".exr";
+    return display.name;
+}
+
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
                               bool primary) {
     const std::string label =
@@ -192,16 +202,11 @@ DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
     if (display.name.empty()) throw ValueError("display with an empty file name");
 
     DisplayTarget target;
-    target.path = display.name;
+    target.path = display_file(display);
     std::string type = lower(display.type);
     target.format = format_from_type(type);
     if (target.format.empty()) {
         // "file", "it", "framebuffer" and unknown drivers: the name decides.
-        // There is no window here: "it"/"framebuffer" write an OpenEXR file.
-        // A name without an image extension ("view", "shot.0042") gets ".exr".
-        if ((type == "it" || type == "framebuffer") &&
-            format_from_extension(target.path).empty())
-            target.path += ".exr";
         target.format = format_from_extension(target.path);
         if (target.format.empty()) target.format = "openexr";
     }

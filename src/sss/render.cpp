@@ -616,14 +616,15 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     return image;
 }
 
-RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
-    RenderReport report;
-    Stopwatch watch;
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+namespace {
 
-    // The Displays, with -o in place of the primary one's file name.
+/// The Displays a job writes: the scene's, with -o in place of the primary
+/// one's file name (or a default "<scene>.exr"), frame patterns expanded.
+/// `primary` receives the index of the primary Display.
+std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions& options,
+                                      std::optional<int> frame, int& primary) {
     std::vector<DisplaySpec> displays = scene.options.displays;
-    int primary = -1;
+    primary = -1;
     for (std::size_t i = 0; i < displays.size(); ++i)
         if (!displays[i].additional) {
             primary = static_cast<int>(i);
@@ -661,6 +662,32 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
             displays[i].name, frame,
             static_cast<int>(i) == primary && !options.output.empty() ? "option -o"
                                                                       : "Display");
+    return displays;
+}
+
+} // namespace
+
+RenderFiles render_files(const Scene& scene, const RenderJobOptions& options) {
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    RenderFiles files;
+    files.inputs = scene.sources;
+    for (const std::string& f : detail::diffusion_files(scene, frame))
+        if (std::find(files.inputs.begin(), files.inputs.end(), f) == files.inputs.end())
+            files.inputs.push_back(f);
+    int primary = -1;
+    for (const DisplaySpec& d : job_displays(scene, options, frame, primary))
+        files.outputs.push_back(display_file(d));
+    return files;
+}
+
+RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
+    RenderReport report;
+    Stopwatch watch;
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+
+    int primary = -1;
+    const std::vector<DisplaySpec> displays =
+        job_displays(scene, options, frame, primary);
 
     Image image = render_image(scene, options, &report);
     const Stopwatch write_watch;

@@ -573,6 +573,9 @@ private:
         if (obj && !m_object && !m_in_world)
             fail(from, "geometry outside WorldBegin/WorldEnd");
         std::string text = slurp(path, " (ReadArchive at " + where(from) + ")");
+        if (std::find(m_scene.sources.begin(), m_scene.sources.end(), path) ==
+            m_scene.sources.end())
+            m_scene.sources.push_back(path);
         ++m_depth;
         if (obj)
             import_obj(text, path);
@@ -2327,7 +2330,9 @@ Scene read_rib(const std::string& path, const RibReadOptions& options) {
     std::ostringstream ss;
     ss << in.rdbuf();
     if (in.bad()) throw IoError(path, "read error");
-    return parse_rib(ss.str(), path, options);
+    Scene scene = parse_rib(ss.str(), path, options);
+    scene.sources.insert(scene.sources.begin(), path);
+    return scene;
 }
 
 Scene parse_rib(const std::string& text, const std::string& path,

@@ -267,6 +267,38 @@ bool DiffusionSource::lookup(const glm::vec3& p, const glm::vec3& n, float radiu
 // ---------------------------------------------------------------------------
 // Resolving the scene's shaders
 
+namespace {
+
+/// A diffusion shader's "filename" with frame patterns expanded ("" if none).
+std::string diffusion_file(const ShaderRef& ref, const std::string& where,
+                           std::optional<int> frame) {
+    std::string file;
+    try {
+        file = ref.params.get_string("filename", "");
+    } catch (const ValueError& e) {
+        throw ValueError(where + ": " + e.what());
+    }
+    return file.empty() ? file : expand_frame_pattern(file, frame, where + " filename");
+}
+
+} // namespace
+
+std::vector<std::string> diffusion_files(const Scene& scene, std::optional<int> frame) {
+    std::vector<std::string> files;
+    for (const Primitive& prim : scene.primitives) {
+        if (!prim.attributes || !prim.attributes->surface) continue;
+        const ShaderRef& ref = *prim.attributes->surface;
+        const std::optional<ShaderKind> kind = shader_kind(ref.name);
+        if (kind != ShaderKind::ReadSsdiffusion && kind != ShaderKind::Skin) continue;
+        const std::string where = (ref.source.empty() ? "" : ref.source + ": ") +
+                                  "Surface \"" + ref.name + "\"";
+        std::string file = diffusion_file(ref, where, frame);
+        if (!file.empty() && std::find(files.begin(), files.end(), file) == files.end())
+            files.push_back(std::move(file));
+    }
+    return files;
+}
+
 ShaderSet resolve_surface_shaders(const Scene& scene, std::optional<int> frame,
                                   std::vector<std::string>& warnings) {
     ShaderSet set;
@@ -322,21 +354,19 @@ ShaderSet resolve_surface_shaders(const Scene& scene, std::optional<int> frame,
             throw ValueError(s.where + ": " + e.what());
         }
         if (s.kind == ShaderKind::ReadSsdiffusion || s.kind == ShaderKind::Skin) {
-            std::string file;
             std::string channel;
             try {
-                file = ref->params.get_string("filename", "");
                 channel = ref->params.get_string("channel", "_ssdiffusion");
             } catch (const ValueError& e) {
                 throw ValueError(s.where + ": " + e.what());
             }
+            const std::string file = diffusion_file(*ref, s.where, frame);
             if (file.empty() && s.kind == ShaderKind::ReadSsdiffusion)
                 throw ValueError(s.where +
                                  " has no \"filename\" (a .bkm brick map or a .ptc "
                                  "point cloud with " +
                                  channel + ")");
             if (!file.empty()) {
-                file = expand_frame_pattern(file, frame, s.where + " filename");
                 auto key = std::make_pair(file, channel);
                 auto it = sources.find(key);
                 if (it == sources.end()) {

@@ -84,6 +84,10 @@ struct ShaderSet {
 ShaderSet resolve_surface_shaders(const Scene& scene, std::optional<int> frame,
                                   std::vector<std::string>& warnings);
 
+/// The diffusion files (brick maps, point clouds) the scene's shaders read,
+/// frame patterns expanded, each once, without opening them.
+std::vector<std::string> diffusion_files(const Scene& scene, std::optional<int> frame);
+
 /// What a shader sees at a shading point (world space, unit vectors).
 struct ShadingPoint {
     glm::dvec3 p{0.0};  ///< position (on the smooth surface)

@@ -587,18 +587,22 @@ AtomicOutput::AtomicOutput(const std::string& target) : m_target(target) {
     if (!dir_prefix.empty() && dir_prefix.back() != '/') dir_prefix += '/';
 
     // O_EXCL makes the name ours; the writer later reopens and truncates it.
+    // The name is registered before the file exists: registered after, a
+    // signal in between would leave the new file behind.
     for (int attempt = 0; attempt < 100; ++attempt) {
         std::string temp = dir_prefix + "." + base + "." + random_alnum(8) + ".tmp";
+        register_temp_file(temp);
         int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd >= 0) {
             ::close(fd);
             m_temp = temp;
-            register_temp_file(m_temp);
             return;
         }
-        if (errno != EEXIST)
+        const int err = errno;
+        unregister_temp_file(temp);
+        if (err != EEXIST)
             throw IoError(target, "cannot create a temporary file in '" +
-                                      parent_dir(target) + "': " + errno_text(errno));
+                                      parent_dir(target) + "': " + errno_text(err));
     }
     throw IoError(target, "cannot find an unused temporary file name");
 }
@@ -727,6 +731,31 @@ bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
     } else {
         return false;
     }
+    return true;
+}
+
+bool outputs_up_to_date(const std::string& tool, const std::vector<std::string>& outputs,
+                        const std::vector<std::string>& inputs) {
+    namespace fs = std::filesystem;
+    if (outputs.empty()) return false;
+    std::error_code ec;
+    std::optional<fs::file_time_type> newest_input;
+    for (const std::string& in : inputs) {
+        const fs::file_time_type t = fs::last_write_time(in, ec);
+        if (ec) return false;
+        if (!newest_input || t > *newest_input) newest_input = t;
+    }
+    for (const std::string& out : outputs) {
+        if (!fs::is_regular_file(out, ec) || ec) return false;
+        const fs::file_time_type t = fs::last_write_time(out, ec);
+        if (ec || (newest_input && !(t > *newest_input))) return false;
+    }
+    std::string names;
+    for (const std::string& out : outputs) names += (names.empty() ? "" : ", ") + out;
+    std::printf("%s: %s %s newer than %s inputs; nothing to do\n", tool.c_str(),
+                names.c_str(), outputs.size() == 1 ? "is" : "are",
+                outputs.size() == 1 ? "its" : "their");
+    std::fflush(stdout);
     return true;
 }
 

@@ -27,6 +27,9 @@ has_channel() {
     "$ptinfo" "$1" 2>/dev/null | grep -Eq "^ *$2\$"
 }
 
+# mtime_of FILE: modification time at full resolution ("none" if missing).
+mtime_of() { stat -c %y "$1" 2>/dev/null || echo none; }
+
 # finish_checks NAME: exits 1 if any check failed.
 finish_checks() {
     if ((failures > 0)); then

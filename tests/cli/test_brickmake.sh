@@ -31,7 +31,6 @@ source "$here/lib.sh"
 source "$here/checks.sh"
 
 size_of() { stat -c %s "$1" 2>/dev/null || echo 0; }
-mtime_of() { stat -c %y "$1" 2>/dev/null || echo none; }
 # compare_field NAME rms|max: a number from the last run's
 # "brickinfo: compare NAME: rms X max Y (...)" line.
 compare_field() {
