@@ -145,7 +145,7 @@ private:
 
 /// An output file written atomically: write to temp_path() (a unique file in
 /// the target's folder), then commit() renames it over the target. If never
-/// committed (error, exception, SIGINT/SIGTERM), the temporary is removed and
+/// committed (error, exception, SIGINT/SIGTERM/SIGHUP), the temporary is removed and
 /// the target is untouched.
 class AtomicOutput {
 public:

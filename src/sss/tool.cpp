@@ -121,16 +121,20 @@ extern "C" void sss_cleanup_and_die(int sig) {
 void install_signal_handlers() {
     static std::once_flag once;
     std::call_once(once, [] {
-        for (int sig : {SIGINT, SIGTERM}) {
+        // SIGHUP too: a closed terminal or dropped ssh session ends the job
+        // like a kill would.
+        for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
             struct sigaction old {};
             if (::sigaction(sig, nullptr, &old) != 0) continue;
-            // A signal ignored by our parent (nohup, background jobs) stays ignored.
+            // A signal ignored by our parent (nohup: SIGHUP, background jobs:
+            // SIGINT) stays ignored.
             if (!(old.sa_flags & SA_SIGINFO) && old.sa_handler == SIG_IGN) continue;
             struct sigaction sa {};
             sa.sa_handler = sss_cleanup_and_die;
             sigemptyset(&sa.sa_mask);
             sigaddset(&sa.sa_mask, SIGINT);
             sigaddset(&sa.sa_mask, SIGTERM);
+            sigaddset(&sa.sa_mask, SIGHUP);
             ::sigaction(sig, &sa, nullptr);
         }
     });
