@@ -33,7 +33,9 @@ enum class Criterion {
 bool parse_criterion(const char* name, Criterion& out);
 const char* criterion_name(Criterion c);
 
-/// The points and materials of one evaluation, in scene units.
+/// The points and materials of one evaluation, every length in one unit. The
+/// float profile tables need the profiles' lengths (dmfp) within roughly 1e-5
+/// to 1e5 of that unit, so ssdiffusion() passes mm, not scene units.
 struct DiffusionProblem {
     std::vector<glm::vec3> positions;
     std::vector<glm::vec3> normals;    ///< used to orient near-field source disks

@@ -432,10 +432,17 @@ inline void lookup3(const Tables& tables, const ReceiverChannels& rc, float q,
     }
 }
 
+// The last coincident-source disk integral per channel (valid within one
+// evaluation, where profiles do not move).
+struct DiskMemo {
+    const Profile* profile = nullptr;
+    double rho = -1.0, value = 0.0;
+};
+
 // Contribution of sorted source s to receiver at x (never the receiver itself).
 inline void near_source(const Tree& tree, const Tables& tables,
                         const ReceiverChannels& rc, const glm::vec3& x, uint32_t s,
-                        double acc[3], DiffusionStats& st) {
+                        double acc[3], DiffusionStats& st, DiskMemo memo[3]) {
     const glm::vec4& pr = tree.pos_rho2[s];
     const glm::vec4& pa = tree.power_area[s];
     glm::vec3 w = x - glm::vec3(pr);
@@ -444,9 +451,17 @@ inline void near_source(const Tree& tree, const Tables& tables,
         ++st.quadrature_terms;
         double rho = std::sqrt(double(pr.w));
         if (q == 0.0f) {
-            // Coincident source: its disk is centred on the receiver.
-            for (int ch = 0; ch < 3; ++ch)
-                if (pa.w > 0) acc[ch] += pa[ch] / pa.w * rc.profile[ch]->disk(rho);
+            // Coincident source: its disk is centred on the receiver. Coincident
+            // points come in big leaves (O(n^2) pairs), usually of equal area:
+            // the last disk value per channel is kept, so a pair costs a
+            // multiply rather than a closed form with exponentials.
+            for (int ch = 0; ch < 3; ++ch) {
+                if (!(pa.w > 0)) continue;
+                DiskMemo& m = memo[ch];
+                if (m.profile != rc.profile[ch] || m.rho != rho)
+                    m = {rc.profile[ch], rho, rc.profile[ch]->disk(rho)};
+                acc[ch] += pa[ch] / pa.w * m.value;
+            }
             return;
         }
         glm::dvec3 u, v;
@@ -650,6 +665,16 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
     // Calibrated so that the default (1) gives well under 1 % RMS error on
     // smooth lit objects (docs/ptfilter.md has the measured table).
     const double tau = 4e-3 * options.max_solid_angle;
+    // The tolerance scales with albedo x E, what a large, well-sampled surface
+    // returns. A cloud can return far less: when the whole object is small
+    // against the profile (at most disk(sqrt(total area / pi)), the profile's
+    // share inside a disk of the cloud's area) or when the areas cover only a
+    // fraction of the surface the points span (tiny areas). Without these
+    // bounds every node was dropped as negligible there (100 % error).
+    std::vector<double> reach(pb.profiles.size());
+    const double rho_all = std::sqrt(double(tree.nodes[0].area) / kPi);
+    for (std::size_t k = 0; k < pb.profiles.size(); ++k)
+        reach[k] = pb.profiles[k].disk(rho_all);
     const double eps = options.max_solid_angle;
 
     std::atomic<std::size_t> done{0};
@@ -661,12 +686,18 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
             auto block_ptr = std::make_unique<BucketBlock>();
             BucketBlock& block = *block_ptr;
             DiffusionStats local;
+            DiskMemo memo[3];
+            struct {
+                uint32_t node = kNone;
+                const ChannelTable* table[3] = {nullptr, nullptr, nullptr};
+                double sum[3] = {0, 0, 0};
+            } coincident;
             for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
                 const Node& bucket = tree.nodes[buckets[bi]];
                 // Channels of the bucket's receivers (distinct tables).
                 ReceiverChannels first_rc = receiver_channels(tree.order[bucket.first]);
                 std::vector<const ChannelTable*> bucket_tables[3];
-                std::vector<double> bucket_totals[3];
+                std::vector<double> bucket_totals[3], bucket_reach[3];
                 for (uint32_t s = bucket.first; s < bucket.first + bucket.count; ++s) {
                     ReceiverChannels rc = pb.profile_index.empty()
                                               ? first_rc
@@ -676,6 +707,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                         if (std::find(v.begin(), v.end(), rc.table[ch]) == v.end()) {
                             v.push_back(rc.table[ch]);
                             bucket_totals[ch].push_back(rc.profile[ch]->total());
+                            bucket_reach[ch].push_back(
+                                reach[std::size_t(rc.profile[ch] - pb.profiles.data())]);
                         }
                     }
                     if (pb.profile_index.empty()) break;
@@ -687,6 +720,13 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                     if (glm::length(nd.hi - nd.lo) >= 2.0 * region) break;
                     up = nd.parent;
                 }
+                // Area density of the region: its points' areas against a quarter
+                // of its squared diagonal (>= 1 for any surface patch that the
+                // points sample: a flat square patch gives 2).
+                double diag = glm::length(tree.nodes[up].hi - tree.nodes[up].lo);
+                double density =
+                    diag > 0 ? std::min(1.0, 4.0 * tree.nodes[up].area / (diag * diag))
+                             : 1.0;
                 double tol[3], skip[3];
                 for (int ch = 0; ch < 3; ++ch) {
                     double level =
@@ -696,7 +736,9 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                     level = std::max(level, 0.05 * global_abs[ch]);
                     double tot = *std::min_element(bucket_totals[ch].begin(),
                                                    bucket_totals[ch].end());
-                    tol[ch] = tau * tot * level;
+                    double reach_min = *std::min_element(bucket_reach[ch].begin(),
+                                                         bucket_reach[ch].end());
+                    tol[ch] = tau * std::min(tot * density, reach_min) * level;
                     skip[ch] = 0.05 * tol[ch];
                 }
 
@@ -818,7 +860,8 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                             for (uint32_t j = leaf.first; j < leaf.first + leaf.count;
                                  ++j)
                                 if (j != s)
-                                    near_source(tree, tables, first_rc, x, j, acc, local);
+                                    near_source(tree, tables, first_rc, x, j, acc, local,
+                                                memo);
                             for (int ch = 0; ch < 3; ++ch)
                                 block.acc[ch][r] += float(acc[ch]);
                         }
@@ -858,10 +901,34 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
                             far_node(tables, rc, tree.expansions[k], x, false, acc);
                         for (uint32_t k : near_list) {
                             const Node& leaf = tree.nodes[k];
+                            if (leaf.count > kLeafSize && leaf.lo == leaf.hi &&
+                                x == leaf.lo) {
+                                // Identical points (one big leaf): the leaf's sum is
+                                // the same for every receiver there, so it is
+                                // formed once per material and each receiver
+                                // subtracts its own term (O(n), not O(n^2)).
+                                if (coincident.node != k ||
+                                    !std::equal(rc.table, rc.table + 3,
+                                                coincident.table)) {
+                                    coincident.node = k;
+                                    std::copy(rc.table, rc.table + 3, coincident.table);
+                                    std::fill(coincident.sum, coincident.sum + 3, 0.0);
+                                    for (uint32_t j = leaf.first;
+                                         j < leaf.first + leaf.count; ++j)
+                                        near_source(tree, tables, rc, x, j,
+                                                    coincident.sum, local, memo);
+                                }
+                                double own[3] = {0, 0, 0};
+                                if (s >= leaf.first && s < leaf.first + leaf.count)
+                                    near_source(tree, tables, rc, x, s, own, local, memo);
+                                for (int ch = 0; ch < 3; ++ch)
+                                    acc[ch] += coincident.sum[ch] - own[ch];
+                                continue;
+                            }
                             for (uint32_t j = leaf.first; j < leaf.first + leaf.count;
                                  ++j)
                                 if (j != s)
-                                    near_source(tree, tables, rc, x, j, acc, local);
+                                    near_source(tree, tables, rc, x, j, acc, local, memo);
                         }
                         local.far_terms += far_list.size() + mono_list.size();
                         for (int ch = 0; ch < 3; ++ch) {
@@ -907,6 +974,8 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
             core2 = std::min(core2, prof[ch]->core_length() * prof[ch]->core_length());
         glm::dvec3 x(pb.positions[i]);
         double acc[3] = {0, 0, 0};
+        // Coincident sources usually share their area: keep the last disk.
+        double memo_rho = -1.0, memo_disk[3] = {0, 0, 0};
         for (std::size_t j = 0; j < n; ++j) {
             double a = pb.areas[j];
             glm::dvec3 e(pb.irradiance[j]);
@@ -914,7 +983,11 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
             glm::dvec3 w = x - glm::dvec3(pb.positions[j]);
             double q = glm::dot(w, w);
             if (j == i || q == 0.0) {
-                for (int ch = 0; ch < 3; ++ch) acc[ch] += e[ch] * prof[ch]->disk(rho);
+                if (rho != memo_rho) {
+                    memo_rho = rho;
+                    for (int ch = 0; ch < 3; ++ch) memo_disk[ch] = prof[ch]->disk(rho);
+                }
+                for (int ch = 0; ch < 3; ++ch) acc[ch] += e[ch] * memo_disk[ch];
                 continue;
             }
             // Same rule as the hierarchical path (in float there).

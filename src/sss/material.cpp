@@ -124,7 +124,8 @@ ChannelCoefficients coefficients_from_albedo_dmfp(double albedo, double dmfp,
     // sigma_t' = 1/(l_d s), sigma_a = s/(3 l_d): no subtraction near alpha' -> 1.
     double st = 1.0 / (dmfp * s);
     c.sigma_a = s / (3.0 * dmfp);
-    c.sigma_s_prime = st - c.sigma_a;
+    // Albedo 0 is exactly no scattering (st - sigma_a leaves ~1e-17 here).
+    c.sigma_s_prime = albedo == 0.0 ? 0.0 : st - c.sigma_a;
     return c;
 }
 

@@ -267,11 +267,20 @@ double Profile::disk(double rho) const {
                             zv * exp_over_d_diff(s, zv, dv, ev));
         // Fluence terms: [ (e^{-s zr} - e^{-s dr}) - (e^{-s zv} - e^{-s dv}) ] / s
         //              = [ (e^{-s zr} - e^{-s zv}) - (e^{-s dr} - e^{-s dv}) ] / s.
-        double near = exp_diff_over_sigma(s, zr, zv - zr);
-        double far = 0.0;
-        if (rho != kInf)
-            far = exp_diff_over_sigma(s, dr, (zv * zv - zr * zr) / (dv + dr));
-        double phi = m_cphi / m_D * (near - far);
+        // The first form for small disks (each bracket ~ rho^2; the second
+        // cancels to ~1e-16 absolute, which dominated, and could turn negative,
+        // for tiny areas), the second for large ones (no growing brackets).
+        double fluence;
+        if (rho < zr) {
+            fluence = exp_diff_over_sigma(s, zr, er) - exp_diff_over_sigma(s, zv, ev);
+        } else {
+            double near = exp_diff_over_sigma(s, zr, zv - zr);
+            double far = 0.0;
+            if (rho != kInf)
+                far = exp_diff_over_sigma(s, dr, (zv * zv - zr * zr) / (dv + dr));
+            fluence = near - far;
+        }
+        double phi = m_cphi / m_D * fluence;
         return 2.0 * kPi * m_scale * (ce + phi);
     }
     case ProfileKind::Burley: {

@@ -106,6 +106,8 @@ public:
         if (!(std::abs(det) > 0.0) || !std::isfinite(det))
             throw ValueError("the camera transform is singular");
         m_to_world = glm::inverse(cam.world_to_camera);
+        m_affine = m_to_world[0][3] == 0.0 && m_to_world[1][3] == 0.0 &&
+                   m_to_world[2][3] == 0.0 && m_to_world[3][3] == 1.0;
     }
 
     /// The ray through raster point (x, y) (pixels, y down), clipped to
@@ -114,17 +116,28 @@ public:
     ShadowRay ray(double x, double y, double* units) const {
         const double sx = m_window[0] + (x / m_cam.xres) * (m_window[1] - m_window[0]);
         const double sy = m_window[3] - (y / m_cam.yres) * (m_window[3] - m_window[2]);
-        glm::dvec4 origin(0.0, 0.0, 0.0, 1.0), ahead(0.0, 0.0, 1.0, 1.0);
+        glm::dvec4 origin(0.0, 0.0, 0.0, 1.0), ahead(0.0, 0.0, 1.0, 0.0);
         if (m_cam.perspective) {
-            ahead = glm::dvec4(sx * m_tan_half, sy * m_tan_half, 1.0, 1.0);
+            ahead = glm::dvec4(sx * m_tan_half, sy * m_tan_half, 1.0, 0.0);
         } else {
             origin = glm::dvec4(sx, sy, 0.0, 1.0);
-            ahead = glm::dvec4(sx, sy, 1.0, 1.0);
         }
         const glm::dvec4 o4 = m_to_world * origin;
-        const glm::dvec4 a4 = m_to_world * ahead;
         const glm::dvec3 o = glm::dvec3(o4) / o4.w;
-        const glm::dvec3 d = glm::dvec3(a4) / a4.w - o;
+        // The direction is transformed as a vector, not as the difference of
+        // two points one camera unit apart: that difference lost the
+        // direction's low bits to the camera's distance from the origin in
+        // large scenes (1e-9 of it at 1e6 units), so a scaled scene's rays
+        // were not the same. Projective camera transforms keep the points.
+        glm::dvec3 d;
+        if (m_affine) {
+            d = glm::dvec3(m_to_world * ahead);
+        } else {
+            ahead.w = 1.0;
+            if (!m_cam.perspective) ahead = origin + glm::dvec4(0.0, 0.0, 1.0, 0.0);
+            const glm::dvec4 a4 = m_to_world * ahead;
+            d = glm::dvec3(a4) / a4.w - o;
+        }
         const double len = glm::length(d);
         *units = len;
         ShadowRay r;
@@ -141,6 +154,7 @@ private:
     std::array<double, 4> m_window{};
     double m_tan_half = 1.0;
     Matrix4 m_to_world{1.0};
+    bool m_affine = true; ///< m_to_world's last row is (0, 0, 0, 1)
 };
 
 /// A primitive as the renderer uses it.

@@ -1,5 +1,7 @@
 #include "sss/ssdiffusion.h"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -17,6 +19,28 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxAlbedo = 0.99999;
 // Per-point materials share profile tables; at most this many distinct ones.
 constexpr std::size_t kMaxDistinctProfiles = 1024;
+
+// Per-point albedo quantisation: steps of 1/albedo_steps, except below 2^-8,
+// where such a step is a large fraction of the value (1/65536 made 1e-6 zero
+// and 1e-4 1.07e-4): there a + 2^-24 keeps log2(albedo_steps) - 8 significant
+// bits (0.2 % at full resolution; at most 16 x 256 extra keys). Small albedos
+// get negative keys.
+constexpr double kSmallAlbedo = 1.0 / 256.0, kTinyAlbedo = 1.0 / 16777216.0;
+int small_albedo_drop(int albedo_steps) {
+    int bits = std::max(1, int(std::bit_width(unsigned(albedo_steps))) - 1 - 8);
+    return 23 - bits;
+}
+int64_t albedo_key(double a, int albedo_steps) {
+    if (a >= kSmallAlbedo) return std::llround(a * albedo_steps);
+    const int drop = small_albedo_drop(albedo_steps);
+    uint32_t b = std::bit_cast<uint32_t>(float(a + kTinyAlbedo));
+    return -1 - int64_t((b + (1u << (drop - 1))) >> drop);
+}
+double albedo_of_key(int64_t key, int albedo_steps) {
+    if (key >= 0) return std::min(double(key) / albedo_steps, kMaxAlbedo);
+    uint32_t b = uint32_t(-1 - key) << small_albedo_drop(albedo_steps);
+    return std::max(0.0, double(std::bit_cast<float>(b)) - kTinyAlbedo);
+}
 
 std::string fmt3(const glm::dvec3& v) {
     char buf[128];
@@ -41,11 +65,12 @@ const Channel& require_channel(const PointCloud& cloud, const std::string& name,
     return *c;
 }
 
-// The constant (whole-cloud) channel profiles.
-std::vector<Profile> constant_profiles(const SsDiffusionOptions& o) {
+// The constant (whole-cloud) channel profiles, with lengths in units of
+// 1/u mm (u = unitlength: scene units; u = 1: mm).
+std::vector<Profile> constant_profiles(const SsDiffusionOptions& o, double u) {
     const MaterialSpec& m = o.material;
     m.validate();
-    const double u = m.unitlength, ior = m.resolved_ior();
+    const double ior = m.resolved_ior();
     std::vector<Profile> out;
     if (m.uses_albedo_form()) {
         glm::dvec3 albedo, dmfp;
@@ -67,7 +92,7 @@ std::vector<Profile> constant_profiles(const SsDiffusionOptions& o) {
 
 std::vector<std::string> describe_material(const SsDiffusionOptions& o) {
     const MaterialSpec& m = o.material;
-    std::vector<Profile> p = constant_profiles(o);
+    std::vector<Profile> p = constant_profiles(o, m.unitlength);
     std::vector<std::string> lines;
     std::string source = m.uses_albedo_form()             ? "albedo/diffusemeanfreepath"
                          : (m.scattering || m.absorption) ? "scattering/absorption"
@@ -102,8 +127,18 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     rep.material_lines = describe_material(o);
     const std::size_t n = in.size();
 
+    // The diffusion is evaluated in mm, the material's own unit, not in scene
+    // units: its profile tables are floats whose entries go as powers of the
+    // material's lengths (R ~ 1/l^2, its r^2-derivatives up to ~1/l^8), which
+    // overflowed or underflowed for marble (dmfp 4-8.5 mm) at -unitlength
+    // below ~1e-6 or above ~1e5: a cm scene scaled by 1e-5 or 3e6. In mm,
+    // real materials' lengths are 0.01 to 100 and sum R A E is the same (R A
+    // has no unit), so the result does not depend on the scene's scale.
+    const double to_mm = 1.0 / m.unitlength;
     DiffusionProblem pb;
-    pb.positions = in.positions;
+    pb.positions.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+        pb.positions[i] = glm::vec3(glm::dvec3(in.positions[i]) * to_mm);
     pb.normals = in.normals;
     pb.areas.resize(n);
     pb.irradiance.resize(n);
@@ -119,13 +154,13 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
                 throw ValueError("channel '" + o.area_channel +
                                  "': negative or invalid area " + std::to_string(a) +
                                  " at point " + std::to_string(i));
-            pb.areas[i] = a;
+            pb.areas[i] = float(a * to_mm * to_mm);
         }
     } else {
         rep.warnings.push_back("no '" + o.area_channel +
                                "' channel: using pi * radius^2 as each point's area");
         for (std::size_t i = 0; i < n; ++i)
-            pb.areas[i] = float(kPi) * in.radii[i] * in.radii[i];
+            pb.areas[i] = float(kPi * (in.radii[i] * to_mm) * (in.radii[i] * to_mm));
     }
     if (n > 0) {
         const Channel& rad =
@@ -136,7 +171,7 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     }
 
     // Material: constant, or per point from the _albedo / _diffusemeanfreepath channels.
-    const std::vector<Profile> constant = constant_profiles(o);
+    const std::vector<Profile> constant = constant_profiles(o, 1.0); // in mm
     if ((m.albedo_from_file || m.dmfp_from_file) && n > 0) {
         const Channel* ach = m.albedo_from_file ? &require_channel(in, o.albedo_channel,
                                                                    3, "-albedo fromfile")
@@ -147,12 +182,14 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
                 : nullptr;
         glm::dvec3 albedo0, dmfp0;
         m.resolve_albedo_dmfp(albedo0, dmfp0);
-        const double u = m.unitlength, ior = m.resolved_ior();
+        const double ior = m.resolved_ior();
         bool clamped = false;
         // Quantise per-point values so points share tables; coarsen until the
         // number of distinct profiles fits.
+        // dmfp_steps stays >= 1 (0 made the dmfp NaN); the last level keeps
+        // every distinct value rather than stopping half-way.
         for (int albedo_steps = 65536, dmfp_steps = 1024;;
-             albedo_steps /= 2, dmfp_steps /= 2) {
+             albedo_steps /= 2, dmfp_steps = std::max(1, dmfp_steps / 2)) {
             std::map<std::tuple<int64_t, int64_t>, uint32_t> index;
             std::vector<std::tuple<double, double>> keys;
             pb.profile_index.assign(n, glm::u32vec3(0));
@@ -171,13 +208,14 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
                             "': diffuse mean free path must be positive, got " +
                             std::to_string(d) + " at point " + std::to_string(i));
                     if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
-                    int64_t ka = std::llround(a * albedo_steps);
+                    int64_t ka = albedo_key(a, albedo_steps);
                     int64_t kd = std::llround(std::log2(d) * dmfp_steps);
                     auto [it, fresh] = index.try_emplace({ka, kd}, uint32_t(keys.size()));
                     if (fresh) {
-                        keys.emplace_back(std::min(double(ka) / albedo_steps, kMaxAlbedo),
+                        keys.emplace_back(albedo_of_key(ka, albedo_steps),
                                           std::exp2(double(kd) / dmfp_steps));
-                        if (keys.size() > kMaxDistinctProfiles) overflow = true;
+                        if (keys.size() > kMaxDistinctProfiles && albedo_steps > 16)
+                            overflow = true;
                     }
                     pb.profile_index[i][ch] = it->second;
                 }
@@ -186,7 +224,7 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
             pb.profiles.clear();
             for (auto [a, d] : keys)
                 pb.profiles.push_back(
-                    Profile::from_albedo_dmfp(o.profile, a, d * u, ior));
+                    Profile::from_albedo_dmfp(o.profile, a, d, ior)); // in mm
             rep.distinct_profiles = keys.size();
             break;
         }
