@@ -165,6 +165,14 @@ std::array<float, N> parse_float_list(const std::string& path,
     return out;
 }
 
+/// Property and channel names become channel names, which may hold no
+/// control characters (blanks cannot occur: the header is split on them).
+bool has_control_character(const std::string& name) {
+    return std::any_of(name.begin(), name.end(), [](char ch) {
+        return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f;
+    });
+}
+
 std::string read_header_line(ByteSource& in, std::size_t& header_bytes) {
     std::string line;
     for (;;) {
@@ -217,6 +225,10 @@ PlyHeader read_header(ByteSource& in) {
                 if (!t)
                     throw fail("unknown channel type '" + w[2] +
                                "' in sss_channel comment");
+                if (has_control_character(w[3]))
+                    throw fail("control character in the channel name of sss_channel "
+                               "comment '" +
+                               line + "'");
                 h.declared.push_back({*t, w[3]});
             } else if (w.size() >= 2 && w[1] == "sss_world_to_eye") {
                 h.world_to_eye = parse_float_list<16>(path, w, w[1]);
@@ -257,6 +269,9 @@ PlyHeader read_header(ByteSource& in) {
             if (w.size() != 3) throw fail("malformed PLY property line '" + line + "'");
             const std::optional<PlyScalar> t = parse_scalar(w[1]);
             if (!t) throw fail("unknown PLY property type '" + w[1] + "'");
+            if (has_control_character(w[2]))
+                throw fail("control character in the vertex property name '" + w[2] +
+                           "'");
             if (!prop_names.insert(w[2]).second) {
                 throw fail("duplicate vertex property '" + w[2] + "'");
             }

@@ -79,8 +79,11 @@ std::size_t ByteSource::raw_read(void* dst, std::size_t n) {
         const char* msg = gzerror(as_gz(m_gz), &errnum);
         if (errnum == Z_ERRNO)
             throw IoError(m_path, std::string("read error: ") + std::strerror(errno));
-        throw FormatError(m_path,
-                          std::string("corrupt gzip stream: ") + (msg ? msg : "?"));
+        // zlib prefixes the name it was opened with, "<fd:3>" for gzdopen.
+        std::string what = msg ? msg : "?";
+        if (what.rfind("<fd:", 0) == 0 && what.find(">: ") != std::string::npos)
+            what.erase(0, what.find(">: ") + 3);
+        throw FormatError(m_path, "corrupt gzip stream: " + what);
     }
     if (got == 0) m_eof = true;
     return static_cast<std::size_t>(got);

@@ -113,7 +113,7 @@ Channel parse_spec_line(const std::string& path, const std::string& line, int in
                                      "': " + why);
     };
     for (char ch : line) {
-        if (static_cast<unsigned char>(ch) < 0x20 && ch != '\t') {
+        if ((static_cast<unsigned char>(ch) < 0x20 && ch != '\t') || ch == 0x7f) {
             throw malformed("control character");
         }
     }
