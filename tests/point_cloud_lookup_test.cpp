@@ -155,9 +155,13 @@ TEST(PointCloudLookup, DoubleSidedPlateKeepsSidesApart) {
 
 TEST(PointCloudLookup, ChannelSelectionAndOrder) {
     PointCloud cloud = grid_plane(5, 0.0f, 1.0f, 0.0, 0);
-    auto& a = cloud.add_channel("a", ChannelType::Float);
-    auto& b = cloud.add_channel("b", ChannelType::Color);
-    auto& v = cloud.add_channel("v", ChannelType::Vector);
+    // Add all channels before taking references: add_channel may reallocate.
+    cloud.add_channel("a", ChannelType::Float);
+    cloud.add_channel("b", ChannelType::Color);
+    cloud.add_channel("v", ChannelType::Vector);
+    auto& a = *cloud.find_channel("a");
+    auto& b = *cloud.find_channel("b");
+    auto& v = *cloud.find_channel("v");
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         a.data[i] = 2.0f;
         for (int c = 0; c < 3; ++c) {

@@ -61,6 +61,7 @@ struct PointCloud {
     Channel* find_channel(std::string_view name);
     /// Adds a zero-filled channel (or returns the existing one of the same type).
     /// Throws ValueError if a channel of that name exists with another type.
+    /// Adding a channel invalidates references to the others (a vector).
     Channel& add_channel(const std::string& name, ChannelType type);
     /// Total floats per point over all channels (the PTC "datasize").
     int data_size() const;
