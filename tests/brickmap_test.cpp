@@ -36,20 +36,11 @@ using sss::PointCloud;
 
 namespace {
 
-using Bytes = std::vector<unsigned char>;
+using sss::test::Bytes;
+using sss::test::read_bytes;
+using sss::test::write_bytes;
 
 using sss::test::TempDir;
-
-Bytes read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const std::string& path, const Bytes& bytes) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(bytes.data()),
-              static_cast<std::streamsize>(bytes.size()));
-}
 
 uint32_t get_u32(const Bytes& b, std::size_t at) {
     uint32_t v = 0;

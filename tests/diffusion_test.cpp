@@ -29,6 +29,8 @@
 #include "sss/synthetic.h"
 #include "sss/tool.h"
 
+#include "diffusion_test_util.h"
+
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -39,34 +41,8 @@ const sss::NamedMaterial& material(const char* name) {
     return *m;
 }
 
-/// The three channel profiles of a table material at a unit length.
-std::vector<sss::Profile>
-material_profiles(const char* name, double unitlength = 1.0,
-                  sss::ProfileKind kind = sss::ProfileKind::Classic) {
-    const sss::NamedMaterial& m = material(name);
-    std::vector<sss::Profile> out;
-    for (int ch = 0; ch < 3; ++ch)
-        out.push_back(sss::Profile::from_coefficients(
-            kind, {m.sigma_s_prime[ch] / unitlength, m.sigma_a[ch] / unitlength, m.ior}));
-    return out;
-}
-
-/// A DiffusionProblem from a cloud with `_area` and `_radiance_t`.
-sss::DiffusionProblem problem_from(const sss::PointCloud& cloud,
-                                   std::vector<sss::Profile> profiles) {
-    sss::DiffusionProblem pb;
-    pb.positions = cloud.positions;
-    pb.normals = cloud.normals;
-    const sss::Channel* area = cloud.find_channel("_area");
-    const sss::Channel* rad = cloud.find_channel("_radiance_t");
-    if (!area || !rad) throw std::runtime_error("cloud lacks _area or _radiance_t");
-    pb.areas = area->data;
-    pb.irradiance.resize(cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i)
-        pb.irradiance[i] = {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]};
-    pb.profiles = std::move(profiles);
-    return pb;
-}
+using sss::test::material_profiles;
+using sss::test::problem_from;
 
 sss::PointCloud sphere_cloud(std::size_t n, double radius,
                              glm::dvec3 light = {1, 0.5, 2}) {

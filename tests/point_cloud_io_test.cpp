@@ -35,7 +35,9 @@ using sss::PointCloud;
 
 namespace {
 
-using Bytes = std::vector<unsigned char>;
+using sss::test::Bytes;
+using sss::test::read_bytes;
+using sss::test::write_bytes;
 
 // ---------------------------------------------------------------------------
 // Helpers
@@ -49,18 +51,6 @@ std::string numbered(const char* prefix, long long n, const char* suffix) {
     s += std::to_string(n);
     s += suffix;
     return s;
-}
-
-void write_bytes(const std::string& path, const Bytes& bytes) {
-    std::ofstream out(path, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()),
-              static_cast<std::streamsize>(bytes.size()));
-    ASSERT_TRUE(out.good());
-}
-
-Bytes read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 Bytes gzip_bytes(const Bytes& raw) {

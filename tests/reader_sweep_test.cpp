@@ -44,7 +44,9 @@ using sss::test::TempDir;
 
 namespace {
 
-using Bytes = std::vector<unsigned char>;
+using sss::test::Bytes;
+using sss::test::read_bytes;
+using sss::test::write_bytes;
 
 enum class Format { Ptc, Ply, Bkm, Rib };
 
@@ -60,17 +62,6 @@ const char* format_name(Format f) {
         return "rib";
     }
     return "?";
-}
-
-Bytes read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void write_bytes(const std::string& path, const Bytes& bytes) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(bytes.data()),
-              static_cast<std::streamsize>(bytes.size()));
 }
 
 void put_u32(Bytes& b, std::size_t at, uint32_t v) {

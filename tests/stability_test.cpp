@@ -37,6 +37,8 @@
 #include "sss/ssdiffusion.h"
 #include "sss/synthetic.h"
 
+#include "diffusion_test_util.h"
+
 namespace {
 
 using sss::ProfileKind;
@@ -63,32 +65,7 @@ std::vector<sss::Profile> albedo_profiles(ProfileKind kind, double albedo, doubl
     return out;
 }
 
-/// Three channel profiles of a table material, lengths scaled by `unitlength`.
-std::vector<sss::Profile> material_profiles(ProfileKind kind, const char* name,
-                                            double unitlength = 1.0) {
-    const sss::NamedMaterial* m = sss::find_material(name);
-    if (!m) throw std::runtime_error(std::string("no material ") + name);
-    std::vector<sss::Profile> out;
-    for (int ch = 0; ch < 3; ++ch)
-        out.push_back(
-            sss::Profile::from_coefficients(kind, {m->sigma_s_prime[ch] / unitlength,
-                                                   m->sigma_a[ch] / unitlength, m->ior}));
-    return out;
-}
-
-sss::DiffusionProblem problem_from(const sss::PointCloud& cloud,
-                                   std::vector<sss::Profile> profiles) {
-    sss::DiffusionProblem pb;
-    pb.positions = cloud.positions;
-    pb.normals = cloud.normals;
-    pb.areas = cloud.find_channel("_area")->data;
-    const sss::Channel* rad = cloud.find_channel("_radiance_t");
-    pb.irradiance.resize(cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i)
-        pb.irradiance[i] = {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]};
-    pb.profiles = std::move(profiles);
-    return pb;
-}
+using sss::test::problem_from;
 
 /// A cloud (P, N, radius, _area, _radiance_t) from a problem, for ssdiffusion.
 sss::PointCloud cloud_from(const sss::DiffusionProblem& pb) {
@@ -451,7 +428,8 @@ TEST_P(StabilityPlane, SpectralonConservesEnergy) {
     const ProfileKind kind = GetParam();
     const double side = 10.0, spacing = 0.1;
     sss::PointCloud cloud = plane_cloud(side, spacing);
-    std::vector<sss::Profile> prof = material_profiles(kind, "spectralon");
+    std::vector<sss::Profile> prof =
+        sss::test::material_profiles("spectralon", 1.0, kind);
     for (const sss::Profile& p : prof) EXPECT_NEAR(p.total(), 1.0, 1e-9);
     sss::DiffusionProblem pb = problem_from(cloud, prof);
     std::vector<glm::vec3> h = sss::evaluate_diffusion(pb, {});
@@ -504,7 +482,7 @@ TEST_P(StabilityMeanFreePath, FarBelowSpacingIsEachPointsOwnDisk) {
                          (form ? " coefficients" : " albedo"));
             std::vector<sss::Profile> prof =
                 form == 0 ? albedo_profiles(kind, 0.7, dmfp)
-                          : material_profiles(kind, "marble", unit);
+                          : sss::test::material_profiles("marble", unit, kind);
             sss::DiffusionProblem pb = problem_from(*cloud, prof);
             // Varying, signed irradiance.
             for (std::size_t i = 0; i < pb.irradiance.size(); ++i)

@@ -2,8 +2,12 @@
 // Helpers shared by the unit tests.
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include <unistd.h>
 
@@ -34,5 +38,22 @@ public:
 private:
     std::filesystem::path m_path;
 };
+
+/// A file's bytes.
+using Bytes = std::vector<unsigned char>;
+
+/// Reads a whole file (empty if it cannot be opened).
+inline Bytes read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Writes bytes as the whole file; throws std::runtime_error if that fails.
+inline void write_bytes(const std::string& path, const Bytes& bytes) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
+    if (!out.good()) throw std::runtime_error("cannot write " + path);
+}
 
 } // namespace sss::test
