@@ -129,6 +129,14 @@ finish() {
 # has_temp DIR NAME: a temporary of NAME (or of anything when NAME is "") in DIR.
 has_temp() { compgen -G "$1/.$2*.tmp" >/dev/null; }
 
+# overdue DEADLINE: once SECONDS is past DEADLINE, fails the case, kills the
+# tool and returns 0.
+overdue() {
+    ((SECONDS > $1)) || return 1
+    fail "$label: still running after ${case_timeout} s"
+    kill -KILL "$pid"
+}
+
 # catch_write DIR NAME "SIG...": polls DIR until the temporary of NAME exists,
 # then delivers the signals while it still does (see the top). Sets hit=1
 # when delivered. Each signal must have a handler, except $ignored, which
@@ -154,11 +162,7 @@ catch_write() {
             fi
             kill -CONT "$pid" 2>/dev/null || true
         fi
-        if ((SECONDS > deadline)); then
-            fail "$label: still running after ${case_timeout} s"
-            kill -KILL "$pid"
-            break
-        fi
+        overdue "$deadline" && break
         nap 0.005
     done
     finish
@@ -185,11 +189,7 @@ catch_compute() {
             kill -CONT "$pid" 2>/dev/null || true
             break
         fi
-        if ((SECONDS > deadline)); then
-            fail "$label: still running after ${case_timeout} s"
-            kill -KILL "$pid"
-            break
-        fi
+        overdue "$deadline" && break
         nap 0.005
     done
     finish
