@@ -119,6 +119,21 @@ TEST(ArgScanner, OptionsAndPositionals) {
     EXPECT_THROW(scan.option(), sss::UsageError);
 }
 
+TEST(ArgScanner, NextOptionCollectsPositionals) {
+    auto scan = scanner({"a.ptc", "b.ptc", "-radius", "-1.5", "c.ptc", "--v", "d.ptc"});
+    std::vector<std::string> files;
+    std::string opt;
+    ASSERT_TRUE(scan.next_option(opt, files));
+    EXPECT_EQ(opt, "radius");
+    EXPECT_EQ(files, (std::vector<std::string>{"a.ptc", "b.ptc"}));
+    EXPECT_DOUBLE_EQ(scan.number(opt), -1.5);
+    ASSERT_TRUE(scan.next_option(opt, files));
+    EXPECT_EQ(opt, "v");
+    EXPECT_FALSE(scan.next_option(opt, files));
+    EXPECT_EQ(files, (std::vector<std::string>{"a.ptc", "b.ptc", "c.ptc", "d.ptc"}));
+    EXPECT_TRUE(scan.done());
+}
+
 TEST(ArgScanner, NegativeNumbersAreValues) {
     auto scan = scanner({"-ambient", "-0.5", "-threads", "-3", "-x", "-.25", "-1e3"});
     EXPECT_EQ(scan.option(), "ambient");

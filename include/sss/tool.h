@@ -53,6 +53,10 @@ public:
     std::string option();
     /// Consumes the next word as a positional argument.
     std::string positional();
+    /// Moves to the next option, appending the positional words before it to
+    /// `positionals`; stores its name (option()) in `opt`. False at the end.
+    /// The usual loop: `while (args.next_option(o, files)) { ... }`.
+    bool next_option(std::string& opt, std::vector<std::string>& positionals);
 
     /// Consumes the value of option opt; UsageError if missing or if it looks
     /// like another option.

@@ -85,12 +85,8 @@ int run(const std::vector<std::string>& argv) {
     bool picture_option = false; // an option that only makes sense with -picture
     std::optional<float> filter_radius;
     bool have_filterscale = false, have_compare = false;
-    while (!args.done()) {
-        if (!args.at_option()) {
-            files.push_back(args.positional());
-            continue;
-        }
-        const std::string o = args.option();
+    std::string o;
+    while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, kUsage)) {
             return 0;
         } else if (o == "info") {

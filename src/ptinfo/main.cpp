@@ -36,12 +36,8 @@ int run(const std::vector<std::string>& args) {
     std::vector<std::string> files;
 
     sss::ArgScanner scan(args);
-    while (!scan.done()) {
-        if (!scan.at_option()) {
-            files.push_back(scan.positional());
-            continue;
-        }
-        const std::string opt = scan.option();
+    std::string opt;
+    while (scan.next_option(opt, files)) {
         if (sss::standard_option(kTool, opt, kUsage)) {
             return 0;
         } else if (opt == "stats") {

@@ -68,12 +68,8 @@ int run(const std::vector<std::string>& argv) {
     sss::RunOptions running;
     std::vector<std::string> files;
     bool newer = false;
-    while (!args.done()) {
-        if (!args.at_option()) {
-            files.push_back(args.positional());
-            continue;
-        }
-        const std::string o = args.option();
+    std::string o;
+    while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, usage())) {
             return 0;
         } else if (o == "o") {

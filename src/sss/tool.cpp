@@ -299,6 +299,17 @@ std::string ArgScanner::positional() {
     return m_args[m_pos++];
 }
 
+bool ArgScanner::next_option(std::string& opt, std::vector<std::string>& positionals) {
+    while (!done()) {
+        if (at_option()) {
+            opt = option();
+            return true;
+        }
+        positionals.push_back(positional());
+    }
+    return false;
+}
+
 std::string ArgScanner::value(const std::string& opt) {
     if (done() || at_option()) throw UsageError("option -" + opt + " needs a value");
     return m_args[m_pos++];
