@@ -21,9 +21,9 @@
 #include <glm/geometric.hpp>
 
 #include "latlong_mesh.h"
-#include "sss/bake.h"
-#include "sss/rib.h"
-#include "sss/tool.h"
+#include "sss/bake/bake.h"
+#include "sss/scene/rib.h"
+#include "sss/cli/tool.h"
 
 namespace {
 

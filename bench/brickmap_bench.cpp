@@ -18,11 +18,11 @@
 
 #include <tbb/parallel_for.h>
 
-#include "sss/brickmap.h"
-#include "sss/point_cloud_io.h"
-#include "sss/ssdiffusion.h"
-#include "sss/synthetic.h"
-#include "sss/tool.h"
+#include "sss/brick/brickmap.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/diffusion/ssdiffusion.h"
+#include "sss/cloud/synthetic.h"
+#include "sss/cli/tool.h"
 
 namespace {
 

@@ -70,15 +70,15 @@
 #include <tbb/parallel_for.h>
 
 #include "latlong_mesh.h"
-#include "sss/bake.h"
-#include "sss/brickmap.h"
-#include "sss/error.h"
-#include "sss/lights.h"
-#include "sss/point_cloud_io.h"
-#include "sss/rib.h"
-#include "sss/ssdiffusion.h"
-#include "sss/synthetic.h"
-#include "sss/tool.h"
+#include "sss/bake/bake.h"
+#include "sss/brick/brickmap.h"
+#include "sss/util/error.h"
+#include "sss/light/lights.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/scene/rib.h"
+#include "sss/diffusion/ssdiffusion.h"
+#include "sss/cloud/synthetic.h"
+#include "sss/cli/tool.h"
 
 extern char** environ;
 

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "sss/brickmap.h"
-#include "sss/brickmap_tools.h"
-#include "sss/error.h"
-#include "sss/frame_pattern.h"
-#include "sss/tool.h"
+#include "sss/brick/brickmap.h"
+#include "sss/brick/brickmap_tools.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/cli/tool.h"
 
 namespace {
 

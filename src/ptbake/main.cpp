@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "sss/bake.h"
-#include "sss/error.h"
-#include "sss/frame_pattern.h"
-#include "sss/material.h"
-#include "sss/rib.h"
-#include "sss/tool.h"
+#include "sss/bake/bake.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/diffusion/material.h"
+#include "sss/scene/rib.h"
+#include "sss/cli/tool.h"
 
 namespace {
 

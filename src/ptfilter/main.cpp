@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "sss/error.h"
-#include "sss/frame_pattern.h"
-#include "sss/point_cloud_io.h"
-#include "sss/ssdiffusion.h"
-#include "sss/tool.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/diffusion/ssdiffusion.h"
+#include "sss/cli/tool.h"
 
 namespace {
 

@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "sss/error.h"
-#include "sss/frame_pattern.h"
-#include "sss/render.h"
-#include "sss/rib.h"
-#include "sss/tool.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/render/render.h"
+#include "sss/scene/rib.h"
+#include "sss/cli/tool.h"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <glm/vec3.hpp>
 
 #include "fuzz_common.h"
-#include "sss/brickmap.h"
+#include "sss/brick/brickmap.h"
 
 namespace {
 

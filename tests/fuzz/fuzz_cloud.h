@@ -9,7 +9,7 @@
 #include <string>
 
 #include "fuzz_common.h"
-#include "sss/point_cloud_io.h"
+#include "sss/cloud/point_cloud_io.h"
 
 namespace sss::fuzz {
 

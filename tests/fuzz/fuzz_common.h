@@ -15,7 +15,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
-#include "sss/error.h"
+#include "sss/util/error.h"
 
 namespace sss::fuzz {
 

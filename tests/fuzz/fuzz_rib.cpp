@@ -14,8 +14,8 @@
 #include <string_view>
 
 #include "fuzz_common.h"
-#include "sss/dice.h"
-#include "sss/rib.h"
+#include "sss/dice/dice.h"
+#include "sss/scene/rib.h"
 
 namespace {
 

@@ -1,0 +1,97 @@
+#pragma once
+/// \file bake.h
+/// The ptbake job as one library call: every primitive with a bake shader is
+/// diced into micropolygons, lit (ambient + diffuse with ray-traced shadows)
+/// and written as point clouds; every other primitive only casts shadows.
+///
+/// Built-in bake shaders (Surface "name" params), each taking "string
+/// filename" and "string displaychannels" (comma or space separated) as in
+/// RenderMan's bake3d:
+///  - bake_radiance_t  "float Kdt" (1): _radiance_t = Kdt * irradiance.
+///  - bake_sss_params  as bake_radiance_t, plus _albedo and _diffusemeanfreepath
+///    (mm, as ptfilter's fromfile expects) from "color albedo" / "color dmfp",
+///    or, with "float noisefreq" > 0, a 3D noise blend towards "color albedo2"
+///    / "color dmfp2" in shader space (frequency in cycles per shader unit).
+///  - bake_constant    bakes the primitive's colour (Cs: per vertex if given,
+///    else Color; negative allowed) into every channel listed (default
+///    _radiance_t): blockers inside objects.
+/// `float _area` is always written.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/diffusion/material.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/scene/scene.h"
+#include "sss/cli/tool.h"
+
+namespace sss {
+
+/// Everything ptbake can be told.
+struct BakeOptions {
+    /// > 0: micropolygon edge length in scene units (-spacing LEN). 0: ShadingRate.
+    double spacing = 0.0;
+    /// Pick the spacing from the material (-spacing mfp): its smallest mean
+    /// free path 1/sigma_t' in scene units, times mfp_fraction. Without
+    /// `material`, each bake_sss_params object uses its own albedo/dmfp range
+    /// (other bake shaders then have no material: UsageError).
+    bool spacing_from_material = false;
+    double mfp_fraction = 1.0;
+    /// The material the bake is for (-material ...): enables the spacing
+    /// check (a warning when points are farther apart than its mean free path).
+    std::optional<MaterialSpec> material;
+    /// Scene length of one mm (-unitlength), for bake_sss_params' dmfp (mm)
+    /// when no `material` is given.
+    double unitlength = 1.0;
+    std::optional<int> frame; ///< -frame N, for frame patterns in file names
+    std::string output;       ///< -o: every bake goes to this one file
+    PointCloudWriteOptions write;
+    Progress* progress = nullptr;
+};
+
+/// One file written.
+struct BakeFileReport {
+    std::string path;
+    std::size_t points = 0;
+    double area = 0.0; ///< sum of _area
+    std::vector<std::string> channels;
+    std::vector<std::string> objects; ///< source locations of the baked primitives
+};
+
+/// What happened, for -progress reports and tests.
+struct BakeReport {
+    std::vector<BakeFileReport> files;
+    std::vector<std::string> warnings;
+    std::size_t baked_primitives = 0;
+    std::size_t occluder_primitives = 0;
+    std::size_t occluder_triangles = 0;
+    std::size_t shadow_lights = 0;
+    double min_spacing = 0.0; ///< smallest and largest micropolygon edge used
+    double max_spacing = 0.0;
+    double dice_seconds = 0.0;
+    double trace_build_seconds = 0.0;
+    double light_seconds = 0.0;
+    double write_seconds = 0.0;
+};
+
+/// Smallest mean free path 1/sigma_t' over the colour channels of a
+/// material, in scene units (mm x unitlength, see material.h).
+double material_mean_free_path(const MaterialSpec& material);
+
+/// Bakes the scene and writes its point clouds (atomically). Throws
+/// ValueError / UsageError / IoError with the primitive's source location.
+BakeReport bake_scene(const Scene& scene, const BakeOptions& options);
+
+/// The files bake_scene would write, in first-use order, without baking
+/// (for -newer 1). Throws ValueError like bake_scene for a bake shader
+/// without a "filename" when options.output is empty.
+std::vector<std::string> bake_output_files(const Scene& scene,
+                                           const BakeOptions& options);
+
+/// Bakes without writing: the clouds by output path, in first-use order.
+std::vector<std::pair<std::string, PointCloud>>
+bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report);
+
+} // namespace sss

@@ -1,0 +1,77 @@
+#pragma once
+/// \file dice.h
+/// Dicing: every primitive of the scene layer becomes micropolygons (one
+/// point each, with its exact area, normal and radius) and triangles for the
+/// ray tracer. View-independent: nothing is culled, and micropolygon size is
+/// either a fixed world length or ShadingRate raster pixels of the scene's
+/// camera measured at the surface's distance from the eye, ignoring its
+/// orientation (REYES with raster-oriented dicing off).
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "sss/scene/scene.h"
+
+namespace sss {
+
+/// How fine to dice.
+struct DiceControl {
+    /// > 0: micropolygon edge length in world units. 0: from ShadingRate and the camera.
+    double spacing = 0.0;
+    /// Camera for ShadingRate dicing (spacing == 0).
+    const Camera* camera = nullptr;
+    /// Edge lengths are multiplied by this (>= 1): surfaces that only cast
+    /// shadows need their shape, not micropolygon density.
+    double coarsening = 1.0;
+    /// Safety cap: no primitive is diced into more than this many micropolygons
+    /// (a ValueError names the primitive instead).
+    std::size_t max_micropolygons = 200'000'000;
+
+    /// Micropolygon edge length wanted at world point p for a primitive with
+    /// the given shading rate: `spacing`, or sqrt(shading_rate) pixels of the
+    /// camera at p's distance from the eye (never below the near clip); times
+    /// `coarsening`.
+    double edge_length_at(const glm::dvec3& world_p, double shading_rate) const;
+};
+
+/// A diced primitive, in world space.
+struct DicedSurface {
+    // One entry per micropolygon:
+    std::vector<glm::vec3> centers; ///< micropolygon centre (on the surface)
+    std::vector<glm::vec3> normals; ///< unit normal (orientation rules applied)
+    std::vector<float> areas;       ///< exact area; they add up to the surface area
+    std::vector<float> radii;       ///< largest centre-to-corner distance
+    std::vector<glm::vec3> colors;  ///< Cs per micropolygon; empty = attributes' Color
+    // Watertight triangles covering the same surface, for ray tracing:
+    std::vector<glm::vec3> vertices;
+    std::vector<glm::vec3> vertex_normals; ///< same size as vertices
+    std::vector<uint32_t> triangles;       ///< 3 vertex indices per triangle
+
+    std::size_t size() const { return centers.size(); }
+    /// Sizes every array: `micropolygons` entries (colours only when
+    /// with_colors), `vertices` vertices and `triangles` triangles.
+    void resize(std::size_t micropolygons, std::size_t vertex_count,
+                std::size_t triangle_count, bool with_colors) {
+        centers.resize(micropolygons);
+        normals.resize(micropolygons);
+        areas.resize(micropolygons);
+        radii.resize(micropolygons);
+        colors.resize(with_colors ? micropolygons : 0);
+        vertices.resize(vertex_count);
+        vertex_normals.resize(vertex_count);
+        triangles.resize(3 * triangle_count);
+    }
+};
+
+/// Dices one primitive. Throws ValueError (naming prim.source) on malformed
+/// geometry: wrong "P" count, out-of-range indices, degenerate parameters.
+DicedSurface dice_primitive(const Primitive& prim, const DiceControl& control);
+
+/// Surface area of a quadric primitive in its object space, computed
+/// independently of the dicer (closed forms, or an accurate 1D quadrature of
+/// the surface of revolution): for tests and checks. ValueError for other kinds.
+double quadric_area(const Primitive& prim);
+
+} // namespace sss

@@ -1,0 +1,82 @@
+#pragma once
+/// \file diffusion.h
+/// Subsurface diffusion over a point cloud: M_o(x_i) = sum_j R(|x_i - P_j|) A_j E_j,
+/// evaluated exactly (all pairs) or hierarchically over an octree.
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/ext/vector_uint3.hpp>
+#include <glm/vec3.hpp>
+
+#include "sss/diffusion/profile.h"
+
+namespace sss {
+
+class Progress;
+
+/// How the octree decides that a node is far enough to be used whole.
+enum class Criterion {
+    /// Ours (default): a bound on the error of the node's second-order
+    /// (quadrupole) expansion, from the profile's derivatives and the node's
+    /// size and power, against a tolerance relative to the local result.
+    Error,
+    /// PRMan's: area / squared distance to the node's bounding box <= maxsolidangle.
+    SolidAngleBox,
+    /// Jensen & Buhler's: area / squared distance to the node centroid <=
+    /// maxsolidangle, and the receiver outside the node box.
+    SolidAngleCentroid
+};
+
+/// Parses "error", "bbox"/"prman", "centroid"/"jensen".
+bool parse_criterion(const char* name, Criterion& out);
+const char* criterion_name(Criterion c);
+
+/// The points and materials of one evaluation, every length in one unit. The
+/// float profile tables need the profiles' lengths (dmfp) within roughly 1e-5
+/// to 1e5 of that unit, so ssdiffusion() passes mm, not scene units.
+struct DiffusionProblem {
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;    ///< used to orient near-field source disks
+    std::vector<float> areas;          ///< >= 0
+    std::vector<glm::vec3> irradiance; ///< signed (blockers are negative)
+    /// Distinct channel profiles; by default point i uses profiles[0..2] for r, g, b.
+    std::vector<Profile> profiles;
+    /// Optional per-point channel -> profile index (receiver's material).
+    std::vector<glm::u32vec3> profile_index;
+};
+
+/// Evaluation settings.
+struct DiffusionOptions {
+    /// PRMan's time/quality knob: smaller is slower and more accurate.
+    double max_solid_angle = 1.0;
+    Criterion criterion = Criterion::Error;
+    Progress* progress = nullptr; ///< optional ALF_PROGRESS reporter
+};
+
+/// Counters of one hierarchical evaluation.
+struct DiffusionStats {
+    std::size_t nodes = 0;            ///< octree nodes
+    std::size_t far_terms = 0;        ///< node expansions evaluated (sum over receivers)
+    std::size_t near_terms = 0;       ///< point-point terms evaluated
+    std::size_t quadrature_terms = 0; ///< near sources integrated as disks
+    double build_seconds = 0;
+    double eval_seconds = 0;
+};
+
+/// Hierarchical evaluation at every point. Deterministic: the result does not
+/// depend on the thread count. Memory is linear in the point count.
+std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& problem,
+                                          const DiffusionOptions& options,
+                                          DiffusionStats* stats = nullptr);
+
+/// Exact evaluation in double precision, all pairs, at the given receivers
+/// (all points when empty). The same point model as the hierarchical path:
+/// exact self disk, disk integration of close sources.
+std::vector<glm::dvec3>
+evaluate_diffusion_exact(const DiffusionProblem& problem,
+                         const std::vector<std::size_t>& receivers = {},
+                         Progress* progress = nullptr);
+
+} // namespace sss

@@ -1,0 +1,99 @@
+#pragma once
+/// \file image_io.h
+/// Multi-channel float images and their output through OpenImageIO /
+/// OpenEXR, following RenderMan's Display semantics and the OpenEXR layer
+/// naming convention (beauty in R, G, B, A; AOV "diffuse" in diffuse.R,
+/// diffuse.G, diffuse.B). The user-facing rules are in docs/images.md.
+
+#include <array>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sss/scene/scene.h"
+
+namespace sss {
+
+/// A float image with named channels, pixels interleaved, rows top to bottom.
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<std::string> channels; ///< e.g. R G B A diffuse.R diffuse.G diffuse.B
+    std::vector<float> pixels;         ///< width * height * channels.size()
+
+    Image() = default;
+    /// A w x h image with the given channels, every value 0. Throws
+    /// ValueError for a negative size or an empty or repeated channel name.
+    Image(int w, int h, std::vector<std::string> names);
+    int channel_count() const { return static_cast<int>(channels.size()); }
+    /// Index of a channel, or -1.
+    int channel_index(const std::string& name) const;
+    float* pixel(int x, int y) {
+        return pixels.data() + (std::size_t(y) * width + x) * channels.size();
+    }
+    const float* pixel(int x, int y) const {
+        return pixels.data() + (std::size_t(y) * width + x) * channels.size();
+    }
+};
+
+/// Provenance written into image headers (EXR: Software, capDate, utcOffset,
+/// renderTimeSeconds, worldToCamera, worldToNDC, sss:commandLine, sss:scene...).
+struct ImageMetadata {
+    std::string software;     ///< "render (sss) 0.1.0"
+    std::string command_line; ///< the full command line
+    double render_seconds = 0.0;
+    /// Column-vector matrices (p' = M * p, like every sss Matrix4); the EXR
+    /// attributes hold them in Imath's row-vector layout (docs/images.md).
+    Matrix4 world_to_camera{1.0};
+    Matrix4 world_to_ndc{1.0};
+    std::vector<std::pair<std::string, std::string>> extra; ///< "sss:scene" -> path...
+};
+
+/// How one Display line is written, resolved from its DisplaySpec.
+struct DisplayTarget {
+    std::string path;   ///< file name (frame patterns already expanded)
+    std::string format; ///< "openexr", "png", "tiff", "jpeg" (OIIO format names)
+    std::vector<std::string> channels; ///< image channels written, in order
+    std::vector<std::string> names;    ///< their names in the file
+    bool half = true;                  ///< OpenEXR: half floats (default) or float
+    std::string compression = "zip";   ///< OpenEXR compression (`"string compression"`)
+};
+
+/// Resolves a Display: the file format from the display type ("openexr"/"exr",
+/// "tiff", "png", "jpeg"; "file", "it", "framebuffer" and unknown types pick
+/// the format from the file extension, defaulting to OpenEXR when the name has
+/// none or an unknown one — "it"/"framebuffer" write a file, adding ".exr"
+/// to a name without an image extension), the channels from the mode ("rgba", "rgb",
+/// "a", "z", "rgbz", "rgbaz", or AOV names such as "diffuse", "color diffuse"
+/// or lists such as "Ci,a"), the EXR pixel type from `"string type"
+/// "half"|"float"` and compression from `"string compression"` (`"quantize"`
+/// is ignored). For the primary (non-'+') OpenEXR display, every AOV layer of
+/// `image` (channels with a '.') is appended as layer.channel. Throws
+/// ValueError, naming the display, for a mode naming a channel the image does
+/// not have or channels the format cannot hold.
+DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
+                              bool primary);
+
+/// The file a Display writes (resolve_display's path, without the image):
+/// its name, plus ".exr" for an "it"/"framebuffer" display whose name has no
+/// image extension.
+std::string display_file(const DisplaySpec& display);
+
+/// Writes the target atomically (AtomicOutput) with OIIO. OpenEXR: linear,
+/// half or float, with the metadata. PNG, TIFF, JPEG: 8-bit sRGB-encoded,
+/// colour divided by alpha (straight alpha), clamped to [0, 1]. Throws
+/// ValueError (NaN/Inf pixels, channels the image does not have: nothing is
+/// written) and IoError (missing folder, write failure: the target is
+/// untouched and no temporary is left).
+void write_display(const Image& image, const DisplayTarget& target,
+                   const ImageMetadata& metadata);
+
+/// Reads an image file back (for tests and tools): the first subimage,
+/// every channel as float, channel names and order as OpenImageIO reports
+/// them. Throws IoError (missing file) and FormatError (unreadable).
+Image read_image(const std::string& path);
+/// One attribute of an image's header in text form ("" if absent). OpenEXR
+/// names that OIIO renames on reading (capDate, comments, owner) are found too.
+std::string read_image_attribute(const std::string& path, const std::string& name);
+
+} // namespace sss

@@ -1,0 +1,59 @@
+#pragma once
+/// \file render.h
+/// The final renderer: ray tracing (Embree) over the shared scene layer,
+/// built-in surface shaders that look `_ssdiffusion` up in a brick map or a
+/// point cloud (texture3d semantics), AOVs, and RenderMan Display outputs.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/render/image_io.h"
+#include "sss/scene/scene.h"
+#include "sss/cli/tool.h"
+
+namespace sss {
+
+/// Everything `render` can be told besides the scene.
+struct RenderJobOptions {
+    std::optional<int>
+        frame;          ///< -frame N: frame patterns in Display names and shader files
+    std::string output; ///< -o IMAGE: replaces the primary Display's file name
+    Progress* progress = nullptr;
+    std::string command_line; ///< stored in image metadata
+    /// Overrides for quick tests: 0 = use the scene's Format / PixelSamples.
+    int xres = 0, yres = 0;
+    int pixel_samples = 0;
+};
+
+/// What happened.
+struct RenderReport {
+    std::vector<std::string> files; ///< images written
+    std::vector<std::string> warnings;
+    std::size_t triangles = 0;
+    std::size_t camera_rays = 0;
+    std::size_t shadow_rays = 0;
+    double setup_seconds = 0.0;  ///< dicing, Embree build, maps opened
+    double render_seconds = 0.0; ///< pixels
+    double write_seconds = 0.0;
+};
+
+/// Renders the scene into an image with the beauty (R, G, B, A) and the AOV
+/// layers (at least ambient, diffuse, specular, sss as layer.R/G/B and
+/// occlusion.R/G/B... see docs/render.md). Deterministic: the same image for
+/// any thread count.
+Image render_image(const Scene& scene, const RenderJobOptions& options,
+                   RenderReport* report);
+
+/// The files a render job reads and writes, without rendering (for -newer 1).
+struct RenderFiles {
+    std::vector<std::string> inputs;  ///< scene.sources, then the diffusion files
+    std::vector<std::string> outputs; ///< every Display's file
+};
+RenderFiles render_files(const Scene& scene, const RenderJobOptions& options);
+
+/// render_image, then writes every Display of the scene (the primary one
+/// replaced by options.output when given; no Display: "<scene>.exr").
+RenderReport render_scene(const Scene& scene, const RenderJobOptions& options);
+
+} // namespace sss

@@ -1,0 +1,50 @@
+#pragma once
+/// \file rib.h
+/// Reader for ASCII RenderMan RIB files into the scene layer (scene.h).
+
+#include <optional>
+#include <string>
+
+#include "sss/util/error.h"
+#include "sss/scene/scene.h"
+
+namespace sss {
+
+/// A RIB file that cannot be understood: names the file, the line and the
+/// statement ("scene.rib:12: Sphere: expected 4 numbers, got 3").
+class RibError : public FormatError {
+public:
+    RibError(const std::string& path, int line, const std::string& statement,
+             const std::string& what)
+        : FormatError(Composed{},
+                      path + (line > 0 ? ":" + std::to_string(line) : std::string()) +
+                          ": " + (statement.empty() ? std::string() : statement + ": ") +
+                          what,
+                      path),
+          m_line(line), m_statement(statement) {}
+    int line() const { return m_line; }
+    const std::string& statement() const { return m_statement; }
+
+private:
+    int m_line;
+    std::string m_statement;
+};
+
+/// How to read a RIB.
+struct RibReadOptions {
+    /// With several FrameBegin blocks: the one to read. nullopt = the first.
+    /// A requested frame that a file with FrameBegin blocks does not contain is
+    /// an error; a file without FrameBegin is the same scene for every frame.
+    std::optional<int> frame;
+};
+
+/// Reads a RIB file (ReadArchive paths are relative to the including file;
+/// a ReadArchive of a ".obj" file brings in a Wavefront OBJ mesh as
+/// PointsPolygons). Throws IoError / RibError.
+Scene read_rib(const std::string& path, const RibReadOptions& options = {});
+/// Same, from text in memory; `path` names it in messages and is the base for
+/// relative ReadArchive paths.
+Scene parse_rib(const std::string& text, const std::string& path,
+                const RibReadOptions& options = {});
+
+} // namespace sss

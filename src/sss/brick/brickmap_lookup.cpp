@@ -1,0 +1,544 @@
+/// \file brickmap_lookup.cpp
+/// BrickMap: opens a .bkm file (header and node tables validated at once),
+/// loads bricks on demand into a bounded cache and answers texture3d-style
+/// lookups.
+///
+/// Cache: one atomic pointer per data brick. A lookup that finds its bricks
+/// loaded takes no lock and allocates nothing; it only "pins" itself (two
+/// atomic adds on a counter mostly private to its thread) so that a brick
+/// another thread evicts meanwhile is not freed under it. Eviction
+/// (least recently used, by a per-brick stamp) unlinks bricks at once and
+/// frees them after a grace period: epoch-based reclamation with two
+/// parities. Misses read the brick with pread outside the lock and install
+/// it under a mutex. Memory: live bricks stay within the budget (plus the
+/// brick being installed) and bricks awaiting their grace period within
+/// about another budget; past that, misses are served from a private copy
+/// that is not cached.
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "brickmap_format.h"
+#include "sss/brick/brickmap.h"
+#include "sss/util/error.h"
+
+namespace sss {
+
+namespace {
+
+using namespace detail;
+
+constexpr double kCos55 = 0.57357643635104609611; // trees within 55 degrees of n
+constexpr int kStripes = 64;
+constexpr int kCoordBits = kBkmMaxDepth; // node coordinates at the deepest depth
+
+/// Readers pinned in each epoch parity. A thread always uses the same stripe,
+/// so with fewer than kStripes threads the counters are never shared.
+struct alignas(64) PinStripe {
+    std::atomic<uint64_t> count[2] = {0, 0};
+};
+
+std::atomic<unsigned> g_next_stripe{0};
+
+unsigned thread_stripe() {
+    thread_local const unsigned stripe =
+        g_next_stripe.fetch_add(1, std::memory_order_relaxed) % kStripes;
+    return stripe;
+}
+
+/// A brick in memory: presence bits and all 512 samples (absent ones 0).
+struct CachedBrick {
+    uint64_t mask[8] = {};
+    std::atomic<uint64_t> stamp{0}; ///< last use, for LRU eviction
+    uint32_t id = 0;
+    std::size_t bytes = 0;
+    std::unique_ptr<float[]> data;
+};
+
+/// A data node, for descending: children with data only.
+struct LookupNode {
+    uint32_t first_child = 0; ///< index of the first data child in the tree's array
+    uint32_t brick = 0;       ///< brick id (cache slot)
+    uint8_t child_mask = 0;
+};
+
+/// Index of a node in a full node table, found by descending from the root;
+/// -1 if absent.
+int64_t find_node(const std::vector<BkmNode>& nodes, int depth, uint32_t ix, uint32_t iy,
+                  uint32_t iz) {
+    if (nodes.empty() || depth < 0 || depth > kBkmMaxDepth) return -1;
+    const uint64_t limit = uint64_t(1) << depth;
+    if (ix >= limit || iy >= limit || iz >= limit) return -1;
+    std::size_t i = 0;
+    for (int d = 1; d <= depth; ++d) {
+        const int shift = depth - d;
+        const int o =
+            ((ix >> shift) & 1) | (((iy >> shift) & 1) << 1) | (((iz >> shift) & 1) << 2);
+        const BkmNode& n = nodes[i];
+        if (!((n.child_mask >> o) & 1)) return -1;
+        i = n.first_child + std::popcount(unsigned(n.child_mask) & ((1u << o) - 1));
+    }
+    return static_cast<int64_t>(i);
+}
+
+} // namespace
+
+struct BrickMap::Impl {
+    std::string path;
+    int fd = -1;
+    BkmContents contents;
+    int ds = 0;
+    double cube_min[3] = {0, 0, 0};
+    double side = 1.0;
+    double inv_side = 1.0;
+    std::array<std::vector<LookupNode>, kBkmTrees> trees;
+    std::vector<std::pair<int, const BkmNode*>> bricks; ///< by id: tree, record
+    std::unique_ptr<std::atomic<CachedBrick*>[]> slots;
+    std::size_t budget = 0;
+
+    // Cache bookkeeping; everything below the mutex is guarded by it.
+    mutable PinStripe stripes[kStripes];
+    mutable std::atomic<uint64_t> epoch{2};
+    mutable std::atomic<uint64_t> tick{1};
+    mutable std::atomic<std::size_t> loaded{0};
+    mutable std::atomic<std::size_t> cached{0};
+    mutable std::mutex mutex;
+    mutable std::vector<CachedBrick*> live;
+    mutable std::vector<CachedBrick*> pending; ///< unlinked in the current epoch
+    mutable std::vector<CachedBrick*> waiting; ///< unlinked before the last flip
+    mutable std::size_t live_bytes = 0;
+    mutable std::size_t retired_bytes = 0;
+    struct Stamped {
+        uint64_t stamp;
+        uint32_t id;
+        CachedBrick* brick;
+    };
+    mutable std::vector<Stamped> order; ///< eviction scratch
+
+    ~Impl() {
+        if (slots) {
+            for (std::size_t i = 0; i < bricks.size(); ++i) slots[i].store(nullptr);
+        }
+        for (CachedBrick* b : live) delete b;
+        for (CachedBrick* b : pending) delete b;
+        for (CachedBrick* b : waiting) delete b;
+        if (fd >= 0) ::close(fd);
+    }
+
+    /// RAII pin of the calling thread for one lookup.
+    class Pin {
+    public:
+        explicit Pin(const Impl& m) : m_stripe(m.stripes[thread_stripe()]) {
+            for (;;) {
+                const uint64_t e = m.epoch.load(std::memory_order_seq_cst);
+                std::atomic<uint64_t>& c = m_stripe.count[e & 1];
+                c.fetch_add(1, std::memory_order_seq_cst);
+                if (m.epoch.load(std::memory_order_seq_cst) == e) {
+                    m_parity = static_cast<int>(e & 1);
+                    return;
+                }
+                c.fetch_sub(1, std::memory_order_release); // a flip raced us: retry
+            }
+        }
+        ~Pin() { m_stripe.count[m_parity].fetch_sub(1, std::memory_order_release); }
+        Pin(const Pin&) = delete;
+        Pin& operator=(const Pin&) = delete;
+
+    private:
+        PinStripe& m_stripe;
+        int m_parity = 0;
+    };
+
+    bool drained(int parity) const {
+        for (const PinStripe& s : stripes) {
+            if (s.count[parity].load(std::memory_order_seq_cst) != 0) return false;
+        }
+        return true;
+    }
+
+    /// Frees retired bricks whose grace period is over and starts a new one.
+    /// Never waits. Caller holds the mutex.
+    void reclaim() const {
+        const uint64_t e = epoch.load(std::memory_order_relaxed);
+        // Readers of epoch e - 1 gone: nothing unlinked before the flip to e
+        // can still be in use, and the epoch may advance.
+        if (!drained(static_cast<int>((e - 1) & 1))) return;
+        for (CachedBrick* b : waiting) {
+            retired_bytes -= b->bytes;
+            delete b;
+        }
+        waiting.clear();
+        if (!pending.empty()) {
+            waiting.swap(pending);
+            epoch.store(e + 1, std::memory_order_seq_cst);
+        }
+    }
+
+    /// Unlinks least recently used bricks until the live bytes are back to
+    /// 7/8 of the budget (so that eviction work is amortised), keeping keep.
+    void evict(const CachedBrick* keep) const {
+        if (live_bytes <= budget) return;
+        const std::size_t target = budget - budget / 8;
+        // Readers keep stamping bricks while we sort: sort a snapshot (a
+        // comparator whose keys change under std::sort is undefined behaviour).
+        order.clear();
+        for (CachedBrick* b : live)
+            order.push_back({b->stamp.load(std::memory_order_relaxed), b->id, b});
+        std::sort(order.begin(), order.end(), [](const Stamped& a, const Stamped& b) {
+            return a.stamp != b.stamp ? a.stamp < b.stamp : a.id < b.id;
+        });
+        std::size_t out = 0;
+        for (std::size_t i = 0; i < order.size(); ++i) {
+            CachedBrick* b = order[i].brick;
+            if (live_bytes > target && b != keep) {
+                slots[b->id].store(nullptr, std::memory_order_release);
+                live_bytes -= b->bytes;
+                retired_bytes += b->bytes;
+                pending.push_back(b);
+            } else {
+                live[out++] = b;
+            }
+        }
+        live.resize(out); // survivors, oldest first
+    }
+
+    void touch(CachedBrick* b) const {
+        const uint64_t now = tick.load(std::memory_order_relaxed);
+        if (b->stamp.load(std::memory_order_relaxed) != now)
+            b->stamp.store(now, std::memory_order_relaxed);
+    }
+
+    /// The brick with this id, loading it on a miss. Caller is pinned.
+    const CachedBrick* fetch(uint32_t id) const {
+        CachedBrick* b = slots[id].load(std::memory_order_acquire);
+        if (b) {
+            touch(b);
+            return b;
+        }
+        return load(id);
+    }
+
+    const CachedBrick* load(uint32_t id) const {
+        const auto [tree, node] = bricks[id];
+        const std::size_t size = static_cast<std::size_t>(bkm_brick_size(*node, ds));
+        std::vector<unsigned char> bytes(size);
+        bkm_pread(fd, path, bytes.data(), size, node->offset);
+        auto fresh = std::make_unique<CachedBrick>();
+        const std::size_t floats = static_cast<std::size_t>(kBrickSamples) * ds;
+        fresh->data.reset(new float[floats]);
+        bkm_decode_brick(bytes.data(), *node, tree, ds, path, fresh->mask,
+                         fresh->data.get());
+        fresh->id = id;
+        fresh->bytes = sizeof(CachedBrick) + floats * sizeof(float);
+
+        loaded.fetch_add(1, std::memory_order_relaxed);
+        std::lock_guard<std::mutex> lock(mutex);
+        if (CachedBrick* other = slots[id].load(std::memory_order_relaxed)) {
+            touch(other); // another thread loaded it meanwhile
+            return other;
+        }
+        reclaim();
+        if (retired_bytes > budget) {
+            // Lookups that started long ago (a preempted thread) still pin a
+            // budget's worth of evicted bricks: rather than grow the cache,
+            // serve this miss from a private copy, valid until this thread's
+            // next private load (the caller uses it at once).
+            thread_local std::unique_ptr<CachedBrick> t_private;
+            t_private = std::move(fresh);
+            cached.store(live_bytes + retired_bytes, std::memory_order_relaxed);
+            return t_private.get();
+        }
+        CachedBrick* b = fresh.release();
+        b->stamp.store(tick.fetch_add(1, std::memory_order_relaxed) + 1,
+                       std::memory_order_relaxed);
+        live.push_back(b);
+        live_bytes += b->bytes;
+        slots[id].store(b, std::memory_order_release);
+        evict(b);
+        reclaim();
+        cached.store(live_bytes + retired_bytes, std::memory_order_relaxed);
+        return b;
+    }
+
+    /// Trilinear value at lattice position x (in sample units of node's
+    /// brick, each in [0, 7]) over the present corners, times weight, added
+    /// to out. False if no corner with a positive weight has data.
+    bool eval_brick(const CachedBrick& b, const double x[3], double weight,
+                    float* out) const {
+        int i0[3];
+        double f[3];
+        for (int a = 0; a < 3; ++a) {
+            i0[a] = std::min(static_cast<int>(x[a]), 6);
+            f[a] = x[a] - i0[a];
+        }
+        const int base = i0[0] + 8 * i0[1] + 64 * i0[2];
+        static constexpr int kOffset[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+        double w[8];
+        double sum = 0.0;
+        for (int c = 0; c < 8; ++c) {
+            const int s = base + kOffset[c];
+            if (!((b.mask[s >> 6] >> (s & 63)) & 1)) {
+                w[c] = 0.0;
+                continue;
+            }
+            w[c] = ((c & 1) ? f[0] : 1.0 - f[0]) * ((c & 2) ? f[1] : 1.0 - f[1]) *
+                   ((c & 4) ? f[2] : 1.0 - f[2]);
+            sum += w[c];
+        }
+        if (!(sum > 0.0)) return false;
+        const double scale = weight / sum;
+        for (int c = 0; c < 8; ++c) {
+            if (w[c] == 0.0) continue;
+            const float* v = &b.data[static_cast<std::size_t>(base + kOffset[c]) * ds];
+            const float wc = static_cast<float>(w[c] * scale);
+            for (int k = 0; k < ds; ++k) out[k] += wc * v[k];
+        }
+        return true;
+    }
+
+    /// Value of the level starting at depth `start` along path (falling back
+    /// to coarser depths where there is no data), times weight, added to out.
+    /// Returns the depth used, or -1.
+    int eval_level(int tree, const uint32_t* path, int start, const double u[3],
+                   const uint32_t q[3], double weight, float* out) const {
+        const std::vector<LookupNode>& nodes = trees[tree];
+        for (int d = start; d >= 0; --d) {
+            const CachedBrick& b = *fetch(nodes[path[d]].brick);
+            const double scale = kBkmBrickEdge * double(1u << d);
+            double x[3];
+            for (int a = 0; a < 3; ++a) {
+                const uint32_t node = q[a] >> (kCoordBits - d);
+                x[a] = std::clamp(u[a] * scale - kBkmBrickEdge * double(node), 0.0,
+                                  double(kBkmBrickEdge));
+            }
+            if (eval_brick(b, x, weight, out)) return d;
+        }
+        return -1;
+    }
+
+    bool lookup_tree(int tree, const double u[3], float filter_radius, float* out,
+                     float* scratch) const {
+        const std::vector<LookupNode>& nodes = trees[tree];
+        if (nodes.empty()) return false;
+        uint32_t q[3];
+        for (int a = 0; a < 3; ++a) {
+            q[a] = static_cast<uint32_t>(std::min(u[a] * double(1u << kCoordBits),
+                                                  double((1u << kCoordBits) - 1)));
+        }
+        uint32_t path[kBkmMaxDepth + 1];
+        path[0] = 0;
+        int deepest = 0;
+        for (int d = 1; d <= kBkmMaxDepth; ++d) {
+            const LookupNode& n = nodes[path[d - 1]];
+            const int shift = kCoordBits - d;
+            const unsigned o = ((q[0] >> shift) & 1) | (((q[1] >> shift) & 1) << 1) |
+                               (((q[2] >> shift) & 1) << 2);
+            if (!((n.child_mask >> o) & 1)) break;
+            path[d] =
+                n.first_child + std::popcount(unsigned(n.child_mask) & ((1u << o) - 1));
+            deepest = d;
+        }
+        if (!(filter_radius > 0.0f))
+            return eval_level(tree, path, deepest, u, q, 1.0, out) >= 0;
+        // Level whose sample spacing side / (7 * 2^d) matches the filter's
+        // diameter: the level brickmake splats a point of that radius into.
+        const double level =
+            std::log2(side / (kBkmBrickEdge * 2.0 * double(filter_radius)));
+        if (!(level > 0.0)) return eval_level(tree, path, 0, u, q, 1.0, out) >= 0;
+        const int d0 = static_cast<int>(std::floor(level));
+        const double f = level - d0;
+        if (d0 >= deepest) return eval_level(tree, path, deepest, u, q, 1.0, out) >= 0;
+        // The finer level first: where it falls back to d0 or coarser, both
+        // levels are the same value.
+        const int fine = eval_level(tree, path, d0 + 1, u, q, 1.0, out);
+        if (fine < 0) return false;
+        if (fine <= d0 || f >= 1.0) return true;
+        std::fill(scratch, scratch + ds, 0.0f);
+        if (eval_level(tree, path, d0, u, q, 1.0, scratch) < 0) return true;
+        const float wf = static_cast<float>(f), wc = static_cast<float>(1.0 - f);
+        for (int k = 0; k < ds; ++k) out[k] = wf * out[k] + wc * scratch[k];
+        return true;
+    }
+
+    static constexpr int kBkmBrickEdge = 7; ///< sample steps per brick edge
+};
+
+BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes)
+    : m_impl(std::make_unique<Impl>()) {
+    Impl& m = *m_impl;
+    m.path = path;
+    m.budget = cache_bytes;
+    m.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (m.fd < 0)
+        throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(m.fd, &st) != 0)
+        throw IoError(path, std::string("cannot stat: ") + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) throw IoError(path, "is a directory");
+    if (!S_ISREG(st.st_mode)) throw IoError(path, "not a regular file");
+    m.contents = bkm_read_head(m.fd, path, static_cast<uint64_t>(st.st_size));
+    const BrickMapInfo& info = m.contents.info;
+    m.ds = info.data_size;
+    for (int a = 0; a < 3; ++a) m.cube_min[a] = info.cube_min[a];
+    m.side = info.cube_side;
+    m.inv_side = 1.0 / info.cube_side;
+
+    // Data-only trees for descending; brick ids in file order.
+    for (int t = 0; t < kBkmTrees; ++t) {
+        const std::vector<BkmNode>& nodes = m.contents.trees[t];
+        std::vector<int64_t> index(nodes.size(), -1);
+        std::vector<LookupNode>& out = m.trees[t];
+        for (std::size_t i = 0; i < nodes.size(); ++i) {
+            if (!nodes[i].has_data()) continue;
+            index[i] = static_cast<int64_t>(out.size());
+            LookupNode n;
+            n.brick = static_cast<uint32_t>(m.bricks.size());
+            m.bricks.emplace_back(t, &nodes[i]);
+            out.push_back(n);
+        }
+        // Data nodes are closed under "parent of" and in breadth-first order,
+        // so the data children of a node stay contiguous and in octant order.
+        for (std::size_t i = 0; i < nodes.size(); ++i) {
+            if (index[i] < 0 || nodes[i].child_mask == 0) continue;
+            LookupNode& n = out[static_cast<std::size_t>(index[i])];
+            int k = 0;
+            for (int o = 0; o < 8; ++o) {
+                if (!((nodes[i].child_mask >> o) & 1)) continue;
+                const std::size_t c = nodes[i].first_child + k++;
+                if (index[c] < 0) continue;
+                if (n.child_mask == 0) n.first_child = static_cast<uint32_t>(index[c]);
+                n.child_mask |= uint8_t(1u << o);
+            }
+        }
+    }
+    m.slots = std::make_unique<std::atomic<CachedBrick*>[]>(m.bricks.size());
+    for (std::size_t i = 0; i < m.bricks.size(); ++i) m.slots[i].store(nullptr);
+}
+
+BrickMap::~BrickMap() = default;
+
+const BrickMapInfo& BrickMap::info() const {
+    return m_impl->contents.info;
+}
+
+int BrickMap::channel_index(const std::string& name) const {
+    const auto& channels = m_impl->contents.info.channels;
+    for (std::size_t i = 0; i < channels.size(); ++i)
+        if (channels[i].first == name) return static_cast<int>(i);
+    return -1;
+}
+
+int BrickMap::channel_offset(const std::string& name) const {
+    int offset = 0;
+    for (const auto& [n, type] : m_impl->contents.info.channels) {
+        if (n == name) return offset;
+        offset += channel_type_size(type);
+    }
+    return -1;
+}
+
+bool BrickMap::lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
+                      float* out) const {
+    const Impl& m = *m_impl;
+    std::fill(out, out + m.ds, 0.0f);
+    double u[3];
+    for (int a = 0; a < 3; ++a) {
+        u[a] = (double(p[a]) - m.cube_min[a]) * m.inv_side;
+        if (!(u[a] >= 0.0 && u[a] <= 1.0)) return false; // outside the cube, or NaN
+    }
+    // Trees to try: the dominant axis of n, the others within 55 degrees of
+    // n (closest first), then the no-normal tree.
+    int order[4];
+    int count = 0;
+    const double nx = n.x, ny = n.y, nz = n.z;
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!m.contents.info.ignore_normals && len > 0.0 && std::isfinite(len)) {
+        const double c[3] = {nx / len, ny / len, nz / len};
+        const double m[3] = {std::abs(c[0]), std::abs(c[1]), std::abs(c[2])};
+        int axes[3] = {0, 1, 2}; // by decreasing |component|
+        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
+        if (m[axes[2]] > m[axes[1]]) std::swap(axes[1], axes[2]);
+        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
+        for (int k = 0; k < 3; ++k) {
+            const int a = axes[k];
+            if (k == 0 || std::abs(c[a]) >= kCos55)
+                order[count++] = 1 + 2 * a + (c[a] < 0.0 ? 1 : 0);
+        }
+    }
+    order[count++] = 0;
+    float scratch[kBkmMaxDataSize];
+    const Impl::Pin pin(m);
+    for (int k = 0; k < count; ++k) {
+        if (m.lookup_tree(order[k], u, filter_radius, out, scratch)) return true;
+        std::fill(out, out + m.ds, 0.0f);
+    }
+    return false;
+}
+
+bool BrickMap::read_brick(int tree, int depth, uint32_t ix, uint32_t iy, uint32_t iz,
+                          std::vector<float>& data, std::vector<uint8_t>& present) const {
+    const Impl& m = *m_impl;
+    if (tree < 0 || tree >= kBkmTrees) return false;
+    const std::vector<BkmNode>& nodes = m.contents.trees[tree];
+    const int64_t i = find_node(nodes, depth, ix, iy, iz);
+    if (i < 0 || !nodes[i].has_data()) return false;
+    const BkmNode& node = nodes[i];
+    std::vector<unsigned char> bytes(bkm_brick_size(node, m.ds));
+    bkm_pread(m.fd, m.path, bytes.data(), bytes.size(), node.offset);
+    uint64_t mask[8];
+    data.assign(static_cast<std::size_t>(kBrickSamples) * m.ds, 0.0f);
+    bkm_decode_brick(bytes.data(), node, tree, m.ds, m.path, mask, data.data());
+    present.assign(kBrickSamples, 0);
+    for (int s = 0; s < kBrickSamples; ++s) present[s] = (mask[s >> 6] >> (s & 63)) & 1;
+    return true;
+}
+
+bool BrickMap::read_occupancy(int tree, int depth, uint32_t ix, uint32_t iy, uint32_t iz,
+                              std::vector<uint8_t>& present) const {
+    const Impl& m = *m_impl;
+    if (tree < 0 || tree >= kBkmTrees) return false;
+    const std::vector<BkmNode>& nodes = m.contents.trees[tree];
+    const int64_t i = find_node(nodes, depth, ix, iy, iz);
+    if (i < 0) return false;
+    const BkmNode& node = nodes[i];
+    unsigned char bytes[kBkmMaskBytes];
+    bkm_pread(m.fd, m.path, bytes, sizeof bytes, node.offset);
+    uint64_t mask[8];
+    BkmNode mask_only = node;
+    mask_only.flags = 0; // decode the mask only
+    bkm_decode_brick(bytes, mask_only, tree, m.ds, m.path, mask, nullptr);
+    present.assign(kBrickSamples, 0);
+    for (int s = 0; s < kBrickSamples; ++s) present[s] = (mask[s >> 6] >> (s & 63)) & 1;
+    return true;
+}
+
+std::vector<std::array<uint32_t, 3>> BrickMap::bricks_at(int tree, int depth) const {
+    std::vector<std::array<uint32_t, 3>> out;
+    if (tree < 0 || tree >= kBkmTrees) return out;
+    for (const BkmNode& n : m_impl->contents.trees[tree]) {
+        if (n.depth == depth && n.has_data()) out.push_back({n.ix, n.iy, n.iz});
+    }
+    return out;
+}
+
+std::size_t BrickMap::bricks_loaded() const {
+    return m_impl->loaded.load(std::memory_order_relaxed);
+}
+
+std::size_t BrickMap::cached_bytes() const {
+    return m_impl->cached.load(std::memory_order_relaxed);
+}
+
+} // namespace sss

@@ -1,0 +1,446 @@
+/// \file point_cloud_io.cpp
+/// Format dispatch, shared byte input/output (with transparent gzip), write-time
+/// checks, channel statistics and the ptinfo report. The formats themselves
+/// live in ptc_io.cpp and ply_io.cpp.
+
+#include "sss/cloud/point_cloud_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "point_cloud_io_detail.h"
+#include "sss/util/error.h"
+
+namespace sss {
+namespace detail {
+
+namespace {
+
+constexpr std::size_t kInputBuffer = 1 << 16;
+constexpr std::size_t kOutputBuffer = 1 << 20;
+// Deflate cannot expand data by more than 1032:1, so a gzip file of S bytes
+// holds at most about 1032 * S bytes; a little margin covers headers.
+constexpr uint64_t kMaxInflateRatio = 1040;
+
+gzFile as_gz(void* p) {
+    return static_cast<gzFile>(p);
+}
+
+} // namespace
+
+ByteSource::ByteSource(const std::string& path) : m_path(path), m_buf(kInputBuffer) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) {
+        const int err = errno;
+        ::close(fd);
+        throw IoError(path, std::string("cannot stat: ") + std::strerror(err));
+    }
+    if (S_ISDIR(st.st_mode)) {
+        ::close(fd);
+        throw IoError(path, "is a directory");
+    }
+    if (S_ISREG(st.st_mode)) m_file_size = static_cast<uint64_t>(st.st_size);
+    // zlib reads plain files transparently and inflates gzip ones, which gives
+    // the gzip sniffing for free.
+    gzFile gz = gzdopen(fd, "rb");
+    if (!gz) {
+        ::close(fd);
+        throw IoError(path, "cannot open (out of memory)");
+    }
+    gzbuffer(gz, 1 << 17);
+    m_gz = gz;
+    m_compressed = gzdirect(gz) == 0; // looks at the first bytes
+}
+
+ByteSource::~ByteSource() {
+    if (m_gz) gzclose_r(as_gz(m_gz));
+}
+
+std::size_t ByteSource::raw_read(void* dst, std::size_t n) {
+    if (m_eof || n == 0) return 0;
+    const unsigned len = static_cast<unsigned>(std::min<std::size_t>(n, INT_MAX));
+    const int got = gzread(as_gz(m_gz), dst, len);
+    if (got < 0) {
+        int errnum = 0;
+        const char* msg = gzerror(as_gz(m_gz), &errnum);
+        if (errnum == Z_ERRNO)
+            throw IoError(m_path, std::string("read error: ") + std::strerror(errno));
+        // zlib prefixes the name it was opened with, "<fd:3>" for gzdopen.
+        std::string what = msg ? msg : "?";
+        if (what.rfind("<fd:", 0) == 0 && what.find(">: ") != std::string::npos)
+            what.erase(0, what.find(">: ") + 3);
+        throw FormatError(m_path, "corrupt gzip stream: " + what);
+    }
+    if (got == 0) m_eof = true;
+    return static_cast<std::size_t>(got);
+}
+
+bool ByteSource::fill() {
+    m_pos = 0;
+    m_end = raw_read(m_buf.data(), m_buf.size());
+    return m_end > 0;
+}
+
+std::size_t ByteSource::read(void* dst, std::size_t n) {
+    auto* out = static_cast<unsigned char*>(dst);
+    std::size_t done = 0;
+    while (done < n) {
+        if (m_pos < m_end) {
+            const std::size_t k = std::min(n - done, m_end - m_pos);
+            std::memcpy(out + done, m_buf.data() + m_pos, k);
+            m_pos += k;
+            done += k;
+        } else if (n - done >= m_buf.size()) {
+            // Large reads bypass the buffer.
+            const std::size_t k = raw_read(out + done, n - done);
+            if (k == 0) break;
+            done += k;
+        } else if (!fill()) {
+            break;
+        }
+    }
+    m_consumed += done;
+    return done;
+}
+
+int ByteSource::get() {
+    if (m_pos >= m_end && !fill()) return -1;
+    ++m_consumed;
+    return m_buf[m_pos++];
+}
+
+std::optional<uint64_t> ByteSource::remaining_bound() const {
+    if (!m_file_size) return std::nullopt;
+    uint64_t total = *m_file_size;
+    if (compressed()) {
+        total = total > std::numeric_limits<uint64_t>::max() / kMaxInflateRatio
+                    ? std::numeric_limits<uint64_t>::max()
+                    : total * kMaxInflateRatio;
+    }
+    return total > m_consumed ? total - m_consumed : 0;
+}
+
+void ByteSource::finish() {
+    if (!compressed()) return;
+    // Drain so that zlib checks the CRC and length in the gzip trailer.
+    while (m_pos < m_end || fill()) m_pos = m_end;
+    int errnum = Z_OK;
+    gzerror(as_gz(m_gz), &errnum);
+    if (errnum == Z_BUF_ERROR) throw FormatError(m_path, "gzip stream is truncated");
+}
+
+ByteSink::ByteSink(const std::string& file, const std::string& display_path,
+                   bool compress)
+    : m_display(display_path), m_buf(kOutputBuffer) {
+    if (compress) {
+        m_gz = gzopen(file.c_str(), "wb");
+        if (!m_gz) fail(std::string("cannot create: ") + std::strerror(errno));
+        gzbuffer(as_gz(m_gz), 1 << 17);
+    } else {
+        m_file = std::fopen(file.c_str(), "wb");
+        if (!m_file) fail(std::string("cannot create: ") + std::strerror(errno));
+    }
+}
+
+ByteSink::~ByteSink() {
+    // Only reached without close() after an error; the AtomicOutput discards the file.
+    if (m_gz) gzclose_w(as_gz(m_gz));
+    if (m_file) std::fclose(m_file);
+}
+
+void ByteSink::fail(const std::string& what) {
+    throw IoError(m_display, what);
+}
+
+void ByteSink::flush_buffer() {
+    if (m_used == 0) return;
+    if (m_gz) {
+        if (gzwrite(as_gz(m_gz), m_buf.data(), static_cast<unsigned>(m_used)) !=
+            static_cast<int>(m_used)) {
+            int errnum = 0;
+            const char* msg = gzerror(as_gz(m_gz), &errnum);
+            fail(std::string("write error: ") +
+                 (errnum == Z_ERRNO ? std::strerror(errno) : (msg ? msg : "?")));
+        }
+    } else if (std::fwrite(m_buf.data(), 1, m_used, m_file) != m_used) {
+        fail(std::string("write error: ") + std::strerror(errno));
+    }
+    m_used = 0;
+}
+
+void ByteSink::write(const void* src, std::size_t n) {
+    const auto* in = static_cast<const unsigned char*>(src);
+    while (n > 0) {
+        if (m_used == m_buf.size()) flush_buffer();
+        const std::size_t k = std::min(n, m_buf.size() - m_used);
+        std::memcpy(m_buf.data() + m_used, in, k);
+        m_used += k;
+        in += k;
+        n -= k;
+    }
+}
+
+void ByteSink::close() {
+    flush_buffer();
+    if (m_gz) {
+        const int rc = gzclose_w(as_gz(m_gz));
+        m_gz = nullptr;
+        if (rc != Z_OK) fail("write error while finishing the gzip stream");
+    }
+    if (m_file) {
+        const bool ok = std::fflush(m_file) == 0 && !std::ferror(m_file);
+        const int err = errno;
+        const bool closed = std::fclose(m_file) == 0;
+        m_file = nullptr;
+        if (!ok || !closed) fail(std::string("write error: ") + std::strerror(err));
+    }
+}
+
+namespace {
+
+bool all_finite(const float* v, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(v[i])) return false;
+    }
+    return true;
+}
+
+} // namespace
+
+void check_writable(const PointCloud& cloud) {
+    const std::size_t n = cloud.size();
+    if (cloud.normals.size() != n || cloud.radii.size() != n) {
+        throw ValueError("inconsistent point cloud: " + std::to_string(n) +
+                         " positions, " + std::to_string(cloud.normals.size()) +
+                         " normals, " + std::to_string(cloud.radii.size()) + " radii");
+    }
+    if (!all_finite(cloud.world_to_eye.data(), 16) ||
+        !all_finite(cloud.world_to_ndc.data(), 16) ||
+        !all_finite(cloud.format.data(), 3)) {
+        throw ValueError("non-finite value in the header matrices or image format");
+    }
+    std::set<std::string> names;
+    for (const Channel& c : cloud.channels) {
+        if (c.name.empty()) throw ValueError("channel with an empty name");
+        for (char ch : c.name) {
+            if (std::isspace(static_cast<unsigned char>(ch)) ||
+                std::iscntrl(static_cast<unsigned char>(ch))) {
+                throw ValueError("channel name '" + c.name +
+                                 "' contains whitespace or control characters");
+            }
+        }
+        if (!names.insert(c.name).second)
+            throw ValueError("duplicate channel '" + c.name + "'");
+        const std::size_t k = static_cast<std::size_t>(c.components());
+        if (c.data.size() != n * k) {
+            throw ValueError("inconsistent point cloud: channel '" + c.name + "' holds " +
+                             std::to_string(c.data.size()) + " floats, expected " +
+                             std::to_string(n * k));
+        }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::string at = " at point " + std::to_string(i);
+        if (!all_finite(&cloud.positions[i].x, 3))
+            throw ValueError("non-finite position" + at);
+        if (!all_finite(&cloud.normals[i].x, 3))
+            throw ValueError("non-finite normal" + at);
+        if (!std::isfinite(cloud.radii[i])) throw ValueError("non-finite radius" + at);
+        if (cloud.radii[i] < 0.0f) throw ValueError("negative radius" + at);
+    }
+    for (const Channel& c : cloud.channels) {
+        const std::size_t k = static_cast<std::size_t>(c.components());
+        for (std::size_t i = 0; i < c.data.size(); ++i) {
+            if (!std::isfinite(c.data[i])) {
+                throw ValueError("non-finite value in channel '" + c.name +
+                                 "' at point " + std::to_string(i / k));
+            }
+        }
+    }
+}
+
+bool has_extension(const std::string& path, const std::string& ext) {
+    if (path.size() < ext.size()) return false;
+    const std::string tail = path.substr(path.size() - ext.size());
+    return std::equal(tail.begin(), tail.end(), ext.begin(), ext.end(),
+                      [](char a, char b) {
+                          return std::tolower(static_cast<unsigned char>(a)) ==
+                                 std::tolower(static_cast<unsigned char>(b));
+                      });
+}
+
+std::string format_float(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return buf;
+}
+
+} // namespace detail
+
+PointCloud read_point_cloud(const std::string& path) {
+    return detail::has_extension(path, ".ply") ? read_ply(path) : read_ptc(path);
+}
+
+void write_point_cloud(const PointCloud& cloud, const std::string& path,
+                       const PointCloudWriteOptions& options) {
+    if (detail::has_extension(path, ".ply")) {
+        write_ply(cloud, path);
+    } else {
+        write_ptc(cloud, path, options);
+    }
+}
+
+std::vector<ChannelStats> channel_stats(const PointCloud& cloud) {
+    const std::size_t n = cloud.size();
+    auto compute = [n](const std::string& name, ChannelType type, const float* data,
+                       std::size_t available) {
+        ChannelStats s;
+        s.name = name;
+        s.type = type;
+        const std::size_t k = static_cast<std::size_t>(channel_type_size(type));
+        s.min.assign(k, 0.0);
+        s.mean.assign(k, 0.0);
+        s.max.assign(k, 0.0);
+        const std::size_t count = std::min(n, available / k);
+        if (count == 0) return s;
+        for (std::size_t c = 0; c < k; ++c) {
+            double lo = data[c], hi = data[c], sum = 0.0;
+            for (std::size_t i = 0; i < count; ++i) {
+                const double v = data[i * k + c];
+                lo = std::min(lo, v);
+                hi = std::max(hi, v);
+                sum += v;
+            }
+            s.min[c] = lo;
+            s.mean[c] = sum / static_cast<double>(count);
+            s.max[c] = hi;
+        }
+        return s;
+    };
+    std::vector<ChannelStats> out;
+    out.push_back(
+        compute("radius", ChannelType::Float, cloud.radii.data(), cloud.radii.size()));
+    for (const Channel& c : cloud.channels) {
+        out.push_back(compute(c.name, c.type, c.data.data(), c.data.size()));
+    }
+    return out;
+}
+
+bool is_identity(const std::array<float, 16>& m) {
+    for (int r = 0; r < 4; ++r) {
+        for (int c = 0; c < 4; ++c) {
+            if (m[r * 4 + c] != (r == c ? 1.0f : 0.0f)) return false;
+        }
+    }
+    return true;
+}
+
+std::string short_float(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
+std::string matrix_text(const std::array<float, 16>& m) {
+    std::string s;
+    for (int r = 0; r < 4; ++r) {
+        if (r > 0) s += " |";
+        for (int c = 0; c < 4; ++c) {
+            s += ' ';
+            s += short_float(m[r * 4 + c]);
+        }
+    }
+    return s;
+}
+
+namespace {
+
+const char* component_label(ChannelType type, int c) {
+    static const char* const xyz[] = {"x", "y", "z"};
+    static const char* const rgb[] = {"r", "g", "b"};
+    static const char* const idx[] = {"0", "1", "2",  "3",  "4",  "5",  "6",  "7",
+                                      "8", "9", "10", "11", "12", "13", "14", "15"};
+    switch (type) {
+    case ChannelType::Float:
+        return "";
+    case ChannelType::Color:
+        return rgb[c];
+    case ChannelType::Point:
+    case ChannelType::Vector:
+    case ChannelType::Normal:
+        return xyz[c];
+    case ChannelType::Matrix:
+        return idx[c];
+    }
+    return "";
+}
+
+std::string stats_lines(const ChannelStats& s, const std::string& indent) {
+    std::string out;
+    for (std::size_t c = 0; c < s.min.size(); ++c) {
+        const std::string label = component_label(s.type, static_cast<int>(c));
+        out += indent + (label.empty() ? "" : label + ": ") + "min " +
+               short_float(s.min[c]) + "  mean " + short_float(s.mean[c]) + "  max " +
+               short_float(s.max[c]) + "\n";
+    }
+    return out;
+}
+
+} // namespace
+
+std::string describe_point_cloud(const std::string& path, const PointCloud& cloud,
+                                 bool stats) {
+    std::ostringstream out;
+    out << "file: " << path << "\n";
+    if (detail::has_extension(path, ".ply")) {
+        out << "format: ply\n";
+    } else {
+        out << "format: ptc version " << cloud.file_version << "\n";
+    }
+    out << "compressed: " << (cloud.file_compressed ? "yes (gzip)" : "no") << "\n";
+    out << "points: " << cloud.size() << "\n";
+    if (cloud.size() == 0) {
+        out << "bbox: empty\n";
+    } else {
+        const Bounds3 b = cloud.bounds();
+        out << "bbox: min " << short_float(b.lo.x) << " " << short_float(b.lo.y) << " "
+            << short_float(b.lo.z) << "  max " << short_float(b.hi.x) << " "
+            << short_float(b.hi.y) << " " << short_float(b.hi.z) << "\n";
+    }
+    if (!is_identity(cloud.world_to_eye))
+        out << "world2eye:" << matrix_text(cloud.world_to_eye) << "\n";
+    if (!is_identity(cloud.world_to_ndc))
+        out << "world2ndc:" << matrix_text(cloud.world_to_ndc) << "\n";
+    if (cloud.format != std::array<float, 3>{0.0f, 0.0f, 1.0f}) {
+        out << "image format: " << short_float(cloud.format[0]) << " "
+            << short_float(cloud.format[1]) << " " << short_float(cloud.format[2])
+            << "\n";
+    }
+    out << "channels: " << cloud.channels.size() << " (datasize " << cloud.data_size()
+        << ")\n";
+    const bool with_stats = stats && cloud.size() > 0;
+    const std::vector<ChannelStats> all =
+        with_stats ? channel_stats(cloud) : std::vector<ChannelStats>{};
+    for (std::size_t i = 0; i < cloud.channels.size(); ++i) {
+        const Channel& c = cloud.channels[i];
+        out << "  " << channel_type_name(c.type) << " " << c.name << "\n";
+        if (with_stats) out << stats_lines(all[i + 1], "    ");
+    }
+    if (with_stats) out << "radius: " << stats_lines(all[0], "");
+    return out.str();
+}
+
+} // namespace sss

@@ -1,0 +1,377 @@
+/// \file ptc_io.cpp
+/// Pixar .ptc point clouds, versions 0-2, plain or gzip. The layout follows
+/// docs/file-formats.md: a little-endian binary header whose field offsets
+/// depend on the version, "<type> <name>\n" channel spec lines, then fixed-size
+/// records (position, packed normal, radius, channel data).
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <set>
+
+#include "point_cloud_io_detail.h"
+#include "sss/util/error.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/cli/tool.h"
+
+namespace sss {
+
+namespace {
+
+using namespace detail;
+
+constexpr int32_t kPtcMagic = 0x63747070; // bytes on disk: "pptc"
+constexpr int kMaxVersion = 2;
+// Far more than any real cloud has; keeps a corrupt header from driving huge loops.
+constexpr int32_t kMaxChannels = 4096;
+constexpr std::size_t kMaxSpecLine = 4096;
+constexpr std::size_t kRecordBase = 20; // 3 f32 position + 2 u16 normal + f32 radius
+// Points reserved up front when the real count cannot be checked against the
+// file size (gzip, pipes): the rest grows as data actually arrives.
+constexpr std::size_t kMaxUpFrontPoints = 1 << 16;
+constexpr uint16_t kZeroNormalCode = 65535;
+constexpr uint32_t kPadWord = 0xDEADBEEFu;
+constexpr int kV2PadWords = 32;
+
+/// Byte offsets of the header fields that move between versions.
+struct PtcLayout {
+    std::size_t max_radius; ///< v >= 2, followed by 32 pad words; 0 = absent
+    std::size_t world2eye;
+    std::size_t world2ndc;
+    std::size_t format;
+    std::size_t nvars; ///< followed by datasize
+    std::size_t specs; ///< = size of the fixed binary header
+};
+
+PtcLayout layout_for(int version) {
+    // Each optional block shifts everything after it: 16 bytes for the four
+    // unknown floats of v1 (at offset 40), 4 + 32 * 4 = 132 bytes for the v2
+    // max radius and padding (at offset 56).
+    const std::size_t v1 = version >= 1 ? 16 : 0;
+    const std::size_t v2 = version >= 2 ? 4 + 4 * kV2PadWords : 0;
+    const std::size_t w2e = 40 + v1 + v2;
+    const std::size_t max_radius = version >= 2 ? 56 : 0;
+    return {max_radius, w2e, w2e + 64, w2e + 128, w2e + 140, w2e + 148};
+}
+
+glm::vec3 decode_normal(uint16_t phi_code, uint16_t z_code) {
+    if (phi_code == kZeroNormalCode && z_code == kZeroNormalCode) return glm::vec3(0.0f);
+    const double nz = 2.0 * z_code / 65535.0 - 1.0;
+    const double phi = 2.0 * std::numbers::pi * (phi_code / 65535.0 - 0.5);
+    const double s = std::sqrt(std::max(0.0, 1.0 - nz * nz));
+    return glm::vec3(static_cast<float>(s * std::sin(phi)),
+                     static_cast<float>(s * std::cos(phi)), static_cast<float>(nz));
+}
+
+/// Inverse of decode_normal with round-to-nearest (halves away from zero) on
+/// both codes. The input is normalised first; a zero vector gets the
+/// (65535, 65535) "no normal" code.
+std::array<uint16_t, 2> encode_normal(const glm::vec3& n) {
+    const double x = n.x, y = n.y, z = n.z;
+    const double len = std::sqrt(x * x + y * y + z * z);
+    if (len == 0.0) return {kZeroNormalCode, kZeroNormalCode};
+    const double nz = std::clamp(z / len, -1.0, 1.0);
+    const double phi = std::atan2(x, y); // x = s sin(phi), y = s cos(phi); in [-pi, pi]
+    auto quantise = [](double unit) {
+        return static_cast<uint16_t>(std::clamp(std::lround(unit * 65535.0), 0L, 65535L));
+    };
+    const uint16_t z_code = quantise((nz + 1.0) * 0.5);
+    uint16_t phi_code = quantise(phi / (2.0 * std::numbers::pi) + 0.5);
+    // (65535, 65535) would read back as "no normal". It arises only for a
+    // normal within half a z step of +z with phi ~ pi, where sqrt(1 - nz^2) is
+    // 0 once decoded, so phi = 0 gives back the same vector.
+    if (phi_code == kZeroNormalCode && z_code == kZeroNormalCode) phi_code = 0;
+    return {phi_code, z_code};
+}
+
+/// Reads one "<type> <name>" spec line (without the newline).
+std::string read_spec_line(ByteSource& in, int index) {
+    std::string line;
+    for (;;) {
+        const int c = in.get();
+        if (c < 0) {
+            throw FormatError(in.path(), "truncated channel specs (in spec line " +
+                                             std::to_string(index + 1) + ")");
+        }
+        if (c == '\n') break;
+        if (line.size() >= kMaxSpecLine) {
+            throw FormatError(in.path(), "malformed channel spec line " +
+                                             std::to_string(index + 1) + " (too long)");
+        }
+        line.push_back(static_cast<char>(c));
+    }
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return line;
+}
+
+Channel parse_spec_line(const std::string& path, const std::string& line, int index) {
+    auto malformed = [&](const std::string& why) {
+        return FormatError(path, "malformed channel spec line " +
+                                     std::to_string(index + 1) + " '" + line +
+                                     "': " + why);
+    };
+    for (char ch : line) {
+        if ((static_cast<unsigned char>(ch) < 0x20 && ch != '\t') || ch == 0x7f) {
+            throw malformed("control character");
+        }
+    }
+    // Split on blanks; exactly two words are expected.
+    std::vector<std::string> words;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+        std::size_t j = i;
+        while (j < line.size() && line[j] != ' ' && line[j] != '\t') ++j;
+        if (j > i) words.push_back(line.substr(i, j - i));
+        i = j;
+    }
+    if (words.size() != 2) throw malformed("expected '<type> <name>'");
+    const std::optional<ChannelType> type = parse_channel_type(words[0]);
+    if (!type) {
+        throw FormatError(path, "unknown channel type '" + words[0] + "' in spec line " +
+                                    std::to_string(index + 1));
+    }
+    Channel c;
+    c.type = *type;
+    c.name = words[1];
+    return c;
+}
+
+} // namespace
+
+PointCloud read_ptc(const std::string& path) {
+    ByteSource in(path);
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
+
+    unsigned char head[8];
+    if (!in.read_exact(head, sizeof head)) {
+        throw fail("file too short for a .ptc header (" + std::to_string(in.consumed()) +
+                   " bytes)");
+    }
+    if (load_i32(head) != kPtcMagic) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "not a .ptc file (bad magic 0x%08x)",
+                      load_u32(head));
+        throw fail(buf);
+    }
+    const int32_t version = load_i32(head + 4);
+    if (version < 0 || version > kMaxVersion) {
+        throw fail("unsupported .ptc version " + std::to_string(version) +
+                   " (versions 0, 1 and 2 are supported; organized clouds are not)");
+    }
+    const PtcLayout lay = layout_for(version);
+    std::vector<unsigned char> header(lay.specs);
+    std::copy(head, head + sizeof head, header.begin());
+    if (!in.read_exact(header.data() + 8, header.size() - 8)) {
+        throw fail("file too short for a version " + std::to_string(version) +
+                   " .ptc header (" + std::to_string(in.consumed()) + " of " +
+                   std::to_string(lay.specs) + " bytes)");
+    }
+    const unsigned char* h = header.data();
+
+    const double npoints_d = load_f64(h + 8);
+    // 2^53: the largest count a double holds exactly.
+    if (!std::isfinite(npoints_d) || npoints_d < 0.0 ||
+        npoints_d != std::floor(npoints_d) || npoints_d > 9007199254740992.0) {
+        throw fail("invalid point count " + format_float(npoints_d) + " in the header");
+    }
+    const uint64_t npoints = static_cast<uint64_t>(npoints_d);
+
+    PointCloud cloud;
+    cloud.file_version = version;
+    cloud.file_compressed = in.compressed();
+    for (int i = 0; i < 16; ++i) {
+        cloud.world_to_eye[i] = load_f32(h + lay.world2eye + 4 * i);
+        cloud.world_to_ndc[i] = load_f32(h + lay.world2ndc + 4 * i);
+    }
+    for (int i = 0; i < 3; ++i) cloud.format[i] = load_f32(h + lay.format + 4 * i);
+    // Everything read is writable again, so the header must be finite too.
+    for (float v : cloud.world_to_eye) {
+        if (!std::isfinite(v)) throw fail("non-finite value in the world2eye matrix");
+    }
+    for (float v : cloud.world_to_ndc) {
+        if (!std::isfinite(v)) throw fail("non-finite value in the world2ndc matrix");
+    }
+    for (float v : cloud.format) {
+        if (!std::isfinite(v)) throw fail("non-finite value in the image format");
+    }
+
+    const int32_t nvars = load_i32(h + lay.nvars);
+    const int32_t datasize = load_i32(h + lay.nvars + 4);
+    if (nvars < 0 || nvars > kMaxChannels) {
+        throw fail("invalid channel count nvars = " + std::to_string(nvars));
+    }
+    if (datasize < 0 || datasize > 16 * kMaxChannels) {
+        throw fail("invalid datasize " + std::to_string(datasize));
+    }
+
+    std::set<std::string> names;
+    int sum = 0;
+    for (int i = 0; i < nvars; ++i) {
+        Channel c = parse_spec_line(path, read_spec_line(in, i), i);
+        if (!names.insert(c.name).second)
+            throw fail("duplicate channel '" + c.name + "'");
+        sum += c.components();
+        cloud.channels.push_back(std::move(c));
+    }
+    if (sum != datasize) {
+        throw fail("channel sizes add up to " + std::to_string(sum) +
+                   " floats per point but the header datasize is " +
+                   std::to_string(datasize));
+    }
+    if (version >= 1) {
+        unsigned char extra[8]; // two floats of unknown meaning
+        if (!in.read_exact(extra, sizeof extra)) {
+            throw fail("truncated header after channel specs");
+        }
+    }
+
+    const std::size_t record = kRecordBase + 4 * static_cast<std::size_t>(datasize);
+    const std::optional<uint64_t> left = in.remaining_bound();
+    if (left && npoints > *left / record) {
+        if (in.compressed()) {
+            throw fail("header claims " + std::to_string(npoints) + " points of " +
+                       std::to_string(record) +
+                       " bytes, more than the compressed file can hold");
+        }
+        // Exact for a plain file: name the first point whose record is missing.
+        throw FormatError(path,
+                          "truncated point data: header claims " +
+                              std::to_string(npoints) + " points of " +
+                              std::to_string(record) + " bytes but only " +
+                              std::to_string(*left) + " bytes remain",
+                          static_cast<int64_t>(*left / record));
+    }
+    // A plain file has been checked exactly; otherwise grow as data arrives.
+    const bool exact = left.has_value() && !in.compressed();
+    const std::size_t reserve =
+        exact ? static_cast<std::size_t>(npoints)
+              : static_cast<std::size_t>(std::min<uint64_t>(npoints, kMaxUpFrontPoints));
+    cloud.positions.reserve(reserve);
+    cloud.normals.reserve(reserve);
+    cloud.radii.reserve(reserve);
+    for (Channel& c : cloud.channels) {
+        c.data.reserve(reserve * static_cast<std::size_t>(c.components()));
+    }
+
+    const std::size_t chunk_points = std::max<std::size_t>(1, (1 << 20) / record);
+    std::vector<unsigned char> buf(chunk_points * record);
+    uint64_t done = 0;
+    while (done < npoints) {
+        const std::size_t k =
+            static_cast<std::size_t>(std::min<uint64_t>(chunk_points, npoints - done));
+        const std::size_t got = in.read(buf.data(), k * record);
+        if (got < k * record) {
+            throw FormatError(path,
+                              "truncated point data: header claims " +
+                                  std::to_string(npoints) + " points, data ends",
+                              static_cast<int64_t>(done + got / record));
+        }
+        for (std::size_t j = 0; j < k; ++j) {
+            const unsigned char* r = buf.data() + j * record;
+            const int64_t index = static_cast<int64_t>(done + j);
+            const glm::vec3 p(load_f32(r), load_f32(r + 4), load_f32(r + 8));
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+                throw FormatError(path, "non-finite position", index);
+            }
+            const float radius = load_f32(r + 16);
+            if (!std::isfinite(radius))
+                throw FormatError(path, "non-finite radius", index);
+            if (radius < 0.0f) throw FormatError(path, "negative radius", index);
+            cloud.positions.push_back(p);
+            cloud.normals.push_back(decode_normal(load_u16(r + 12), load_u16(r + 14)));
+            cloud.radii.push_back(radius);
+            const unsigned char* d = r + kRecordBase;
+            for (Channel& c : cloud.channels) {
+                for (int q = 0; q < c.components(); ++q, d += 4) {
+                    const float v = load_f32(d);
+                    if (!std::isfinite(v)) {
+                        throw FormatError(
+                            path, "non-finite value in channel '" + c.name + "'", index);
+                    }
+                    c.data.push_back(v);
+                }
+            }
+        }
+        done += k;
+    }
+    in.finish();
+    return cloud;
+}
+
+void write_ptc(const PointCloud& cloud, const std::string& path,
+               const PointCloudWriteOptions& options) {
+    if (options.ptc_version < 0 || options.ptc_version > kMaxVersion) {
+        throw ValueError("cannot write .ptc version " +
+                         std::to_string(options.ptc_version) + " (0, 1 or 2)");
+    }
+    check_writable(cloud);
+    if (cloud.channels.size() > static_cast<std::size_t>(kMaxChannels)) {
+        throw ValueError("too many channels for a .ptc file (" +
+                         std::to_string(cloud.channels.size()) + ")");
+    }
+    const int version = options.ptc_version;
+    const PtcLayout lay = layout_for(version);
+    const std::size_t n = cloud.size();
+
+    std::vector<unsigned char> header(lay.specs, 0);
+    unsigned char* h = header.data();
+    store_i32(h, kPtcMagic);
+    store_i32(h + 4, version);
+    store_f64(h + 8, static_cast<double>(n));
+    const Bounds3 b = cloud.bounds();
+    const float box[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+    for (int i = 0; i < 6; ++i) store_f32(h + 16 + 4 * i, box[i]);
+    // v1's four unknown floats stay zero.
+    if (version >= 2) {
+        float max_radius = 0.0f;
+        for (float r : cloud.radii) max_radius = std::max(max_radius, r);
+        store_f32(h + lay.max_radius, max_radius);
+        for (int i = 0; i < kV2PadWords; ++i) {
+            store_u32(h + lay.max_radius + 4 + 4 * i, kPadWord);
+        }
+    }
+    for (int i = 0; i < 16; ++i) {
+        store_f32(h + lay.world2eye + 4 * i, cloud.world_to_eye[i]);
+        store_f32(h + lay.world2ndc + 4 * i, cloud.world_to_ndc[i]);
+    }
+    for (int i = 0; i < 3; ++i) store_f32(h + lay.format + 4 * i, cloud.format[i]);
+    store_i32(h + lay.nvars, static_cast<int32_t>(cloud.channels.size()));
+    store_i32(h + lay.nvars + 4, cloud.data_size());
+
+    AtomicOutput out(path);
+    ByteSink sink(out.temp_path(), path, options.compress);
+    sink.write(header.data(), header.size());
+    for (const Channel& c : cloud.channels) {
+        sink.write(std::string(channel_type_name(c.type)) + " " + c.name + "\n");
+    }
+    if (version >= 1) {
+        const unsigned char zeros[8] = {};
+        sink.write(zeros, sizeof zeros);
+    }
+    const std::size_t record =
+        kRecordBase + 4 * static_cast<std::size_t>(cloud.data_size());
+    std::vector<unsigned char> rec(record);
+    for (std::size_t i = 0; i < n; ++i) {
+        unsigned char* r = rec.data();
+        store_f32(r, cloud.positions[i].x);
+        store_f32(r + 4, cloud.positions[i].y);
+        store_f32(r + 8, cloud.positions[i].z);
+        const std::array<uint16_t, 2> code = encode_normal(cloud.normals[i]);
+        store_u16(r + 12, code[0]);
+        store_u16(r + 14, code[1]);
+        store_f32(r + 16, cloud.radii[i]);
+        unsigned char* d = r + kRecordBase;
+        for (const Channel& c : cloud.channels) {
+            const std::size_t k = static_cast<std::size_t>(c.components());
+            for (std::size_t q = 0; q < k; ++q, d += 4) store_f32(d, c.data[i * k + q]);
+        }
+        sink.write(rec.data(), rec.size());
+    }
+    sink.close();
+    out.commit();
+}
+
+} // namespace sss

@@ -1,0 +1,272 @@
+#include "sss/diffusion/ssdiffusion.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <tuple>
+
+#include "sss/util/error.h"
+#include "sss/cli/tool.h"
+
+namespace sss {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Albedo at or above 1 is clamped here (with one warning), as PRMan does at 0.999.
+constexpr double kMaxAlbedo = 0.99999;
+// Per-point materials share profile tables; at most this many distinct ones.
+constexpr std::size_t kMaxDistinctProfiles = 1024;
+
+// Per-point albedo quantisation: steps of 1/albedo_steps, except below 2^-8,
+// where such a step is a large fraction of the value (1/65536 made 1e-6 zero
+// and 1e-4 1.07e-4): there a + 2^-24 keeps log2(albedo_steps) - 8 significant
+// bits (0.2 % at full resolution; at most 16 x 256 extra keys). Small albedos
+// get negative keys.
+constexpr double kSmallAlbedo = 1.0 / 256.0, kTinyAlbedo = 1.0 / 16777216.0;
+int small_albedo_drop(int albedo_steps) {
+    int bits = std::max(1, int(std::bit_width(unsigned(albedo_steps))) - 1 - 8);
+    return 23 - bits;
+}
+int64_t albedo_key(double a, int albedo_steps) {
+    if (a >= kSmallAlbedo) return std::llround(a * albedo_steps);
+    const int drop = small_albedo_drop(albedo_steps);
+    uint32_t b = std::bit_cast<uint32_t>(float(a + kTinyAlbedo));
+    return -1 - int64_t((b + (1u << (drop - 1))) >> drop);
+}
+double albedo_of_key(int64_t key, int albedo_steps) {
+    if (key >= 0) return std::min(double(key) / albedo_steps, kMaxAlbedo);
+    uint32_t b = uint32_t(-1 - key) << small_albedo_drop(albedo_steps);
+    return std::max(0.0, double(std::bit_cast<float>(b)) - kTinyAlbedo);
+}
+
+std::string fmt3(const glm::dvec3& v) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "%.6g %.6g %.6g", v.x, v.y, v.z);
+    return buf;
+}
+
+const Channel& require_channel(const PointCloud& cloud, const std::string& name,
+                               int components, const char* option) {
+    const Channel* c = cloud.find_channel(name);
+    if (!c) {
+        std::string have;
+        for (const Channel& ch : cloud.channels)
+            have += (have.empty() ? "" : ", ") + std::string(channel_type_name(ch.type)) +
+                    " " + ch.name;
+        throw ValueError("input has no channel '" + name + "' (set it with " + option +
+                         "; channels present: " + (have.empty() ? "none" : have) + ")");
+    }
+    if (c->components() != components)
+        throw ValueError("channel '" + name + "' is " + channel_type_name(c->type) +
+                         ", expected " + (components == 1 ? "float" : "color"));
+    return *c;
+}
+
+// The constant (whole-cloud) channel profiles, with lengths in units of
+// 1/u mm (u = unitlength: scene units; u = 1: mm).
+std::vector<Profile> constant_profiles(const SsDiffusionOptions& o, double u) {
+    const MaterialSpec& m = o.material;
+    m.validate();
+    const double ior = m.resolved_ior();
+    std::vector<Profile> out;
+    if (m.uses_albedo_form()) {
+        glm::dvec3 albedo, dmfp;
+        m.resolve_albedo_dmfp(albedo, dmfp);
+        for (int ch = 0; ch < 3; ++ch)
+            out.push_back(Profile::from_albedo_dmfp(
+                o.profile, std::min(albedo[ch], kMaxAlbedo), dmfp[ch] * u, ior));
+    } else {
+        glm::dvec3 ss, sa;
+        m.resolve_coefficients(ss, sa);
+        for (int ch = 0; ch < 3; ++ch)
+            out.push_back(
+                Profile::from_coefficients(o.profile, {ss[ch] / u, sa[ch] / u, ior}));
+    }
+    return out;
+}
+
+} // namespace
+
+std::vector<std::string> describe_material(const SsDiffusionOptions& o) {
+    const MaterialSpec& m = o.material;
+    std::vector<Profile> p = constant_profiles(o, m.unitlength);
+    std::vector<std::string> lines;
+    std::string source = m.uses_albedo_form()             ? "albedo/diffusemeanfreepath"
+                         : (m.scattering || m.absorption) ? "scattering/absorption"
+                                                          : "material " + m.preset;
+    lines.push_back("material: " + source + ", profile " + profile_kind_name(o.profile) +
+                    ", unitlength " + std::to_string(m.unitlength));
+    glm::dvec3 albedo, dmfp, ss, sa;
+    for (int ch = 0; ch < 3; ++ch) {
+        albedo[ch] = p[ch].total();
+        dmfp[ch] = p[ch].dmfp();
+        ss[ch] = p[ch].alpha_prime() * p[ch].sigma_t_prime();
+        sa[ch] = p[ch].sigma_t_prime() - ss[ch];
+    }
+    lines.push_back("  albedo " + fmt3(albedo) +
+                    (m.albedo_from_file ? " (per point from file)" : ""));
+    lines.push_back("  diffusemeanfreepath " + fmt3(dmfp) + " (scene units)" +
+                    (m.dmfp_from_file ? " (per point from file)" : ""));
+    if (o.profile != ProfileKind::Burley) {
+        lines.push_back("  scattering (sigma_s') " + fmt3(ss) + " (1/scene unit)");
+        lines.push_back("  absorption (sigma_a) " + fmt3(sa) + " (1/scene unit)");
+    }
+    lines.push_back("  ior " + std::to_string(m.resolved_ior()));
+    return lines;
+}
+
+PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
+                       SsDiffusionReport* report) {
+    Stopwatch watch;
+    SsDiffusionReport local;
+    SsDiffusionReport& rep = report ? *report : local;
+    const MaterialSpec& m = o.material;
+    rep.material_lines = describe_material(o);
+    const std::size_t n = in.size();
+
+    // The diffusion is evaluated in mm, the material's own unit, not in scene
+    // units: its profile tables are floats whose entries go as powers of the
+    // material's lengths (R ~ 1/l^2, its r^2-derivatives up to ~1/l^8), which
+    // overflowed or underflowed for marble (dmfp 4-8.5 mm) at -unitlength
+    // below ~1e-6 or above ~1e5: a cm scene scaled by 1e-5 or 3e6. In mm,
+    // real materials' lengths are 0.01 to 100 and sum R A E is the same (R A
+    // has no unit), so the result does not depend on the scene's scale.
+    const double to_mm = 1.0 / m.unitlength;
+    DiffusionProblem pb;
+    pb.positions.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+        pb.positions[i] = glm::vec3(glm::dvec3(in.positions[i]) * to_mm);
+    pb.normals = in.normals;
+    pb.areas.resize(n);
+    pb.irradiance.resize(n);
+
+    // Area: the explicit channel, else the disk of the stored radius.
+    if (const Channel* area = in.find_channel(o.area_channel); area || n == 0) {
+        if (area && area->components() != 1)
+            throw ValueError("channel '" + o.area_channel + "' is " +
+                             channel_type_name(area->type) + ", expected float");
+        for (std::size_t i = 0; i < n; ++i) {
+            float a = area->data[i];
+            if (!(a >= 0.0f) || !std::isfinite(a))
+                throw ValueError("channel '" + o.area_channel +
+                                 "': negative or invalid area " + std::to_string(a) +
+                                 " at point " + std::to_string(i));
+            pb.areas[i] = float(a * to_mm * to_mm);
+        }
+    } else {
+        rep.warnings.push_back("no '" + o.area_channel +
+                               "' channel: using pi * radius^2 as each point's area");
+        for (std::size_t i = 0; i < n; ++i)
+            pb.areas[i] = float(kPi * (in.radii[i] * to_mm) * (in.radii[i] * to_mm));
+    }
+    if (n > 0) {
+        const Channel& rad =
+            require_channel(in, o.radiance_channel, 3, "-radiancechannel");
+        for (std::size_t i = 0; i < n; ++i)
+            pb.irradiance[i] = {rad.data[3 * i], rad.data[3 * i + 1],
+                                rad.data[3 * i + 2]};
+    }
+
+    // Material: constant, or per point from the _albedo / _diffusemeanfreepath channels.
+    const std::vector<Profile> constant = constant_profiles(o, 1.0); // in mm
+    if ((m.albedo_from_file || m.dmfp_from_file) && n > 0) {
+        const Channel* ach = m.albedo_from_file ? &require_channel(in, o.albedo_channel,
+                                                                   3, "-albedo fromfile")
+                                                : nullptr;
+        const Channel* dch =
+            m.dmfp_from_file
+                ? &require_channel(in, o.dmfp_channel, 3, "-diffusemeanfreepath fromfile")
+                : nullptr;
+        glm::dvec3 albedo0, dmfp0;
+        m.resolve_albedo_dmfp(albedo0, dmfp0);
+        const double ior = m.resolved_ior();
+        bool clamped = false;
+        // Quantise per-point values so points share tables; coarsen until the
+        // number of distinct profiles fits.
+        // dmfp_steps stays >= 1 (0 made the dmfp NaN); the last level keeps
+        // every distinct value rather than stopping half-way.
+        for (int albedo_steps = 65536, dmfp_steps = 1024;;
+             albedo_steps /= 2, dmfp_steps = std::max(1, dmfp_steps / 2)) {
+            std::map<std::tuple<int64_t, int64_t>, uint32_t> index;
+            std::vector<std::tuple<double, double>> keys;
+            pb.profile_index.assign(n, glm::u32vec3(0));
+            bool overflow = false;
+            for (std::size_t i = 0; i < n && !overflow; ++i) {
+                for (int ch = 0; ch < 3; ++ch) {
+                    double a = ach ? ach->data[3 * i + ch] : albedo0[ch];
+                    double d = dch ? dch->data[3 * i + ch] : dmfp0[ch];
+                    if (!(a >= 0.0) || !std::isfinite(a))
+                        throw ValueError("channel '" + o.albedo_channel +
+                                         "': impossible albedo " + std::to_string(a) +
+                                         " at point " + std::to_string(i));
+                    if (!(d > 0.0) || !std::isfinite(d))
+                        throw ValueError(
+                            "channel '" + o.dmfp_channel +
+                            "': diffuse mean free path must be positive, got " +
+                            std::to_string(d) + " at point " + std::to_string(i));
+                    if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
+                    int64_t ka = albedo_key(a, albedo_steps);
+                    int64_t kd = std::llround(std::log2(d) * dmfp_steps);
+                    auto [it, fresh] = index.try_emplace({ka, kd}, uint32_t(keys.size()));
+                    if (fresh) {
+                        keys.emplace_back(albedo_of_key(ka, albedo_steps),
+                                          std::exp2(double(kd) / dmfp_steps));
+                        if (keys.size() > kMaxDistinctProfiles && albedo_steps > 16)
+                            overflow = true;
+                    }
+                    pb.profile_index[i][ch] = it->second;
+                }
+            }
+            if (overflow && albedo_steps > 16) continue;
+            pb.profiles.clear();
+            for (auto [a, d] : keys)
+                pb.profiles.push_back(
+                    Profile::from_albedo_dmfp(o.profile, a, d, ior)); // in mm
+            rep.distinct_profiles = keys.size();
+            break;
+        }
+        if (clamped)
+            rep.warnings.push_back("albedo values >= 1 were clamped to " +
+                                   std::to_string(kMaxAlbedo));
+    } else {
+        pb.profiles = constant;
+        rep.distinct_profiles = 3;
+    }
+
+    std::vector<glm::vec3> result;
+    if (o.exact) {
+        std::vector<glm::dvec3> exact =
+            evaluate_diffusion_exact(pb, {}, o.diffusion.progress);
+        result.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            glm::dvec3 v = exact[i];
+            for (int ch = 0; ch < 3; ++ch)
+                result[i][ch] = std::isfinite(v[ch]) ? float(v[ch]) : 0.0f;
+        }
+    } else {
+        result = evaluate_diffusion(pb, o.diffusion, &rep.stats);
+    }
+    if (o.diffusion.progress) o.diffusion.progress->finish();
+
+    PointCloud out;
+    out.positions = in.positions;
+    out.normals = in.normals;
+    out.radii = in.radii;
+    out.world_to_eye = in.world_to_eye;
+    out.world_to_ndc = in.world_to_ndc;
+    out.format = in.format;
+    if (o.keep_channels)
+        for (const Channel& c : in.channels)
+            if (c.name != o.output_channel) out.channels.push_back(c);
+    Channel& dst = out.add_channel(o.output_channel, ChannelType::Color);
+    dst.data.resize(3 * n);
+    for (std::size_t i = 0; i < n; ++i)
+        for (int ch = 0; ch < 3; ++ch) dst.data[3 * i + ch] = result[i][ch];
+    rep.seconds = watch.seconds();
+    return out;
+}
+
+} // namespace sss

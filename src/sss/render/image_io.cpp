@@ -1,0 +1,566 @@
+/// \file image_io.cpp
+/// Images out and in through OpenImageIO: resolving RenderMan Display lines
+/// (type, mode, parameters) into files and channels, writing them atomically
+/// with provenance metadata, and reading images back. docs/images.md has the
+/// user-facing rules.
+
+#include "sss/render/image_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string_view>
+
+#include <OpenImageIO/imageio.h>
+
+#include "sss/util/error.h"
+#include "sss/cli/tool.h"
+
+namespace sss {
+
+// ---------------------------------------------------------------------------
+// Image
+// ---------------------------------------------------------------------------
+
+Image::Image(int w, int h, std::vector<std::string> names)
+    : width(w), height(h), channels(std::move(names)) {
+    if (w < 0 || h < 0)
+        throw ValueError("image size " + std::to_string(w) + " x " + std::to_string(h) +
+                         " is negative");
+    std::set<std::string> seen;
+    for (const auto& name : channels) {
+        if (name.empty()) throw ValueError("image channel with an empty name");
+        if (!seen.insert(name).second)
+            throw ValueError("image channel '" + name + "' is given twice");
+    }
+    pixels.assign(std::size_t(w) * std::size_t(h) * channels.size(), 0.0f);
+}
+
+int Image::channel_index(const std::string& name) const {
+    for (std::size_t i = 0; i < channels.size(); ++i)
+        if (channels[i] == name) return static_cast<int>(i);
+    return -1;
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// Resolving a Display
+// ---------------------------------------------------------------------------
+
+std::string lower(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+}
+
+std::string trim(std::string_view s) {
+    std::size_t b = s.find_first_not_of(" \t\r\n");
+    if (b == std::string_view::npos) return {};
+    std::size_t e = s.find_last_not_of(" \t\r\n");
+    return std::string(s.substr(b, e - b + 1));
+}
+
+/// OIIO format name for a file extension ("" when the extension is unknown).
+std::string format_from_extension(const std::string& path) {
+    std::string ext = lower(std::filesystem::path(path).extension().string());
+    if (ext == ".exr") return "openexr";
+    if (ext == ".tif" || ext == ".tiff") return "tiff";
+    if (ext == ".png") return "png";
+    if (ext == ".jpg" || ext == ".jpeg") return "jpeg";
+    return {};
+}
+
+/// OIIO format name for a display type that names a format ("" otherwise).
+std::string format_from_type(const std::string& type) {
+    if (type == "openexr" || type == "exr") return "openexr";
+    if (type == "tiff" || type == "tif") return "tiff";
+    if (type == "png") return "png";
+    if (type == "jpeg" || type == "jpg") return "jpeg";
+    return {};
+}
+
+/// The RenderMan standard modes (and "ci", the beauty colour of "Ci,a" lists).
+const std::vector<std::string>* standard_mode(const std::string& item) {
+    static const std::vector<std::pair<std::string, std::vector<std::string>>> modes = {
+        {"rgba", {"R", "G", "B", "A"}},
+        {"rgb", {"R", "G", "B"}},
+        {"a", {"A"}},
+        {"z", {"Z"}},
+        {"rgbz", {"R", "G", "B", "Z"}},
+        {"rgbaz", {"R", "G", "B", "A", "Z"}},
+        {"ci", {"R", "G", "B"}},
+    };
+    std::string key = lower(item);
+    for (const auto& [name, channels] : modes)
+        if (name == key) return &channels;
+    return nullptr;
+}
+
+/// "beauty R G B A, layers diffuse specular" for error messages.
+std::string describe_channels(const Image& image) {
+    std::string plain, layers;
+    std::set<std::string> seen;
+    for (const auto& c : image.channels) {
+        std::size_t dot = c.rfind('.');
+        if (dot == std::string::npos) {
+            plain += (plain.empty() ? "" : " ") + c;
+        } else if (seen.insert(c.substr(0, dot)).second) {
+            layers += (layers.empty() ? "" : " ") + c.substr(0, dot);
+        }
+    }
+    std::string text = "the image has channels " + (plain.empty() ? "(none)" : plain);
+    if (!layers.empty()) text += " and layers " + layers;
+    return text;
+}
+
+/// One channel chosen by a mode, and the name it takes in a file of its own.
+struct ModeChannel {
+    std::string channel;
+    std::string short_name;
+};
+
+/// Channels of one item of a mode ("rgba", "Ci", "diffuse", "color diffuse").
+void add_mode_item(const std::string& item_text, const Image& image,
+                   const std::string& label, const std::string& mode,
+                   std::vector<ModeChannel>& out) {
+    std::string item = trim(item_text);
+    if (item.empty())
+        throw ValueError(label + ": mode '" + mode + "' has an empty channel name");
+    // An inline declaration ("color diffuse", "varying float occ") names the
+    // AOV by its last word; the type is the renderer's business.
+    std::size_t space = item.find_last_of(" \t");
+    if (space != std::string::npos) item = item.substr(space + 1);
+
+    if (const auto* channels = standard_mode(item)) {
+        for (const auto& c : *channels) {
+            if (image.channel_index(c) < 0)
+                throw ValueError(label + ": mode '" + mode + "' needs channel " + c +
+                                 ", which the image does not have (" +
+                                 describe_channels(image) + ")");
+            out.push_back({c, c});
+        }
+        return;
+    }
+    // An AOV: a plain channel of that name, or the layer "item.*".
+    if (image.channel_index(item) >= 0) {
+        out.push_back({item, item});
+        return;
+    }
+    std::string prefix = item + ".";
+    std::size_t before = out.size();
+    for (const auto& c : image.channels)
+        if (c.size() > prefix.size() && c.compare(0, prefix.size(), prefix) == 0)
+            out.push_back({c, c.substr(prefix.size())});
+    if (out.size() == before)
+        throw ValueError(label + ": mode '" + mode + "' names '" + item +
+                         "', which the image does not have (" + describe_channels(image) +
+                         ")");
+}
+
+bool contains(const std::vector<std::string>& list, const std::string& s) {
+    return std::find(list.begin(), list.end(), s) != list.end();
+}
+
+const std::vector<std::string>& exr_compressions() {
+    static const std::vector<std::string> names = {
+        "none", "rle", "zips", "zip", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"};
+    return names;
+}
+
+std::string join(const std::vector<std::string>& list, const char* sep) {
+    std::string s;
+    for (const auto& item : list) s += (s.empty() ? "" : sep) + item;
+    return s;
+}
+
+} // namespace
+
+std::string display_file(const DisplaySpec& display) {
+    // There is no window here: "it"/"framebuffer" write an OpenEXR file, and a
+    // name without an image extension ("view", "shot.0042") gets ".exr".
+    const std::string type = lower(display.type);
+    if ((type == "it" || type == "framebuffer") &&
+        format_from_extension(display.name).empty())
+        return display.name + ".exr";
+    return display.name;
+}
+
+DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
+                              bool primary) {
+    const std::string label =
+        "display '" + std::string(display.additional ? "+" : "") + display.name + "'";
+    if (display.name.empty()) throw ValueError("display with an empty file name");
+
+    DisplayTarget target;
+    target.path = display_file(display);
+    std::string type = lower(display.type);
+    target.format = format_from_type(type);
+    if (target.format.empty()) {
+        // "file", "it", "framebuffer" and unknown drivers: the name decides.
+        target.format = format_from_extension(target.path);
+        if (target.format.empty()) target.format = "openexr";
+    }
+    const bool exr = target.format == "openexr";
+
+    // Channels from the mode: a comma-separated list of items.
+    if (trim(display.mode).empty()) throw ValueError(label + ": empty display mode");
+    std::vector<ModeChannel> chosen;
+    std::size_t start = 0;
+    while (true) {
+        std::size_t comma = display.mode.find(',', start);
+        add_mode_item(display.mode.substr(start, comma == std::string::npos
+                                                     ? std::string::npos
+                                                     : comma - start),
+                      image, label, display.mode, chosen);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    // "rgba,a" or "Ci,rgb" name a channel twice: it is written once.
+    for (const auto& m : chosen) {
+        if (contains(target.channels, m.channel)) continue;
+        target.channels.push_back(m.channel);
+        target.names.push_back(m.short_name);
+    }
+
+    if (exr && primary) {
+        // The primary EXR holds everything: full layer names, and every AOV.
+        target.names = target.channels;
+        for (const auto& c : image.channels)
+            if (c.find('.') != std::string::npos && !contains(target.channels, c)) {
+                target.channels.push_back(c);
+                target.names.push_back(c);
+            }
+    } else {
+        // A file of its own: AOV channels take their short names (diffuse.R
+        // -> R) unless two channels would then share a name.
+        std::set<std::string> unique(target.names.begin(), target.names.end());
+        if (unique.size() != target.names.size()) target.names = target.channels;
+    }
+
+    // Pixel type and compression.
+    std::string pixel_type = lower(display.params.get_string("type", ""));
+    if (exr) {
+        if (pixel_type == "float")
+            target.half = false;
+        else if (pixel_type.empty() || pixel_type == "half")
+            target.half = true;
+        else
+            throw ValueError(label + ": \"string type\" '" + pixel_type +
+                             "' is not half or float");
+        target.compression = lower(display.params.get_string("compression", "zip"));
+        if (!contains(exr_compressions(), target.compression))
+            throw ValueError(label + ": unknown OpenEXR compression '" +
+                             target.compression + "' (one of " +
+                             join(exr_compressions(), ", ") + ")");
+        return target;
+    }
+
+    // 8-bit formats.
+    target.half = false;
+    if (!pixel_type.empty() && pixel_type != "uint8" && pixel_type != "byte")
+        throw ValueError(
+            label + ": " + target.format + " files are written with 8 bits " +
+            "per channel; \"string type\" '" + pixel_type + "' needs an OpenEXR display");
+    for (const auto& c : target.channels)
+        if (c == "Z")
+            throw ValueError(label + ": depth (Z) cannot be stored in an 8-bit " +
+                             target.format + " file; use an OpenEXR display");
+    if (target.format == "jpeg" && target.channels.size() > 1) {
+        // JPEG has no alpha: the colour stays premultiplied (over black).
+        for (std::size_t i = 0; i < target.names.size(); ++i)
+            if (target.names[i] == "A") {
+                target.channels.erase(target.channels.begin() + std::ptrdiff_t(i));
+                target.names.erase(target.names.begin() + std::ptrdiff_t(i));
+                break;
+            }
+    }
+    std::size_t n = target.channels.size();
+    if (target.format == "png" && n > 4)
+        throw ValueError(label + ": PNG holds at most 4 channels, mode '" + display.mode +
+                         "' gives " + std::to_string(n) + " (" + join(target.names, " ") +
+                         "); use an OpenEXR display");
+    if (target.format == "jpeg" && n != 1 && n != 3)
+        throw ValueError(label + ": JPEG holds 1 or 3 channels, mode '" + display.mode +
+                         "' gives " + std::to_string(n) + " (" + join(target.names, " ") +
+                         ")");
+    return target;
+}
+
+// ---------------------------------------------------------------------------
+// Writing
+// ---------------------------------------------------------------------------
+
+namespace {
+
+/// Largest finite half: larger values would become infinite in the file.
+constexpr float kHalfMax = 65504.0f;
+
+/// Depth, positions and normals keep full precision even in a half file.
+bool needs_float(const std::string& channel) {
+    return channel == "Z" || channel.rfind("P.", 0) == 0 || channel.rfind("N.", 0) == 0;
+}
+
+double srgb_encode(double linear) {
+    return linear <= 0.0031308 ? 12.92 * linear
+                               : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
+uint8_t to_byte(double v) {
+    return uint8_t(std::lround(255.0 * std::clamp(v, 0.0, 1.0)));
+}
+
+/// "YYYY:MM:DD hh:mm:ss" local time and EXR's utcOffset (UTC = local +
+/// utcOffset, in seconds). SOURCE_DATE_EPOCH fixes the time (in UTC) for
+/// reproducible files.
+struct CaptureTime {
+    std::string date;
+    float utc_offset = 0.0f;
+};
+
+CaptureTime capture_time() {
+    std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    CaptureTime result;
+    if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH"); epoch && *epoch) {
+        errno = 0;
+        char* end = nullptr;
+        long long value = std::strtoll(epoch, &end, 10);
+        if (errno != 0 || *end != '\0' || value < 0)
+            throw ValueError("SOURCE_DATE_EPOCH '" + std::string(epoch) +
+                             "' is not a number of seconds since 1970");
+        now = static_cast<std::time_t>(value);
+        gmtime_r(&now, &tm);
+    } else {
+        tzset(); // localtime_r need not notice a changed TZ by itself
+        localtime_r(&now, &tm);
+        result.utc_offset = static_cast<float>(-tm.tm_gmtoff);
+    }
+    char text[32];
+    std::strftime(text, sizeof text, "%Y:%m:%d %H:%M:%S", &tm);
+    result.date = text;
+    return result;
+}
+
+/// glm stores a column-vector matrix column by column; read in that order
+/// the 16 numbers are the row-vector (Imath, RenderMan) matrix row by row:
+/// the transpose, which is what the EXR attribute holds.
+std::array<float, 16> row_vector_matrix(const Matrix4& m) {
+    std::array<float, 16> out{};
+    for (int col = 0; col < 4; ++col)
+        for (int row = 0; row < 4; ++row)
+            out[std::size_t(col * 4 + row)] = float(m[col][row]);
+    return out;
+}
+
+void add_metadata(OIIO::ImageSpec& spec, const ImageMetadata& metadata, bool exr) {
+    if (!metadata.software.empty()) spec.attribute("Software", metadata.software);
+    // OIIO writes DateTime as EXR's capDate (a capDate of our own would be
+    // replaced by the current time).
+    CaptureTime when = capture_time();
+    spec.attribute("DateTime", when.date);
+    if (!metadata.command_line.empty()) {
+        spec.attribute("sss:commandLine", metadata.command_line);
+        if (!exr) spec.attribute("ImageDescription", metadata.command_line);
+    }
+    for (const auto& [name, value] : metadata.extra) spec.attribute(name, value);
+    if (!exr) return;
+    spec.attribute("utcOffset", when.utc_offset);
+    spec.attribute("renderTimeSeconds", static_cast<float>(metadata.render_seconds));
+    auto w2c = row_vector_matrix(metadata.world_to_camera);
+    auto w2n = row_vector_matrix(metadata.world_to_ndc);
+    spec.attribute("worldToCamera", OIIO::TypeMatrix44, w2c.data());
+    spec.attribute("worldToNDC", OIIO::TypeMatrix44, w2n.data());
+}
+
+int index_of(const std::vector<std::string>& list, const std::string& s) {
+    auto it = std::find(list.begin(), list.end(), s);
+    return it == list.end() ? -1 : int(it - list.begin());
+}
+
+} // namespace
+
+void write_display(const Image& image, const DisplayTarget& target,
+                   const ImageMetadata& metadata) {
+    const std::string& path = target.path;
+    if (path.empty()) throw ValueError("image output with an empty file name");
+    if (image.width <= 0 || image.height <= 0)
+        throw ValueError(path + ": cannot write an empty image (" +
+                         std::to_string(image.width) + " x " +
+                         std::to_string(image.height) + ")");
+    const std::size_t pixel_count = std::size_t(image.width) * std::size_t(image.height);
+    if (image.pixels.size() != pixel_count * image.channels.size())
+        throw ValueError(path + ": image has " + std::to_string(image.pixels.size()) +
+                         " values, expected " + std::to_string(image.width) + " x " +
+                         std::to_string(image.height) + " x " +
+                         std::to_string(image.channels.size()));
+    if (target.channels.empty() || target.channels.size() != target.names.size())
+        throw ValueError(path + ": display has " +
+                         std::to_string(target.channels.size()) + " channels and " +
+                         std::to_string(target.names.size()) + " channel names");
+    const bool exr = target.format == "openexr";
+    const std::size_t n = target.channels.size();
+    std::vector<int> source(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        source[k] = image.channel_index(target.channels[k]);
+        if (source[k] < 0)
+            throw ValueError(path + ": the image has no channel '" + target.channels[k] +
+                             "' (" + describe_channels(image) + ")");
+        if (index_of(target.names, target.names[k]) != int(k))
+            throw ValueError(path + ": channel name '" + target.names[k] +
+                             "' is used twice");
+    }
+
+    // Gather the written channels; any NaN/Inf stops here, before a file exists.
+    std::vector<float> values(pixel_count * n);
+    std::size_t bad = 0, first_bad = 0;
+    const std::size_t stride = image.channels.size();
+    for (std::size_t p = 0; p < pixel_count; ++p)
+        for (std::size_t k = 0; k < n; ++k) {
+            float v = image.pixels[p * stride + std::size_t(source[k])];
+            if (!std::isfinite(v) && bad++ == 0) first_bad = p * n + k;
+            values[p * n + k] = v;
+        }
+    if (bad > 0) {
+        std::size_t p = first_bad / n, k = first_bad % n;
+        float v = values[first_bad];
+        throw ValueError(
+            path + ": " + std::to_string(bad) + " non-finite value" +
+            (bad > 1 ? "s" : "") + " in the image, the first " +
+            (std::isnan(v) ? "NaN" : "infinite") + " in channel " + target.channels[k] +
+            " at pixel (" + std::to_string(p % std::size_t(image.width)) + ", " +
+            std::to_string(p / std::size_t(image.width)) + "); nothing was written");
+    }
+
+    OIIO::ImageSpec spec(
+        image.width, image.height, int(n),
+        exr ? (target.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT)
+            : OIIO::TypeDesc::UINT8);
+    spec.channelnames = target.names;
+    spec.alpha_channel = index_of(target.names, "A");
+    spec.z_channel = exr ? index_of(target.names, "Z") : -1;
+    add_metadata(spec, metadata, exr);
+
+    std::vector<uint8_t> bytes;
+    if (exr) {
+        spec.attribute("compression", target.compression);
+        if (target.half) {
+            bool mixed = false;
+            std::vector<OIIO::TypeDesc> formats(n, OIIO::TypeDesc::HALF);
+            for (std::size_t k = 0; k < n; ++k)
+                if (needs_float(target.channels[k])) {
+                    formats[k] = OIIO::TypeDesc::FLOAT;
+                    mixed = true;
+                }
+            if (mixed) spec.channelformats = formats;
+            // Beyond the half range a value would be stored as infinity.
+            for (std::size_t i = 0; i < values.size(); ++i)
+                if (formats[i % n] == OIIO::TypeDesc::HALF)
+                    values[i] = std::clamp(values[i], -kHalfMax, kHalfMax);
+        }
+    } else {
+        // 8-bit: straight alpha (colour divided by coverage), sRGB-encoded
+        // colour, linear alpha, clamped to [0, 1].
+        spec.attribute("oiio:ColorSpace", "sRGB");
+        // Our data is already unassociated: OIIO must not divide again (PNG)
+        // and TIFF marks its alpha as unassociated.
+        spec.attribute("oiio:UnassociatedAlpha", 1);
+        const int alpha = spec.alpha_channel;
+        bytes.resize(values.size());
+        for (std::size_t p = 0; p < pixel_count; ++p) {
+            const float* in = &values[p * n];
+            double a = alpha >= 0 ? double(in[alpha]) : 1.0;
+            for (std::size_t k = 0; k < n; ++k) {
+                double v = in[k];
+                if (int(k) == alpha) {
+                    bytes[p * n + k] = to_byte(v);
+                    continue;
+                }
+                if (alpha >= 0 && a > 0.0) v /= a;
+                bytes[p * n + k] = to_byte(srgb_encode(std::clamp(v, 0.0, 1.0)));
+            }
+        }
+    }
+
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(target.format);
+    if (!out)
+        throw IoError(path, "no '" + target.format +
+                                "' writer in OpenImageIO: " + OIIO::geterror());
+    AtomicOutput file(path);
+    // The temporary is ".<name>.<random>.tmp": the writer is chosen by format
+    // name above, so the extension does not matter.
+    if (!out->open(file.temp_path(), spec))
+        throw IoError(path,
+                      "cannot write " + target.format + " image: " + out->geterror());
+    bool ok = exr ? out->write_image(OIIO::TypeDesc::FLOAT, values.data())
+                  : out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    ok = out->close() && ok;
+    if (!ok)
+        throw IoError(path,
+                      "cannot write " + target.format + " image: " + out->geterror());
+    file.commit();
+}
+
+// ---------------------------------------------------------------------------
+// Reading
+// ---------------------------------------------------------------------------
+
+namespace {
+
+/// Opens an image for reading with alpha left as stored (no premultiplying).
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in)
+        throw FormatError(path, "not an image OpenImageIO can read: " + OIIO::geterror());
+    return in;
+}
+
+} // namespace
+
+Image read_image(const std::string& path) {
+    auto in = open_input(path);
+    const OIIO::ImageSpec& spec = in->spec();
+    Image image;
+    try {
+        image = Image(spec.width, spec.height, spec.channelnames);
+    } catch (const ValueError& e) {
+        throw FormatError(path, e.what());
+    }
+    if (!image.pixels.empty() &&
+        !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT,
+                        image.pixels.data()))
+        throw FormatError(path, "cannot read pixels: " + in->geterror());
+    in->close();
+    return image;
+}
+
+std::string read_image_attribute(const std::string& path, const std::string& name) {
+    auto in = open_input(path);
+    const OIIO::ImageSpec& spec = in->spec();
+    const OIIO::ParamValue* p = spec.find_attribute(name);
+    if (!p) {
+        // OIIO renames some standard OpenEXR attributes when reading.
+        static const std::pair<const char*, const char*> aliases[] = {
+            {"capdate", "DateTime"},
+            {"comments", "ImageDescription"},
+            {"owner", "Copyright"}};
+        for (const auto& [exr_name, oiio_name] : aliases)
+            if (lower(name) == exr_name) p = spec.find_attribute(oiio_name);
+    }
+    return p ? p->get_string() : std::string();
+}
+
+} // namespace sss

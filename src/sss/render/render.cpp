@@ -1,0 +1,738 @@
+/// \file render.cpp
+/// The final renderer (docs/render.md): every primitive is diced into
+/// triangles with vertex normals and ray traced with Embree; camera samples
+/// are stratified and jittered per pixel by a hash, shaded with the built-in
+/// shaders (shaders.cpp), composited front to back through semi-transparent
+/// surfaces and reconstructed with RenderMan's 2 x 2 Gaussian filter. The
+/// image holds the beauty, Z and the AOVs; render_scene writes the Displays.
+///
+/// Determinism: a sample's position and every random decision in it depend
+/// only on (pixel, sample index, surface layer), tiles splat their samples
+/// into private buffers, and the buffers are added up in tile order, so the
+/// image is the same for every thread count.
+
+#include "sss/render/render.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/matrix.hpp>
+#include <glm/vec4.hpp>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "sss/util/hash.h"
+#include "shading.h"
+#include "sss/dice/dice.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/light/lights.h"
+#include "sss/light/ray_tracer.h"
+
+namespace sss {
+
+namespace {
+
+using detail::ShadeResult;
+using detail::ShadingEnv;
+using detail::ShadingPoint;
+
+/// Pixels per tile side: the unit of parallel work and of filter splatting.
+constexpr int kTile = 16;
+/// Render dicing: triangles about this many raster pixels across, whatever
+/// the ShadingRate (shading is per pixel sample, not per micropolygon).
+/// Smooth shading comes from the vertex normals, so the triangles only need
+/// to get the silhouette right: their chords are within a few hundredths of
+/// a pixel of a curved surface whose radius is 100 pixels or more.
+constexpr double kEdgePixels = 4.0;
+/// Surfaces composited along one camera ray, and hits examined in all
+/// (hidden back faces and fully transparent surfaces included).
+constexpr int kMaxLayers = 8;
+constexpr int kMaxHits = 32;
+/// A ray stops once less than this fraction of light gets through.
+constexpr double kOpaque = 1e-4;
+/// The reconstruction filter: RenderMan's gaussian 2 x 2 (radius 1 pixel).
+constexpr double kFilterRadius = 1.0;
+
+// Filtered sample values: beauty RGBA, then the AOVs (ambient, diffuse,
+// specular, sss as RGB; occlusion), then the filter weight.
+constexpr int kAmbient = 4;
+constexpr int kDiffuse = 7;
+constexpr int kSpecular = 10;
+constexpr int kSss = 13;
+constexpr int kOcclusion = 16;
+constexpr int kValues = 17;
+constexpr int kSlots = kValues + 1; // + weight
+
+double unit_double(uint64_t h) {
+    return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
+
+/// A primitive's attributes (RI defaults for a primitive built without any).
+const Attributes& attributes_of(const Primitive& prim) {
+    static const Attributes defaults;
+    return prim.attributes ? *prim.attributes : defaults;
+}
+
+/// Whether `Attribute "visibility" name` leaves the primitive visible.
+bool visible_to(const Primitive& prim, const char* name) {
+    return attributes_of(prim).visible_to(name);
+}
+
+/// Camera rays from raster positions.
+class CameraRays {
+public:
+    explicit CameraRays(const Camera& cam) : m_cam(cam) {
+        m_window = cam.resolved_screen_window();
+        if (!(m_window[1] != m_window[0]) || !(m_window[3] != m_window[2]))
+            throw ValueError("ScreenWindow has no area");
+        if (cam.perspective && !(cam.fov > 0.0 && cam.fov < 180.0))
+            throw ValueError("perspective fov must lie in (0, 180) degrees, got " +
+                             std::to_string(cam.fov));
+        if (!(cam.near_clip >= 0.0) || !(cam.far_clip > cam.near_clip))
+            throw ValueError("Clipping: far must be beyond near");
+        m_tan_half = cam.perspective ? std::tan(cam.fov * std::numbers::pi / 360.0) : 1.0;
+        const double det = glm::determinant(cam.world_to_camera);
+        if (!(std::abs(det) > 0.0) || !std::isfinite(det))
+            throw ValueError("the camera transform is singular");
+        m_to_world = glm::inverse(cam.world_to_camera);
+        m_affine = m_to_world[0][3] == 0.0 && m_to_world[1][3] == 0.0 &&
+                   m_to_world[2][3] == 0.0 && m_to_world[3][3] == 1.0;
+    }
+
+    /// The ray through raster point (x, y) (pixels, y down), clipped to
+    /// [hither, yon] along the camera's z; *units is the ray length per unit
+    /// of camera z (the depth of a hit at t is t / *units).
+    ShadowRay ray(double x, double y, double* units) const {
+        const double sx = m_window[0] + (x / m_cam.xres) * (m_window[1] - m_window[0]);
+        const double sy = m_window[3] - (y / m_cam.yres) * (m_window[3] - m_window[2]);
+        glm::dvec4 origin(0.0, 0.0, 0.0, 1.0), ahead(0.0, 0.0, 1.0, 0.0);
+        if (m_cam.perspective) {
+            ahead = glm::dvec4(sx * m_tan_half, sy * m_tan_half, 1.0, 0.0);
+        } else {
+            origin = glm::dvec4(sx, sy, 0.0, 1.0);
+        }
+        const glm::dvec4 o4 = m_to_world * origin;
+        const glm::dvec3 o = glm::dvec3(o4) / o4.w;
+        // The direction is transformed as a vector, not as the difference of
+        // two points one camera unit apart: that difference lost the
+        // direction's low bits to the camera's distance from the origin in
+        // large scenes (1e-9 of it at 1e6 units), so a scaled scene's rays
+        // were not the same. Projective camera transforms keep the points.
+        glm::dvec3 d;
+        if (m_affine) {
+            d = glm::dvec3(m_to_world * ahead);
+        } else {
+            ahead.w = 1.0;
+            if (!m_cam.perspective) ahead = origin + glm::dvec4(0.0, 0.0, 1.0, 0.0);
+            const glm::dvec4 a4 = m_to_world * ahead;
+            d = glm::dvec3(a4) / a4.w - o;
+        }
+        const double len = glm::length(d);
+        *units = len;
+        ShadowRay r;
+        r.origin = glm::vec3(o);
+        r.direction = glm::vec3(d / len);
+        r.tnear = static_cast<float>(m_cam.near_clip * len);
+        r.tfar = m_cam.far_clip >= 1e30 ? std::numeric_limits<float>::infinity()
+                                        : static_cast<float>(m_cam.far_clip * len);
+        return r;
+    }
+
+private:
+    Camera m_cam;
+    std::array<double, 4> m_window{};
+    double m_tan_half = 1.0;
+    Matrix4 m_to_world{1.0};
+    bool m_affine = true; ///< m_to_world's last row is (0, 0, 0, 1)
+};
+
+/// A primitive as the renderer uses it.
+struct Surface {
+    DicedSurface diced;
+    /// Cs per triangle when the primitive has varying colours (the colour of
+    /// the micropolygon nearest to the triangle's centre); empty otherwise.
+    std::vector<glm::vec3> triangle_colors;
+    bool camera = true;  ///< seen by camera rays
+    bool shadows = true; ///< casts shadows and occludes
+};
+
+/// For primitives with per-micropolygon colours: each triangle takes the
+/// colour of the micropolygon centre nearest to its centroid (a hash grid of
+/// cells the size of the largest micropolygon).
+void assign_triangle_colors(Surface& s) {
+    const DicedSurface& d = s.diced;
+    if (d.colors.empty() || d.triangles.empty()) return;
+    float cell = 0.0f;
+    for (float r : d.radii) cell = std::max(cell, r);
+    if (!(cell > 0.0f)) cell = 1.0f;
+    const auto key = [&](const glm::vec3& p, int dx, int dy, int dz) {
+        const int64_t x = static_cast<int64_t>(std::floor(p.x / cell)) + dx;
+        const int64_t y = static_cast<int64_t>(std::floor(p.y / cell)) + dy;
+        const int64_t z = static_cast<int64_t>(std::floor(p.z / cell)) + dz;
+        return detail::splitmix64(static_cast<uint64_t>(x) * 0x9E3779B1u ^
+                                  static_cast<uint64_t>(y) * 0x85EBCA77u ^
+                                  static_cast<uint64_t>(z) * 0xC2B2AE3Du);
+    };
+    // Open hashing into sorted (key, index) pairs.
+    std::vector<std::pair<uint64_t, uint32_t>> grid(d.size());
+    for (std::size_t i = 0; i < d.size(); ++i)
+        grid[i] = {key(d.centers[i], 0, 0, 0), static_cast<uint32_t>(i)};
+    std::sort(grid.begin(), grid.end());
+    const std::size_t triangles = d.triangles.size() / 3;
+    s.triangle_colors.resize(triangles);
+    for (std::size_t t = 0; t < triangles; ++t) {
+        const glm::vec3 c =
+            (d.vertices[d.triangles[3 * t]] + d.vertices[d.triangles[3 * t + 1]] +
+             d.vertices[d.triangles[3 * t + 2]]) /
+            3.0f;
+        float best = std::numeric_limits<float>::infinity();
+        uint32_t best_i = 0;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const uint64_t k = key(c, dx, dy, dz);
+                    auto it = std::lower_bound(grid.begin(), grid.end(),
+                                               std::make_pair(k, uint32_t{0}));
+                    for (; it != grid.end() && it->first == k; ++it) {
+                        const glm::vec3 e = d.centers[it->second] - c;
+                        const float dist = glm::dot(e, e);
+                        if (dist < best || (dist == best && it->second < best_i)) {
+                            best = dist;
+                            best_i = it->second;
+                        }
+                    }
+                }
+        if (!std::isfinite(best)) {
+            // Nothing in the neighbouring cells (a sliver far from any centre).
+            for (std::size_t i = 0; i < d.size(); ++i) {
+                const glm::vec3 e = d.centers[i] - c;
+                const float dist = glm::dot(e, e);
+                if (dist < best) {
+                    best = dist;
+                    best_i = static_cast<uint32_t>(i);
+                }
+            }
+        }
+        s.triangle_colors[t] = d.colors[best_i];
+    }
+}
+
+/// One camera sample's values, before filtering.
+struct SampleValue {
+    float v[kValues];
+    float depth; ///< camera z of the first visible surface, or +inf
+};
+
+/// Everything the pixel loop reads (immutable once built).
+struct Renderer {
+    const Scene* scene = nullptr;
+    Camera camera;
+    std::optional<CameraRays> rays;
+    int nx = 1, ny = 1; ///< pixel samples
+    std::vector<Light> lights;
+    detail::ShaderSet shaders;
+    std::vector<Surface> surfaces;          ///< by primitive
+    std::vector<uint32_t> camera_primitive; ///< camera mesh -> primitive
+    std::unique_ptr<RayTracer> camera_tracer;
+    std::unique_ptr<RayTracer> shadow_tracer; ///< only when it differs from the camera's
+    const RayTracer* occluders = nullptr;
+    double extent = 0.0;
+    /// Pixel size per unit of depth (perspective; hits lie beyond hither), or
+    /// the pixel size (orthographic): Camera::pixel_size_at without its tan().
+    double pixel_per_depth = 0.0;
+    std::atomic<uint64_t> camera_rays{0};
+    std::atomic<uint64_t> shadow_rays{0};
+    std::atomic<uint64_t> bad_samples{0};
+
+    void sample(double x, double y, uint64_t key, std::vector<LightSample>& scratch,
+                SampleValue& out, uint64_t& camera_count, uint64_t& shadow_count,
+                bool& bad) const;
+};
+
+void Renderer::sample(double x, double y, uint64_t key, std::vector<LightSample>& scratch,
+                      SampleValue& out, uint64_t& camera_count, uint64_t& shadow_count,
+                      bool& bad) const {
+    std::fill(out.v, out.v + kValues, 0.0f);
+    out.depth = std::numeric_limits<float>::infinity();
+    double units = 1.0;
+    ShadowRay ray = rays->ray(x, y, &units);
+    const glm::dvec3 dir(ray.direction);
+    glm::dvec3 trans(1.0);
+    glm::dvec3 beauty(0.0), ambient(0.0), diffuse(0.0), specular(0.0), sss(0.0);
+    double occlusion = 0.0;
+    int layers = 0;
+    // Continuing past a hit: far enough to leave its triangle behind, near
+    // enough not to skip a surface behind it.
+    const float skip_base = static_cast<float>(1e-6 * extent);
+    for (int k = 0; k < kMaxHits && layers < kMaxLayers; ++k) {
+        if (!(ray.tnear <= ray.tfar)) break;
+        const RayHit hit = camera_tracer->intersect(ray);
+        ++camera_count;
+        if (!hit.hit) break;
+        ray.tnear = hit.t + skip_base + 1e-6f * hit.t;
+
+        const uint32_t prim_index = camera_primitive[hit.mesh];
+        const Surface& surf = surfaces[prim_index];
+        const Primitive& prim = scene->primitives[prim_index];
+        const Attributes& attr = attributes_of(prim);
+        const DicedSurface& d = surf.diced;
+        const uint32_t* tri = &d.triangles[3 * std::size_t(hit.triangle)];
+        const glm::dvec3 v0(d.vertices[tri[0]]), v1(d.vertices[tri[1]]),
+            v2(d.vertices[tri[2]]);
+        const glm::dvec3 n0(d.vertex_normals[tri[0]]), n1(d.vertex_normals[tri[1]]),
+            n2(d.vertex_normals[tri[2]]);
+        const double b1 = hit.u, b2 = hit.v, b0 = 1.0 - b1 - b2;
+        const glm::dvec3 p = b0 * v0 + b1 * v1 + b2 * v2;
+
+        glm::dvec3 ng(hit.geometric_normal);
+        const double ng_len = glm::length(ng);
+        if (!(ng_len > 0.0) || !std::isfinite(ng_len)) continue; // degenerate sliver
+        ng /= ng_len;
+        glm::dvec3 n = b0 * n0 + b1 * n1 + b2 * n2;
+        const double n_len = glm::length(n);
+        n = (n_len > 0.0 && std::isfinite(n_len)) ? n / n_len : ng;
+        // The vertex normals carry the orientation (Orientation, ReverseOrientation).
+        if (glm::dot(ng, n) < 0.0) ng = -ng;
+        const bool back = glm::dot(ng, dir) > 0.0;
+        if (back && attr.sides == 1) continue; // one-sided: back faces are not seen
+
+        const glm::dvec3 os = glm::clamp(attr.opacity, 0.0, 1.0);
+        if (os == glm::dvec3(0.0)) continue;
+
+        ShadingPoint sp;
+        sp.n = n;
+        sp.nf = back ? -n : n;
+        const glm::dvec3 ngf = back ? -ng : ng;
+        sp.v = -dir;
+        // The point on the smooth surface the vertex normals describe
+        // (Hanika 2021): the barycentric blend of p projected onto each
+        // vertex's tangent plane. Shadow and occlusion rays start there,
+        // clear of the flat triangles' own shadows near the terminator; it
+        // is used only on the side it bulges to, and never farther than the
+        // triangle's size.
+        glm::dvec3 smooth = b0 * (p - glm::dot(p - v0, n0) * n0) +
+                            b1 * (p - glm::dot(p - v1, n1) * n1) +
+                            b2 * (p - glm::dot(p - v2, n2) * n2);
+        const double lift = glm::dot(smooth - p, ngf);
+        const double size =
+            std::max({glm::length(v1 - v0), glm::length(v2 - v1), glm::length(v0 - v2)});
+        if (!(lift > 0.0) || !(glm::length(smooth - p) < 0.5 * size)) smooth = p;
+        sp.p = smooth;
+        sp.cs = surf.triangle_colors.empty()
+                    ? attr.color
+                    : glm::dvec3(surf.triangle_colors[hit.triangle]);
+        const double depth = hit.t / units;
+        sp.filter_radius =
+            0.5 * std::sqrt(std::max(attr.shading_rate, 0.0)) *
+            (camera.perspective ? pixel_per_depth * depth : pixel_per_depth);
+        sp.ray_offset = 1e-5 * extent;
+        sp.seed =
+            detail::splitmix64(key ^ (0xA5A5A5A5ull + static_cast<uint64_t>(layers)));
+
+        ShadingEnv env;
+        env.lights = &lights;
+        env.active = &attr.lights_on;
+        env.occluders = occluders;
+        env.scratch = &scratch;
+        ShadeResult r;
+        detail::shade(shaders.shaders[shaders.of_primitive[prim_index]], sp, env, r);
+        shadow_count += r.rays;
+
+        if (layers == 0) out.depth = static_cast<float>(depth);
+        const glm::dvec3 w = trans * os;
+        const glm::dvec3 ci = r.ambient + r.diffuse + r.specular + r.sss + r.emission;
+        beauty += w * ci;
+        ambient += w * r.ambient;
+        diffuse += w * r.diffuse;
+        specular += w * r.specular;
+        sss += w * r.sss;
+        occlusion += (w.x + w.y + w.z) / 3.0 * r.occlusion;
+        trans *= 1.0 - os;
+        ++layers;
+        if (std::max({trans.x, trans.y, trans.z}) < kOpaque) break;
+    }
+    const double alpha = 1.0 - (trans.x + trans.y + trans.z) / 3.0;
+    const auto put = [&](int at, const glm::dvec3& c) {
+        out.v[at] = static_cast<float>(c.x);
+        out.v[at + 1] = static_cast<float>(c.y);
+        out.v[at + 2] = static_cast<float>(c.z);
+    };
+    put(0, beauty);
+    out.v[3] = static_cast<float>(alpha);
+    put(kAmbient, ambient);
+    put(kDiffuse, diffuse);
+    put(kSpecular, specular);
+    put(kSss, sss);
+    out.v[kOcclusion] = static_cast<float>(occlusion);
+    // A sample that went wrong numerically is dropped (black, transparent)
+    // rather than spreading NaN through the filter; render_image reports it.
+    bad = false;
+    for (float v : out.v)
+        if (!std::isfinite(v)) bad = true;
+    if (bad) std::fill(out.v, out.v + kValues, 0.0f);
+}
+
+/// RenderMan's gaussian filter of width 2, one axis: exp(-2 d^2), |d| < 1.
+double filter_weight(double d) {
+    return std::abs(d) < kFilterRadius ? std::exp(-2.0 * d * d) : 0.0;
+}
+
+/// Image channel names, in order.
+std::vector<std::string> image_channels() {
+    std::vector<std::string> names = {"R", "G", "B", "A", "Z"};
+    for (const char* layer : {"ambient", "diffuse", "specular", "sss", "occlusion"})
+        for (const char* c : {"R", "G", "B"})
+            names.push_back(std::string(layer) + "." + c);
+    return names;
+}
+
+} // namespace
+
+Image render_image(const Scene& scene, const RenderJobOptions& options,
+                   RenderReport* report_out) {
+    RenderReport local;
+    RenderReport& report = report_out ? *report_out : local;
+    Stopwatch watch;
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+
+    Renderer job;
+    job.scene = &scene;
+    job.camera = scene.options.camera;
+    if (options.xres > 0 || options.yres > 0) {
+        if (!(options.xres > 0 && options.yres > 0))
+            throw UsageError("image size overrides need both x and y resolutions");
+        job.camera.xres = options.xres;
+        job.camera.yres = options.yres;
+    }
+    if (job.camera.xres <= 0 || job.camera.yres <= 0)
+        throw ValueError("image size " + std::to_string(job.camera.xres) + " x " +
+                         std::to_string(job.camera.yres) + " has no pixels");
+    job.nx = scene.options.pixel_samples[0];
+    job.ny = scene.options.pixel_samples[1];
+    if (options.pixel_samples > 0) job.nx = job.ny = options.pixel_samples;
+    if (job.nx < 1 || job.ny < 1 || job.nx > 1024 || job.ny > 1024)
+        throw ValueError("pixel samples must lie in [1, 1024]");
+    job.rays.emplace(job.camera);
+    {
+        // pixel_size_at is linear in the depth beyond hither (perspective).
+        const double d =
+            job.camera.perspective ? std::max(1.0, job.camera.near_clip) : 1.0;
+        job.pixel_per_depth =
+            job.camera.pixel_size_at(d) / (job.camera.perspective ? d : 1.0);
+    }
+
+    // Lights and shaders (brick maps and point clouds are opened here, so a
+    // missing file stops the render before any work).
+    job.lights = resolve_lights(scene, &report.warnings);
+    job.shaders = detail::resolve_surface_shaders(scene, frame, report.warnings);
+    bool any_shadows = false;
+    for (const Light& l : job.lights) any_shadows = any_shadows || l.shadows;
+    for (const detail::SurfaceShader& s : job.shaders.shaders)
+        any_shadows = any_shadows || s.occlusion_samples > 0;
+
+    // Dicing: everything the camera sees, and everything that casts shadows
+    // when some light or shader traces them.
+    const std::size_t count = scene.primitives.size();
+    job.surfaces.resize(count);
+    std::vector<std::size_t> to_dice;
+    bool separate_shadows = false;
+    for (std::size_t i = 0; i < count; ++i) {
+        Surface& s = job.surfaces[i];
+        s.camera = visible_to(scene.primitives[i], "camera");
+        s.shadows = any_shadows && visible_to(scene.primitives[i], "transmission");
+        if (s.camera || s.shadows) to_dice.push_back(i);
+        if (s.camera != s.shadows && any_shadows) separate_shadows = true;
+    }
+    std::vector<std::string> errors(to_dice.size());
+    tbb::parallel_for(std::size_t(0), to_dice.size(), [&](std::size_t k) {
+        try {
+            const Primitive& prim = scene.primitives[to_dice[k]];
+            // Edges of kEdgePixels whatever the ShadingRate: coarser than its
+            // micropolygons through the coarsening, finer through a camera
+            // with proportionally more pixels over the same screen window.
+            const double rate = attributes_of(prim).shading_rate;
+            const double edge = std::sqrt(std::max(rate, 1e-12)); // pixels
+            Camera dice_camera = job.camera;
+            DiceControl control;
+            control.camera = &dice_camera;
+            if (edge <= kEdgePixels) {
+                control.coarsening = kEdgePixels / edge;
+            } else {
+                dice_camera.screen_window = job.camera.resolved_screen_window();
+                dice_camera.xres = static_cast<int>(
+                    std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
+            }
+            Surface& s = job.surfaces[to_dice[k]];
+            s.diced = dice_primitive(prim, control);
+            for (glm::vec3& n : s.diced.vertex_normals) {
+                const float len = glm::length(n);
+                if (len > 0.0f && std::isfinite(len)) n /= len;
+            }
+            assign_triangle_colors(s);
+        } catch (const std::exception& e) {
+            errors[k] = e.what();
+        }
+    });
+    for (const std::string& e : errors)
+        if (!e.empty()) throw ValueError(e);
+
+    // Ray tracers: one when the camera and shadows see the same surfaces.
+    job.camera_tracer = std::make_unique<RayTracer>();
+    if (separate_shadows) job.shadow_tracer = std::make_unique<RayTracer>();
+    for (std::size_t i : to_dice) {
+        const Surface& s = job.surfaces[i];
+        if (s.diced.triangles.empty()) continue;
+        report.triangles += s.diced.triangles.size() / 3;
+        if (s.camera) {
+            job.camera_tracer->add_mesh(s.diced.vertices, s.diced.triangles);
+            job.camera_primitive.push_back(static_cast<uint32_t>(i));
+        }
+        if (separate_shadows && s.shadows)
+            job.shadow_tracer->add_mesh(s.diced.vertices, s.diced.triangles);
+    }
+    job.camera_tracer->commit();
+    if (job.shadow_tracer) job.shadow_tracer->commit();
+    if (any_shadows)
+        job.occluders =
+            separate_shadows ? job.shadow_tracer.get() : job.camera_tracer.get();
+    job.extent = std::max(job.camera_tracer->scene_extent(),
+                          job.shadow_tracer ? job.shadow_tracer->scene_extent() : 0.0f);
+    report.setup_seconds = watch.seconds();
+
+    // Pixels, tile by tile. Each tile splats its own samples into a buffer
+    // one pixel wider on every side (the filter's reach).
+    const int width = job.camera.xres, height = job.camera.yres;
+    const int tiles_x = (width + kTile - 1) / kTile;
+    const int tiles_y = (height + kTile - 1) / kTile;
+    const std::size_t tiles = std::size_t(tiles_x) * tiles_y;
+    constexpr int kSpan = kTile + 2;
+    std::vector<std::vector<float>> tile_sums(tiles);
+    std::vector<float> depth(std::size_t(width) * height,
+                             std::numeric_limits<float>::infinity());
+    std::atomic<std::size_t> tiles_done{0};
+    tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
+        const int x0 = static_cast<int>(t % tiles_x) * kTile;
+        const int y0 = static_cast<int>(t / tiles_x) * kTile;
+        const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
+        std::vector<float>& sums = tile_sums[t];
+        sums.assign(std::size_t(kSpan) * kSpan * kSlots, 0.0f);
+        std::vector<LightSample> scratch;
+        uint64_t camera_count = 0, shadow_count = 0, bad_count = 0;
+        SampleValue value;
+        for (int py = y0; py < y1; ++py) {
+            for (int px = x0; px < x1; ++px) {
+                const uint64_t pixel_key =
+                    detail::splitmix64((uint64_t(uint32_t(py)) << 32) | uint32_t(px));
+                float& z = depth[std::size_t(py) * width + px];
+                for (int j = 0; j < job.ny; ++j) {
+                    for (int i = 0; i < job.nx; ++i) {
+                        const uint64_t key = detail::splitmix64(
+                            pixel_key +
+                            uint64_t(j * job.nx + i) * detail::kSplitMixIncrement);
+                        const double sx = px + (i + unit_double(key)) / job.nx;
+                        const double sy =
+                            py + (j + unit_double(detail::splitmix64(key))) / job.ny;
+                        bool bad = false;
+                        job.sample(sx, sy, key, scratch, value, camera_count,
+                                   shadow_count, bad);
+                        bad_count += bad ? 1 : 0;
+                        z = std::min(z, value.depth);
+                        // Splat into the pixels whose filter reaches the
+                        // sample: this pixel and its 8 neighbours at most.
+                        double wx[3], wy[3];
+                        for (int k = 0; k < 3; ++k) {
+                            const int qx = px - 1 + k, qy = py - 1 + k;
+                            wx[k] = qx >= 0 && qx < width ? filter_weight(sx - (qx + 0.5))
+                                                          : 0.0;
+                            wy[k] = qy >= 0 && qy < height
+                                        ? filter_weight(sy - (qy + 0.5))
+                                        : 0.0;
+                        }
+                        for (int ky = 0; ky < 3; ++ky) {
+                            if (wy[ky] == 0.0) continue;
+                            for (int kx = 0; kx < 3; ++kx) {
+                                if (wx[kx] == 0.0) continue;
+                                const float w = static_cast<float>(wx[kx] * wy[ky]);
+                                // Buffer cell of pixel (px - 1 + kx, py - 1 + ky).
+                                float* acc = &sums[(std::size_t(py - y0 + ky) * kSpan +
+                                                    (px - x0 + kx)) *
+                                                   kSlots];
+                                for (int c = 0; c < kValues; ++c)
+                                    acc[c] += w * value.v[c];
+                                acc[kValues] += w;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        job.camera_rays += camera_count;
+        job.shadow_rays += shadow_count;
+        job.bad_samples += bad_count;
+        if (options.progress) options.progress->update(++tiles_done, tiles);
+    });
+
+    // Tiles are added up in a fixed order: the same sums for any thread count.
+    std::vector<float> sums(std::size_t(width) * height * kSlots, 0.0f);
+    for (std::size_t t = 0; t < tiles; ++t) {
+        const int x0 = static_cast<int>(t % tiles_x) * kTile;
+        const int y0 = static_cast<int>(t / tiles_x) * kTile;
+        const std::vector<float>& tile = tile_sums[t];
+        for (int ty = 0; ty < kSpan; ++ty) {
+            const int py = y0 - 1 + ty;
+            if (py < 0 || py >= height) continue;
+            for (int tx = 0; tx < kSpan; ++tx) {
+                const int px = x0 - 1 + tx;
+                if (px < 0 || px >= width) continue;
+                const float* src = &tile[(std::size_t(ty) * kSpan + tx) * kSlots];
+                float* dst = &sums[(std::size_t(py) * width + px) * kSlots];
+                for (int c = 0; c < kSlots; ++c) dst[c] += src[c];
+            }
+        }
+        std::vector<float>().swap(tile_sums[t]);
+    }
+
+    Image image(width, height, image_channels());
+    const int channels = image.channel_count();
+    for (int py = 0; py < height; ++py) {
+        for (int px = 0; px < width; ++px) {
+            const float* s = &sums[(std::size_t(py) * width + px) * kSlots];
+            float* out = image.pixel(px, py);
+            const float weight = s[kValues];
+            const float inv = weight > 0.0f ? 1.0f / weight : 0.0f;
+            for (int c = 0; c < 4; ++c) out[c] = s[c] * inv;
+            const float z = depth[std::size_t(py) * width + px];
+            out[4] = std::isfinite(z) ? z : 0.0f; // no hit: 0
+            for (int c = 0; c < 12; ++c) out[5 + c] = s[kAmbient + c] * inv;
+            const float occ = s[kOcclusion] * inv;
+            out[17] = out[18] = out[19] = occ;
+            (void)channels;
+        }
+    }
+
+    report.camera_rays = job.camera_rays.load();
+    report.shadow_rays = job.shadow_rays.load();
+    if (job.bad_samples.load() > 0)
+        report.warnings.push_back(std::to_string(job.bad_samples.load()) +
+                                  " samples had non-finite values and were left black");
+    report.render_seconds = watch.seconds() - report.setup_seconds;
+    return image;
+}
+
+namespace {
+
+/// The Displays a job writes: the scene's, with -o in place of the primary
+/// one's file name (or a default "<scene>.exr"), frame patterns expanded.
+/// `primary` receives the index of the primary Display.
+std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions& options,
+                                      std::optional<int> frame, int& primary) {
+    std::vector<DisplaySpec> displays = scene.options.displays;
+    primary = -1;
+    for (std::size_t i = 0; i < displays.size(); ++i)
+        if (!displays[i].additional) {
+            primary = static_cast<int>(i);
+            break;
+        }
+    if (!options.output.empty()) {
+        if (primary >= 0) {
+            // -o names a file: its extension picks the format, whatever
+            // the Display's type said.
+            displays[primary].name = options.output;
+            displays[primary].type = "file";
+        } else {
+            DisplaySpec d;
+            d.name = options.output;
+            d.type = "file";
+            d.mode = "rgba";
+            displays.insert(displays.begin(), d);
+            primary = 0;
+        }
+    }
+    if (displays.empty()) {
+        DisplaySpec d;
+        d.name =
+            scene.path.empty()
+                ? std::string("render.exr")
+                : std::filesystem::path(scene.path).replace_extension(".exr").string();
+        d.type = "openexr";
+        d.mode = "rgba";
+        displays.push_back(d);
+        primary = 0;
+    }
+    // Names first: a bad pattern is a usage error before any rendering.
+    for (std::size_t i = 0; i < displays.size(); ++i)
+        displays[i].name = expand_frame_pattern(
+            displays[i].name, frame,
+            static_cast<int>(i) == primary && !options.output.empty() ? "option -o"
+                                                                      : "Display");
+    return displays;
+}
+
+} // namespace
+
+RenderFiles render_files(const Scene& scene, const RenderJobOptions& options) {
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    RenderFiles files;
+    files.inputs = scene.sources;
+    for (const std::string& f : detail::diffusion_files(scene, frame))
+        if (std::find(files.inputs.begin(), files.inputs.end(), f) == files.inputs.end())
+            files.inputs.push_back(f);
+    int primary = -1;
+    for (const DisplaySpec& d : job_displays(scene, options, frame, primary))
+        files.outputs.push_back(display_file(d));
+    return files;
+}
+
+RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
+    RenderReport report;
+    Stopwatch watch;
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+
+    int primary = -1;
+    const std::vector<DisplaySpec> displays =
+        job_displays(scene, options, frame, primary);
+
+    Image image = render_image(scene, options, &report);
+    const Stopwatch write_watch;
+    ImageMetadata meta;
+    meta.software = std::string("render (sss) ") + version_string();
+    meta.command_line = options.command_line;
+    meta.render_seconds = watch.seconds();
+    meta.world_to_camera = scene.options.camera.world_to_camera;
+    Camera cam = scene.options.camera;
+    cam.xres = image.width;
+    cam.yres = image.height;
+    meta.world_to_ndc = cam.world_to_ndc();
+    if (!scene.path.empty()) meta.extra.emplace_back("sss:scene", scene.path);
+    const int nx = options.pixel_samples > 0 ? options.pixel_samples
+                                             : scene.options.pixel_samples[0];
+    const int ny = options.pixel_samples > 0 ? options.pixel_samples
+                                             : scene.options.pixel_samples[1];
+    meta.extra.emplace_back("sss:pixelSamples",
+                            std::to_string(nx) + " " + std::to_string(ny));
+    if (frame) meta.extra.emplace_back("sss:frame", std::to_string(*frame));
+    meta.extra.emplace_back("sss:threads",
+                            std::to_string(tbb::this_task_arena::max_concurrency()));
+    for (std::size_t i = 0; i < displays.size(); ++i) {
+        const DisplayTarget target =
+            resolve_display(displays[i], image, static_cast<int>(i) == primary);
+        write_display(image, target, meta);
+        report.files.push_back(target.path);
+    }
+    report.write_seconds = write_watch.seconds();
+    if (options.progress) options.progress->finish();
+    return report;
+}
+
+} // namespace sss

@@ -1,0 +1,307 @@
+/// \file scene.cpp
+/// The scene layer basics: typed parameter access, the RI spline bases and
+/// the camera's screen-window arithmetic.
+
+#include "sss/scene/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "sss/util/error.h"
+
+namespace sss {
+
+int param_type_components(ParamType type) {
+    switch (type) {
+    case ParamType::Float:
+    case ParamType::Integer:
+    case ParamType::String:
+        return 1;
+    case ParamType::Color:
+    case ParamType::Point:
+    case ParamType::Vector:
+    case ParamType::Normal:
+        return 3;
+    case ParamType::HPoint:
+        return 4;
+    case ParamType::Matrix:
+        return 16;
+    }
+    return 1;
+}
+
+const char* param_class_name(ParamClass c) {
+    switch (c) {
+    case ParamClass::Constant:
+        return "constant";
+    case ParamClass::Uniform:
+        return "uniform";
+    case ParamClass::Varying:
+        return "varying";
+    case ParamClass::Vertex:
+        return "vertex";
+    case ParamClass::FaceVarying:
+        return "facevarying";
+    case ParamClass::FaceVertex:
+        return "facevertex";
+    }
+    return "?";
+}
+
+const char* param_type_name(ParamType type) {
+    switch (type) {
+    case ParamType::Float:
+        return "float";
+    case ParamType::Integer:
+        return "integer";
+    case ParamType::String:
+        return "string";
+    case ParamType::Color:
+        return "color";
+    case ParamType::Point:
+        return "point";
+    case ParamType::Vector:
+        return "vector";
+    case ParamType::Normal:
+        return "normal";
+    case ParamType::HPoint:
+        return "hpoint";
+    case ParamType::Matrix:
+        return "matrix";
+    }
+    return "?";
+}
+
+int Param::element_size() const {
+    return param_type_components(type) * std::max(array_size, 1);
+}
+
+std::size_t Param::element_count() const {
+    if (type == ParamType::String)
+        return strings.size() / static_cast<std::size_t>(std::max(array_size, 1));
+    return numbers.size() / static_cast<std::size_t>(element_size());
+}
+
+const Param* ParamList::find(std::string_view name) const {
+    for (const Param& p : items)
+        if (p.name == name) return &p;
+    return nullptr;
+}
+
+namespace {
+
+std::string quoted(std::string_view name) {
+    return "parameter \"" + std::string(name) + "\"";
+}
+
+/// The parameter's numbers, checked to be numeric and at least `needed`.
+const std::vector<double>& numbers_of(const Param& p, std::size_t needed,
+                                      const char* wanted) {
+    if (p.type == ParamType::String)
+        throw ValueError(quoted(p.name) + ": expected " + wanted + ", got a string");
+    if (p.numbers.size() < needed)
+        throw ValueError(quoted(p.name) + ": expected " + wanted + ", got " +
+                         std::to_string(p.numbers.size()) + " numbers");
+    return p.numbers;
+}
+
+} // namespace
+
+double ParamList::get_float(std::string_view name, double fallback) const {
+    const Param* p = find(name);
+    if (!p) return fallback;
+    if (p->type != ParamType::Float && p->type != ParamType::Integer)
+        throw ValueError(quoted(name) + ": expected a float, got a " +
+                         param_type_name(p->type));
+    return numbers_of(*p, 1, "a float")[0];
+}
+
+int ParamList::get_int(std::string_view name, int fallback) const {
+    const Param* p = find(name);
+    if (!p) return fallback;
+    if (p->type != ParamType::Float && p->type != ParamType::Integer)
+        throw ValueError(quoted(name) + ": expected an integer, got a " +
+                         param_type_name(p->type));
+    double v = numbers_of(*p, 1, "an integer")[0];
+    // A float parameter used as a count must still hold a whole number.
+    if (v != std::floor(v) || std::abs(v) > 2147483647.0)
+        throw ValueError(quoted(name) + ": expected an integer, got " +
+                         std::to_string(v));
+    return static_cast<int>(v);
+}
+
+std::string ParamList::get_string(std::string_view name,
+                                  const std::string& fallback) const {
+    const Param* p = find(name);
+    if (!p) return fallback;
+    if (p->type != ParamType::String)
+        throw ValueError(quoted(name) + ": expected a string, got a " +
+                         param_type_name(p->type));
+    if (p->strings.empty())
+        throw ValueError(quoted(name) + ": expected a string, got none");
+    return p->strings[0];
+}
+
+glm::dvec3 ParamList::get_vec3(std::string_view name, const glm::dvec3& fallback) const {
+    const Param* p = find(name);
+    if (!p) return fallback;
+    switch (p->type) {
+    case ParamType::Color:
+    case ParamType::Point:
+    case ParamType::Vector:
+    case ParamType::Normal:
+    case ParamType::Float:
+        break;
+    default:
+        throw ValueError(quoted(name) + ": expected 3 numbers, got a " +
+                         param_type_name(p->type));
+    }
+    const auto& n = numbers_of(*p, 3, "3 numbers");
+    return {n[0], n[1], n[2]};
+}
+
+void ParamList::set(Param p) {
+    for (Param& q : items) {
+        if (q.name == p.name) {
+            q = std::move(p);
+            return;
+        }
+    }
+    items.push_back(std::move(p));
+}
+
+namespace {
+
+/// A basis given as RenderMan writes it (row-major rows of the row-vector
+/// matrix), loaded the way scene.h documents: numbers k go to m[k/4][k%4].
+Matrix4 basis_matrix(const double (&b)[16], double scale) {
+    Matrix4 m(1.0);
+    for (int k = 0; k < 16; ++k) m[k / 4][k % 4] = b[k] * scale;
+    return m;
+}
+
+} // namespace
+
+std::optional<Basis> named_basis(std::string_view name) {
+    // The matrices of the RI specification (section "Basis").
+    static const double bezier[16] = {-1, 3, -3, 1, 3, -6, 3, 0, -3, 3, 0, 0, 1, 0, 0, 0};
+    static const double bspline[16] = {-1, 3, -3, 1, 3, -6, 3, 0,
+                                       -3, 0, 3,  0, 1, 4,  1, 0};
+    static const double catmull_rom[16] = {-1, 3, -3, 1, 2, -5, 4, -1,
+                                           -1, 0, 1,  0, 0, 2,  0, 0};
+    static const double hermite[16] = {2, 1, -2, 1, -3, -2, 3, -1,
+                                       0, 1, 0,  0, 1,  0,  0, 0};
+    static const double power[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+    Basis b;
+    if (name == "bezier") {
+        b = {basis_matrix(bezier, 1.0), 3, "bezier"};
+    } else if (name == "b-spline" || name == "bspline") {
+        b = {basis_matrix(bspline, 1.0 / 6.0), 1, "b-spline"};
+    } else if (name == "catmull-rom" || name == "catmullrom") {
+        b = {basis_matrix(catmull_rom, 0.5), 1, "catmull-rom"};
+    } else if (name == "hermite") {
+        b = {basis_matrix(hermite, 1.0), 2, "hermite"};
+    } else if (name == "power") {
+        b = {basis_matrix(power, 1.0), 4, "power"};
+    } else {
+        return std::nullopt;
+    }
+    return b;
+}
+
+std::string Attributes::name() const {
+    auto it = groups.find("identifier");
+    if (it == groups.end()) return "";
+    const Param* p = it->second.find("name");
+    if (!p || p->type != ParamType::String || p->strings.empty()) return "";
+    return p->strings[0];
+}
+
+const char* primitive_kind_name(PrimitiveKind kind) {
+    switch (kind) {
+    case PrimitiveKind::Polygon:
+        return "Polygon";
+    case PrimitiveKind::GeneralPolygon:
+        return "GeneralPolygon";
+    case PrimitiveKind::PointsPolygons:
+        return "PointsPolygons";
+    case PrimitiveKind::PointsGeneralPolygons:
+        return "PointsGeneralPolygons";
+    case PrimitiveKind::SubdivisionMesh:
+        return "SubdivisionMesh";
+    case PrimitiveKind::Sphere:
+        return "Sphere";
+    case PrimitiveKind::Cylinder:
+        return "Cylinder";
+    case PrimitiveKind::Cone:
+        return "Cone";
+    case PrimitiveKind::Disk:
+        return "Disk";
+    case PrimitiveKind::Torus:
+        return "Torus";
+    case PrimitiveKind::Hyperboloid:
+        return "Hyperboloid";
+    case PrimitiveKind::Paraboloid:
+        return "Paraboloid";
+    case PrimitiveKind::Patch:
+        return "Patch";
+    case PrimitiveKind::PatchMesh:
+        return "PatchMesh";
+    case PrimitiveKind::Teapot:
+        return "Teapot";
+    }
+    return "?";
+}
+
+std::array<double, 4> Camera::resolved_screen_window() const {
+    if (screen_window) return *screen_window;
+    // RI default: the shorter image side spans [-1, 1].
+    double a = static_cast<double>(xres) * pixel_aspect / static_cast<double>(yres);
+    if (a >= 1.0) return {-a, a, -1.0, 1.0};
+    return {-1.0, 1.0, -1.0 / a, 1.0 / a};
+}
+
+double Camera::pixel_size_at(double distance) const {
+    auto sw = resolved_screen_window();
+    double width = sw[1] - sw[0];
+    if (!perspective) return width / static_cast<double>(xres);
+    double half_angle = fov * std::numbers::pi / 360.0;
+    return width * std::max(distance, near_clip) * std::tan(half_angle) /
+           static_cast<double>(xres);
+}
+
+bool Attributes::visible_to(const char* kind) const {
+    auto it = groups.find("visibility");
+    if (it == groups.end()) return true;
+    const Param* p = it->second.find(kind);
+    if (!p) return true;
+    if (p->type == ParamType::String)
+        return p->strings.empty() ||
+               (p->strings[0] != "transparent" && p->strings[0] != "0");
+    return p->numbers.empty() || p->numbers[0] != 0.0;
+}
+
+Matrix4 Camera::world_to_ndc() const {
+    const auto sw = resolved_screen_window();
+    Matrix4 proj(1.0);
+    if (perspective) {
+        const double c = 1.0 / std::tan(fov * 3.14159265358979323846 / 360.0);
+        const double n = near_clip, f = far_clip;
+        proj = Matrix4(0.0);
+        proj[0][0] = c;
+        proj[1][1] = c;
+        proj[2][2] = f / (f - n);
+        proj[3][2] = -f * n / (f - n);
+        proj[2][3] = 1.0;
+    }
+    Matrix4 screen_to_ndc(1.0);
+    screen_to_ndc[0][0] = 1.0 / (sw[1] - sw[0]);
+    screen_to_ndc[3][0] = -sw[0] / (sw[1] - sw[0]);
+    screen_to_ndc[1][1] = -1.0 / (sw[3] - sw[2]);
+    screen_to_ndc[3][1] = sw[3] / (sw[3] - sw[2]);
+    return screen_to_ndc * proj * world_to_camera;
+}
+
+} // namespace sss
