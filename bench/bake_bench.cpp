@@ -23,7 +23,8 @@
 #include "latlong_mesh.h"
 #include "sss/bake/bake.h"
 #include "sss/scene/rib.h"
-#include "sss/cli/tool.h"
+#include "sss/util/progress.h"
+#include "sss/util/threads.h"
 
 namespace {
 

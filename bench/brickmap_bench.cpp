@@ -22,7 +22,8 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/ssdiffusion.h"
 #include "sss/cloud/synthetic.h"
-#include "sss/cli/tool.h"
+#include "sss/util/progress.h"
+#include "sss/util/threads.h"
 
 namespace {
 

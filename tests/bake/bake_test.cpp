@@ -10,7 +10,7 @@
 #include "sss/bake/bake.h"
 #include "sss/util/error.h"
 #include "sss/scene/rib.h"
-#include "sss/cli/tool.h"
+#include "sss/util/threads.h"
 
 namespace {
 

@@ -26,7 +26,7 @@
 #include "sss/util/error.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/synthetic.h"
-#include "sss/cli/tool.h"
+#include "sss/util/threads.h"
 
 namespace fs = std::filesystem;
 using sss::BrickMap;

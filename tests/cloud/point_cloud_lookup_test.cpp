@@ -14,7 +14,7 @@
 #include <glm/geometric.hpp>
 #include <oneapi/tbb/parallel_for.h>
 
-#include "sss/brick/brickmap.h"
+#include "sss/cloud/point_cloud_lookup.h"
 #include "sss/util/error.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/synthetic.h"

@@ -29,7 +29,7 @@
 #include "sss/cloud/synthetic.h"
 #include "test_util.h"
 
-#include "../../src/sss/cloud/point_cloud_io_detail.h" // ByteSink: gzip files for the sweeps
+#include "sss/util/byte_io.h" // ByteSink: gzip files for the sweeps
 
 #if defined(__SANITIZE_ADDRESS__)
 #define SSS_SWEEP_ASAN 1

@@ -27,7 +27,8 @@
 #include "sss/diffusion/profile.h"
 #include "sss/diffusion/ssdiffusion.h"
 #include "sss/cloud/synthetic.h"
-#include "sss/cli/tool.h"
+#include "sss/util/progress.h"
+#include "sss/util/threads.h"
 
 #include "diffusion_test_util.h"
 

@@ -29,7 +29,8 @@
 #include "sss/render/render.h"
 #include "sss/scene/rib.h"
 #include "sss/diffusion/ssdiffusion.h"
-#include "sss/cli/tool.h"
+#include "sss/util/threads.h"
+#include "sss/util/version.h"
 #include "test_util.h"
 
 namespace {

@@ -25,9 +25,10 @@
 #include "sss/diffusion/material.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/scene/scene.h"
-#include "sss/cli/tool.h"
 
 namespace sss {
+
+class Progress; // sss/util/progress.h
 
 /// Everything ptbake can be told.
 struct BakeOptions {

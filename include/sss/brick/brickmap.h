@@ -24,9 +24,10 @@
 #include <glm/vec3.hpp>
 
 #include "sss/cloud/point_cloud.h"
-#include "sss/cli/tool.h"
 
 namespace sss {
+
+class Progress; // sss/util/progress.h
 
 /// brickmake's options (PRMan names).
 struct BrickMapBuildOptions {
@@ -140,32 +141,6 @@ public:
     /// Cache statistics: bricks read from disk so far, bytes currently cached.
     std::size_t bricks_loaded() const;
     std::size_t cached_bytes() const;
-
-private:
-    struct Impl;
-    std::unique_ptr<Impl> m_impl;
-};
-
-/// The same lookup directly on a point cloud, for checks: a normal-aware
-/// average of the nearest points (those whose normal agrees with n, within
-/// about 60 degrees; all of them when n is zero), weighted by distance within
-/// the filter radius or, when 0, over the k nearest.
-class PointCloudLookup {
-public:
-    /// Indexes the cloud's positions (the cloud must outlive this object).
-    /// channels: the channels to return, in order (empty: every float and
-    /// color channel).
-    PointCloudLookup(const PointCloud& cloud, std::vector<std::string> channels = {});
-    ~PointCloudLookup();
-    PointCloudLookup(const PointCloudLookup&) = delete;
-    PointCloudLookup& operator=(const PointCloudLookup&) = delete;
-
-    /// Floats per lookup (sum of the channels' components).
-    int data_size() const;
-    const std::vector<std::pair<std::string, ChannelType>>& channels() const;
-    /// Fills out; false when no point qualifies. Thread-safe.
-    bool lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
-                float* out) const;
 
 private:
     struct Impl;

@@ -13,9 +13,10 @@
 
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
-#include "sss/cli/tool.h"
 
 namespace sss {
+
+class Progress; // sss/util/progress.h
 
 // ---------------------------------------------------------------------------
 // brickmake

@@ -10,9 +10,10 @@
 
 #include "sss/render/image_io.h"
 #include "sss/scene/scene.h"
-#include "sss/cli/tool.h"
 
 namespace sss {
+
+class Progress; // sss/util/progress.h
 
 /// Everything `render` can be told besides the scene.
 struct RenderJobOptions {

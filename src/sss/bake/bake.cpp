@@ -18,6 +18,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/util/error.h"
+#include "sss/util/progress.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"

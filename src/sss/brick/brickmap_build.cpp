@@ -29,10 +29,11 @@
 
 #include "brickmap_format.h"
 #include "sss/util/hash.h"
-#include "../cloud/point_cloud_io_detail.h"
+#include "sss/util/byte_io.h"
 #include "sss/brick/brickmap.h"
 #include "sss/util/error.h"
-#include "sss/cli/tool.h"
+#include "sss/util/atomic_output.h"
+#include "sss/util/progress.h"
 
 namespace sss {
 

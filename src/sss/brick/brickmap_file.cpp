@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "brickmap_format.h"
-#include "../cloud/point_cloud_io_detail.h"
+#include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 
 namespace sss::detail {

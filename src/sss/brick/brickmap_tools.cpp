@@ -21,7 +21,10 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/progress.h"
+#include "sss/util/version.h"
 #include "sss/cloud/point_cloud_io.h"
 
 namespace sss {

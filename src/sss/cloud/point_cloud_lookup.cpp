@@ -4,7 +4,7 @@
 /// widest axis, leaves of at most 8 points) indexes the positions; points
 /// and their data are stored in tree order so a leaf is one contiguous run.
 
-#include "sss/brick/brickmap.h"
+#include "sss/cloud/point_cloud_lookup.h"
 
 #include <algorithm>
 #include <array>

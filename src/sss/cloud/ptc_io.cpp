@@ -14,7 +14,7 @@
 #include "point_cloud_io_detail.h"
 #include "sss/util/error.h"
 #include "sss/cloud/point_cloud_io.h"
-#include "sss/cli/tool.h"
+#include "sss/util/atomic_output.h"
 
 namespace sss {
 

@@ -17,7 +17,7 @@
 #include <glm/vector_relational.hpp>
 
 #include "sss/util/error.h"
-#include "sss/cli/tool.h"
+#include "sss/util/progress.h"
 
 namespace sss {
 

@@ -8,7 +8,7 @@
 #include <tuple>
 
 #include "sss/util/error.h"
-#include "sss/cli/tool.h"
+#include "sss/util/progress.h"
 
 namespace sss {
 

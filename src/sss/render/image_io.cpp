@@ -23,7 +23,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "sss/util/error.h"
-#include "sss/cli/tool.h"
+#include "sss/util/atomic_output.h"
 
 namespace sss {
 

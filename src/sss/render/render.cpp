@@ -35,6 +35,8 @@
 #include "shading.h"
 #include "sss/dice/dice.h"
 #include "sss/util/error.h"
+#include "sss/util/progress.h"
+#include "sss/util/version.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"

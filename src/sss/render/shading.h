@@ -14,6 +14,7 @@
 #include "sss/brick/brickmap.h"
 #include "sss/light/lights.h"
 #include "sss/cloud/point_cloud.h"
+#include "sss/cloud/point_cloud_lookup.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
 

@@ -1,0 +1,53 @@
+#pragma once
+/// \file args.h
+/// RenderMan-style command-line scanning for the tools' mains.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace sss {
+
+/// Walks a command line the RenderMan way: options start with one or two
+/// dashes and take a fixed number of values; other words are positional.
+/// Every malformed use throws UsageError naming the option.
+class ArgScanner {
+public:
+    explicit ArgScanner(std::vector<std::string> args);
+
+    bool done() const { return m_pos >= m_args.size(); }
+    /// True if the next word is an option ("-x", "--x"; a negative number is not).
+    bool at_option() const;
+    /// Consumes the next word as an option and returns its name without dashes.
+    std::string option();
+    /// Consumes the next word as a positional argument.
+    std::string positional();
+    /// Moves to the next option, appending the positional words before it to
+    /// `positionals`; stores its name (option()) in `opt`. False at the end.
+    /// The usual loop: `while (args.next_option(o, files)) { ... }`.
+    bool next_option(std::string& opt, std::vector<std::string>& positionals);
+
+    /// Consumes the value of option opt; UsageError if missing or if it looks
+    /// like another option.
+    std::string value(const std::string& opt);
+    /// A finite number.
+    double number(const std::string& opt);
+    /// A finite number > 0.
+    double positive(const std::string& opt);
+    /// A finite number >= 0.
+    double non_negative(const std::string& opt);
+    /// An integer in [lo, hi].
+    int integer(const std::string& opt, int lo, int hi);
+    /// Three finite numbers (r g b).
+    glm::dvec3 triple(const std::string& opt);
+    /// Peeks the next word without consuming it ("" when done).
+    const std::string& peek() const;
+
+private:
+    std::vector<std::string> m_args;
+    std::size_t m_pos = 0;
+};
+
+} // namespace sss

@@ -1,0 +1,27 @@
+#pragma once
+/// \file threads.h
+/// Thread counts: the cores a job may use (CPU affinity and cgroup quota
+/// aware) and a scoped limit on oneTBB's parallelism.
+
+#include <memory>
+
+namespace sss {
+
+/// Resolves a -threads value: N > 0 is exact, 0 = every usable core (CPU
+/// affinity and cgroup quota aware), N < 0 = usable cores minus |N| (at least 1).
+int resolve_thread_count(int requested);
+
+/// Limits oneTBB parallelism to n threads while alive.
+class ThreadLimit {
+public:
+    explicit ThreadLimit(int n);
+    ~ThreadLimit();
+    ThreadLimit(const ThreadLimit&) = delete;
+    ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+} // namespace sss

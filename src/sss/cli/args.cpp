@@ -1,0 +1,122 @@
+/// \file args.cpp
+/// ArgScanner: options with a fixed number of values, positional words.
+
+#include "sss/cli/args.h"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <optional>
+#include <string_view>
+
+#include "sss/util/error.h"
+#include "sss/util/parse.h"
+
+namespace sss {
+
+namespace {
+
+bool looks_like_option(const std::string& word) {
+    if (word.size() < 2 || word[0] != '-') return false;
+    char c = word[1];
+    return !(std::isdigit(static_cast<unsigned char>(c)) || c == '.');
+}
+
+} // namespace
+
+ArgScanner::ArgScanner(std::vector<std::string> args) : m_args(std::move(args)) {}
+
+bool ArgScanner::at_option() const {
+    return !done() && looks_like_option(m_args[m_pos]);
+}
+
+std::string ArgScanner::option() {
+    if (done()) throw UsageError("missing option");
+    const std::string& word = m_args[m_pos];
+    if (!looks_like_option(word))
+        throw UsageError("expected an option, got '" + word + "'");
+    ++m_pos;
+    std::size_t dashes = (word.size() > 1 && word[1] == '-') ? 2 : 1;
+    return word.substr(dashes);
+}
+
+std::string ArgScanner::positional() {
+    if (done()) throw UsageError("missing argument");
+    return m_args[m_pos++];
+}
+
+bool ArgScanner::next_option(std::string& opt, std::vector<std::string>& positionals) {
+    while (!done()) {
+        if (at_option()) {
+            opt = option();
+            return true;
+        }
+        positionals.push_back(positional());
+    }
+    return false;
+}
+
+std::string ArgScanner::value(const std::string& opt) {
+    if (done() || at_option()) throw UsageError("option -" + opt + " needs a value");
+    return m_args[m_pos++];
+}
+
+double ArgScanner::number(const std::string& opt) {
+    std::string word = value(opt);
+    std::optional<double> v = parse_finite(word);
+    if (!v) throw UsageError("option -" + opt + ": '" + word + "' is not a number");
+    return *v;
+}
+
+double ArgScanner::positive(const std::string& opt) {
+    double v = number(opt);
+    if (!(v > 0.0))
+        throw UsageError("option -" + opt + ": must be > 0 (got " + format_number(v) +
+                         ")");
+    return v;
+}
+
+double ArgScanner::non_negative(const std::string& opt) {
+    double v = number(opt);
+    if (!(v >= 0.0))
+        throw UsageError("option -" + opt + ": must be >= 0 (got " + format_number(v) +
+                         ")");
+    return v;
+}
+
+int ArgScanner::integer(const std::string& opt, int lo, int hi) {
+    std::string word = value(opt);
+    std::string_view s = word;
+    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
+    long long v = 0;
+    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    bool ok = !s.empty() && ec == std::errc() && end == s.data() + s.size();
+    if (!ok) {
+        // Accept integral values written as numbers ("1e6", "3.0").
+        std::optional<double> d = parse_finite(word);
+        if (!d || std::floor(*d) != *d || std::fabs(*d) > 9.0e18)
+            throw UsageError("option -" + opt + ": '" + word + "' is not an integer");
+        v = static_cast<long long>(*d);
+    }
+    if (v < lo || v > hi)
+        throw UsageError("option -" + opt + ": " + std::to_string(v) +
+                         " is out of range [" + std::to_string(lo) + ", " +
+                         std::to_string(hi) + "]");
+    return static_cast<int>(v);
+}
+
+glm::dvec3 ArgScanner::triple(const std::string& opt) {
+    glm::dvec3 out(0.0);
+    for (int i = 0; i < 3; ++i) {
+        if (done() || at_option()) throw UsageError("option -" + opt + " needs 3 values");
+        out[i] = number(opt);
+    }
+    return out;
+}
+
+const std::string& ArgScanner::peek() const {
+    static const std::string empty;
+    return done() ? empty : m_args[m_pos];
+}
+
+} // namespace sss
