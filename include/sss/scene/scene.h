@@ -177,6 +177,24 @@ struct Primitive {
     std::string source; ///< "file.rib:12" of the statement
 };
 
+/// A primitive's attributes (RI defaults for a primitive built without any).
+const Attributes& attributes_of(const Primitive& prim);
+
+/// How many values each storage class carries on a primitive: constant 1,
+/// uniform one per face, varying and vertex one per (varying or control)
+/// point, facevarying one per face corner, facevertex one per face control
+/// point.
+struct ClassCounts {
+    std::size_t uniform = 1;
+    std::size_t varying = 4;
+    std::size_t vertex = 4;
+    std::size_t facevarying = 4;
+    std::size_t facevertex = 4;
+
+    /// The number of values a parameter of storage class c must have.
+    std::size_t of(ParamClass c) const;
+};
+
 /// A light source instance.
 struct LightInstance {
     ShaderRef shader;   ///< ambientlight, distantlight, pointlight, spotlight, *_rts...

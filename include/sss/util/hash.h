@@ -19,4 +19,9 @@ inline uint64_t splitmix64(uint64_t x) {
     return z ^ (z >> 31);
 }
 
+/// A 64-bit hash mapped to a double in [0, 1) (its top 53 bits).
+inline double unit_double(uint64_t h) {
+    return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
+
 } // namespace sss::detail

@@ -57,10 +57,6 @@ constexpr double kDegenerateRatio = 1e-10;
 /// Offset, in cells, of the point whose normal replaces a degenerate one.
 constexpr double kNudgeCells = 1e-3;
 
-const Attributes& attributes_of(const Primitive& prim) {
-    static const Attributes defaults;
-    return prim.attributes ? *prim.attributes : defaults;
-}
 
 /// "file.rib:12: Sphere" — how errors name a primitive.
 std::string describe(const Primitive& prim) {
@@ -372,16 +368,6 @@ struct FaceValues {
     }
 };
 
-/// How many values each storage class carries on a primitive.
-/// Facevarying values are per patch corner (4 per patch), facevertex
-/// values per patch control point (4 or 16 per patch).
-struct ClassCounts {
-    std::size_t uniform = 1;
-    std::size_t varying = 4;
-    std::size_t vertex = 4;
-    std::size_t facevarying = 4;
-    std::size_t facevertex = 4;
-};
 
 /// Where one face finds its values among the primitive's.
 struct FaceIndex {
@@ -405,27 +391,9 @@ struct PrimVar {
             fail(prim, std::string("\"") + name +
                            "\" must have 3 numbers per value, not " +
                            std::to_string(param->element_size()));
-        std::size_t want = 1;
-        switch (param->storage) {
-        case ParamClass::Constant:
-            want = 1;
-            break;
-        case ParamClass::Uniform:
-            want = counts.uniform;
-            break;
-        case ParamClass::Varying:
-            want = counts.varying;
-            break;
-        case ParamClass::FaceVarying:
-            want = counts.facevarying;
-            break;
-        case ParamClass::FaceVertex:
-            want = counts.facevertex;
-            break;
-        case ParamClass::Vertex:
-            want = counts.vertex;
-            break;
-        }
+        // Patches: facevarying values per patch corner (4 per patch),
+        // facevertex values per patch control point (4 or 16 per patch).
+        const std::size_t want = counts.of(param->storage);
         if (param->numbers.size() != 3 * want)
             fail(prim, std::string("\"") + name + "\" has " +
                            std::to_string(param->numbers.size()) + " numbers, expected " +

@@ -131,10 +131,6 @@ namespace {
 // ---------------------------------------------------------------------------
 // Normals
 
-const Attributes& attributes_of(const Primitive& prim) {
-    static const Attributes defaults;
-    return prim.attributes ? *prim.attributes : defaults;
-}
 
 /// The normal rule of dice_detail.h with the matrix prepared once per
 /// primitive (world_normal rebuilds it on every call, too slow for millions

@@ -80,11 +80,6 @@ double unit_double(uint64_t h) {
     return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
 
-/// A primitive's attributes (RI defaults for a primitive built without any).
-const Attributes& attributes_of(const Primitive& prim) {
-    static const Attributes defaults;
-    return prim.attributes ? *prim.attributes : defaults;
-}
 
 /// Whether `Attribute "visibility" name` leaves the primitive visible.
 bool visible_to(const Primitive& prim, const char* name) {

@@ -219,6 +219,29 @@ std::string Attributes::name() const {
     return p->strings[0];
 }
 
+const Attributes& attributes_of(const Primitive& prim) {
+    static const Attributes defaults;
+    return prim.attributes ? *prim.attributes : defaults;
+}
+
+std::size_t ClassCounts::of(ParamClass c) const {
+    switch (c) {
+    case ParamClass::Constant:
+        return 1;
+    case ParamClass::Uniform:
+        return uniform;
+    case ParamClass::Varying:
+        return varying;
+    case ParamClass::Vertex:
+        return vertex;
+    case ParamClass::FaceVarying:
+        return facevarying;
+    case ParamClass::FaceVertex:
+        return facevertex;
+    }
+    return 1;
+}
+
 const char* primitive_kind_name(PrimitiveKind kind) {
     switch (kind) {
     case PrimitiveKind::Polygon:
