@@ -1,0 +1,246 @@
+/// \file services_test.cpp
+/// Tests of the runtime services every stage uses (sss/util): thread counts,
+/// progress lines, atomic output files and their signal cleanup, the stopwatch.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <oneapi/tbb/global_control.h>
+
+#include "sss/util/atomic_output.h"
+#include "sss/util/error.h"
+#include "sss/util/progress.h"
+#include "sss/util/threads.h"
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using TempFolder = sss::test::TempDir;
+using sss::test::read_text;
+using sss::test::split_lines;
+using sss::test::write_text;
+
+} // namespace
+
+// ---------------------------------------------------------------------------
+// Threads
+// ---------------------------------------------------------------------------
+
+TEST(Threads, ResolveThreadCount) {
+    const int usable = sss::resolve_thread_count(0);
+    EXPECT_GE(usable, 1);
+    EXPECT_LE(usable,
+              static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+    EXPECT_EQ(sss::resolve_thread_count(1), 1);
+    EXPECT_EQ(sss::resolve_thread_count(7), 7);
+    EXPECT_EQ(sss::resolve_thread_count(1000), 1000);
+    EXPECT_EQ(sss::resolve_thread_count(-1), std::max(1, usable - 1));
+    EXPECT_EQ(sss::resolve_thread_count(-1000), 1);
+    EXPECT_EQ(sss::resolve_thread_count(std::numeric_limits<int>::min()), 1);
+}
+
+TEST(Threads, ThreadLimitScopesTbbParallelism) {
+    using oneapi::tbb::global_control;
+    const auto before =
+        global_control::active_value(global_control::max_allowed_parallelism);
+    {
+        sss::ThreadLimit limit(1);
+        EXPECT_EQ(global_control::active_value(global_control::max_allowed_parallelism),
+                  1u);
+    }
+    EXPECT_EQ(global_control::active_value(global_control::max_allowed_parallelism),
+              before);
+}
+
+// ---------------------------------------------------------------------------
+// Progress
+// ---------------------------------------------------------------------------
+
+TEST(Progress, PrintsEachPercentOnceAndMonotone) {
+    testing::internal::CaptureStdout();
+    {
+        sss::Progress progress(true);
+        progress.update(0, 200);   // 0%
+        progress.update(1, 200);   // still 0%
+        progress.update(3, 200);   // 1%
+        progress.update(2, 200);   // going back: nothing
+        progress.update(100, 200); // 50%
+        progress.update(100, 200); // same: nothing
+        progress.update(199, 200); // 99%
+        progress.finish();         // 100%
+        progress.finish();         // already printed
+        progress.update(500, 200); // clamped to 100, already printed
+    }
+    std::string out = testing::internal::GetCapturedStdout();
+    EXPECT_EQ(out, "ALF_PROGRESS 0%\nALF_PROGRESS 1%\nALF_PROGRESS 50%\n"
+                   "ALF_PROGRESS 99%\nALF_PROGRESS 100%\n");
+}
+
+TEST(Progress, DisabledPrintsNothing) {
+    testing::internal::CaptureStdout();
+    sss::Progress progress(false);
+    EXPECT_FALSE(progress.enabled());
+    progress.update(5, 10);
+    progress.finish();
+    EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
+}
+
+TEST(Progress, ZeroTotalIsDone) {
+    testing::internal::CaptureStdout();
+    sss::Progress progress(true);
+    progress.update(0, 0);
+    progress.finish();
+    EXPECT_EQ(testing::internal::GetCapturedStdout(), "ALF_PROGRESS 100%\n");
+}
+
+TEST(Progress, ThreadSafe) {
+    testing::internal::CaptureStdout();
+    {
+        sss::Progress progress(true);
+        constexpr uint64_t total = 100000;
+        std::atomic<uint64_t> done{0};
+        std::vector<std::thread> threads;
+        for (int t = 0; t < 4; ++t) {
+            threads.emplace_back([&] {
+                for (;;) {
+                    uint64_t d = done.fetch_add(1) + 1;
+                    if (d > total) break;
+                    progress.update(d, total);
+                }
+            });
+        }
+        for (auto& t : threads) t.join();
+        progress.finish();
+    }
+    std::vector<std::string> lines = split_lines(testing::internal::GetCapturedStdout());
+    ASSERT_FALSE(lines.empty());
+    int last = -1;
+    for (const auto& line : lines) {
+        ASSERT_EQ(line.rfind("ALF_PROGRESS ", 0), 0u) << line;
+        ASSERT_EQ(line.back(), '%') << line;
+        int pct = std::stoi(line.substr(13));
+        EXPECT_GT(pct, last) << "lines must be strictly increasing";
+        EXPECT_LE(pct, 100);
+        last = pct;
+    }
+    EXPECT_EQ(last, 100);
+}
+
+// ---------------------------------------------------------------------------
+// AtomicOutput
+// ---------------------------------------------------------------------------
+
+TEST(AtomicOutput, TempNameInTargetFolder) {
+    TempFolder dir;
+    const std::string target = (dir.path() / "cloud.ptc").string();
+    sss::AtomicOutput out(target);
+    EXPECT_EQ(out.target(), target);
+    fs::path temp(out.temp_path());
+    EXPECT_EQ(temp.parent_path(), dir.path());
+    const std::string name = temp.filename().string();
+    EXPECT_EQ(name.rfind(".cloud.ptc.", 0), 0u) << name;
+    EXPECT_EQ(name.size(), std::string(".cloud.ptc.").size() + 8 + 4) << name;
+    EXPECT_EQ(name.substr(name.size() - 4), ".tmp");
+    EXPECT_TRUE(fs::exists(temp)) << "the temporary name is reserved on creation";
+
+    sss::AtomicOutput other(target);
+    EXPECT_NE(other.temp_path(), out.temp_path());
+}
+
+TEST(AtomicOutput, CommitLeavesOnlyTheTarget) {
+    TempFolder dir;
+    const std::string target = (dir.path() / "a.ptc").string();
+    {
+        sss::AtomicOutput out(target);
+        write_text(out.temp_path(), "hello");
+        EXPECT_FALSE(fs::exists(target));
+        out.commit();
+        EXPECT_FALSE(fs::exists(out.temp_path()));
+    }
+    EXPECT_EQ(read_text(target), "hello");
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{"a.ptc"});
+}
+
+TEST(AtomicOutput, UncommittedLeavesTargetUntouched) {
+    TempFolder dir;
+    const std::string target = (dir.path() / "a.ptc").string();
+    write_text(target, "old");
+    std::string temp;
+    try {
+        sss::AtomicOutput out(target);
+        temp = out.temp_path();
+        write_text(temp, "partial");
+        throw std::runtime_error("writer failed");
+    } catch (const std::runtime_error&) {
+    }
+    EXPECT_FALSE(temp.empty());
+    EXPECT_FALSE(fs::exists(temp));
+    EXPECT_EQ(read_text(target), "old");
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{"a.ptc"});
+
+    // Also without any existing target.
+    const std::string fresh = (dir.path() / "b.ptc").string();
+    { sss::AtomicOutput out(fresh); }
+    EXPECT_FALSE(fs::exists(fresh));
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{"a.ptc"});
+}
+
+TEST(AtomicOutput, CommitReplacesExistingFile) {
+    TempFolder dir;
+    const std::string target = (dir.path() / "a.ply").string();
+    write_text(target, "old content that is longer");
+    sss::AtomicOutput out(target);
+    write_text(out.temp_path(), "new");
+    out.commit();
+    out.commit(); // second commit is a no-op
+    EXPECT_EQ(read_text(target), "new");
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{"a.ply"});
+}
+
+TEST(AtomicOutput, MissingFolderIsIoError) {
+    TempFolder dir;
+    const std::string target = (dir.path() / "missing" / "a.ptc").string();
+    try {
+        sss::AtomicOutput out(target);
+        FAIL() << "expected IoError";
+    } catch (const sss::IoError& e) {
+        EXPECT_EQ(e.path(), target);
+        EXPECT_NE(std::string(e.what()).find("No such file or directory"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(AtomicOutput, CommitOntoFolderFails) {
+    TempFolder dir;
+    const fs::path target = dir.path() / "sub";
+    fs::create_directories(target / "x");
+    sss::AtomicOutput out(target.string());
+    write_text(out.temp_path(), "data");
+    EXPECT_THROW(out.commit(), sss::IoError);
+}
+
+// ---------------------------------------------------------------------------
+// Stopwatch
+// ---------------------------------------------------------------------------
+
+TEST(Stopwatch, Monotone) {
+    sss::Stopwatch watch;
+    double a = watch.seconds();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    double b = watch.seconds();
+    EXPECT_GE(a, 0.0);
+    EXPECT_GE(b - a, 0.015);
+    EXPECT_LT(b, 10.0);
+}
