@@ -13,10 +13,10 @@
 
 #include "sss/brick/brickmap.h"
 #include "sss/brick/brickmap_tools.h"
+#include "sss/cli/tool.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
-#include "sss/cloud/point_cloud_io.h"
-#include "sss/cli/tool.h"
 
 namespace {
 
@@ -73,22 +73,41 @@ bool ends_with_png(const std::string& path) {
     return ext == ".png";
 }
 
-int run(const std::vector<std::string>& argv) {
-    sss::ArgScanner args(argv);
-    sss::RunOptions running;
-    sss::PointCloudWriteOptions wopt;
+/// What the command line asks for.
+struct Request {
+    std::string map_path;
+    bool info = true;
+    std::string picture_path; ///< empty: no picture
     sss::BrickMapPictureOptions picture;
+    bool have_slice = false;
+    std::string lookup_in, lookup_out; ///< empty: no lookup
     sss::BrickMapCloudLookupOptions lookup;
+    sss::PointCloudWriteOptions wopt;
+    sss::RunOptions running;
+};
+
+/// Parses and checks the command line; nullopt after --help or --version.
+std::optional<Request> parse_request(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    Request r;
+    sss::RunOptions& running = r.running;
+    sss::PointCloudWriteOptions& wopt = r.wopt;
+    sss::BrickMapPictureOptions& picture = r.picture;
+    sss::BrickMapCloudLookupOptions& lookup = r.lookup;
+    std::string& picture_path = r.picture_path;
+    std::string& lookup_in = r.lookup_in;
+    std::string& lookup_out = r.lookup_out;
+    bool& info = r.info;
+    bool& have_slice = r.have_slice;
     std::vector<std::string> files;
-    std::string picture_path, lookup_in, lookup_out;
-    bool info = true, have_level = false, have_slice = false, have_axis = false;
+    bool have_level = false, have_axis = false;
     bool picture_option = false; // an option that only makes sense with -picture
     std::optional<float> filter_radius;
     bool have_filterscale = false, have_compare = false;
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, kUsage)) {
-            return 0;
+            return std::nullopt;
         } else if (o == "info") {
             info = args.integer(o, 0, 1) != 0;
         } else if (o == "picture") {
@@ -171,8 +190,7 @@ int run(const std::vector<std::string>& argv) {
         throw sss::UsageError("option -picture: '" + picture_path +
                               "' does not end in .png (pictures are PNG files)");
 
-    const std::string map_path =
-        sss::expand_frame_pattern(files[0], running.frame, "brick map");
+    r.map_path = sss::expand_frame_pattern(files[0], running.frame, "brick map");
     if (!picture_path.empty())
         picture_path =
             sss::expand_frame_pattern(picture_path, running.frame, "option -picture");
@@ -185,65 +203,77 @@ int run(const std::vector<std::string>& argv) {
         lookup.filter_radius = *filter_radius;
         picture.filter_radius = *filter_radius;
     }
+    return r;
+}
 
-    sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
-    const sss::BrickMap map(map_path);
-    if (info) {
-        std::fputs(sss::describe_brick_map(map_path, map).c_str(), stdout);
+/// -picture: draws the map and reports what was drawn.
+void write_picture(const sss::BrickMap& map, const Request& request) {
+    const std::string& picture_path = request.picture_path;
+    const sss::BrickMapPictureOptions& picture = request.picture;
+    const bool have_slice = request.have_slice;
+    const sss::BrickMapPictureReport r =
+        sss::write_brick_map_picture(map, picture, picture_path);
+    std::printf("brickinfo: wrote %s: %d x %d, %s; %zu pixels with data",
+                picture_path.c_str(), r.width, r.height, r.description.c_str(),
+                r.pixels_with_data);
+    if (picture.mode == sss::BrickMapPictureMode::Level)
+        std::printf(", %zu samples drawn", r.samples_drawn);
+    std::printf("\n");
+    std::fflush(stdout);
+    if (r.pixels_with_data == 0)
+        sss::warn(kTool, picture_path + ": no data in the picture (" +
+                             (have_slice ? "does the plane cross the map? " : "") +
+                             "does the tree hold data?)");
+}
+
+/// -lookup: evaluates the map at every point of a cloud, writes the result and
+/// reports the differences to the input.
+void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
+    const std::string& lookup_in = r.lookup_in;
+    const std::string& lookup_out = r.lookup_out;
+    sss::BrickMapCloudLookupOptions& lookup = r.lookup;
+    const sss::PointCloud cloud = sss::read_point_cloud(lookup_in);
+    lookup.progress = job.progress();
+    const sss::Stopwatch watch;
+    sss::BrickMapCloudLookupReport report;
+    const sss::PointCloud out = sss::lookup_brick_map_cloud(map, cloud, lookup, &report);
+    const double seconds = watch.seconds();
+    sss::write_point_cloud(out, lookup_out, r.wopt);
+    char radius[64];
+    if (lookup.filter_radius >= 0.0f)
+        std::snprintf(radius, sizeof radius, "%g", double(lookup.filter_radius));
+    else
+        std::snprintf(radius, sizeof radius, "point radius x %g",
+                      double(lookup.filter_scale));
+    std::printf("brickinfo: lookup %s -> %s: %zu points, %zu without data, filter radius "
+                "%s, %.3f s\n",
+                lookup_in.c_str(), lookup_out.c_str(), report.points, report.misses,
+                radius, seconds);
+    for (const sss::ChannelDifference& d : report.differences)
+        std::printf("brickinfo: compare %s: rms %.6g max %.6g (input rms %.6g, relative "
+                    "rms %.4g%%)\n",
+                    d.name.c_str(), d.rms, d.max_abs, d.reference_rms,
+                    d.reference_rms > 0.0 ? 100.0 * d.rms / d.reference_rms : 0.0);
+    for (const std::string& name : report.not_compared)
+        std::printf("brickinfo: compare %s: not in %s (or another type)\n", name.c_str(),
+                    lookup_in.c_str());
+    std::fflush(stdout);
+    if (report.misses > 0)
+        sss::warn(kTool, lookup_in + ": " + std::to_string(report.misses) +
+                             " points have no map data around them (written as 0)");
+}
+
+int run(const std::vector<std::string>& argv) {
+    std::optional<Request> request = parse_request(argv);
+    if (!request) return 0;
+    sss::Job job(kTool, request->running);
+    const sss::BrickMap map(request->map_path);
+    if (request->info) {
+        std::fputs(sss::describe_brick_map(request->map_path, map).c_str(), stdout);
         std::fflush(stdout);
     }
-
-    if (!picture_path.empty()) {
-        const sss::BrickMapPictureReport r =
-            sss::write_brick_map_picture(map, picture, picture_path);
-        std::printf("brickinfo: wrote %s: %d x %d, %s; %zu pixels with data",
-                    picture_path.c_str(), r.width, r.height, r.description.c_str(),
-                    r.pixels_with_data);
-        if (picture.mode == sss::BrickMapPictureMode::Level)
-            std::printf(", %zu samples drawn", r.samples_drawn);
-        std::printf("\n");
-        std::fflush(stdout);
-        if (r.pixels_with_data == 0)
-            sss::warn(kTool, picture_path + ": no data in the picture (" +
-                                 (have_slice ? "does the plane cross the map? " : "") +
-                                 "does the tree hold data?)");
-    }
-
-    if (!lookup_in.empty()) {
-        const sss::PointCloud cloud = sss::read_point_cloud(lookup_in);
-        sss::Progress reporter(running.progress > 0);
-        lookup.progress = &reporter;
-        const sss::Stopwatch watch;
-        sss::BrickMapCloudLookupReport report;
-        const sss::PointCloud out =
-            sss::lookup_brick_map_cloud(map, cloud, lookup, &report);
-        const double seconds = watch.seconds();
-        sss::write_point_cloud(out, lookup_out, wopt);
-        char radius[64];
-        if (lookup.filter_radius >= 0.0f)
-            std::snprintf(radius, sizeof radius, "%g", double(lookup.filter_radius));
-        else
-            std::snprintf(radius, sizeof radius, "point radius x %g",
-                          double(lookup.filter_scale));
-        std::printf(
-            "brickinfo: lookup %s -> %s: %zu points, %zu without data, filter radius "
-            "%s, %.3f s\n",
-            lookup_in.c_str(), lookup_out.c_str(), report.points, report.misses, radius,
-            seconds);
-        for (const sss::ChannelDifference& d : report.differences)
-            std::printf(
-                "brickinfo: compare %s: rms %.6g max %.6g (input rms %.6g, relative "
-                "rms %.4g%%)\n",
-                d.name.c_str(), d.rms, d.max_abs, d.reference_rms,
-                d.reference_rms > 0.0 ? 100.0 * d.rms / d.reference_rms : 0.0);
-        for (const std::string& name : report.not_compared)
-            std::printf("brickinfo: compare %s: not in %s (or another type)\n",
-                        name.c_str(), lookup_in.c_str());
-        std::fflush(stdout);
-        if (report.misses > 0)
-            sss::warn(kTool, lookup_in + ": " + std::to_string(report.misses) +
-                                 " points have no map data around them (written as 0)");
-    }
+    if (!request->picture_path.empty()) write_picture(map, *request);
+    if (!request->lookup_in.empty()) lookup_cloud(map, *request, job);
     return 0;
 }
 

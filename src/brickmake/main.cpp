@@ -10,9 +10,9 @@
 
 #include "sss/brick/brickmap.h"
 #include "sss/brick/brickmap_tools.h"
+#include "sss/cli/tool.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
-#include "sss/cli/tool.h"
 
 namespace {
 
@@ -52,7 +52,6 @@ int run(const std::vector<std::string>& argv) {
     sss::BrickMapBuildOptions opt;
     sss::RunOptions running;
     std::vector<std::string> files;
-    bool newer = false;
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, kUsage)) {
@@ -69,8 +68,8 @@ int run(const std::vector<std::string>& argv) {
             opt.omit_geometry = args.integer(o, 0, 1) != 0;
         } else if (o == "channels") {
             opt.channels = sss::split_channel_list(args.value(o), o);
-        } else if (o == "newer") {
-            newer = args.integer(o, 0, 1) != 0;
+        } else if (sss::newer_option(args, o, running)) {
+            continue;
         } else if (o == "splitangle") {
             args.number(o);
             sss::warn(kTool, "-splitangle is ignored: the sides of a surface are always "
@@ -92,31 +91,28 @@ int run(const std::vector<std::string>& argv) {
     if (opt.radius_scale < 1.0)
         sss::warn(kTool, "-radiusscale below 1 makes large and inefficient brick maps");
 
-    if (newer && sss::outputs_up_to_date(kTool, {out_path}, files)) return 0;
-
-    const int threads = sss::resolve_thread_count(running.threads);
-    sss::ThreadLimit limit(threads);
-    sss::Progress reporter(running.progress > 0);
-    opt.progress = &reporter;
-    opt.provenance = sss::command_line_provenance(kTool, argv);
-    const sss::Stopwatch watch;
+    sss::Job job(kTool, running);
+    if (job.up_to_date({out_path}, files)) return 0;
+    opt.progress = job.progress();
+    opt.provenance =
+        sss::quoted_command_line(std::string(kTool) + " " + sss::version_string(), argv);
 
     const sss::BrickMapBuildReport report =
         sss::make_brick_map_from_files(files, opt, out_path);
-    if (running.progress > 0) {
+    if (job.verbose()) {
         std::printf(
             "brickmake: %s: %zu points, %zu bricks (%zu before pruning), %llu bytes\n",
             out_path.c_str(), report.points, report.bricks_written,
             report.bricks_before_pruning,
             static_cast<unsigned long long>(report.file_size));
-        if (running.progress > 1) {
+        if (job.detailed()) {
             const sss::BrickMap map(out_path);
             for (const sss::BrickMapLevel& l : map.info().levels)
                 std::printf("brickmake: depth %d: %zu bricks, %zu samples\n", l.depth,
                             l.bricks, l.samples);
         }
         std::printf("brickmake: build %.3f s, total %.3f s (with reading), threads %d\n",
-                    report.seconds, watch.seconds(), threads);
+                    report.seconds, job.seconds(), job.threads());
         std::fflush(stdout);
     }
     return 0;

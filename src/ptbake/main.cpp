@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "sss/bake/bake.h"
-#include "sss/util/error.h"
-#include "sss/util/frame_pattern.h"
+#include "sss/cli/tool.h"
 #include "sss/diffusion/material.h"
 #include "sss/scene/rib.h"
-#include "sss/cli/tool.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
 
 namespace {
 
@@ -64,7 +64,6 @@ int run(const std::vector<std::string>& argv) {
     bool have_material = false;
     std::vector<std::string> files;
     sss::RunOptions running;
-    bool newer = false;
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, usage())) {
@@ -84,8 +83,8 @@ int run(const std::vector<std::string>& argv) {
             }
         } else if (o == "mfpfraction") {
             opt.mfp_fraction = args.positive(o);
-        } else if (o == "newer") {
-            newer = args.integer(o, 0, 1) != 0;
+        } else if (sss::newer_option(args, o, running)) {
+            continue;
         } else if (sss::write_option(args, o, opt.write)) {
             continue;
         } else if (sss::run_option(args, o, running)) {
@@ -106,23 +105,20 @@ int run(const std::vector<std::string>& argv) {
     if (!opt.output.empty())
         opt.output = sss::expand_frame_pattern(opt.output, opt.frame, "option -o");
 
-    sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
-    sss::Progress reporter(running.progress > 0);
-    opt.progress = &reporter;
-    sss::Stopwatch watch;
+    sss::Job job(kTool, running);
+    opt.progress = job.progress();
 
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
     sss::Scene scene = sss::read_rib(rib, ropt);
     for (const std::string& w : scene.warnings) sss::warn(kTool, w);
-    const double read_s = watch.seconds();
-    if (newer &&
-        sss::outputs_up_to_date(kTool, sss::bake_output_files(scene, opt), scene.sources))
+    const double read_s = job.seconds();
+    if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt), scene.sources))
         return 0;
 
     sss::BakeReport report = sss::bake_scene(scene, opt);
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
-    if (running.progress > 0) {
+    if (job.verbose()) {
         std::printf("ptbake: %s: %zu primitives, %zu lights, %zu baked, %zu occluders "
                     "(%zu triangles, %zu shadowed lights)\n",
                     rib.c_str(), scene.primitives.size(), scene.lights.size(),
@@ -139,8 +135,8 @@ int run(const std::vector<std::string>& argv) {
         std::printf("ptbake: read %.3f s, dice %.3f s, occluders %.3f s, light %.3f s, "
                     "write %.3f s, total %.3f s, threads %d\n",
                     read_s, report.dice_seconds, report.trace_build_seconds,
-                    report.light_seconds, report.write_seconds, watch.seconds(),
-                    sss::resolve_thread_count(running.threads));
+                    report.light_seconds, report.write_seconds, job.seconds(),
+                    job.threads());
         std::fflush(stdout);
     }
     return 0;

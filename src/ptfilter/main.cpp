@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "sss/util/error.h"
-#include "sss/util/frame_pattern.h"
+#include "sss/cli/tool.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/ssdiffusion.h"
-#include "sss/cli/tool.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
 
 namespace {
 
@@ -68,7 +68,6 @@ int run(const std::vector<std::string>& argv) {
     std::vector<std::string> files;
     bool have_filter = false;
     sss::RunOptions running;
-    bool newer = false;
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, usage())) {
@@ -107,8 +106,8 @@ int run(const std::vector<std::string>& argv) {
             continue;
         } else if (sss::run_option(args, o, running)) {
             continue;
-        } else if (o == "newer") {
-            newer = args.integer(o, 0, 1) != 0;
+        } else if (sss::newer_option(args, o, running)) {
+            continue;
         } else if (o == "organize") {
             args.integer(o, 0, 1);
         } else {
@@ -127,12 +126,10 @@ int run(const std::vector<std::string>& argv) {
         f = sss::expand_frame_pattern(f, running.frame, "file name");
     const std::string out_path = files.back();
     files.pop_back();
-    if (newer && sss::outputs_up_to_date(kTool, {out_path}, files)) return 0;
-    sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
-    sss::Progress reporter(running.progress > 0);
-    opt.diffusion.progress = &reporter;
-    sss::Stopwatch watch;
-    if (running.progress > 0) {
+    sss::Job job(kTool, running);
+    if (job.up_to_date({out_path}, files)) return 0;
+    opt.diffusion.progress = job.progress();
+    if (job.verbose()) {
         for (const std::string& line : material)
             std::printf("ptfilter: %s\n", line.c_str());
         std::fflush(stdout);
@@ -141,7 +138,7 @@ int run(const std::vector<std::string>& argv) {
     sss::PointCloud cloud = sss::read_point_cloud(files[0]);
     for (std::size_t i = 1; i < files.size(); ++i)
         cloud.append(sss::read_point_cloud(files[i]));
-    double read_s = watch.seconds();
+    double read_s = job.seconds();
 
     sss::SsDiffusionReport report;
     sss::PointCloud out;
@@ -154,16 +151,15 @@ int run(const std::vector<std::string>& argv) {
         throw sss::ValueError(names + ": " + e.what());
     }
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
-    double filter_s = watch.seconds() - read_s;
+    double filter_s = job.seconds() - read_s;
 
     sss::write_point_cloud(out, out_path, wopt);
-    if (running.progress > 0) {
+    if (job.verbose()) {
         std::printf(
             "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
-            cloud.size(), sss::resolve_thread_count(running.threads),
-            opt.diffusion.max_solid_angle, sss::criterion_name(opt.diffusion.criterion),
-            opt.exact ? " (exact)" : "");
-        if (running.progress > 1 && !opt.exact)
+            cloud.size(), job.threads(), opt.diffusion.max_solid_angle,
+            sss::criterion_name(opt.diffusion.criterion), opt.exact ? " (exact)" : "");
+        if (job.detailed() && !opt.exact)
             std::printf(
                 "ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
                 "terms, %.2f disk integrals\n",
@@ -174,7 +170,7 @@ int run(const std::vector<std::string>& argv) {
                     std::max<std::size_t>(1, cloud.size()));
         std::printf(
             "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
-            read_s, filter_s, watch.seconds() - read_s - filter_s, watch.seconds());
+            read_s, filter_s, job.seconds() - read_s - filter_s, job.seconds());
         std::fflush(stdout);
     }
     return 0;

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "sss/util/error.h"
-#include "sss/cloud/point_cloud_io.h"
 #include "sss/cli/tool.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/util/error.h"
 
 namespace {
 

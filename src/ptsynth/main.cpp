@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "sss/util/error.h"
+#include "sss/cli/tool.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/cloud/synthetic.h"
-#include "sss/cli/tool.h"
+#include "sss/util/error.h"
 
 namespace {
 

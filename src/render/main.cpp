@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "sss/util/error.h"
-#include "sss/util/frame_pattern.h"
+#include "sss/cli/tool.h"
 #include "sss/render/render.h"
 #include "sss/scene/rib.h"
-#include "sss/cli/tool.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
 
 namespace {
 
@@ -42,32 +42,11 @@ std::string usage() {
            "Exit codes: 0 ok, 1 bad scene or failed render, 2 bad command line.\n";
 }
 
-/// The command line as a shell would take it back (for image metadata).
-std::string quoted_command_line(const std::vector<std::string>& argv) {
-    std::string line = kTool;
-    for (const std::string& a : argv) {
-        line += ' ';
-        const bool plain =
-            !a.empty() &&
-            a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMN"
-                                "OPQRSTUVWXYZ0123456789-_./=+,:%#@") == std::string::npos;
-        if (plain) {
-            line += a;
-            continue;
-        }
-        line += '\'';
-        for (char c : a) line += c == '\'' ? std::string("'\\''") : std::string(1, c);
-        line += '\'';
-    }
-    return line;
-}
-
 int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::RenderJobOptions opt;
     sss::RunOptions running;
     std::vector<std::string> files;
-    bool newer = false;
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, usage())) {
@@ -79,8 +58,8 @@ int run(const std::vector<std::string>& argv) {
             opt.yres = args.integer(o, 1, 65536);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
-        } else if (o == "newer") {
-            newer = args.integer(o, 0, 1) != 0;
+        } else if (sss::newer_option(args, o, running)) {
+            continue;
         } else if (sss::run_option(args, o, running)) {
             continue;
         } else {
@@ -91,28 +70,25 @@ int run(const std::vector<std::string>& argv) {
         throw sss::UsageError(files.empty() ? "no scene given (usage: render scene.rib)"
                                             : "more than one scene given");
     opt.frame = running.frame;
-    opt.command_line = quoted_command_line(argv);
+    opt.command_line = sss::quoted_command_line(kTool, argv);
     const std::string rib = sss::expand_frame_pattern(files[0], opt.frame, "scene");
 
-    const int threads = sss::resolve_thread_count(running.threads);
-    sss::ThreadLimit limit(threads);
-    sss::Progress reporter(running.progress > 0);
-    opt.progress = &reporter;
-    sss::Stopwatch watch;
+    sss::Job job(kTool, running);
+    opt.progress = job.progress();
 
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
     const sss::Scene scene = sss::read_rib(rib, ropt);
     for (const std::string& w : scene.warnings) sss::warn(kTool, w);
-    const double read_s = watch.seconds();
-    if (newer) {
+    const double read_s = job.seconds();
+    if (job.newer()) {
         const sss::RenderFiles io = sss::render_files(scene, opt);
-        if (sss::outputs_up_to_date(kTool, io.outputs, io.inputs)) return 0;
+        if (job.up_to_date(io.outputs, io.inputs)) return 0;
     }
 
     const sss::RenderReport report = sss::render_scene(scene, opt);
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
-    if (running.progress > 0) {
+    if (job.verbose()) {
         const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;
         const int yres = opt.yres > 0 ? opt.yres : scene.options.camera.yres;
         const int nx =
@@ -131,7 +107,7 @@ int run(const std::vector<std::string>& argv) {
         std::printf("render: read %.3f s, setup %.3f s, render %.3f s, write %.3f s, "
                     "total %.3f s, threads %d\n",
                     read_s, report.setup_seconds, report.render_seconds,
-                    report.write_seconds, watch.seconds(), threads);
+                    report.write_seconds, job.seconds(), job.threads());
         std::fflush(stdout);
     }
     return 0;

@@ -16,6 +16,7 @@
 
 #include "sss/cli/tool.h"
 #include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -218,6 +219,19 @@ TEST(RunTool, UsageErrorExits2) {
     std::string err = testing::internal::GetCapturedStderr();
     EXPECT_EQ(rc, 2);
     EXPECT_EQ(err, "mytool ERROR: unknown option -bogus\nmytool: try 'mytool --help'\n");
+}
+
+TEST(RunTool, MissingFrameNamesTheOption) {
+    testing::internal::CaptureStderr();
+    int rc =
+        call_run_tool({"mytool", "x.####.ptc"}, [](const std::vector<std::string>& a) {
+            return sss::expand_frame_pattern(a[0], std::nullopt, "file name").empty() ? 1
+                                                                                      : 0;
+        });
+    std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 2);
+    EXPECT_EQ(err, "mytool ERROR: file name: 'x.####.ptc' has a frame pattern; give the "
+                   "frame with -frame N\nmytool: try 'mytool --help'\n");
 }
 
 TEST(RunTool, RuntimeErrorsExit1) {

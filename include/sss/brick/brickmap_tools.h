@@ -22,16 +22,6 @@ class Progress; // sss/util/progress.h
 // brickmake
 // ---------------------------------------------------------------------------
 
-/// "tool version args...": the provenance stored in a map, with arguments
-/// that need it quoted for a POSIX shell so the line can be re-run.
-std::string command_line_provenance(const std::string& tool,
-                                    const std::vector<std::string>& args);
-
-/// Splits a comma-separated channel list ("_ssdiffusion,_radiance_t").
-/// UsageError naming opt for an empty list, an empty name or a repeated name.
-std::vector<std::string> split_channel_list(const std::string& list,
-                                            const std::string& opt);
-
 /// Reads the clouds (.ptc/.ply) and builds the map at output (atomically).
 /// ValueErrors of the build are prefixed with the input file names.
 BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& inputs,

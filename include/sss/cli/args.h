@@ -50,4 +50,19 @@ private:
     std::size_t m_pos = 0;
 };
 
+/// A word as a POSIX shell reads it back: unchanged when it is made of
+/// letters, digits and _./,:=+@%-#, else in single quotes (a quote itself
+/// becomes '\'').
+std::string shell_quote(const std::string& word);
+
+/// head followed by every argument, shell-quoted: a command line that can be
+/// re-run (image metadata, the provenance stored in brick maps).
+std::string quoted_command_line(const std::string& head,
+                                const std::vector<std::string>& args);
+
+/// Splits a comma-separated channel list ("_ssdiffusion,_radiance_t").
+/// UsageError naming opt for an empty list, an empty name or a repeated name.
+std::vector<std::string> split_channel_list(const std::string& list,
+                                            const std::string& opt);
+
 } // namespace sss

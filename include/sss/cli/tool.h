@@ -1,5 +1,9 @@
 #pragma once
 /// \file tool.h
+/// Module cli: everything about command lines; the only module that knows
+/// option names. It uses diffusion (materials), cloud and util, and reports
+/// the versions of every library.
+///
 /// The command-line layer every tool's main() is built on: error reporting
 /// and exit codes (run_tool), --help/--version, warnings. Includes the option
 /// scanner and the shared option groups, so a main needs this one header
@@ -10,6 +14,7 @@
 #include <vector>
 
 #include "sss/cli/args.h"
+#include "sss/cli/job.h"
 #include "sss/cli/options.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/progress.h"

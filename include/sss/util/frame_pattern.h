@@ -11,16 +11,26 @@
 #include <optional>
 #include <string>
 
+#include "sss/util/error.h"
+
 namespace sss {
+
+/// A frame pattern in a file name with no frame number to expand it with. A
+/// UsageError (the caller must say which frame); the command-line layer adds
+/// how to give it.
+class MissingFrameError : public UsageError {
+public:
+    using UsageError::UsageError;
+};
 
 /// True if path contains a frame pattern (a lone '#' counts, so that it can
 /// be reported).
 bool has_frame_pattern(const std::string& path);
 
 /// Expands every frame pattern of path with frame. A path without pattern is
-/// returned unchanged. Throws UsageError for a pattern without a frame
-/// number ("<what>: 'x.####.ptc' has a frame pattern; give -frame N"), for a
-/// lone '#', and for a malformed %-sequence.
+/// returned unchanged. Throws MissingFrameError for a pattern without a
+/// frame number ("<what>: 'x.####.ptc' has a frame pattern"), UsageError for a
+/// lone '#' and for a malformed %-sequence.
 std::string expand_frame_pattern(const std::string& path, std::optional<int> frame,
                                  const std::string& what = "path");
 

@@ -13,19 +13,17 @@
 #include <filesystem>
 #include <limits>
 #include <sstream>
-#include <string_view>
-#include <unordered_set>
 
 #include <OpenImageIO/imageio.h>
 #include <glm/geometric.hpp>
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/progress.h"
 #include "sss/util/version.h"
-#include "sss/cloud/point_cloud_io.h"
 
 namespace sss {
 
@@ -71,47 +69,6 @@ bool ends_with_png(const std::string& path) {
 // ---------------------------------------------------------------------------
 // brickmake
 // ---------------------------------------------------------------------------
-
-std::string command_line_provenance(const std::string& tool,
-                                    const std::vector<std::string>& args) {
-    std::string line = tool + " " + version_string();
-    for (const std::string& a : args) {
-        bool plain = !a.empty();
-        for (unsigned char c : a)
-            if (!(std::isalnum(c) || std::string_view("_./,:=+@%-#").find(char(c)) !=
-                                         std::string_view::npos))
-                plain = false;
-        if (plain) {
-            line += " " + a;
-            continue;
-        }
-        // Single quotes keep everything; a quote itself becomes '\''.
-        std::string q = "'";
-        for (char c : a) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-        line += " " + q + "'";
-    }
-    return line;
-}
-
-std::vector<std::string> split_channel_list(const std::string& list,
-                                            const std::string& opt) {
-    std::vector<std::string> names;
-    std::unordered_set<std::string> seen;
-    std::size_t start = 0;
-    while (true) {
-        std::size_t comma = list.find(',', start);
-        std::string name = list.substr(
-            start, comma == std::string::npos ? std::string::npos : comma - start);
-        if (name.empty())
-            throw UsageError("option -" + opt + ": empty channel name in '" + list + "'");
-        if (!seen.insert(name).second)
-            throw UsageError("option -" + opt + ": channel '" + name + "' named twice");
-        names.push_back(name);
-        if (comma == std::string::npos) break;
-        start = comma + 1;
-    }
-    return names;
-}
 
 BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& inputs,
                                               const BrickMapBuildOptions& options,

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <optional>
 #include <string_view>
+#include <unordered_set>
 
 #include "sss/util/error.h"
 #include "sss/util/parse.h"
@@ -117,6 +118,50 @@ glm::dvec3 ArgScanner::triple(const std::string& opt) {
 const std::string& ArgScanner::peek() const {
     static const std::string empty;
     return done() ? empty : m_args[m_pos];
+}
+
+std::string shell_quote(const std::string& word) {
+    bool plain = !word.empty();
+    for (unsigned char c : word)
+        if (!(std::isalnum(c) ||
+              std::string_view("_./,:=+@%-#").find(char(c)) != std::string_view::npos))
+            plain = false;
+    if (plain) return word;
+    // Single quotes keep everything; a quote itself becomes '\''.
+    std::string q = "'";
+    for (char c : word) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    q += '\'';
+    return q;
+}
+
+std::string quoted_command_line(const std::string& head,
+                                const std::vector<std::string>& args) {
+    std::string line = head;
+    for (const std::string& a : args) {
+        line += ' ';
+        line += shell_quote(a);
+    }
+    return line;
+}
+
+std::vector<std::string> split_channel_list(const std::string& list,
+                                            const std::string& opt) {
+    std::vector<std::string> names;
+    std::unordered_set<std::string> seen;
+    std::size_t start = 0;
+    while (true) {
+        std::size_t comma = list.find(',', start);
+        std::string name = list.substr(
+            start, comma == std::string::npos ? std::string::npos : comma - start);
+        if (name.empty())
+            throw UsageError("option -" + opt + ": empty channel name in '" + list + "'");
+        if (!seen.insert(name).second)
+            throw UsageError("option -" + opt + ": channel '" + name + "' named twice");
+        names.push_back(name);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return names;
 }
 
 } // namespace sss

@@ -1,11 +1,7 @@
 /// \file options.cpp
-/// Shared option groups and the -newer test.
+/// Shared option groups: materials and point-cloud output.
 
 #include "sss/cli/options.h"
-
-#include <algorithm>
-#include <cstdio>
-#include <filesystem>
 
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/material.h"
@@ -51,46 +47,6 @@ bool material_option(ArgScanner& args, const std::string& o, MaterialSpec& m,
     } else {
         return false;
     }
-    return true;
-}
-
-bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
-    if (o == "threads") {
-        run.threads = args.integer(o, -1024, 1024);
-    } else if (o == "progress") {
-        run.progress = args.integer(o, 0, 2);
-    } else if (o == "Progress") {
-        run.progress = std::max(run.progress, 1);
-    } else if (o == "frame") {
-        run.frame = args.integer(o, -1000000, 1000000);
-    } else {
-        return false;
-    }
-    return true;
-}
-
-bool outputs_up_to_date(const std::string& tool, const std::vector<std::string>& outputs,
-                        const std::vector<std::string>& inputs) {
-    namespace fs = std::filesystem;
-    if (outputs.empty()) return false;
-    std::error_code ec;
-    std::optional<fs::file_time_type> newest_input;
-    for (const std::string& in : inputs) {
-        const fs::file_time_type t = fs::last_write_time(in, ec);
-        if (ec) return false;
-        if (!newest_input || t > *newest_input) newest_input = t;
-    }
-    for (const std::string& out : outputs) {
-        if (!fs::is_regular_file(out, ec) || ec) return false;
-        const fs::file_time_type t = fs::last_write_time(out, ec);
-        if (ec || (newest_input && !(t > *newest_input))) return false;
-    }
-    std::string names;
-    for (const std::string& out : outputs) names += (names.empty() ? "" : ", ") + out;
-    std::printf("%s: %s %s newer than %s inputs; nothing to do\n", tool.c_str(),
-                names.c_str(), outputs.size() == 1 ? "is" : "are",
-                outputs.size() == 1 ? "its" : "their");
-    std::fflush(stdout);
     return true;
 }
 

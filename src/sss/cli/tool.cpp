@@ -15,6 +15,7 @@
 #include <zlib.h>
 
 #include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
 
 namespace sss {
 
@@ -65,6 +66,11 @@ int run_tool(const std::string& tool, int argc, char** argv,
             return status == 0 ? 1 : status;
         }
         return status;
+    } catch (const MissingFrameError& e) {
+        // The library cannot know how a frame is given; a tool takes -frame.
+        print_error(tool, std::string(e.what()) + "; give the frame with -frame N");
+        std::cerr << tool << ": try '" << tool << " --help'\n";
+        return 2;
     } catch (const UsageError& e) {
         print_error(tool, e.what());
         std::cerr << tool << ": try '" << tool << " --help'\n";

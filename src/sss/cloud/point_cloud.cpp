@@ -9,6 +9,7 @@
 #include <glm/common.hpp>
 
 #include "sss/util/error.h"
+#include "sss/util/name_table.h"
 
 namespace sss {
 
@@ -27,32 +28,24 @@ int channel_type_size(ChannelType type) {
     return 1; // unreachable for valid enum values
 }
 
+namespace {
+
+constexpr NameTable<ChannelType, 6> kChannelTypes({{{ChannelType::Float, "float"},
+                                                    {ChannelType::Color, "color"},
+                                                    {ChannelType::Point, "point"},
+                                                    {ChannelType::Vector, "vector"},
+                                                    {ChannelType::Normal, "normal"},
+                                                    {ChannelType::Matrix, "matrix"}}},
+                                                  "float");
+
+} // namespace
+
 const char* channel_type_name(ChannelType type) {
-    switch (type) {
-    case ChannelType::Float:
-        return "float";
-    case ChannelType::Color:
-        return "color";
-    case ChannelType::Point:
-        return "point";
-    case ChannelType::Vector:
-        return "vector";
-    case ChannelType::Normal:
-        return "normal";
-    case ChannelType::Matrix:
-        return "matrix";
-    }
-    return "float";
+    return kChannelTypes.name(type);
 }
 
 std::optional<ChannelType> parse_channel_type(std::string_view name) {
-    static constexpr ChannelType all[] = {ChannelType::Float,  ChannelType::Color,
-                                          ChannelType::Point,  ChannelType::Vector,
-                                          ChannelType::Normal, ChannelType::Matrix};
-    for (ChannelType t : all) {
-        if (name == channel_type_name(t)) return t;
-    }
-    return std::nullopt;
+    return kChannelTypes.parse(name);
 }
 
 void PointCloud::resize(std::size_t n) {

@@ -105,8 +105,7 @@ std::string expand_frame_pattern(const std::string& path, std::optional<int> fra
                              "' has a lone '#' (one or four digits depending on the "
                              "tool); write #### or %04d");
         if (!frame)
-            throw UsageError(what + ": '" + path +
-                             "' has a frame pattern; give the frame with -frame N");
+            throw MissingFrameError(what + ": '" + path + "' has a frame pattern");
         out += padded(*frame, m.width);
         i += m.length;
     }
