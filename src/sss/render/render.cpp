@@ -19,7 +19,6 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -31,15 +30,16 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "sss/util/hash.h"
 #include "shading.h"
 #include "sss/dice/dice.h"
-#include "sss/util/error.h"
-#include "sss/util/progress.h"
-#include "sss/util/version.h"
-#include "sss/util/frame_pattern.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/util/hash.h"
+#include "sss/util/math.h"
+#include "sss/util/progress.h"
+#include "sss/util/version.h"
 
 namespace sss {
 
@@ -76,11 +76,6 @@ constexpr int kOcclusion = 16;
 constexpr int kValues = 17;
 constexpr int kSlots = kValues + 1; // + weight
 
-double unit_double(uint64_t h) {
-    return static_cast<double>(h >> 11) * 0x1.0p-53;
-}
-
-
 /// Whether `Attribute "visibility" name` leaves the primitive visible.
 bool visible_to(const Primitive& prim, const char* name) {
     return attributes_of(prim).visible_to(name);
@@ -98,7 +93,7 @@ public:
                              std::to_string(cam.fov));
         if (!(cam.near_clip >= 0.0) || !(cam.far_clip > cam.near_clip))
             throw ValueError("Clipping: far must be beyond near");
-        m_tan_half = cam.perspective ? std::tan(cam.fov * std::numbers::pi / 360.0) : 1.0;
+        m_tan_half = cam.perspective ? std::tan(cam.fov * kPi / 360.0) : 1.0;
         const double det = glm::determinant(cam.world_to_camera);
         if (!(std::abs(det) > 0.0) || !std::isfinite(det))
             throw ValueError("the camera transform is singular");
@@ -537,9 +532,10 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
                         const uint64_t key = detail::splitmix64(
                             pixel_key +
                             uint64_t(j * job.nx + i) * detail::kSplitMixIncrement);
-                        const double sx = px + (i + unit_double(key)) / job.nx;
+                        const double sx = px + (i + detail::unit_double(key)) / job.nx;
                         const double sy =
-                            py + (j + unit_double(detail::splitmix64(key))) / job.ny;
+                            py +
+                            (j + detail::unit_double(detail::splitmix64(key))) / job.ny;
                         bool bad = false;
                         job.sample(sx, sy, key, scratch, value, camera_count,
                                    shadow_count, bad);

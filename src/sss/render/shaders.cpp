@@ -12,7 +12,6 @@
 #include <filesystem>
 #include <limits>
 #include <map>
-#include <numbers>
 #include <set>
 #include <string>
 #include <utility>
@@ -20,25 +19,21 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
-#include "sss/util/hash.h"
 #include "shading.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
-#include "sss/cloud/point_cloud_io.h"
+#include "sss/util/hash.h"
+#include "sss/util/math.h"
 
 namespace sss::detail {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 /// Occlusion rays per shading point are capped: more only costs time.
 constexpr int kMaxOcclusionSamples = 1024;
 /// Lookups return at most this many floats (the .bkm format's own limit).
 constexpr int kMaxLookupFloats = 1024;
-
-double unit_double(uint64_t h) {
-    return static_cast<double>(h >> 11) * 0x1.0p-53;
-}
 
 bool ends_with_nocase(const std::string& s, const std::string& suffix) {
     if (s.size() < suffix.size()) return false;
