@@ -2,7 +2,7 @@
 /// Dicing of parametric surfaces (quadrics, patches, patch meshes, the
 /// teapot) into micropolygons and triangles, the dispatch of dice_primitive
 /// and the reference quadric areas. Polygons and subdivision meshes are in
-/// dice_mesh.cpp.
+/// dice_polygon.cpp.
 ///
 /// A surface is split recursively in parameter space (REYES style) until
 /// each piece can be diced into a grid of at most 256 micropolygons whose

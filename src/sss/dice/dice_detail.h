@@ -1,6 +1,6 @@
 #pragma once
 // Internal interface between dice.cpp (dispatch, parametric surfaces) and
-// dice_mesh.cpp (polygons and subdivision meshes).
+// dice_polygon.cpp (polygons and subdivision meshes).
 
 #include "sss/dice/dice.h"
 

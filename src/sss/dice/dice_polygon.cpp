@@ -1,4 +1,4 @@
-/// \file dice_mesh.cpp
+/// \file dice_polygon.cpp
 /// Dicing of polygons (Polygon, GeneralPolygon, PointsPolygons,
 /// PointsGeneralPolygons) and Catmull–Clark subdivision meshes.
 ///
