@@ -1,5 +1,8 @@
 #pragma once
 /// \file dice.h
+/// The dice module owns dicing: primitives of the scene layer become
+/// micropolygons and ray-tracing triangles. It may use scene and util only.
+///
 /// Dicing: every primitive of the scene layer becomes micropolygons (one
 /// point each, with its exact area, normal and radius) and triangles for the
 /// ray tracer. View-independent: nothing is culled, and micropolygon size is
@@ -7,6 +10,7 @@
 /// camera measured at the surface's distance from the eye, ignoring its
 /// orientation (REYES with raster-oriented dicing off).
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 

@@ -1,17 +1,14 @@
 /// \file dice_polygon.cpp
 /// Dicing of polygons (Polygon, GeneralPolygon, PointsPolygons,
-/// PointsGeneralPolygons) and Catmull–Clark subdivision meshes.
+/// PointsGeneralPolygons).
 ///
-/// Polygons: convex quads are diced like REYES grids, as bilinear patches of
+/// Convex quads are diced like REYES grids, as bilinear patches of
 /// nu x nv sub-quads (one micropolygon each, made of two triangles). Every
 /// other face is triangulated in the plane of its Newell normal (ear clipping,
 /// holes joined to the outer loop by bridges), and every triangle is cut into
 /// n x n similar sub-triangles in world space, one micropolygon each, with n
 /// = ceil(longest side / (sqrt(2) e)). Thin triangles, for which that would
 /// make n^2 needles, are cut in columns across their longest side instead.
-/// Subdivision meshes are refined until their control edges are at most twice
-/// the dicing length, pushed to the limit surface, and every refined quad is
-/// diced as a bilinear patch.
 ///
 /// Watertightness: points on a face's border are computed from that border
 /// edge's two end points only, with integer-quotient weights, so two faces
@@ -20,593 +17,24 @@
 /// since both sides put their points on the same straight segment, the
 /// cracks are only rounding-sized (the ray tracer's epsilon covers them).
 
-#include "sss/dice/dice.h"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
-#include <glm/mat3x3.hpp>
-#include <glm/matrix.hpp>
 #include <glm/vec2.hpp>
 
-#include "dice_detail.h"
+#include "dice_common.h"
 #include "mesh_common.h"
-#include "sss/util/error.h"
-#include "subdivision.h"
+#include "triangulator.h"
 
 namespace sss::detail {
 
-// ---------------------------------------------------------------------------
-// Shared helpers (mesh_common.h)
-
-void throw_mesh_error(const Primitive& prim, const std::string& what) {
-    const std::string kind = primitive_kind_name(prim.kind);
-    throw ValueError((prim.source.empty() ? kind : prim.source + ": " + kind) + ": " +
-                     what);
-}
-
-std::vector<glm::dvec3> read_positions(const Primitive& prim) {
-    const Param* p = prim.params.find("P");
-    bool homogeneous = p && p->type == ParamType::HPoint;
-    if (!p) {
-        p = prim.params.find("Pw");
-        homogeneous = true;
-    }
-    if (!p) throw_mesh_error(prim, "missing \"P\"");
-    const std::size_t comps = homogeneous ? 4 : 3;
-    if (p->type == ParamType::String ||
-        static_cast<std::size_t>(p->element_size()) != comps)
-        throw_mesh_error(prim, "\"" + p->name + "\" must have " + std::to_string(comps) +
-                                   " numbers per point");
-    if (p->numbers.size() % comps != 0)
-        throw_mesh_error(prim, "\"" + p->name + "\" has " +
-                                   std::to_string(p->numbers.size()) +
-                                   " numbers, not a whole number of points");
-    std::vector<glm::dvec3> points(p->numbers.size() / comps);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        const double* v = &p->numbers[comps * i];
-        glm::dvec3 q(v[0], v[1], v[2]);
-        if (homogeneous) {
-            if (v[3] == 0.0)
-                throw_mesh_error(prim,
-                                 "\"Pw\" point " + std::to_string(i) + " has w = 0");
-            q /= v[3];
-        }
-        if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
-            throw_mesh_error(prim, "\"" + p->name + "\" point " + std::to_string(i) +
-                                       " is not finite");
-        points[i] = q;
-    }
-    return points;
-}
-
-namespace {} // namespace
-
-CornerVec3::CornerVec3(const Primitive& prim, std::string_view name, std::size_t faces,
-                       std::size_t points, std::size_t corners) {
-    const Param* p = prim.params.find(name);
-    if (!p) return;
-    std::string quoted(1, '"');
-    quoted.append(name);
-    quoted.push_back('"');
-    if (p->type == ParamType::String || p->element_size() != 3)
-        throw_mesh_error(prim, quoted + " must have 3 numbers per value");
-    std::size_t needed = 1;
-    switch (p->storage) {
-    case ParamClass::Constant:
-        needed = 1;
-        break;
-    case ParamClass::Uniform:
-        needed = faces;
-        break;
-    case ParamClass::Varying:
-    case ParamClass::Vertex:
-        needed = points;
-        break;
-    case ParamClass::FaceVarying:
-    case ParamClass::FaceVertex:
-        needed = corners;
-        break;
-    }
-    if (p->element_count() < needed)
-        throw_mesh_error(prim, quoted + " (" + param_class_name(p->storage) + ") has " +
-                                   std::to_string(p->element_count()) + " values, " +
-                                   std::to_string(needed) + " needed");
-    for (std::size_t i = 0; i < 3 * needed; ++i)
-        if (!std::isfinite(p->numbers[i]))
-            throw_mesh_error(prim, quoted + " has a value that is not finite");
-    m_data = p->numbers.data();
-    m_class = p->storage;
-}
-
 namespace {
-
-// ---------------------------------------------------------------------------
-// Normals
-
-
-/// The normal rule of dice_detail.h with the matrix prepared once per
-/// primitive (world_normal rebuilds it on every call, too slow for millions
-/// of corner normals). The cofactor matrix (det * inverse transpose) is
-/// defined even for singular transforms, and maps object cross products to
-/// world cross products; its sign is calibrated against world_normal so the
-/// two can never disagree (mirror transforms included).
-class NormalTransform {
-public:
-    explicit NormalTransform(const Primitive& prim) {
-        const glm::dmat3 a(prim.object_to_world);
-        m_matrix = glm::dmat3(glm::cross(a[1], a[2]), glm::cross(a[2], a[0]),
-                              glm::cross(a[0], a[1]));
-        const glm::dvec3 probe(0.267, 0.535, 0.802);
-        const glm::dvec3 reference = world_normal(prim.object_to_world, probe, false);
-        m_user_sign = glm::dot(reference, m_matrix * probe) < 0.0 ? -1.0 : 1.0;
-        m_geometric_sign =
-            attributes_of(prim).orientation_inside ? -m_user_sign : m_user_sign;
-    }
-    /// World direction of a user-supplied object-space normal, not normalised.
-    glm::dvec3 user(const glm::dvec3& n) const { return m_user_sign * (m_matrix * n); }
-    /// Unit world normal from an object-space formula normal (orientation applied).
-    glm::dvec3 geometric(const glm::dvec3& n) const {
-        return safe_normalize(m_geometric_sign * (m_matrix * n));
-    }
-    /// Unit world normal from a cross product of world-space edges (the
-    /// cofactor image of the object-space formula normal).
-    glm::dvec3 geometric_from_world_cross(const glm::dvec3& c) const {
-        return safe_normalize(m_geometric_sign * c);
-    }
-    /// n / |n|, or zero for a zero or non-finite vector (never NaN).
-    static glm::dvec3 safe_normalize(const glm::dvec3& n) {
-        const double len = glm::length(n);
-        return len > 0.0 && std::isfinite(len) ? n * (1.0 / len) : glm::dvec3(0.0);
-    }
-
-private:
-    glm::dmat3 m_matrix{1.0};
-    double m_user_sign = 1.0;
-    double m_geometric_sign = 1.0;
-};
-
-/// World position of an object-space point (projective matrices divide by w).
-glm::dvec3 to_world(const Matrix4& m, const glm::dvec3& p) {
-    const glm::dvec4 h = m * glm::dvec4(p, 1.0);
-    return h.w == 1.0 ? glm::dvec3(h) : glm::dvec3(h) / h.w;
-}
-
-/// Micropolygon edge length at a world point, checked.
-double edge_length(const Primitive& prim, const DiceControl& control, const glm::dvec3& p,
-                   double shading_rate) {
-    double e = 0.0;
-    try {
-        e = control.edge_length_at(p, shading_rate);
-    } catch (const ValueError& err) {
-        throw_mesh_error(prim, err.what()); // name the primitive
-    }
-    if (!(e > 0.0) || !std::isfinite(e))
-        throw_mesh_error(prim, "dicing edge length " + std::to_string(e) +
-                                   " is not a positive number");
-    return e;
-}
-
-/// Number of pieces for a length: ceil(length / edge), at least 1.
-std::size_t piece_count(const Primitive& prim, const DiceControl& control, double length,
-                        double edge) {
-    const double n = std::max(1.0, std::ceil(length / edge));
-    // Every piece is at least one micropolygon: one side beyond the budget is
-    // reported here, before any count can overflow.
-    if (!(n <= static_cast<double>(control.max_micropolygons)) || !(n <= 1e9))
-        throw_mesh_error(prim, "would dice into more than " +
-                                   std::to_string(control.max_micropolygons) +
-                                   " micropolygons");
-    return static_cast<std::size_t>(n);
-}
-
-void check_budget(const Primitive& prim, const DiceControl& control, std::size_t count) {
-    if (count > control.max_micropolygons)
-        throw_mesh_error(prim, "would dice into " + std::to_string(count) +
-                                   " micropolygons, more than the limit of " +
-                                   std::to_string(control.max_micropolygons));
-}
-
-glm::vec3 to_float(const glm::dvec3& v) {
-    return glm::vec3(v);
-}
-
-/// Fills a DicedSurface whose arrays were sized beforehand.
-struct SurfaceWriter {
-    DicedSurface& out;
-    bool with_colors;
-    std::size_t mp = 0;
-    std::size_t vertex = 0;
-    std::size_t triangle = 0;
-
-    void micropolygon(const glm::dvec3& centre, const glm::dvec3& normal, double area,
-                      double radius, const glm::dvec3& color) {
-        if (mp >= out.centers.size()) overflow();
-        out.centers[mp] = to_float(centre);
-        out.normals[mp] = to_float(normal);
-        out.areas[mp] = static_cast<float>(area);
-        out.radii[mp] = static_cast<float>(radius);
-        if (with_colors) out.colors[mp] = to_float(color);
-        ++mp;
-    }
-    void add_vertex(const glm::dvec3& p, const glm::dvec3& n) {
-        if (vertex >= out.vertices.size()) overflow();
-        out.vertices[vertex] = to_float(p);
-        out.vertex_normals[vertex] = to_float(n);
-        ++vertex;
-    }
-    void add_triangle(std::size_t a, std::size_t b, std::size_t c) {
-        if (3 * triangle >= out.triangles.size()) overflow();
-        out.triangles[3 * triangle + 0] = static_cast<uint32_t>(a);
-        out.triangles[3 * triangle + 1] = static_cast<uint32_t>(b);
-        out.triangles[3 * triangle + 2] = static_cast<uint32_t>(c);
-        ++triangle;
-    }
-    /// The counting pass and the dicing disagree: a bug, never bad input.
-    [[noreturn]] static void overflow() {
-        throw std::logic_error("dice_mesh: more micropolygons than counted");
-    }
-    void finish() { out.resize(mp, vertex, triangle, with_colors); }
-};
-
-void allocate(const Primitive& prim, DicedSurface& out, std::size_t micropolygons,
-              std::size_t vertices, std::size_t triangles, bool with_colors) {
-    if (vertices > std::numeric_limits<uint32_t>::max())
-        throw_mesh_error(prim,
-                         "diced surface has more vertices than 32-bit indices address");
-    out.resize(micropolygons, vertices, triangles, with_colors);
-}
-
-glm::dvec3 bilinear(const std::array<glm::dvec3, 4>& c, double u, double v) {
-    return (c[0] * (1.0 - u) + c[1] * u) * (1.0 - v) + (c[3] * (1.0 - u) + c[2] * u) * v;
-}
-
-constexpr std::array<glm::dvec3, 4> kZero4{glm::dvec3(0.0), glm::dvec3(0.0),
-                                           glm::dvec3(0.0), glm::dvec3(0.0)};
-
-/// One quad to dice, in world space, corners in winding order.
-struct QuadCorners {
-    std::array<glm::dvec3, 4> p = kZero4;
-    std::array<glm::dvec3, 4> normal = kZero4; ///< interpolated, then normalised
-    std::array<glm::dvec3, 4> color = kZero4;  ///< used when the writer has colours
-    glm::dvec3 fallback_normal{0.0};           ///< where the interpolation vanishes
-};
-
-/// Dices a quad as a bilinear patch of nu x nv sub-quads (nu along corners
-/// 0->1). Each sub-quad is one micropolygon made of two emitted triangles:
-/// its area is theirs, its centre their area-weighted centroid.
-class QuadDicer {
-public:
-    void dice(const QuadCorners& q, std::size_t nu, std::size_t nv, SurfaceWriter& w) {
-        m_grid.resize((nu + 1) * (nv + 1));
-        const double du = static_cast<double>(nu), dv = static_cast<double>(nv);
-        // Flat faces (one normal at all corners) skip the interpolation.
-        const bool flat = q.normal[1] == q.normal[0] && q.normal[2] == q.normal[0] &&
-                          q.normal[3] == q.normal[0];
-        const glm::dvec3 flat_normal = NormalTransform::safe_normalize(q.normal[0]);
-        auto normal_at = [&](double u, double v) {
-            const glm::dvec3 n =
-                flat ? flat_normal
-                     : NormalTransform::safe_normalize(bilinear(q.normal, u, v));
-            return glm::dot(n, n) > 0.0 ? n : q.fallback_normal;
-        };
-        const std::size_t base = w.vertex;
-        for (std::size_t j = 0; j <= nv; ++j)
-            for (std::size_t i = 0; i <= nu; ++i) {
-                const double u = double(i) / du, v = double(j) / dv;
-                glm::dvec3 p;
-                // Border points from the border's two end points only, with
-                // integer-quotient weights: identical in the neighbouring quad.
-                if (j == 0)
-                    p = q.p[0] * (double(nu - i) / du) + q.p[1] * u;
-                else if (j == nv)
-                    p = q.p[3] * (double(nu - i) / du) + q.p[2] * u;
-                else if (i == 0)
-                    p = q.p[0] * (double(nv - j) / dv) + q.p[3] * v;
-                else if (i == nu)
-                    p = q.p[1] * (double(nv - j) / dv) + q.p[2] * v;
-                else
-                    p = bilinear(q.p, u, v);
-                m_grid[j * (nu + 1) + i] = p;
-                w.add_vertex(p, normal_at(u, v));
-            }
-        for (std::size_t j = 0; j < nv; ++j)
-            for (std::size_t i = 0; i < nu; ++i) {
-                const std::size_t k00 = j * (nu + 1) + i, k10 = k00 + 1;
-                const std::size_t k01 = k00 + nu + 1, k11 = k01 + 1;
-                w.add_triangle(base + k00, base + k10, base + k11);
-                w.add_triangle(base + k00, base + k11, base + k01);
-                const glm::dvec3 &p00 = m_grid[k00], &p10 = m_grid[k10];
-                const glm::dvec3 &p11 = m_grid[k11], &p01 = m_grid[k01];
-                const double a1 = 0.5 * glm::length(glm::cross(p10 - p00, p11 - p00));
-                const double a2 = 0.5 * glm::length(glm::cross(p11 - p00, p01 - p00));
-                const double area = a1 + a2;
-                if (!(area > 0.0)) continue; // collapsed: no surface, no point
-                const glm::dvec3 centre =
-                    (a1 * (p00 + p10 + p11) + a2 * (p00 + p11 + p01)) *
-                    (1.0 / (3.0 * area));
-                const double radius =
-                    std::sqrt(std::max({glm::dot(p00 - centre, p00 - centre),
-                                        glm::dot(p10 - centre, p10 - centre),
-                                        glm::dot(p11 - centre, p11 - centre),
-                                        glm::dot(p01 - centre, p01 - centre)}));
-                const double u = (double(i) + 0.5) / du, v = (double(j) + 0.5) / dv;
-                const glm::dvec3 col =
-                    w.with_colors ? bilinear(q.color, u, v) : glm::dvec3(0.0);
-                w.micropolygon(centre, normal_at(u, v), area, radius, col);
-            }
-    }
-
-private:
-    std::vector<glm::dvec3> m_grid;
-};
-
-// ---------------------------------------------------------------------------
-// Triangulation
-
-double orient(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
-    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-}
-
-/// Inclusive point-in-triangle test for a counter-clockwise triangle.
-bool in_ccw_triangle(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c,
-                     const glm::dvec2& p) {
-    return orient(a, b, p) >= 0.0 && orient(b, c, p) >= 0.0 && orient(c, a, p) >= 0.0;
-}
-
-/// Inclusive point-in-triangle test for either winding.
-bool in_triangle(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c,
-                 const glm::dvec2& p) {
-    const double d1 = orient(a, b, p), d2 = orient(b, c, p), d3 = orient(c, a, p);
-    const bool neg = d1 < 0.0 || d2 < 0.0 || d3 < 0.0;
-    const bool pos = d1 > 0.0 || d2 > 0.0 || d3 > 0.0;
-    return !(neg && pos);
-}
-
-/// Ear-clipping triangulator for one polygon with holes. Keeps its buffers
-/// between polygons so a mesh of many faces allocates nothing per face.
-class Triangulator {
-public:
-    /// Triangulates the polygon whose loops are consecutive runs of `points`
-    /// (their sizes in `loop_sizes`; the first loop is the outer boundary, the
-    /// others are holes), in any winding. Appends counter-clockwise triangles
-    /// of indices into `points`.
-    void run(const std::vector<glm::dvec2>& points, const std::vector<int>& loop_sizes,
-             std::vector<std::array<int, 3>>& out) {
-        m_nodes.clear();
-        m_holes.clear();
-        glm::dvec2 lo(std::numeric_limits<double>::max()),
-            hi(-std::numeric_limits<double>::max());
-        for (const glm::dvec2& p : points) {
-            lo = glm::min(lo, p);
-            hi = glm::max(hi, p);
-        }
-        const double extent = glm::length(hi - lo);
-        m_tolerance = 1e-12 * extent * extent;
-
-        const int outer = make_ring(points, 0, loop_sizes[0], true);
-        if (outer < 0) return;
-        int start = loop_sizes[0];
-        for (std::size_t l = 1; l < loop_sizes.size(); ++l) {
-            const int ring = make_ring(points, start, loop_sizes[l], false);
-            start += loop_sizes[l];
-            if (ring < 0) continue; // zero-area hole: removes nothing
-            int right = ring;
-            for (int p = m_nodes[ring].next; p != ring; p = m_nodes[p].next)
-                if (m_nodes[p].p.x > m_nodes[right].p.x ||
-                    (m_nodes[p].p.x == m_nodes[right].p.x &&
-                     m_nodes[p].p.y < m_nodes[right].p.y))
-                    right = p;
-            m_holes.emplace_back(m_nodes[right].p.x, right);
-        }
-        // Rightmost holes first, so each bridge sees the holes already joined.
-        std::sort(m_holes.begin(), m_holes.end(),
-                  [](const auto& a, const auto& b) { return a.first > b.first; });
-        for (const auto& [x, hole] : m_holes) {
-            const int bridge = find_bridge(hole, outer);
-            if (bridge >= 0) splice(bridge, hole);
-            // A hole outside the outer loop cannot be joined: it is ignored.
-        }
-        clip_ears(outer, out);
-    }
-
-private:
-    struct Node {
-        glm::dvec2 p;
-        int index;
-        int prev;
-        int next;
-    };
-    std::vector<Node> m_nodes;
-    std::vector<std::pair<double, int>> m_holes;
-    double m_tolerance = 0.0;
-
-    const glm::dvec2& pos(int n) const { return m_nodes[n].p; }
-    int prev(int n) const { return m_nodes[n].prev; }
-    int next(int n) const { return m_nodes[n].next; }
-
-    /// Links one loop into a ring wound counter-clockwise (`ccw`) or clockwise.
-    /// Returns a node of the ring, or -1 for a loop with zero area.
-    int make_ring(const std::vector<glm::dvec2>& points, int first, int count, bool ccw) {
-        double area = 0.0;
-        for (int i = 0; i < count; ++i)
-            area +=
-                orient(points[first], points[first + i], points[first + (i + 1) % count]);
-        if (area == 0.0) return -1;
-        const bool reverse = (area > 0.0) != ccw;
-        const int base = static_cast<int>(m_nodes.size());
-        for (int i = 0; i < count; ++i) {
-            const int k = reverse ? count - 1 - i : i;
-            m_nodes.push_back({points[first + k], first + k,
-                               base + (i + count - 1) % count, base + (i + 1) % count});
-        }
-        return base;
-    }
-
-    /// True when the direction from node a towards p leaves a into the
-    /// polygon's interior (between its two edges).
-    bool locally_inside(int a, const glm::dvec2& p) const {
-        const glm::dvec2 &pa = pos(prev(a)), &va = pos(a), &na = pos(next(a));
-        if (orient(pa, va, na) >= 0.0)
-            return orient(pa, va, p) >= 0.0 && orient(va, na, p) >= 0.0;
-        return orient(pa, va, p) >= 0.0 || orient(va, na, p) >= 0.0;
-    }
-
-    /// The outer-ring node the hole's rightmost node `hole` can be joined to:
-    /// cast a ray towards +x, take the nearest edge hit, then the visible
-    /// vertex closest in angle to the ray (the standard hole-bridging method).
-    int find_bridge(int hole, int outer) const {
-        const glm::dvec2 h = pos(hole);
-        int edge = -1;
-        double hit_x = std::numeric_limits<double>::infinity();
-        int p = outer;
-        do {
-            const glm::dvec2 &a = pos(p), &b = pos(next(p));
-            // The ray leaves the interior through an upward edge (CCW ring).
-            if (a.y <= h.y && b.y >= h.y && a.y != b.y) {
-                const double x = a.x + (h.y - a.y) * (b.x - a.x) / (b.y - a.y);
-                if (x >= h.x && x < hit_x) {
-                    hit_x = x;
-                    edge = p;
-                }
-            }
-            p = next(p);
-        } while (p != outer);
-        if (edge < 0) return -1;
-        // The hit vertex, or else the hit edge's end point further along +x.
-        // Either may have duplicates from earlier bridges: the search below
-        // picks the copy whose sector the bridge enters.
-        const glm::dvec2 hit(hit_x, h.y);
-        const int candidate = pos(edge) == hit                  ? edge
-                              : pos(next(edge)) == hit          ? next(edge)
-                              : pos(edge).x > pos(next(edge)).x ? edge
-                                                                : next(edge);
-        const glm::dvec2 c = pos(candidate);
-
-        int best = -1;
-        double best_tan = std::numeric_limits<double>::infinity(), best_dist = best_tan;
-        p = outer;
-        do {
-            const glm::dvec2 q = pos(p);
-            if ((q == c || in_triangle(h, hit, c, q)) && locally_inside(p, h)) {
-                const double dx = q.x - h.x;
-                const double tan = q == h     ? 0.0
-                                   : dx > 0.0 ? std::abs(q.y - h.y) / dx
-                                              : std::numeric_limits<double>::infinity();
-                const double dist = glm::length(q - h);
-                if (tan < best_tan || (tan == best_tan && dist < best_dist)) {
-                    best = p;
-                    best_tan = tan;
-                    best_dist = dist;
-                }
-            }
-            p = next(p);
-        } while (p != outer);
-        return best >= 0 ? best : candidate;
-    }
-
-    /// Joins the hole ring at `hole` into the outer ring at `bridge` with two
-    /// coincident edges (the bridge is walked in both directions).
-    void splice(int bridge, int hole) {
-        const int bridge2 = static_cast<int>(m_nodes.size());
-        m_nodes.push_back(m_nodes[bridge]);
-        const int hole2 = bridge2 + 1;
-        m_nodes.push_back(m_nodes[hole]);
-        const int after = next(bridge), before = prev(hole);
-        m_nodes[bridge].next = hole;
-        m_nodes[hole].prev = bridge;
-        m_nodes[before].next = hole2;
-        m_nodes[hole2].prev = before;
-        m_nodes[hole2].next = bridge2;
-        m_nodes[bridge2].prev = hole2;
-        m_nodes[bridge2].next = after;
-        m_nodes[after].prev = bridge2;
-    }
-
-    void unlink(int n) {
-        m_nodes[prev(n)].next = next(n);
-        m_nodes[next(n)].prev = prev(n);
-    }
-
-    bool is_ear(int b) const {
-        const int a = prev(b), c = next(b);
-        const glm::dvec2 &pa = pos(a), &pb = pos(b), &pc = pos(c);
-        if (orient(pa, pb, pc) <= 0.0) return false;
-        for (int p = next(c); p != a; p = next(p)) {
-            const glm::dvec2& q = pos(p);
-            // Bridge duplicates share a position with an ear corner: not inside.
-            if (q == pa || q == pb || q == pc) continue;
-            // Only reflex (or flat) vertices can lie inside an ear.
-            if (orient(pos(prev(p)), q, pos(next(p))) > 0.0) continue;
-            if (in_ccw_triangle(pa, pb, pc, q)) return false;
-        }
-        return true;
-    }
-
-    void emit(int b, std::vector<std::array<int, 3>>& out) const {
-        out.push_back({m_nodes[prev(b)].index, m_nodes[b].index, m_nodes[next(b)].index});
-    }
-
-    /// When a whole turn finds no ear (collinear or duplicate vertices, or a
-    /// self-intersecting loop): drop a degenerate vertex if there is one (it
-    /// encloses no area), else clip the most convex vertex anyway. Returns the
-    /// node to continue from.
-    int clip_fallback(int start, std::vector<std::array<int, 3>>& out) {
-        int p = start;
-        do {
-            if (std::abs(orient(pos(prev(p)), pos(p), pos(next(p)))) <= m_tolerance) {
-                const int after = next(p);
-                unlink(p);
-                return after;
-            }
-            p = next(p);
-        } while (p != start);
-        int best = start;
-        double best_turn = -std::numeric_limits<double>::infinity();
-        p = start;
-        do {
-            const double turn = orient(pos(prev(p)), pos(p), pos(next(p)));
-            if (turn > best_turn) {
-                best_turn = turn;
-                best = p;
-            }
-            p = next(p);
-        } while (p != start);
-        emit(best, out);
-        const int after = next(best);
-        unlink(best);
-        return after;
-    }
-
-    void clip_ears(int start, std::vector<std::array<int, 3>>& out) {
-        int count = 1;
-        for (int p = next(start); p != start; p = next(p)) ++count;
-        int ear = start, stop = start;
-        while (count > 3) {
-            if (is_ear(ear)) {
-                emit(ear, out);
-                const int after = next(ear);
-                unlink(ear);
-                --count;
-                ear = stop = after;
-                continue;
-            }
-            ear = next(ear);
-            if (ear == stop) {
-                ear = stop = clip_fallback(ear, out);
-                --count;
-            }
-        }
-        if (count == 3) emit(ear, out);
-    }
-};
 
 // ---------------------------------------------------------------------------
 // Polygons
@@ -621,8 +49,8 @@ struct PolygonTopology {
 
 void check_loop_size(const Primitive& prim, int n, std::size_t loop) {
     if (n < 3)
-        throw_mesh_error(prim, "loop " + std::to_string(loop) + " has " +
-                                   std::to_string(n) + " vertices (at least 3 needed)");
+        fail(prim, "loop " + std::to_string(loop) + " has " + std::to_string(n) +
+                       " vertices (at least 3 needed)");
 }
 
 PolygonTopology polygon_topology(const Primitive& prim, std::size_t npoints) {
@@ -638,7 +66,7 @@ PolygonTopology polygon_topology(const Primitive& prim, std::size_t npoints) {
         nloops.push_back(1);
         break;
     case PrimitiveKind::GeneralPolygon:
-        if (prim.nverts.empty()) throw_mesh_error(prim, "no loops");
+        if (prim.nverts.empty()) fail(prim, "no loops");
         nloops.push_back(static_cast<int>(prim.nverts.size()));
         break;
     case PrimitiveKind::PointsPolygons:
@@ -650,49 +78,47 @@ PolygonTopology polygon_topology(const Primitive& prim, std::size_t npoints) {
         indexed = true;
         break;
     default:
-        throw_mesh_error(prim, "not a polygon primitive");
+        fail(prim, "not a polygon primitive");
     }
-    if (nloops.empty()) throw_mesh_error(prim, "no faces");
+    if (nloops.empty()) fail(prim, "no faces");
 
     std::size_t loop_total = 0;
     for (std::size_t f = 0; f < nloops.size(); ++f) {
         if (nloops[f] < 1)
-            throw_mesh_error(prim, "face " + std::to_string(f) + " has " +
-                                       std::to_string(nloops[f]) + " loops");
+            fail(prim, "face " + std::to_string(f) + " has " + std::to_string(nloops[f]) +
+                           " loops");
         loop_total += static_cast<std::size_t>(nloops[f]);
     }
     if (loop_total != nverts->size())
-        throw_mesh_error(prim, "nloops add up to " + std::to_string(loop_total) +
-                                   " but " + std::to_string(nverts->size()) +
-                                   " loop sizes are given");
+        fail(prim, "nloops add up to " + std::to_string(loop_total) + " but " +
+                       std::to_string(nverts->size()) + " loop sizes are given");
     std::size_t corner_total = 0;
     for (std::size_t l = 0; l < nverts->size(); ++l) {
         check_loop_size(prim, (*nverts)[l], l);
         corner_total += static_cast<std::size_t>((*nverts)[l]);
     }
     if (corner_total > std::numeric_limits<int32_t>::max())
-        throw_mesh_error(prim, "too many vertices");
+        fail(prim, "too many vertices");
 
     t.corner_point.resize(corner_total);
     if (indexed) {
         if (prim.verts.size() != corner_total)
-            throw_mesh_error(prim, "nverts add up to " + std::to_string(corner_total) +
-                                       " but " + std::to_string(prim.verts.size()) +
-                                       " vertex indices are given");
+            fail(prim, "nverts add up to " + std::to_string(corner_total) + " but " +
+                           std::to_string(prim.verts.size()) +
+                           " vertex indices are given");
         for (std::size_t c = 0; c < corner_total; ++c) {
             const int v = prim.verts[c];
             if (v < 0 || static_cast<std::size_t>(v) >= npoints)
-                throw_mesh_error(prim, "vertex index " + std::to_string(v) +
-                                           " out of range (" + std::to_string(npoints) +
-                                           " points in \"P\")");
+                fail(prim, "vertex index " + std::to_string(v) + " out of range (" +
+                               std::to_string(npoints) + " points in \"P\")");
             t.corner_point[c] = static_cast<uint32_t>(v);
             t.points_referenced =
                 std::max(t.points_referenced, static_cast<std::size_t>(v) + 1);
         }
     } else {
         if (corner_total != npoints)
-            throw_mesh_error(prim, "\"P\" has " + std::to_string(npoints) + " points, " +
-                                       std::to_string(corner_total) + " expected");
+            fail(prim, "\"P\" has " + std::to_string(npoints) + " points, " +
+                           std::to_string(corner_total) + " expected");
         for (std::size_t c = 0; c < corner_total; ++c)
             t.corner_point[c] = static_cast<uint32_t>(c);
         t.points_referenced = npoints;
@@ -1149,103 +575,6 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
         } else {
             dice_triangle(tri, job.pieces[0], n, user_n.present(), writer);
         }
-    }
-    writer.finish();
-    return out;
-}
-
-// ---------------------------------------------------------------------------
-// Subdivision meshes
-
-namespace {
-
-/// Refinement stops before a level would exceed this many faces (memory);
-/// the bilinear dicing of the last level still reaches the dicing length.
-constexpr std::size_t kMaxRefinedFaces = std::size_t(1) << 20;
-constexpr int kMaxLevels = 8;
-
-} // namespace
-
-DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control) {
-    const Attributes& attr = attributes_of(prim);
-    const Matrix4& m = prim.object_to_world;
-    const NormalTransform normals(prim);
-    // "N" is not used: the limit surface has exact normals of its own.
-    SubdivMesh mesh = build_subdiv_mesh(prim);
-
-    std::vector<glm::dvec3> world;
-    std::vector<double> edge;
-    auto measure = [&](const std::vector<glm::dvec3>& points) {
-        world.resize(points.size());
-        edge.resize(points.size());
-        for (std::size_t i = 0; i < points.size(); ++i) {
-            world[i] = to_world(m, points[i]);
-            edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
-        }
-    };
-    // Uniform refinement until every control edge is at most twice the dicing
-    // length at its ends; the first step is forced when faces are not quads.
-    const std::size_t face_budget = std::min(kMaxRefinedFaces, control.max_micropolygons);
-    for (int level = 0;; ++level) {
-        if (mesh.all_quads()) {
-            if (level >= kMaxLevels ||
-                static_cast<std::size_t>(mesh.corner_count()) > face_budget)
-                break;
-            measure(mesh.points);
-            bool fine = true;
-            for (const auto& [a, b] : mesh.edge_vertices)
-                if (glm::length(world[a] - world[b]) > 2.0 * std::min(edge[a], edge[b])) {
-                    fine = false;
-                    break;
-                }
-            if (fine) break;
-        }
-        mesh = refine_subdiv_mesh(mesh);
-    }
-
-    const SubdivLimit limit = subdiv_limit(mesh);
-    measure(limit.points);
-    std::vector<glm::dvec3> corner_normal(limit.corner_normals.size());
-    for (std::size_t c = 0; c < corner_normal.size(); ++c)
-        corner_normal[c] = normals.geometric(limit.corner_normals[c]);
-
-    // Sub-quad counts per face, then exact output sizes.
-    const int nf = mesh.face_count();
-    std::vector<std::array<uint32_t, 2>> pieces(nf, {0, 0});
-    std::size_t total_mp = 0, total_vertices = 0;
-    for (int f = 0; f < nf; ++f) {
-        if (mesh.face_hole[f]) continue;
-        const int* v = &mesh.corner_vertex[4 * f];
-        const double e = std::min({edge[v[0]], edge[v[1]], edge[v[2]], edge[v[3]]});
-        const double lu = std::max(glm::length(world[v[1]] - world[v[0]]),
-                                   glm::length(world[v[2]] - world[v[3]]));
-        const double lv = std::max(glm::length(world[v[3]] - world[v[0]]),
-                                   glm::length(world[v[2]] - world[v[1]]));
-        const std::size_t nu = piece_count(prim, control, lu, e);
-        const std::size_t nv = piece_count(prim, control, lv, e);
-        pieces[f] = {static_cast<uint32_t>(nu), static_cast<uint32_t>(nv)};
-        total_mp += nu * nv;
-        total_vertices += (nu + 1) * (nv + 1);
-        check_budget(prim, control, total_mp);
-    }
-
-    const bool with_colors = !mesh.corner_colors.empty();
-    DicedSurface out;
-    allocate(prim, out, total_mp, total_vertices, 2 * total_mp, with_colors);
-    SurfaceWriter writer{out, with_colors};
-    QuadDicer dicer;
-    QuadCorners q;
-    for (int f = 0; f < nf; ++f) {
-        if (pieces[f][0] == 0) continue;
-        for (int k = 0; k < 4; ++k) {
-            const std::size_t c = 4 * static_cast<std::size_t>(f) + k;
-            q.p[k] = world[mesh.corner_vertex[c]];
-            q.normal[k] = corner_normal[c];
-            if (with_colors) q.color[k] = glm::dvec3(mesh.corner_colors[c]);
-        }
-        q.fallback_normal = normals.geometric_from_world_cross(
-            glm::cross(q.p[2] - q.p[0], q.p[3] - q.p[1]));
-        dicer.dice(q, pieces[f][0], pieces[f][1], writer);
     }
     writer.finish();
     return out;
