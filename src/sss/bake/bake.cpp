@@ -17,11 +17,11 @@
 #include <tbb/parallel_for.h>
 
 #include "sss/dice/dice.h"
-#include "sss/util/error.h"
-#include "sss/util/progress.h"
-#include "sss/util/frame_pattern.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/util/progress.h"
 
 namespace sss {
 namespace {
@@ -316,32 +316,21 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
-    std::vector<DicedSurface> diced(scene.primitives.size());
-    std::vector<std::size_t> to_dice;
-    for (std::size_t i = 0; i < scene.primitives.size(); ++i)
-        if (job_of[i] >= 0 || occluder[i]) to_dice.push_back(i);
-    std::vector<std::string> dice_errors(to_dice.size());
     // Shadow-only surfaces need their shape, not micropolygon density.
     DiceControl occluder_control = control;
     occluder_control.coarsening = kOccluderCoarsening;
-    tbb::parallel_for(std::size_t(0), to_dice.size(), [&](std::size_t k) {
-        try {
-            const std::size_t i = to_dice[k];
-            if (job_of[i] < 0) {
-                diced[i] = dice_primitive(scene.primitives[i], occluder_control);
-            } else if (options.spacing_from_material && !options.material) {
-                DiceControl own = control;
-                own.spacing = *job_mfp[job_of[i]] * options.mfp_fraction;
-                diced[i] = dice_primitive(scene.primitives[i], own);
-            } else {
-                diced[i] = dice_primitive(scene.primitives[i], control);
-            }
-        } catch (const std::exception& e) {
-            dice_errors[k] = e.what();
+    std::vector<DiceRequest> requests;
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        if (job_of[i] < 0 && !occluder[i]) continue;
+        DiceRequest request{i, control};
+        if (job_of[i] < 0) {
+            request.control = occluder_control;
+        } else if (options.spacing_from_material && !options.material) {
+            request.control.spacing = *job_mfp[job_of[i]] * options.mfp_fraction;
         }
-    });
-    for (const std::string& e : dice_errors)
-        if (!e.empty()) throw ValueError(e);
+        requests.push_back(request);
+    }
+    const std::vector<DicedSurface> diced = dice_all(scene, requests);
     report.dice_seconds = watch.seconds();
 
     // Spacing report and the mean-free-path check.

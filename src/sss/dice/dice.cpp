@@ -1,9 +1,16 @@
 /// \file dice.cpp
 /// The dispatcher: dice_primitive hands each primitive to the dicer of its
 /// family (dice_quadric.cpp, dice_patch.cpp, dice_polygon.cpp,
-/// dice_subdiv.cpp).
+/// dice_subdiv.cpp), and dice_all dices many of them in parallel for the
+/// baker and the renderer.
 
 #include "sss/dice/dice.h"
+
+#include <exception>
+#include <string>
+#include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include "dice_common.h"
 #include "sss/util/error.h"
@@ -35,6 +42,29 @@ DicedSurface dice_primitive(const Primitive& prim, const DiceControl& control) {
         return detail::dice_teapot(prim, control);
     }
     throw ValueError(prim.source + ": unknown primitive kind");
+}
+
+std::vector<DicedSurface> dice_all(const Scene& scene,
+                                   std::span<const DiceRequest> requests,
+                                   const DiceFinish& finish) {
+    std::vector<DicedSurface> diced(scene.primitives.size());
+    // One message per request, so that the first failure in request order is
+    // reported whichever thread met it first.
+    std::vector<std::string> errors(requests.size());
+    tbb::parallel_for(std::size_t(0), requests.size(), [&](std::size_t k) {
+        try {
+            const DiceRequest& request = requests[k];
+            DicedSurface& surface = diced[request.primitive];
+            surface =
+                dice_primitive(scene.primitives[request.primitive], request.control);
+            if (finish) finish(request.primitive, surface);
+        } catch (const std::exception& e) {
+            errors[k] = e.what();
+        }
+    });
+    for (const std::string& e : errors)
+        if (!e.empty()) throw ValueError(e);
+    return diced;
 }
 
 } // namespace sss

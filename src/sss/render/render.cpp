@@ -161,10 +161,10 @@ struct Surface {
 
 /// For primitives with per-micropolygon colours: each triangle takes the
 /// colour of the micropolygon centre nearest to its centroid (a hash grid of
-/// cells the size of the largest micropolygon).
-void assign_triangle_colors(Surface& s) {
-    const DicedSurface& d = s.diced;
-    if (d.colors.empty() || d.triangles.empty()) return;
+/// cells the size of the largest micropolygon). Empty without colours.
+std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
+    std::vector<glm::vec3> colors;
+    if (d.colors.empty() || d.triangles.empty()) return colors;
     float cell = 0.0f;
     for (float r : d.radii) cell = std::max(cell, r);
     if (!(cell > 0.0f)) cell = 1.0f;
@@ -182,7 +182,7 @@ void assign_triangle_colors(Surface& s) {
         grid[i] = {key(d.centers[i], 0, 0, 0), static_cast<uint32_t>(i)};
     std::sort(grid.begin(), grid.end());
     const std::size_t triangles = d.triangles.size() / 3;
-    s.triangle_colors.resize(triangles);
+    colors.resize(triangles);
     for (std::size_t t = 0; t < triangles; ++t) {
         const glm::vec3 c =
             (d.vertices[d.triangles[3 * t]] + d.vertices[d.triangles[3 * t + 1]] +
@@ -216,8 +216,9 @@ void assign_triangle_colors(Surface& s) {
                 }
             }
         }
-        s.triangle_colors[t] = d.colors[best_i];
+        colors[t] = d.colors[best_i];
     }
+    return colors;
 }
 
 /// One camera sample's values, before filtering.
@@ -446,38 +447,37 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
         if (s.camera || s.shadows) to_dice.push_back(i);
         if (s.camera != s.shadows && any_shadows) separate_shadows = true;
     }
-    std::vector<std::string> errors(to_dice.size());
-    tbb::parallel_for(std::size_t(0), to_dice.size(), [&](std::size_t k) {
-        try {
-            const Primitive& prim = scene.primitives[to_dice[k]];
-            // Edges of kEdgePixels whatever the ShadingRate: coarser than its
-            // micropolygons through the coarsening, finer through a camera
-            // with proportionally more pixels over the same screen window.
-            const double rate = attributes_of(prim).shading_rate;
-            const double edge = std::sqrt(std::max(rate, 1e-12)); // pixels
-            Camera dice_camera = job.camera;
-            DiceControl control;
-            control.camera = &dice_camera;
-            if (edge <= kEdgePixels) {
-                control.coarsening = kEdgePixels / edge;
-            } else {
-                dice_camera.screen_window = job.camera.resolved_screen_window();
-                dice_camera.xres = static_cast<int>(
-                    std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
-            }
-            Surface& s = job.surfaces[to_dice[k]];
-            s.diced = dice_primitive(prim, control);
-            for (glm::vec3& n : s.diced.vertex_normals) {
+    // Edges of kEdgePixels whatever the ShadingRate: coarser than its
+    // micropolygons through the coarsening, finer through a camera with
+    // proportionally more pixels over the same screen window.
+    std::vector<Camera> dice_cameras(to_dice.size()); // live through dice_all
+    std::vector<DiceRequest> requests(to_dice.size());
+    for (std::size_t k = 0; k < to_dice.size(); ++k) {
+        const Primitive& prim = scene.primitives[to_dice[k]];
+        const double rate = attributes_of(prim).shading_rate;
+        const double edge = std::sqrt(std::max(rate, 1e-12)); // pixels
+        Camera& dice_camera = dice_cameras[k];
+        dice_camera = job.camera;
+        DiceControl control;
+        control.camera = &dice_camera;
+        if (edge <= kEdgePixels) {
+            control.coarsening = kEdgePixels / edge;
+        } else {
+            dice_camera.screen_window = job.camera.resolved_screen_window();
+            dice_camera.xres = static_cast<int>(
+                std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
+        }
+        requests[k] = {to_dice[k], control};
+    }
+    std::vector<DicedSurface> diced =
+        dice_all(scene, requests, [&](std::size_t i, DicedSurface& d) {
+            for (glm::vec3& n : d.vertex_normals) {
                 const float len = glm::length(n);
                 if (len > 0.0f && std::isfinite(len)) n /= len;
             }
-            assign_triangle_colors(s);
-        } catch (const std::exception& e) {
-            errors[k] = e.what();
-        }
-    });
-    for (const std::string& e : errors)
-        if (!e.empty()) throw ValueError(e);
+            job.surfaces[i].triangle_colors = triangle_colors(d);
+        });
+    for (std::size_t i : to_dice) job.surfaces[i].diced = std::move(diced[i]);
 
     // Ray tracers: one when the camera and shadows see the same surfaces.
     job.camera_tracer = std::make_unique<RayTracer>();
