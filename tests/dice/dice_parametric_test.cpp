@@ -25,7 +25,7 @@
 #include "sss/scene/scene.h"
 
 // The shared normal rule (internal header of the library).
-#include "../../src/sss/dice/dice_detail.h"
+#include "../../src/sss/dice/dice_common.h"
 
 namespace {
 

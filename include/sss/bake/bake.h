@@ -1,5 +1,9 @@
 #pragma once
 /// \file bake.h
+/// The bake module owns ptbake's job: baking lit micropolygons into point
+/// clouds. It may use dice, light, diffusion's materials, cloud, scene and
+/// util.
+///
 /// The ptbake job as one library call: every primitive with a bake shader is
 /// diced into micropolygons, lit (ambient + diffuse with ray-traced shadows)
 /// and written as point clouds; every other primitive only casts shadows.

@@ -1,5 +1,9 @@
 #pragma once
 /// \file dice.h
+/// The dice module owns dicing: primitives of the scene layer become
+/// micropolygons and ray-tracing triangles, one primitive or many in
+/// parallel. It may use scene and util only.
+///
 /// Dicing: every primitive of the scene layer becomes micropolygons (one
 /// point each, with its exact area, normal and radius) and triangles for the
 /// ray tracer. View-independent: nothing is culled, and micropolygon size is
@@ -7,7 +11,10 @@
 /// camera measured at the surface's distance from the eye, ignoring its
 /// orientation (REYES with raster-oriented dicing off).
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -68,6 +75,28 @@ struct DicedSurface {
 /// Dices one primitive. Throws ValueError (naming prim.source) on malformed
 /// geometry: wrong "P" count, out-of-range indices, degenerate parameters.
 DicedSurface dice_primitive(const Primitive& prim, const DiceControl& control);
+
+/// One primitive for dice_all, and how fine to dice it.
+struct DiceRequest {
+    std::size_t primitive = 0; ///< index into scene.primitives
+    DiceControl control;       ///< its camera (if any) must outlive dice_all
+};
+
+/// Per-surface work that belongs with the dicing: called by dice_all with
+/// the primitive's index and its surface, right after it is diced, in the
+/// same task.
+using DiceFinish = std::function<void(std::size_t primitive, DicedSurface& surface)>;
+
+/// Dices the requested primitives of `scene` in parallel (TBB) and returns
+/// one surface per primitive of the scene, by index: the requested ones
+/// diced (then passed to `finish`, when given), every other one empty.
+/// Every request is tried; then, if any failed (in dice_primitive or in
+/// `finish`), throws ValueError with the message of the first failure in
+/// request order, so that the error and the surfaces are the same for any
+/// number of threads. Requests name distinct primitives.
+std::vector<DicedSurface> dice_all(const Scene& scene,
+                                   std::span<const DiceRequest> requests,
+                                   const DiceFinish& finish = {});
 
 /// Surface area of a quadric primitive in its object space, computed
 /// independently of the dicer (closed forms, or an accurate 1D quadrature of

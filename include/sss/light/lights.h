@@ -1,5 +1,8 @@
 #pragma once
 /// \file lights.h
+/// The light module owns lights, noise and the ray tracer that shadows use.
+/// It may use scene and util, with Embree behind ray_tracer.cpp.
+///
 /// RenderMan's standard light shaders resolved to world space, and the
 /// irradiance they give at a surface point: ambient() + diffuse(N), the sum
 /// over lights of Cl * max(0, N.L), with ray-traced shadows when a light asks

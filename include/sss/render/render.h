@@ -1,5 +1,9 @@
 #pragma once
 /// \file render.h
+/// The render module owns the final image: ray tracing, shading and image
+/// output. It may use dice, light, brick, cloud, scene and util, with
+/// OpenEXR and OpenImageIO behind its sources.
+///
 /// The final renderer: ray tracing (Embree) over the shared scene layer,
 /// built-in surface shaders that look `_ssdiffusion` up in a brick map or a
 /// point cloud (texture3d semantics), AOVs, and RenderMan Display outputs.

@@ -1,3 +1,8 @@
+/// \file bake.cpp
+/// The ptbake job (bake.h): bake_clouds runs its phases in order (spacing,
+/// lights, jobs, dicing, spacing checks, occluders, lighting, point clouds),
+/// each a function below; bake_scene writes the clouds.
+
 #include "sss/bake/bake.h"
 
 #include <algorithm>
@@ -6,8 +11,11 @@
 #include <cstdio>
 #include <limits>
 #include <map>
-#include <mutex>
-#include <sstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -17,11 +25,11 @@
 #include <tbb/parallel_for.h>
 
 #include "sss/dice/dice.h"
-#include "sss/util/error.h"
-#include "sss/util/progress.h"
-#include "sss/util/frame_pattern.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/util/progress.h"
 
 namespace sss {
 namespace {
@@ -227,47 +235,59 @@ double shadow_ray_offset(const DicedSurface& d, std::size_t begin, std::size_t e
     return 1e-5 * extent + std::min(0.5 * rmax, kappa * rmax * rmax);
 }
 
-} // namespace
+// ---------------------------------------------------------------------------
+// The phases of bake_clouds
 
-double material_mean_free_path(const MaterialSpec& material) {
-    material.validate();
-    return mfp_mm(material, nullptr, nullptr) * material.unitlength;
-}
-
-std::vector<std::pair<std::string, PointCloud>>
-bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_out) {
-    BakeReport local;
-    BakeReport& report = report_out ? *report_out : local;
-    Stopwatch watch;
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
-
-    // Spacing.
-    double spacing = options.spacing;
+/// The dicing spacing (0: ShadingRate) and the -material's mean free path.
+struct BakeSpacing {
+    double spacing = 0.0;
     std::optional<double> material_mfp;
+};
+
+/// Resolves -spacing (a length, or "mfp" from the -material) and checks it
+/// and -unitlength.
+BakeSpacing resolve_spacing(const BakeOptions& options) {
+    BakeSpacing out;
+    out.spacing = options.spacing;
     if (options.material) {
-        material_mfp = material_mean_free_path(*options.material);
-        if (options.spacing_from_material) spacing = *material_mfp * options.mfp_fraction;
+        out.material_mfp = material_mean_free_path(*options.material);
+        if (options.spacing_from_material)
+            out.spacing = *out.material_mfp * options.mfp_fraction;
     }
-    if (!(spacing >= 0.0) || !std::isfinite(spacing))
-        throw ValueError("impossible spacing " + std::to_string(spacing));
+    if (!(out.spacing >= 0.0) || !std::isfinite(out.spacing))
+        throw ValueError("impossible spacing " + std::to_string(out.spacing));
     if (!(options.unitlength > 0.0) || !std::isfinite(options.unitlength))
         throw ValueError("impossible unitlength " + std::to_string(options.unitlength));
+    return out;
+}
 
+/// The scene's lights; their warnings and the shadow-casting ones counted
+/// in the report.
+std::vector<Light> bake_lights(const Scene& scene, BakeReport& report) {
     std::vector<std::string> light_warnings;
-    const std::vector<Light> lights = resolve_lights(scene, &light_warnings);
+    std::vector<Light> lights = resolve_lights(scene, &light_warnings);
     for (const std::string& w : light_warnings) report.warnings.push_back(w);
-    bool any_shadows = false;
-    for (const Light& l : lights) {
-        if (l.shadows) {
-            any_shadows = true;
-            ++report.shadow_lights;
-        }
-    }
+    for (const Light& l : lights)
+        if (l.shadows) ++report.shadow_lights;
+    return lights;
+}
 
-    // Which primitives are baked, which only cast shadows.
+/// What the bake does with each primitive.
+struct BakePlan {
     std::vector<BakeJob> jobs;
-    std::vector<int> job_of(scene.primitives.size(), -1);
-    std::vector<char> occluder(scene.primitives.size(), 0);
+    std::vector<int> job_of;    ///< per primitive: its job, or -1 when not baked
+    std::vector<char> occluder; ///< per primitive: casts shadows
+    /// Per job: the mean free path its points should respect, if known.
+    std::vector<std::optional<double>> job_mfp;
+};
+
+/// Which primitives are baked (a job each, in primitive order) and which
+/// only cast shadows; ValueError when nothing is baked.
+BakePlan plan_jobs(const Scene& scene, const BakeOptions& options,
+                   std::optional<int> frame, bool any_shadows, BakeReport& report) {
+    BakePlan plan;
+    plan.job_of.assign(scene.primitives.size(), -1);
+    plan.occluder.assign(scene.primitives.size(), 0);
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const Primitive& prim = scene.primitives[i];
         const auto& surf = prim.attributes->surface;
@@ -280,22 +300,28 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
                     "' (known: bake_radiance_t, bake_sss_params, "
                     "bake_constant); the object only casts shadows");
         }
-        occluder[i] = any_shadows && prim.attributes->visible_to("transmission");
+        plan.occluder[i] = any_shadows && prim.attributes->visible_to("transmission");
         if (kind) {
-            job_of[i] = static_cast<int>(jobs.size());
-            jobs.push_back(make_job(scene, i, *kind, options, frame));
+            plan.job_of[i] = static_cast<int>(plan.jobs.size());
+            plan.jobs.push_back(make_job(scene, i, *kind, options, frame));
         }
     }
-    report.baked_primitives = jobs.size();
-    if (jobs.empty())
+    report.baked_primitives = plan.jobs.size();
+    if (plan.jobs.empty())
         throw ValueError(
             scene.path +
             ": nothing to bake (no primitive has a bake shader: Surface "
             "\"bake_radiance_t\", \"bake_sss_params\" or \"bake_constant\")");
+    return plan;
+}
 
-    // The mean free path each job's points should respect: the -material's,
-    // else a bake_sss_params object's own (the smallest over its range).
-    std::vector<std::optional<double>> job_mfp(jobs.size(), material_mfp);
+/// The mean free path each job's points should respect: the -material's,
+/// else a bake_sss_params object's own (the smallest over its range).
+/// UsageError when -spacing mfp leaves a job without one.
+void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
+                         std::optional<double> material_mfp, BakePlan& plan) {
+    const std::vector<BakeJob>& jobs = plan.jobs;
+    plan.job_mfp.assign(jobs.size(), material_mfp);
     for (std::size_t j = 0; j < jobs.size(); ++j) {
         const BakeJob& job = jobs[j];
         if (job.kind != BakeShader::SssParams) continue;
@@ -303,51 +329,48 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         const double unit = options.material ? m.unitlength : options.unitlength;
         const double a = mfp_mm(m, &job.albedo, &job.dmfp) * unit;
         const double b = mfp_mm(m, &job.albedo2, &job.dmfp2) * unit;
-        job_mfp[j] = std::min(job_mfp[j].value_or(a), std::min(a, b));
+        plan.job_mfp[j] = std::min(plan.job_mfp[j].value_or(a), std::min(a, b));
     }
     if (options.spacing_from_material && !options.material)
         for (std::size_t j = 0; j < jobs.size(); ++j)
-            if (!job_mfp[j])
+            if (!plan.job_mfp[j])
                 throw UsageError(scene.primitives[jobs[j].prim].source +
                                  ": -spacing mfp needs a material (-material NAME ...) "
                                  "for objects baked without bake_sss_params");
+}
 
-    // Dice what is baked or casts shadows; the rest is not needed.
+/// Dices what is baked or casts shadows; the rest is not needed.
+std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& options,
+                                     const BakePlan& plan, double spacing) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
-    std::vector<DicedSurface> diced(scene.primitives.size());
-    std::vector<std::size_t> to_dice;
-    for (std::size_t i = 0; i < scene.primitives.size(); ++i)
-        if (job_of[i] >= 0 || occluder[i]) to_dice.push_back(i);
-    std::vector<std::string> dice_errors(to_dice.size());
     // Shadow-only surfaces need their shape, not micropolygon density.
     DiceControl occluder_control = control;
     occluder_control.coarsening = kOccluderCoarsening;
-    tbb::parallel_for(std::size_t(0), to_dice.size(), [&](std::size_t k) {
-        try {
-            const std::size_t i = to_dice[k];
-            if (job_of[i] < 0) {
-                diced[i] = dice_primitive(scene.primitives[i], occluder_control);
-            } else if (options.spacing_from_material && !options.material) {
-                DiceControl own = control;
-                own.spacing = *job_mfp[job_of[i]] * options.mfp_fraction;
-                diced[i] = dice_primitive(scene.primitives[i], own);
-            } else {
-                diced[i] = dice_primitive(scene.primitives[i], control);
-            }
-        } catch (const std::exception& e) {
-            dice_errors[k] = e.what();
+    std::vector<DiceRequest> requests;
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        const int job = plan.job_of[i];
+        if (job < 0 && !plan.occluder[i]) continue;
+        DiceRequest request{i, control};
+        if (job < 0) {
+            request.control = occluder_control;
+        } else if (options.spacing_from_material && !options.material) {
+            request.control.spacing = *plan.job_mfp[job] * options.mfp_fraction;
         }
-    });
-    for (const std::string& e : dice_errors)
-        if (!e.empty()) throw ValueError(e);
-    report.dice_seconds = watch.seconds();
+        requests.push_back(request);
+    }
+    return dice_all(scene, requests);
+}
 
-    // Spacing report and the mean-free-path check.
+/// Reports the micropolygon spacing, and warns about objects without area
+/// and points farther apart than their mean free path.
+void check_spacing(const Scene& scene, const BakePlan& plan,
+                   const std::vector<DicedSurface>& diced, BakeReport& report) {
     report.min_spacing = std::numeric_limits<double>::infinity();
     report.max_spacing = 0.0;
-    for (const BakeJob& job : jobs) {
+    for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
+        const BakeJob& job = plan.jobs[j];
         const DicedSurface& d = diced[job.prim];
         double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
         for (float a : d.areas) {
@@ -361,8 +384,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         }
         report.min_spacing = std::min(report.min_spacing, std::sqrt(lo));
         report.max_spacing = std::max(report.max_spacing, std::sqrt(hi));
-        const std::optional<double> mfp =
-            job_mfp[static_cast<std::size_t>(&job - jobs.data())];
+        const std::optional<double> mfp = plan.job_mfp[j];
         // sqrt(area) is the edge of a square micropolygon: the point spacing.
         if (mfp && std::sqrt(hi) > *mfp * 1.0001) {
             char buf[256];
@@ -374,24 +396,33 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         }
     }
     if (!std::isfinite(report.min_spacing)) report.min_spacing = 0.0;
+}
 
-    // Occluders for ray-traced shadows.
-    std::unique_ptr<RayTracer> tracer;
-    if (any_shadows) {
-        tracer = std::make_unique<RayTracer>();
-        for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
-            if (!occluder[i] || diced[i].triangles.empty()) continue;
-            tracer->add_mesh(diced[i].vertices, diced[i].triangles);
-            report.occluder_triangles += diced[i].triangles.size() / 3;
-            if (job_of[i] < 0) ++report.occluder_primitives;
-        }
-        tracer->commit();
+/// The ray tracer of the occluders, for ray-traced shadows (none without
+/// shadow-casting lights).
+std::unique_ptr<RayTracer> build_occluders(const Scene& scene, const BakePlan& plan,
+                                           const std::vector<DicedSurface>& diced,
+                                           bool any_shadows, BakeReport& report) {
+    if (!any_shadows) return nullptr;
+    auto tracer = std::make_unique<RayTracer>();
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        if (!plan.occluder[i] || diced[i].triangles.empty()) continue;
+        tracer->add_mesh(diced[i].vertices, diced[i].triangles);
+        report.occluder_triangles += diced[i].triangles.size() / 3;
+        if (plan.job_of[i] < 0) ++report.occluder_primitives;
     }
-    report.trace_build_seconds = watch.seconds() - report.dice_seconds;
-    const double extent = tracer ? tracer->scene_extent() : 0.0;
+    tracer->commit();
+    return tracer;
+}
 
-    // Light every baked micropolygon. Seeds are global point indices, so the
-    // result does not depend on how the work is split between threads.
+/// The irradiance at every micropolygon of every job (none for
+/// bake_constant). Seeds are global point indices, so the result does not
+/// depend on how the work is split between threads.
+std::vector<std::vector<glm::dvec3>>
+light_points(const Scene& scene, const BakeOptions& options,
+             const std::vector<Light>& lights, const std::vector<BakeJob>& jobs,
+             const std::vector<DicedSurface>& diced, const RayTracer* tracer) {
+    const double extent = tracer ? tracer->scene_extent() : 0.0;
     std::size_t total_points = 0;
     std::vector<std::size_t> first_point(jobs.size());
     for (std::size_t j = 0; j < jobs.size(); ++j) {
@@ -420,101 +451,131 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
             shadow_ray_offset(d, ch.begin, ch.end, static_cast<double>(extent));
         irradiance_batch(lights, scene.primitives[job.prim].attributes->lights_on,
                          d.centers.data() + ch.begin, d.normals.data() + ch.begin,
-                         ch.end - ch.begin, tracer.get(), first_point[ch.job] + ch.begin,
+                         ch.end - ch.begin, tracer, first_point[ch.job] + ch.begin,
                          offset, irr[ch.job].data() + ch.begin);
         if (options.progress)
             options.progress->update(done += ch.end - ch.begin, total_points);
     });
-    report.light_seconds =
-        watch.seconds() - report.dice_seconds - report.trace_build_seconds;
+    return irr;
+}
 
-    // Gather the points per output file, in primitive order.
-    std::vector<std::pair<std::string, PointCloud>> files;
-    std::map<std::string, std::size_t> file_index;
-    std::vector<std::vector<std::string>> file_channels;
+/// The output files, in first-use order, and the channels each gets.
+struct OutputFiles {
+    std::vector<std::string> paths;
+    std::map<std::string, std::size_t> index; ///< path -> position in paths
+    std::vector<std::vector<std::string>> channels;
+};
+
+/// Lists the files the jobs bake into, each with the union of its jobs'
+/// channels (warning when they differ), and starts their reports.
+OutputFiles plan_files(const Scene& scene, const std::vector<BakeJob>& jobs,
+                       BakeReport& report) {
+    OutputFiles files;
     for (const BakeJob& job : jobs) {
-        auto [it, inserted] = file_index.emplace(job.file, files.size());
+        auto [it, inserted] = files.index.emplace(job.file, files.paths.size());
         if (inserted) {
-            files.push_back({job.file, PointCloud{}});
-            file_channels.push_back(job.channels);
+            files.paths.push_back(job.file);
+            files.channels.push_back(job.channels);
             BakeFileReport fr;
             fr.path = job.file;
             report.files.push_back(fr);
-        } else if (file_channels[it->second] != job.channels) {
+        } else if (files.channels[it->second] != job.channels) {
             report.warnings.push_back(scene.primitives[job.prim].source +
                                       ": bakes other channels than the "
                                       "first object baked into " +
                                       job.file + "; missing channels are filled with 0");
+            std::vector<std::string>& have = files.channels[it->second];
             for (const std::string& c : job.channels)
-                if (std::find(file_channels[it->second].begin(),
-                              file_channels[it->second].end(),
-                              c) == file_channels[it->second].end())
-                    file_channels[it->second].push_back(c);
+                if (std::find(have.begin(), have.end(), c) == have.end())
+                    have.push_back(c);
         }
     }
-    const Camera& cam = scene.options.camera;
-    for (std::size_t f = 0; f < files.size(); ++f) {
-        PointCloud& cloud = files[f].second;
+    return files;
+}
+
+/// An empty cloud of `points` points with _area and the given colour
+/// channels, and the camera's matrices and format.
+PointCloud make_cloud(const Camera& cam, std::size_t points,
+                      const std::vector<std::string>& channels) {
+    PointCloud cloud;
+    cloud.resize(points);
+    cloud.add_channel("_area", ChannelType::Float);
+    for (const std::string& c : channels) cloud.add_channel(c, ChannelType::Color);
+    store_matrix(cam.world_to_camera, cloud.world_to_eye);
+    store_matrix(cam.world_to_ndc(), cloud.world_to_ndc);
+    cloud.format = {float(cam.xres), float(cam.yres), float(cam.pixel_aspect)};
+    return cloud;
+}
+
+/// Writes one job's micropolygons into `cloud` from point `base` on: their
+/// geometry, _area and the job's channels.
+void write_job(const Primitive& prim, const BakeJob& job, const DicedSurface& d,
+               const std::vector<glm::dvec3>& irr, std::size_t base, PointCloud& cloud,
+               BakeFileReport& file_report) {
+    file_report.points += d.size();
+    file_report.objects.push_back(prim.source);
+    Channel* area = cloud.find_channel("_area");
+    const Matrix4 to_shader = glm::inverse(prim.attributes->surface->shader_to_world);
+    for (std::size_t i = 0; i < d.size(); ++i) {
+        cloud.positions[base + i] = d.centers[i];
+        cloud.normals[base + i] = d.normals[i];
+        cloud.radii[base + i] = d.radii[i];
+        area->data[base + i] = d.areas[i];
+        file_report.area += d.areas[i];
+    }
+    for (const std::string& name : job.channels) {
+        Channel* ch = cloud.find_channel(name);
+        for (std::size_t i = 0; i < d.size(); ++i) {
+            glm::dvec3 v(0.0);
+            if (job.kind == BakeShader::Constant) {
+                v = d.colors.empty() ? prim.attributes->color : glm::dvec3(d.colors[i]);
+            } else if (name == "_radiance_t") {
+                v = job.kdt * irr[i];
+            } else {
+                double t = 0.0;
+                if (job.noise_freq > 0.0) {
+                    glm::dvec3 ps =
+                        glm::dvec3(to_shader * glm::dvec4(glm::dvec3(d.centers[i]), 1.0));
+                    t = noise3(ps * job.noise_freq);
+                }
+                v = name == "_albedo" ? glm::mix(job.albedo, job.albedo2, t)
+                                      : glm::mix(job.dmfp, job.dmfp2, t);
+            }
+            for (int k = 0; k < 3; ++k) {
+                float x = static_cast<float>(v[k]);
+                if (!std::isfinite(x))
+                    throw ValueError(prim.source + ": " + name +
+                                     " is not finite at micropolygon " +
+                                     std::to_string(i));
+                ch->data[(base + i) * 3 + k] = x;
+            }
+        }
+    }
+}
+
+/// The point clouds by output file, in first-use order: every job's points
+/// in primitive order.
+std::vector<std::pair<std::string, PointCloud>>
+gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
+              const std::vector<DicedSurface>& diced,
+              const std::vector<std::vector<glm::dvec3>>& irr, BakeReport& report) {
+    const OutputFiles out = plan_files(scene, jobs, report);
+    std::vector<std::pair<std::string, PointCloud>> files;
+    for (std::size_t f = 0; f < out.paths.size(); ++f) {
         std::size_t n = 0;
         for (const BakeJob& job : jobs)
-            if (file_index[job.file] == f) n += diced[job.prim].size();
-        cloud.resize(n);
-        cloud.add_channel("_area", ChannelType::Float);
-        for (const std::string& c : file_channels[f])
-            cloud.add_channel(c, ChannelType::Color);
-        store_matrix(cam.world_to_camera, cloud.world_to_eye);
-        store_matrix(cam.world_to_ndc(), cloud.world_to_ndc);
-        cloud.format = {float(cam.xres), float(cam.yres), float(cam.pixel_aspect)};
+            if (out.index.at(job.file) == f) n += diced[job.prim].size();
+        files.emplace_back(out.paths[f],
+                           make_cloud(scene.options.camera, n, out.channels[f]));
     }
     std::vector<std::size_t> fill(files.size(), 0);
     for (std::size_t j = 0; j < jobs.size(); ++j) {
         const BakeJob& job = jobs[j];
-        const std::size_t f = file_index[job.file];
-        PointCloud& cloud = files[f].second;
+        const std::size_t f = out.index.at(job.file);
         const DicedSurface& d = diced[job.prim];
-        const Primitive& prim = scene.primitives[job.prim];
-        const std::size_t base = fill[f];
+        write_job(scene.primitives[job.prim], job, d, irr[j], fill[f], files[f].second,
+                  report.files[f]);
         fill[f] += d.size();
-        report.files[f].points += d.size();
-        report.files[f].objects.push_back(prim.source);
-        Channel* area = cloud.find_channel("_area");
-        const Matrix4 to_shader = glm::inverse(prim.attributes->surface->shader_to_world);
-        for (std::size_t i = 0; i < d.size(); ++i) {
-            cloud.positions[base + i] = d.centers[i];
-            cloud.normals[base + i] = d.normals[i];
-            cloud.radii[base + i] = d.radii[i];
-            area->data[base + i] = d.areas[i];
-            report.files[f].area += d.areas[i];
-        }
-        for (const std::string& name : job.channels) {
-            Channel* ch = cloud.find_channel(name);
-            for (std::size_t i = 0; i < d.size(); ++i) {
-                glm::dvec3 v(0.0);
-                if (job.kind == BakeShader::Constant) {
-                    v = d.colors.empty() ? prim.attributes->color
-                                         : glm::dvec3(d.colors[i]);
-                } else if (name == "_radiance_t") {
-                    v = job.kdt * irr[j][i];
-                } else {
-                    double t = 0.0;
-                    if (job.noise_freq > 0.0) {
-                        glm::dvec3 ps = glm::dvec3(
-                            to_shader * glm::dvec4(glm::dvec3(d.centers[i]), 1.0));
-                        t = noise3(ps * job.noise_freq);
-                    }
-                    v = name == "_albedo" ? glm::mix(job.albedo, job.albedo2, t)
-                                          : glm::mix(job.dmfp, job.dmfp2, t);
-                }
-                for (int k = 0; k < 3; ++k) {
-                    float x = static_cast<float>(v[k]);
-                    if (!std::isfinite(x))
-                        throw ValueError(prim.source + ": " + name +
-                                         " is not finite at micropolygon " +
-                                         std::to_string(i));
-                    ch->data[(base + i) * 3 + k] = x;
-                }
-            }
-        }
     }
     for (std::size_t f = 0; f < files.size(); ++f) {
         for (const Channel& c : files[f].second.channels)
@@ -522,6 +583,44 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
                                                " " + c.name);
     }
     return files;
+}
+
+} // namespace
+
+double material_mean_free_path(const MaterialSpec& material) {
+    material.validate();
+    return mfp_mm(material, nullptr, nullptr) * material.unitlength;
+}
+
+std::vector<std::pair<std::string, PointCloud>>
+bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_out) {
+    BakeReport local;
+    BakeReport& report = report_out ? *report_out : local;
+    Stopwatch watch;
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+
+    const BakeSpacing spacing = resolve_spacing(options);
+    const std::vector<Light> lights = bake_lights(scene, report);
+    const bool any_shadows = std::any_of(lights.begin(), lights.end(),
+                                         [](const Light& l) { return l.shadows; });
+    BakePlan plan = plan_jobs(scene, options, frame, any_shadows, report);
+    job_mean_free_paths(scene, options, spacing.material_mfp, plan);
+
+    const std::vector<DicedSurface> diced =
+        dice_scene(scene, options, plan, spacing.spacing);
+    report.dice_seconds = watch.seconds();
+
+    check_spacing(scene, plan, diced, report);
+    const std::unique_ptr<RayTracer> tracer =
+        build_occluders(scene, plan, diced, any_shadows, report);
+    report.trace_build_seconds = watch.seconds() - report.dice_seconds;
+
+    const std::vector<std::vector<glm::dvec3>> irr =
+        light_points(scene, options, lights, plan.jobs, diced, tracer.get());
+    report.light_seconds =
+        watch.seconds() - report.dice_seconds - report.trace_build_seconds;
+
+    return gather_clouds(scene, plan.jobs, diced, irr, report);
 }
 
 std::vector<std::string> bake_output_files(const Scene& scene,

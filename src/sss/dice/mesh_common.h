@@ -1,21 +1,28 @@
 #pragma once
-// Internal helpers shared by the polygon and subdivision-mesh dicers
-// (dice_mesh.cpp, subdivision.cpp): validation errors, positions and
-// per-corner primitive variables.
+/// \file mesh_common.h
+/// Internal: what the polygon and subdivision-mesh dicers share
+/// (dice_polygon.cpp, dice_subdiv.cpp, subdivision.cpp): positions and
+/// per-corner primitive variables, the normal transform, dicing lengths and
+/// budgets, the output writer and the bilinear quad dicer (mesh_common.cpp).
 
+#include <array>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
+#include "dice_common.h"
+#include "sss/dice/dice.h"
 #include "sss/scene/scene.h"
 
 namespace sss::detail {
-
-/// Throws ValueError "<source>: <Kind>: <what>".
-[[noreturn]] void throw_mesh_error(const Primitive& prim, const std::string& what);
 
 /// The object-space positions of "P" (or "Pw", divided by w). ValueError when
 /// both are missing, the number count is not a whole number of points, or a
@@ -62,6 +69,140 @@ public:
 private:
     const double* m_data = nullptr;
     ParamClass m_class = ParamClass::Constant;
+};
+
+// ---------------------------------------------------------------------------
+// Normals and dicing lengths
+
+/// The normal rule of dice_common.h with the matrix prepared once per
+/// primitive (world_normal rebuilds it on every call, too slow for millions
+/// of corner normals). The cofactor matrix (det * inverse transpose) is
+/// defined even for singular transforms, and maps object cross products to
+/// world cross products; its sign is calibrated against world_normal so the
+/// two can never disagree (mirror transforms included).
+class NormalTransform {
+public:
+    explicit NormalTransform(const Primitive& prim) {
+        m_matrix = cofactor(glm::dmat3(prim.object_to_world));
+        const glm::dvec3 probe(0.267, 0.535, 0.802);
+        const glm::dvec3 reference = world_normal(prim.object_to_world, probe, false);
+        m_user_sign = glm::dot(reference, m_matrix * probe) < 0.0 ? -1.0 : 1.0;
+        m_geometric_sign =
+            attributes_of(prim).orientation_inside ? -m_user_sign : m_user_sign;
+    }
+    /// World direction of a user-supplied object-space normal, not normalised.
+    glm::dvec3 user(const glm::dvec3& n) const { return m_user_sign * (m_matrix * n); }
+    /// Unit world normal from an object-space formula normal (orientation applied).
+    glm::dvec3 geometric(const glm::dvec3& n) const {
+        return safe_normalize(m_geometric_sign * (m_matrix * n));
+    }
+    /// Unit world normal from a cross product of world-space edges (the
+    /// cofactor image of the object-space formula normal).
+    glm::dvec3 geometric_from_world_cross(const glm::dvec3& c) const {
+        return safe_normalize(m_geometric_sign * c);
+    }
+    /// n / |n|, or zero for a zero or non-finite vector (never NaN).
+    static glm::dvec3 safe_normalize(const glm::dvec3& n) {
+        const double len = glm::length(n);
+        return len > 0.0 && std::isfinite(len) ? n * (1.0 / len) : glm::dvec3(0.0);
+    }
+
+private:
+    glm::dmat3 m_matrix{1.0};
+    double m_user_sign = 1.0;
+    double m_geometric_sign = 1.0;
+};
+
+/// World position of an object-space point (projective matrices divide by w).
+inline glm::dvec3 to_world(const Matrix4& m, const glm::dvec3& p) {
+    const glm::dvec4 h = m * glm::dvec4(p, 1.0);
+    return h.w == 1.0 ? glm::dvec3(h) : glm::dvec3(h) / h.w;
+}
+
+/// Micropolygon edge length at a world point, checked.
+double edge_length(const Primitive& prim, const DiceControl& control, const glm::dvec3& p,
+                   double shading_rate);
+
+/// Number of pieces for a length: ceil(length / edge), at least 1.
+std::size_t piece_count(const Primitive& prim, const DiceControl& control, double length,
+                        double edge);
+
+/// ValueError when `count` micropolygons exceed the control's budget.
+void check_budget(const Primitive& prim, const DiceControl& control, std::size_t count);
+
+// ---------------------------------------------------------------------------
+// Output
+
+inline glm::vec3 to_float(const glm::dvec3& v) {
+    return glm::vec3(v);
+}
+
+/// Fills a DicedSurface whose arrays were sized beforehand.
+struct SurfaceWriter {
+    DicedSurface& out;
+    bool with_colors;
+    std::size_t mp = 0;
+    std::size_t vertex = 0;
+    std::size_t triangle = 0;
+
+    void micropolygon(const glm::dvec3& centre, const glm::dvec3& normal, double area,
+                      double radius, const glm::dvec3& color) {
+        if (mp >= out.centers.size()) overflow();
+        out.centers[mp] = to_float(centre);
+        out.normals[mp] = to_float(normal);
+        out.areas[mp] = static_cast<float>(area);
+        out.radii[mp] = static_cast<float>(radius);
+        if (with_colors) out.colors[mp] = to_float(color);
+        ++mp;
+    }
+    void add_vertex(const glm::dvec3& p, const glm::dvec3& n) {
+        if (vertex >= out.vertices.size()) overflow();
+        out.vertices[vertex] = to_float(p);
+        out.vertex_normals[vertex] = to_float(n);
+        ++vertex;
+    }
+    void add_triangle(std::size_t a, std::size_t b, std::size_t c) {
+        if (3 * triangle >= out.triangles.size()) overflow();
+        out.triangles[3 * triangle + 0] = static_cast<uint32_t>(a);
+        out.triangles[3 * triangle + 1] = static_cast<uint32_t>(b);
+        out.triangles[3 * triangle + 2] = static_cast<uint32_t>(c);
+        ++triangle;
+    }
+    /// The counting pass and the dicing disagree: a bug, never bad input.
+    [[noreturn]] static void overflow() {
+        throw std::logic_error("dice_mesh: more micropolygons than counted");
+    }
+    void finish() { out.resize(mp, vertex, triangle, with_colors); }
+};
+
+/// Sizes `out`; ValueError when its vertices cannot be addressed by 32-bit indices.
+void allocate(const Primitive& prim, DicedSurface& out, std::size_t micropolygons,
+              std::size_t vertices, std::size_t triangles, bool with_colors);
+
+inline glm::dvec3 bilinear(const std::array<glm::dvec3, 4>& c, double u, double v) {
+    return (c[0] * (1.0 - u) + c[1] * u) * (1.0 - v) + (c[3] * (1.0 - u) + c[2] * u) * v;
+}
+
+constexpr std::array<glm::dvec3, 4> kZero4{glm::dvec3(0.0), glm::dvec3(0.0),
+                                           glm::dvec3(0.0), glm::dvec3(0.0)};
+
+/// One quad to dice, in world space, corners in winding order.
+struct QuadCorners {
+    std::array<glm::dvec3, 4> p = kZero4;
+    std::array<glm::dvec3, 4> normal = kZero4; ///< interpolated, then normalised
+    std::array<glm::dvec3, 4> color = kZero4;  ///< used when the writer has colours
+    glm::dvec3 fallback_normal{0.0};           ///< where the interpolation vanishes
+};
+
+/// Dices a quad as a bilinear patch of nu x nv sub-quads (nu along corners
+/// 0->1). Each sub-quad is one micropolygon made of two emitted triangles:
+/// its area is theirs, its centre their area-weighted centroid.
+class QuadDicer {
+public:
+    void dice(const QuadCorners& q, std::size_t nu, std::size_t nv, SurfaceWriter& w);
+
+private:
+    std::vector<glm::dvec3> m_grid;
 };
 
 } // namespace sss::detail

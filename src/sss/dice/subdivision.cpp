@@ -23,13 +23,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <string>
 #include <utility>
 
 #include <glm/geometric.hpp>
 
 #include "mesh_common.h"
+#include "sss/util/math.h"
 
 namespace sss::detail {
 
@@ -113,13 +113,13 @@ bool SubdivMesh::all_quads() const {
 
 SubdivMesh build_subdiv_mesh(const Primitive& prim) {
     if (prim.type != "catmull-clark")
-        throw_mesh_error(prim, "unsupported subdivision scheme \"" + prim.type +
-                                   "\" (only \"catmull-clark\" is supported)");
+        fail(prim, "unsupported subdivision scheme \"" + prim.type +
+                       "\" (only \"catmull-clark\" is supported)");
     SubdivMesh m;
     m.points = read_positions(prim);
     const int npoints = static_cast<int>(m.points.size());
     const int nfaces = static_cast<int>(prim.nverts.size());
-    if (nfaces == 0) throw_mesh_error(prim, "no faces");
+    if (nfaces == 0) fail(prim, "no faces");
 
     // Faces and corners.
     m.face_start.resize(nfaces + 1);
@@ -127,25 +127,22 @@ SubdivMesh build_subdiv_mesh(const Primitive& prim) {
     for (int f = 0; f < nfaces; ++f) {
         const int n = prim.nverts[f];
         if (n < 3)
-            throw_mesh_error(prim, "face " + std::to_string(f) + " has " +
-                                       std::to_string(n) +
-                                       " vertices (at least 3 needed)");
+            fail(prim, "face " + std::to_string(f) + " has " + std::to_string(n) +
+                           " vertices (at least 3 needed)");
         if (m.face_start[f] > std::numeric_limits<int>::max() - n)
-            throw_mesh_error(prim, "too many face vertices");
+            fail(prim, "too many face vertices");
         m.face_start[f + 1] = m.face_start[f] + n;
     }
     const int ncorners = m.face_start[nfaces];
     if (static_cast<std::size_t>(ncorners) != prim.verts.size())
-        throw_mesh_error(prim, "nverts add up to " + std::to_string(ncorners) + " but " +
-                                   std::to_string(prim.verts.size()) +
-                                   " vertex indices are given");
+        fail(prim, "nverts add up to " + std::to_string(ncorners) + " but " +
+                       std::to_string(prim.verts.size()) + " vertex indices are given");
     m.corner_vertex = prim.verts;
     for (int c = 0; c < ncorners; ++c) {
         const int v = m.corner_vertex[c];
         if (v < 0 || v >= npoints)
-            throw_mesh_error(prim, "vertex index " + std::to_string(v) +
-                                       " out of range (" + std::to_string(npoints) +
-                                       " points in \"P\")");
+            fail(prim, "vertex index " + std::to_string(v) + " out of range (" +
+                           std::to_string(npoints) + " points in \"P\")");
     }
     std::vector<int> corner_face(ncorners);
     for (int f = 0; f < nfaces; ++f) {
@@ -155,9 +152,8 @@ SubdivMesh build_subdiv_mesh(const Primitive& prim) {
             // A repeated vertex makes an edge meet itself: no valid topology.
             for (int d = s; d < c; ++d)
                 if (m.corner_vertex[d] == m.corner_vertex[c])
-                    throw_mesh_error(prim, "face " + std::to_string(f) + " uses vertex " +
-                                               std::to_string(m.corner_vertex[c]) +
-                                               " twice");
+                    fail(prim, "face " + std::to_string(f) + " uses vertex " +
+                                   std::to_string(m.corner_vertex[c]) + " twice");
         }
     }
 
@@ -179,9 +175,9 @@ SubdivMesh build_subdiv_mesh(const Primitive& prim) {
         const int c0 = by_key[i].second;
         const int a = m.corner_vertex[c0], b = m.corner_vertex[next_corner(c0)];
         if (j - i > 2)
-            throw_mesh_error(prim, "edge " + std::to_string(a) + "-" + std::to_string(b) +
-                                       " is shared by " + std::to_string(j - i) +
-                                       " faces (non-manifold)");
+            fail(prim, "edge " + std::to_string(a) + "-" + std::to_string(b) +
+                           " is shared by " + std::to_string(j - i) +
+                           " faces (non-manifold)");
         const int e = m.edge_count();
         m.edge_vertices.push_back({a, b});
         m.edge_faces.push_back(
@@ -196,39 +192,38 @@ SubdivMesh build_subdiv_mesh(const Primitive& prim) {
 
     // Tags.
     if (prim.tag_nargs.size() != 2 * prim.tags.size())
-        throw_mesh_error(prim, "tags need 2 argument counts each (" +
-                                   std::to_string(prim.tags.size()) + " tags, " +
-                                   std::to_string(prim.tag_nargs.size()) + " counts)");
+        fail(prim, "tags need 2 argument counts each (" +
+                       std::to_string(prim.tags.size()) + " tags, " +
+                       std::to_string(prim.tag_nargs.size()) + " counts)");
     int boundary_mode = 0;
     std::size_t ip = 0, fp = 0;
     for (std::size_t t = 0; t < prim.tags.size(); ++t) {
         const int ni = prim.tag_nargs[2 * t], nf = prim.tag_nargs[2 * t + 1];
         if (ni < 0 || nf < 0 || ip + ni > prim.tag_intargs.size() ||
             fp + nf > prim.tag_floatargs.size())
-            throw_mesh_error(prim, "tag \"" + prim.tags[t] +
-                                       "\" has more arguments than the tag lists hold");
+            fail(prim, "tag \"" + prim.tags[t] +
+                           "\" has more arguments than the tag lists hold");
         const int* ints = prim.tag_intargs.data() + ip;
         const double* floats = prim.tag_floatargs.data() + fp;
         ip += ni;
         fp += nf;
         const std::string& tag = prim.tags[t];
         auto sharpness_arg = [&](double s) {
-            if (std::isnan(s))
-                throw_mesh_error(prim, "tag \"" + tag + "\": NaN sharpness");
+            if (std::isnan(s)) fail(prim, "tag \"" + tag + "\": NaN sharpness");
             return static_cast<float>(std::max(0.0, s));
         };
         auto vertex_arg = [&](int v) {
             if (v < 0 || v >= npoints)
-                throw_mesh_error(prim, "tag \"" + tag + "\": vertex " +
-                                           std::to_string(v) + " out of range");
+                fail(prim, "tag \"" + tag + "\": vertex " + std::to_string(v) +
+                               " out of range");
             return v;
         };
         if (tag == "interpolateboundary") {
             boundary_mode = ni > 0 ? ints[0] : 1;
         } else if (tag == "crease") {
             if (ni < 2 || nf < 1)
-                throw_mesh_error(prim, "tag \"crease\" needs at least 2 vertices and a "
-                                       "sharpness");
+                fail(prim, "tag \"crease\" needs at least 2 vertices and a "
+                           "sharpness");
             const float s = sharpness_arg(floats[0]);
             for (int k = 0; k + 1 < ni; ++k) {
                 // A crease between vertices with no edge between them is ignored,
@@ -238,16 +233,15 @@ SubdivMesh build_subdiv_mesh(const Primitive& prim) {
                 if (e >= 0 && m.edge_faces[e][1] >= 0) m.edge_sharpness[e] = s;
             }
         } else if (tag == "corner") {
-            if (ni > 0 && nf < 1)
-                throw_mesh_error(prim, "tag \"corner\" needs a sharpness");
+            if (ni > 0 && nf < 1) fail(prim, "tag \"corner\" needs a sharpness");
             for (int k = 0; k < ni; ++k)
                 m.vertex_sharpness[vertex_arg(ints[k])] =
                     sharpness_arg(nf == ni ? floats[k] : floats[0]);
         } else if (tag == "hole") {
             for (int k = 0; k < ni; ++k) {
                 if (ints[k] < 0 || ints[k] >= nfaces)
-                    throw_mesh_error(prim, "tag \"hole\": face " +
-                                               std::to_string(ints[k]) + " out of range");
+                    fail(prim, "tag \"hole\": face " + std::to_string(ints[k]) +
+                                   " out of range");
                 m.face_hole[ints[k]] = 1;
             }
         }
@@ -428,10 +422,9 @@ struct TangentWeights {
         edge_sin.resize(n);
         diagonal_cos.resize(n);
         diagonal_sin.resize(n);
-        const double step = 2.0 * std::numbers::pi / n;
-        const double a =
-            1.0 + std::cos(step) +
-            std::cos(std::numbers::pi / n) * std::sqrt(2.0 * (9.0 + std::cos(step)));
+        const double step = 2.0 * kPi / n;
+        const double a = 1.0 + std::cos(step) +
+                         std::cos(kPi / n) * std::sqrt(2.0 * (9.0 + std::cos(step)));
         for (int j = 0; j < n; ++j) {
             const double c0 = std::cos(step * j), c1 = std::cos(step * (j + 1));
             const double s0 = std::sin(step * j), s1 = std::sin(step * (j + 1));

@@ -1,6 +1,6 @@
 #pragma once
 // Internal: Catmull–Clark subdivision of a RenderMan SubdivisionMesh, used by
-// dice_mesh.cpp. Object space throughout; dicing decisions (how many levels)
+// dice_subdiv.cpp. Object space throughout; dicing decisions (how many levels)
 // belong to the caller.
 
 #include <array>

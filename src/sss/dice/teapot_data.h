@@ -1,6 +1,6 @@
 #pragma once
 // Internal: the Newell teapot of `Geometry "teapot"` (teapot.cpp), diced by
-// dice.cpp as 32 bicubic Bezier patches.
+// dice_patch.cpp as 32 bicubic Bezier patches.
 
 #include <array>
 

@@ -70,7 +70,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -79,14 +78,14 @@
 #include <glm/matrix.hpp>
 #include <glm/vec4.hpp>
 
-#include "sss/util/hash.h"
 #include "sss/util/error.h"
+#include "sss/util/hash.h"
+#include "sss/util/math.h"
 
 namespace sss {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr int kMaxSamples = 1024;
 /// Shadow rays stop this fraction short of the light so that geometry at
 /// the light itself (a bulb, a light on a wall) does not shadow everything.
@@ -214,11 +213,6 @@ bool resolve_one(const ShaderRef& shader, const std::string& where, Light& light
 
 // ---------------------------------------------------------------------------
 // Irradiance
-
-/// Uniform in [0, 1) from the top 53 bits.
-double unit_double(uint64_t h) {
-    return static_cast<double>(h >> 11) * 0x1.0p-53;
-}
 
 /// A light prepared for evaluation: per-light constants computed once.
 struct PreparedLight {
@@ -353,12 +347,13 @@ ShadowRay ray_to(const glm::dvec3& origin, const glm::dvec3& target) {
     basis_around(inc.to_light, &t1, &t2);
     const uint64_t h = detail::splitmix64(
         seed ^ detail::splitmix64(0x6c69676874ull + static_cast<uint64_t>(pl.index)));
-    const double rotation = unit_double(h);
+    const double rotation = detail::unit_double(h);
     const double cos_max = std::cos(l.size); // distant: cone half-angle
     for (int k = 0; k < pl.rays; ++k) {
         // Stratified in area: sample k lies in the k-th of `rays` equal rings.
         const double radial =
-            (k + unit_double(detail::splitmix64(h + 1 + static_cast<uint64_t>(k)))) /
+            (k +
+             detail::unit_double(detail::splitmix64(h + 1 + static_cast<uint64_t>(k)))) /
             pl.rays;
         double turn = rotation + k * 0.6180339887498949; // golden-ratio spiral
         turn -= std::floor(turn);

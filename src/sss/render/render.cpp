@@ -5,6 +5,8 @@
 /// shaders (shaders.cpp), composited front to back through semi-transparent
 /// surfaces and reconstructed with RenderMan's 2 x 2 Gaussian filter. The
 /// image holds the beauty, Z and the AOVs; render_scene writes the Displays.
+/// render_image runs its phases in order (camera, lights and shaders,
+/// surfaces, dicing, ray tracers, tiles, pixels), each a function below.
 ///
 /// Determinism: a sample's position and every random decision in it depend
 /// only on (pixel, sample index, surface layer), tiles splat their samples
@@ -19,7 +21,6 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -31,15 +32,16 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "sss/util/hash.h"
 #include "shading.h"
 #include "sss/dice/dice.h"
-#include "sss/util/error.h"
-#include "sss/util/progress.h"
-#include "sss/util/version.h"
-#include "sss/util/frame_pattern.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/util/hash.h"
+#include "sss/util/math.h"
+#include "sss/util/progress.h"
+#include "sss/util/version.h"
 
 namespace sss {
 
@@ -76,11 +78,6 @@ constexpr int kOcclusion = 16;
 constexpr int kValues = 17;
 constexpr int kSlots = kValues + 1; // + weight
 
-double unit_double(uint64_t h) {
-    return static_cast<double>(h >> 11) * 0x1.0p-53;
-}
-
-
 /// Whether `Attribute "visibility" name` leaves the primitive visible.
 bool visible_to(const Primitive& prim, const char* name) {
     return attributes_of(prim).visible_to(name);
@@ -98,7 +95,7 @@ public:
                              std::to_string(cam.fov));
         if (!(cam.near_clip >= 0.0) || !(cam.far_clip > cam.near_clip))
             throw ValueError("Clipping: far must be beyond near");
-        m_tan_half = cam.perspective ? std::tan(cam.fov * std::numbers::pi / 360.0) : 1.0;
+        m_tan_half = cam.perspective ? std::tan(cam.fov * kPi / 360.0) : 1.0;
         const double det = glm::determinant(cam.world_to_camera);
         if (!(std::abs(det) > 0.0) || !std::isfinite(det))
             throw ValueError("the camera transform is singular");
@@ -166,10 +163,10 @@ struct Surface {
 
 /// For primitives with per-micropolygon colours: each triangle takes the
 /// colour of the micropolygon centre nearest to its centroid (a hash grid of
-/// cells the size of the largest micropolygon).
-void assign_triangle_colors(Surface& s) {
-    const DicedSurface& d = s.diced;
-    if (d.colors.empty() || d.triangles.empty()) return;
+/// cells the size of the largest micropolygon). Empty without colours.
+std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
+    std::vector<glm::vec3> colors;
+    if (d.colors.empty() || d.triangles.empty()) return colors;
     float cell = 0.0f;
     for (float r : d.radii) cell = std::max(cell, r);
     if (!(cell > 0.0f)) cell = 1.0f;
@@ -187,7 +184,7 @@ void assign_triangle_colors(Surface& s) {
         grid[i] = {key(d.centers[i], 0, 0, 0), static_cast<uint32_t>(i)};
     std::sort(grid.begin(), grid.end());
     const std::size_t triangles = d.triangles.size() / 3;
-    s.triangle_colors.resize(triangles);
+    colors.resize(triangles);
     for (std::size_t t = 0; t < triangles; ++t) {
         const glm::vec3 c =
             (d.vertices[d.triangles[3 * t]] + d.vertices[d.triangles[3 * t + 1]] +
@@ -221,8 +218,9 @@ void assign_triangle_colors(Surface& s) {
                 }
             }
         }
-        s.triangle_colors[t] = d.colors[best_i];
+        colors[t] = d.colors[best_i];
     }
+    return colors;
 }
 
 /// One camera sample's values, before filtering.
@@ -394,16 +392,13 @@ std::vector<std::string> image_channels() {
     return names;
 }
 
-} // namespace
+// ---------------------------------------------------------------------------
+// The phases of render_image
 
-Image render_image(const Scene& scene, const RenderJobOptions& options,
-                   RenderReport* report_out) {
-    RenderReport local;
-    RenderReport& report = report_out ? *report_out : local;
-    Stopwatch watch;
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
-
-    Renderer job;
+/// The camera with the image size overrides, the pixel samples, the camera
+/// rays and the pixel size per unit of depth; ValueError (UsageError for a
+/// half-given override) on values that cannot render.
+void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& options) {
     job.scene = &scene;
     job.camera = scene.options.camera;
     if (options.xres > 0 || options.yres > 0) {
@@ -421,70 +416,87 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     if (job.nx < 1 || job.ny < 1 || job.nx > 1024 || job.ny > 1024)
         throw ValueError("pixel samples must lie in [1, 1024]");
     job.rays.emplace(job.camera);
-    {
-        // pixel_size_at is linear in the depth beyond hither (perspective).
-        const double d =
-            job.camera.perspective ? std::max(1.0, job.camera.near_clip) : 1.0;
-        job.pixel_per_depth =
-            job.camera.pixel_size_at(d) / (job.camera.perspective ? d : 1.0);
-    }
+    // pixel_size_at is linear in the depth beyond hither (perspective).
+    const double d = job.camera.perspective ? std::max(1.0, job.camera.near_clip) : 1.0;
+    job.pixel_per_depth =
+        job.camera.pixel_size_at(d) / (job.camera.perspective ? d : 1.0);
+}
 
-    // Lights and shaders (brick maps and point clouds are opened here, so a
-    // missing file stops the render before any work).
+/// Lights and shaders (brick maps and point clouds are opened here, so a
+/// missing file stops the render before any work); true when some light or
+/// shader traces shadow or occlusion rays.
+bool resolve_lighting(Renderer& job, const Scene& scene, std::optional<int> frame,
+                      RenderReport& report) {
     job.lights = resolve_lights(scene, &report.warnings);
     job.shaders = detail::resolve_surface_shaders(scene, frame, report.warnings);
     bool any_shadows = false;
     for (const Light& l : job.lights) any_shadows = any_shadows || l.shadows;
     for (const detail::SurfaceShader& s : job.shaders.shaders)
         any_shadows = any_shadows || s.occlusion_samples > 0;
+    return any_shadows;
+}
 
-    // Dicing: everything the camera sees, and everything that casts shadows
-    // when some light or shader traces them.
+/// What is diced: everything the camera sees, and everything that casts
+/// shadows when some light or shader traces them. Returns those primitives;
+/// *separate_shadows tells whether shadows see other surfaces than the camera.
+std::vector<std::size_t> plan_surfaces(Renderer& job, bool any_shadows,
+                                       bool* separate_shadows) {
+    const Scene& scene = *job.scene;
     const std::size_t count = scene.primitives.size();
     job.surfaces.resize(count);
     std::vector<std::size_t> to_dice;
-    bool separate_shadows = false;
+    *separate_shadows = false;
     for (std::size_t i = 0; i < count; ++i) {
         Surface& s = job.surfaces[i];
         s.camera = visible_to(scene.primitives[i], "camera");
         s.shadows = any_shadows && visible_to(scene.primitives[i], "transmission");
         if (s.camera || s.shadows) to_dice.push_back(i);
-        if (s.camera != s.shadows && any_shadows) separate_shadows = true;
+        if (s.camera != s.shadows && any_shadows) *separate_shadows = true;
     }
-    std::vector<std::string> errors(to_dice.size());
-    tbb::parallel_for(std::size_t(0), to_dice.size(), [&](std::size_t k) {
-        try {
-            const Primitive& prim = scene.primitives[to_dice[k]];
-            // Edges of kEdgePixels whatever the ShadingRate: coarser than its
-            // micropolygons through the coarsening, finer through a camera
-            // with proportionally more pixels over the same screen window.
-            const double rate = attributes_of(prim).shading_rate;
-            const double edge = std::sqrt(std::max(rate, 1e-12)); // pixels
-            Camera dice_camera = job.camera;
-            DiceControl control;
-            control.camera = &dice_camera;
-            if (edge <= kEdgePixels) {
-                control.coarsening = kEdgePixels / edge;
-            } else {
-                dice_camera.screen_window = job.camera.resolved_screen_window();
-                dice_camera.xres = static_cast<int>(
-                    std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
-            }
-            Surface& s = job.surfaces[to_dice[k]];
-            s.diced = dice_primitive(prim, control);
-            for (glm::vec3& n : s.diced.vertex_normals) {
+    return to_dice;
+}
+
+/// Dices the primitives `to_dice` into triangles of about kEdgePixels, with
+/// unit vertex normals and per-triangle colours.
+void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice) {
+    const Scene& scene = *job.scene;
+    // Edges of kEdgePixels whatever the ShadingRate: coarser than its
+    // micropolygons through the coarsening, finer through a camera with
+    // proportionally more pixels over the same screen window.
+    std::vector<Camera> dice_cameras(to_dice.size()); // live through dice_all
+    std::vector<DiceRequest> requests(to_dice.size());
+    for (std::size_t k = 0; k < to_dice.size(); ++k) {
+        const Primitive& prim = scene.primitives[to_dice[k]];
+        const double rate = attributes_of(prim).shading_rate;
+        const double edge = std::sqrt(std::max(rate, 1e-12)); // pixels
+        Camera& dice_camera = dice_cameras[k];
+        dice_camera = job.camera;
+        DiceControl control;
+        control.camera = &dice_camera;
+        if (edge <= kEdgePixels) {
+            control.coarsening = kEdgePixels / edge;
+        } else {
+            dice_camera.screen_window = job.camera.resolved_screen_window();
+            dice_camera.xres = static_cast<int>(
+                std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
+        }
+        requests[k] = {to_dice[k], control};
+    }
+    std::vector<DicedSurface> diced =
+        dice_all(scene, requests, [&](std::size_t i, DicedSurface& d) {
+            for (glm::vec3& n : d.vertex_normals) {
                 const float len = glm::length(n);
                 if (len > 0.0f && std::isfinite(len)) n /= len;
             }
-            assign_triangle_colors(s);
-        } catch (const std::exception& e) {
-            errors[k] = e.what();
-        }
-    });
-    for (const std::string& e : errors)
-        if (!e.empty()) throw ValueError(e);
+            job.surfaces[i].triangle_colors = triangle_colors(d);
+        });
+    for (std::size_t i : to_dice) job.surfaces[i].diced = std::move(diced[i]);
+}
 
-    // Ray tracers: one when the camera and shadows see the same surfaces.
+/// The ray tracers: one when the camera and shadows see the same surfaces,
+/// else one each; and the scene extent.
+void build_tracers(Renderer& job, const std::vector<std::size_t>& to_dice,
+                   bool any_shadows, bool separate_shadows, RenderReport& report) {
     job.camera_tracer = std::make_unique<RayTracer>();
     if (separate_shadows) job.shadow_tracer = std::make_unique<RayTracer>();
     for (std::size_t i : to_dice) {
@@ -505,22 +517,37 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
             separate_shadows ? job.shadow_tracer.get() : job.camera_tracer.get();
     job.extent = std::max(job.camera_tracer->scene_extent(),
                           job.shadow_tracer ? job.shadow_tracer->scene_extent() : 0.0f);
-    report.setup_seconds = watch.seconds();
+}
 
-    // Pixels, tile by tile. Each tile splats its own samples into a buffer
-    // one pixel wider on every side (the filter's reach).
-    const int width = job.camera.xres, height = job.camera.yres;
-    const int tiles_x = (width + kTile - 1) / kTile;
-    const int tiles_y = (height + kTile - 1) / kTile;
-    const std::size_t tiles = std::size_t(tiles_x) * tiles_y;
-    constexpr int kSpan = kTile + 2;
+/// The image cut into kTile x kTile tiles, in row order.
+struct TileGrid {
+    int width = 0, height = 0;
+    int tiles_x = 0, tiles_y = 0;
+
+    TileGrid(int w, int h)
+        : width(w), height(h), tiles_x((w + kTile - 1) / kTile),
+          tiles_y((h + kTile - 1) / kTile) {}
+    std::size_t count() const { return std::size_t(tiles_x) * tiles_y; }
+    int x0(std::size_t t) const { return static_cast<int>(t % tiles_x) * kTile; }
+    int y0(std::size_t t) const { return static_cast<int>(t / tiles_x) * kTile; }
+};
+
+/// Sides of a tile's buffer: one pixel wider on every side (the filter's reach).
+constexpr int kSpan = kTile + 2;
+
+/// Renders every tile: each splats its own samples into its buffer of
+/// kSpan x kSpan pixels of kSlots values, and keeps the nearest depth of
+/// its pixels in `depth`.
+std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid,
+                                             const RenderJobOptions& options,
+                                             std::vector<float>& depth) {
+    const int width = grid.width, height = grid.height;
+    const std::size_t tiles = grid.count();
     std::vector<std::vector<float>> tile_sums(tiles);
-    std::vector<float> depth(std::size_t(width) * height,
-                             std::numeric_limits<float>::infinity());
     std::atomic<std::size_t> tiles_done{0};
     tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
-        const int x0 = static_cast<int>(t % tiles_x) * kTile;
-        const int y0 = static_cast<int>(t / tiles_x) * kTile;
+        const int x0 = grid.x0(t);
+        const int y0 = grid.y0(t);
         const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
         std::vector<float>& sums = tile_sums[t];
         sums.assign(std::size_t(kSpan) * kSpan * kSlots, 0.0f);
@@ -537,9 +564,10 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
                         const uint64_t key = detail::splitmix64(
                             pixel_key +
                             uint64_t(j * job.nx + i) * detail::kSplitMixIncrement);
-                        const double sx = px + (i + unit_double(key)) / job.nx;
+                        const double sx = px + (i + detail::unit_double(key)) / job.nx;
                         const double sy =
-                            py + (j + unit_double(detail::splitmix64(key))) / job.ny;
+                            py +
+                            (j + detail::unit_double(detail::splitmix64(key))) / job.ny;
                         bool bad = false;
                         job.sample(sx, sy, key, scratch, value, camera_count,
                                    shadow_count, bad);
@@ -579,12 +607,18 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
         job.bad_samples += bad_count;
         if (options.progress) options.progress->update(++tiles_done, tiles);
     });
+    return tile_sums;
+}
 
-    // Tiles are added up in a fixed order: the same sums for any thread count.
+/// Adds the tiles up in a fixed order, the same sums for any thread count,
+/// freeing each tile's buffer once added.
+std::vector<float> add_tiles(const TileGrid& grid,
+                             std::vector<std::vector<float>>& tile_sums) {
+    const int width = grid.width, height = grid.height;
     std::vector<float> sums(std::size_t(width) * height * kSlots, 0.0f);
-    for (std::size_t t = 0; t < tiles; ++t) {
-        const int x0 = static_cast<int>(t % tiles_x) * kTile;
-        const int y0 = static_cast<int>(t / tiles_x) * kTile;
+    for (std::size_t t = 0; t < grid.count(); ++t) {
+        const int x0 = grid.x0(t);
+        const int y0 = grid.y0(t);
         const std::vector<float>& tile = tile_sums[t];
         for (int ty = 0; ty < kSpan; ++ty) {
             const int py = y0 - 1 + ty;
@@ -599,9 +633,14 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
         }
         std::vector<float>().swap(tile_sums[t]);
     }
+    return sums;
+}
 
+/// The image: filtered sums divided by their weights, and the depth.
+Image resolve_pixels(const TileGrid& grid, const std::vector<float>& sums,
+                     const std::vector<float>& depth) {
+    const int width = grid.width, height = grid.height;
     Image image(width, height, image_channels());
-    const int channels = image.channel_count();
     for (int py = 0; py < height; ++py) {
         for (int px = 0; px < width; ++px) {
             const float* s = &sums[(std::size_t(py) * width + px) * kSlots];
@@ -614,15 +653,46 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
             for (int c = 0; c < 12; ++c) out[5 + c] = s[kAmbient + c] * inv;
             const float occ = s[kOcclusion] * inv;
             out[17] = out[18] = out[19] = occ;
-            (void)channels;
         }
     }
+    return image;
+}
 
+/// The ray counts, and a warning about samples that went wrong numerically.
+void report_rays(const Renderer& job, RenderReport& report) {
     report.camera_rays = job.camera_rays.load();
     report.shadow_rays = job.shadow_rays.load();
     if (job.bad_samples.load() > 0)
         report.warnings.push_back(std::to_string(job.bad_samples.load()) +
                                   " samples had non-finite values and were left black");
+}
+
+} // namespace
+
+Image render_image(const Scene& scene, const RenderJobOptions& options,
+                   RenderReport* report_out) {
+    RenderReport local;
+    RenderReport& report = report_out ? *report_out : local;
+    Stopwatch watch;
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+
+    Renderer job;
+    setup_camera(job, scene, options);
+    const bool any_shadows = resolve_lighting(job, scene, frame, report);
+    bool separate_shadows = false;
+    const std::vector<std::size_t> to_dice =
+        plan_surfaces(job, any_shadows, &separate_shadows);
+    dice_surfaces(job, to_dice);
+    build_tracers(job, to_dice, any_shadows, separate_shadows, report);
+    report.setup_seconds = watch.seconds();
+
+    const TileGrid grid(job.camera.xres, job.camera.yres);
+    std::vector<float> depth(std::size_t(grid.width) * grid.height,
+                             std::numeric_limits<float>::infinity());
+    std::vector<std::vector<float>> tile_sums = render_tiles(job, grid, options, depth);
+    Image image = resolve_pixels(grid, add_tiles(grid, tile_sums), depth);
+
+    report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
     return image;
 }

@@ -12,7 +12,6 @@
 #include <filesystem>
 #include <limits>
 #include <map>
-#include <numbers>
 #include <set>
 #include <string>
 #include <utility>
@@ -20,25 +19,21 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
-#include "sss/util/hash.h"
 #include "shading.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
-#include "sss/cloud/point_cloud_io.h"
+#include "sss/util/hash.h"
+#include "sss/util/math.h"
 
 namespace sss::detail {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 /// Occlusion rays per shading point are capped: more only costs time.
 constexpr int kMaxOcclusionSamples = 1024;
 /// Lookups return at most this many floats (the .bkm format's own limit).
 constexpr int kMaxLookupFloats = 1024;
-
-double unit_double(uint64_t h) {
-    return static_cast<double>(h >> 11) * 0x1.0p-53;
-}
 
 bool ends_with_nocase(const std::string& s, const std::string& suffix) {
     if (s.size() < suffix.size()) return false;
@@ -83,38 +78,43 @@ glm::dvec3 finite_color(const ParamList& params, const char* name,
     return v;
 }
 
+/// Ka and Kd, with the shader's defaults.
+void read_ka_kd(const ParamList& p, double ka, double kd, SurfaceShader& s) {
+    s.ka = finite_float(p, "Ka", ka);
+    s.kd = finite_float(p, "Kd", kd);
+}
+
+/// The highlight's roughness (shader's default) and specularcolor (white).
+void read_highlight(const ParamList& p, double roughness, SurfaceShader& s) {
+    s.roughness = finite_float(p, "roughness", roughness);
+    s.specular_color = finite_color(p, "specularcolor", glm::dvec3(1.0));
+}
+
 /// Fills a shader's parameters from its Surface call (defaults as documented).
 void read_parameters(const ShaderRef& ref, SurfaceShader& s) {
     const ParamList& p = ref.params;
     switch (s.kind) {
     case ShaderKind::Default:
-        s.ka = finite_float(p, "Ka", 0.2);
-        s.kd = finite_float(p, "Kd", 0.8);
+        read_ka_kd(p, 0.2, 0.8, s);
         break;
     case ShaderKind::Constant:
         break;
     case ShaderKind::Matte:
-        s.ka = finite_float(p, "Ka", 1.0);
-        s.kd = finite_float(p, "Kd", 1.0);
+        read_ka_kd(p, 1.0, 1.0, s);
         break;
     case ShaderKind::Plastic:
-        s.ka = finite_float(p, "Ka", 1.0);
-        s.kd = finite_float(p, "Kd", 0.5);
+        read_ka_kd(p, 1.0, 0.5, s);
         s.ks = finite_float(p, "Ks", 0.5);
-        s.roughness = finite_float(p, "roughness", 0.1);
-        s.specular_color = finite_color(p, "specularcolor", glm::dvec3(1.0));
+        read_highlight(p, 0.1, s);
         break;
     case ShaderKind::ReadSsdiffusion:
-        s.ka = finite_float(p, "Ka", 0.0);
-        s.kd = finite_float(p, "Kd", 0.0);
+        read_ka_kd(p, 0.0, 0.0, s);
         break;
     case ShaderKind::Skin:
-        s.ka = finite_float(p, "Ka", 0.0);
-        s.kd = finite_float(p, "Kd", 0.3);
+        read_ka_kd(p, 0.0, 0.3, s);
         s.ks_facing = finite_float(p, "Ksfacing", 0.05);
         s.ks_glancing = finite_float(p, "Ksglancing", 0.3);
-        s.roughness = finite_float(p, "roughness", 0.2);
-        s.specular_color = finite_color(p, "specularcolor", glm::dvec3(1.0));
+        read_highlight(p, 0.2, s);
         s.sss_weight = finite_float(p, "sss_weight", finite_float(p, "Ksss", 1.0));
         s.sss_color = finite_color(p, "sss_color", glm::dvec3(1.0));
         break;
