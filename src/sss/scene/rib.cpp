@@ -23,6 +23,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 
+#include "sss/util/name_table.h"
+
 namespace sss {
 
 namespace {
@@ -362,29 +364,6 @@ struct Decl {
     int array_size = 1;
 };
 
-std::optional<ParamType> type_from_name(std::string_view t) {
-    if (t == "float") return ParamType::Float;
-    if (t == "integer" || t == "int") return ParamType::Integer;
-    if (t == "string") return ParamType::String;
-    if (t == "color") return ParamType::Color;
-    if (t == "point") return ParamType::Point;
-    if (t == "vector") return ParamType::Vector;
-    if (t == "normal") return ParamType::Normal;
-    if (t == "hpoint") return ParamType::HPoint;
-    if (t == "matrix") return ParamType::Matrix;
-    return std::nullopt;
-}
-
-std::optional<ParamClass> class_from_name(std::string_view c) {
-    if (c == "constant") return ParamClass::Constant;
-    if (c == "uniform") return ParamClass::Uniform;
-    if (c == "varying") return ParamClass::Varying;
-    if (c == "vertex") return ParamClass::Vertex;
-    if (c == "facevarying") return ParamClass::FaceVarying;
-    if (c == "facevertex") return ParamClass::FaceVertex;
-    return std::nullopt;
-}
-
 /// Parses "[class] type[[n]] [name]". Returns an error message or "" on success.
 std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
                        std::string* name, std::string* type_text = nullptr) {
@@ -405,7 +384,7 @@ std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
     std::size_t i = 0;
     const std::string bad = "bad declaration \"" + std::string(text) + "\"";
     if (i < words.size()) {
-        if (auto c = class_from_name(words[i])) {
+        if (auto c = parse_param_class(words[i])) {
             decl.storage = *c;
             ++i;
         } else {
@@ -413,7 +392,7 @@ std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
         }
     }
     if (i >= words.size()) return bad + ": no type";
-    auto t = type_from_name(words[i]);
+    auto t = parse_param_type(words[i]);
     if (!t) return bad + ": unknown type '" + words[i] + "'";
     decl.type = *t;
     std::string type_words = (i > 0 ? words[0] + " " : std::string()) + words[i];
@@ -482,32 +461,27 @@ std::unordered_map<std::string, Decl> predeclared() {
 // ---------------------------------------------------------------------------
 // The interpreter
 
-/// Element counts a primitive's parameters must have, per storage class.
-struct Counts {
-    std::size_t uniform = 1;
-    std::size_t varying = 4;
-    std::size_t vertex = 4;
-    std::size_t facevarying = 4;
-};
+/// The element counts a primitive's parameters must have, per storage class.
+/// The reader counts facevertex values like facevarying ones (one per face
+/// corner), so both get the same number.
+ClassCounts counts(std::size_t uniform, std::size_t varying, std::size_t vertex,
+                   std::size_t facevarying) {
+    return {uniform, varying, vertex, facevarying, facevarying};
+}
 
 enum class Block { Attribute, Transform, World, Frame, Object, Solid };
 
+constexpr NameTable<Block, 6> kBlockBeginNames({{
+    {Block::Attribute, "AttributeBegin"},
+    {Block::Transform, "TransformBegin"},
+    {Block::World, "WorldBegin"},
+    {Block::Frame, "FrameBegin"},
+    {Block::Object, "ObjectBegin"},
+    {Block::Solid, "SolidBegin"},
+}});
+
 const char* block_begin_name(Block b) {
-    switch (b) {
-    case Block::Attribute:
-        return "AttributeBegin";
-    case Block::Transform:
-        return "TransformBegin";
-    case Block::World:
-        return "WorldBegin";
-    case Block::Frame:
-        return "FrameBegin";
-    case Block::Object:
-        return "ObjectBegin";
-    case Block::Solid:
-        return "SolidBegin";
-    }
-    return "?";
+    return kBlockBeginNames.name(b);
 }
 
 /// The attribute half of the graphics state, with a cached immutable
@@ -1753,23 +1727,6 @@ private:
         add_primitive(s, std::move(p), Matrix4(1.0), where(s));
     }
 
-    static std::size_t expected_for(ParamClass c, const Counts& n) {
-        switch (c) {
-        case ParamClass::Constant:
-            return 1;
-        case ParamClass::Uniform:
-            return n.uniform;
-        case ParamClass::Varying:
-            return n.varying;
-        case ParamClass::Vertex:
-            return n.vertex;
-        case ParamClass::FaceVarying:
-        case ParamClass::FaceVertex:
-            return n.facevarying;
-        }
-        return 1;
-    }
-
     /// Makes "P" the position parameter (from Pw or, for patches, Pz) and
     /// checks it holds `n_points` points.
     void resolve_positions(const Statement& s, ParamList& params, std::size_t n_points,
@@ -1842,10 +1799,10 @@ private:
 
     /// Every other parameter must have the number of values its class asks for.
     static void check_counts(const Statement& s, const ParamList& params,
-                             const Counts& n) {
+                             const ClassCounts& n) {
         for (const Param& p : params.items) {
             if (p.name == "P") continue;
-            std::size_t want = expected_for(p.storage, n);
+            std::size_t want = n.of(p.storage);
             if (p.element_count() != want)
                 fail(s, "parameter \"" + p.name + "\" (" + param_class_name(p.storage) +
                             " " + param_type_name(p.type) + ") has " +
@@ -1875,7 +1832,7 @@ private:
             fail(s, "a polygon needs \"P\" with at least 3 points, got " +
                         std::to_string(n));
         resolve_positions(s, params, n);
-        check_counts(s, params, Counts{1, n, n, n});
+        check_counts(s, params, counts(1, n, n, n));
         Primitive p;
         p.kind = PrimitiveKind::Polygon;
         p.nverts = {static_cast<int>(n)};
@@ -1892,7 +1849,7 @@ private:
         p.params = take_params(s, i, false);
         std::size_t n = sum(p.nverts);
         resolve_positions(s, p.params, n);
-        check_counts(s, p.params, Counts{1, n, n, n});
+        check_counts(s, p.params, counts(1, n, n, n));
         add_primitive(s, std::move(p));
     }
 
@@ -1915,7 +1872,7 @@ private:
         check_indices(s, p.verts, sum(p.nverts));
         std::size_t nv = vertex_count(p.verts);
         resolve_positions(s, p.params, nv);
-        check_counts(s, p.params, Counts{p.nverts.size(), nv, nv, p.verts.size()});
+        check_counts(s, p.params, counts(p.nverts.size(), nv, nv, p.verts.size()));
         add_primitive(s, std::move(p));
     }
 
@@ -1934,7 +1891,7 @@ private:
         check_indices(s, p.verts, sum(p.nverts));
         std::size_t nv = vertex_count(p.verts);
         resolve_positions(s, p.params, nv);
-        check_counts(s, p.params, Counts{p.nloops.size(), nv, nv, p.verts.size()});
+        check_counts(s, p.params, counts(p.nloops.size(), nv, nv, p.verts.size()));
         add_primitive(s, std::move(p));
     }
 
@@ -1982,7 +1939,7 @@ private:
         if (ni != p.tag_intargs.size() || nf != p.tag_floatargs.size())
             fail(s, "tag argument counts do not match intargs/floatargs");
         resolve_positions(s, p.params, nv);
-        check_counts(s, p.params, Counts{p.nverts.size(), nv, nv, p.verts.size()});
+        check_counts(s, p.params, counts(p.nverts.size(), nv, nv, p.verts.size()));
         add_primitive(s, std::move(p));
     }
 
@@ -2011,7 +1968,7 @@ private:
         p.params = take_params(s, i, false);
         if (p.params.has("P") || p.params.has("Pw") || p.params.has("Pz"))
             fail(s, "quadrics take no \"P\"");
-        check_counts(s, p.params, Counts{1, 4, 4, 4});
+        check_counts(s, p.params, counts(1, 4, 4, 4));
         add_primitive(s, std::move(p));
     }
 
@@ -2030,7 +1987,7 @@ private:
             fail(s, "patch type must be bicubic or bilinear, got \"" + p.type + "\"");
         p.nu = p.nv = n;
         resolve_positions(s, p.params, static_cast<std::size_t>(n * n), n, n);
-        check_counts(s, p.params, Counts{1, 4, static_cast<std::size_t>(n * n), 4});
+        check_counts(s, p.params, counts(1, 4, static_cast<std::size_t>(n * n), 4));
         add_primitive(s, std::move(p));
     }
 
@@ -2087,7 +2044,7 @@ private:
         std::size_t nvert =
             static_cast<std::size_t>(p.nu) * static_cast<std::size_t>(p.nv);
         resolve_positions(s, p.params, nvert, p.nu, p.nv, p.uwrap, p.vwrap);
-        check_counts(s, p.params, Counts{pu * pv, vu * vv, nvert, 4 * pu * pv});
+        check_counts(s, p.params, counts(pu * pv, vu * vv, nvert, 4 * pu * pv));
         add_primitive(s, std::move(p));
     }
 
@@ -2107,7 +2064,7 @@ private:
                 fail(s, "parameter \"" + q.name +
                             "\": only constant and uniform parameters "
                             "are allowed on the teapot");
-        check_counts(s, p.params, Counts{1, 1, 1, 1});
+        check_counts(s, p.params, counts(1, 1, 1, 1));
         add_primitive(s, std::move(p));
     }
 
