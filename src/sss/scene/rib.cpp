@@ -23,6 +23,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 
+#include "obj_import.h"
 #include "rib_lexer.h"
 #include "sss/util/name_table.h"
 
@@ -239,7 +240,7 @@ private:
             m_scene.sources.push_back(path);
         ++m_depth;
         if (obj)
-            import_obj(text, path);
+            add_obj(text, path);
         else
             run_text(text, std::make_shared<const std::string>(path));
         --m_depth;
@@ -1757,174 +1758,16 @@ private:
 
     // --- Wavefront OBJ -------------------------------------------------------
 
-    void import_obj(const std::string& text, const std::string& path) {
-        auto file = std::make_shared<const std::string>(path);
-        auto obj_fail = [&](int line, const std::string& keyword,
-                            const std::string& what) {
-            throw RibError(path, line, keyword, what);
-        };
-        std::vector<double> positions, normals;
-        std::size_t n_texcoords = 0;
-        std::vector<int> nverts, verts, corner_normals;
-        bool all_normals = true;
-        int first_face_line = 0;
-        std::set<std::string> warned;
-
-        std::size_t pos = 0;
-        int line_no = 0;
-        std::string line;
-        while (pos < text.size()) {
-            // One logical line: a trailing backslash continues it.
-            line.clear();
-            ++line_no;
-            const int start_line = line_no;
-            for (;;) {
-                std::size_t end = text.find('\n', pos);
-                if (end == std::string::npos) end = text.size();
-                std::string_view part(text.data() + pos, end - pos);
-                pos = std::min(end + 1, text.size() + 1);
-                if (!part.empty() && part.back() == '\r') part.remove_suffix(1);
-                if (!part.empty() && part.back() == '\\' && pos <= text.size()) {
-                    part.remove_suffix(1);
-                    line.append(part);
-                    line.push_back(' ');
-                    ++line_no;
-                    continue;
-                }
-                line.append(part);
-                break;
-            }
-            if (std::size_t hash = line.find('#'); hash != std::string::npos)
-                line.resize(hash);
-            std::vector<std::string_view> words;
-            {
-                std::size_t k = 0;
-                while (k < line.size()) {
-                    while (k < line.size() && is_space(line[k])) ++k;
-                    std::size_t b = k;
-                    while (k < line.size() && !is_space(line[k])) ++k;
-                    if (k > b) words.emplace_back(line.data() + b, k - b);
-                }
-            }
-            if (words.empty()) continue;
-            const std::string key(words[0]);
-            auto number = [&](std::string_view w) {
-                double d;
-                std::string err;
-                if (!parse_number(w, d, err)) obj_fail(start_line, key, err);
-                return d;
-            };
-            if (key == "v") {
-                std::size_t n = words.size() - 1;
-                if (n != 3 && n != 4 && n != 6)
-                    obj_fail(start_line, key,
-                             "expected x y z [w] (or x y z r g b), got " +
-                                 std::to_string(n) + " numbers");
-                for (std::size_t k = 1; k <= n; ++k) {
-                    double d = number(words[k]);
-                    if (k <= 3) positions.push_back(d); // w and colours are not used
-                }
-            } else if (key == "vn") {
-                if (words.size() != 4)
-                    obj_fail(start_line, key,
-                             "expected 3 numbers, got " +
-                                 std::to_string(words.size() - 1));
-                for (std::size_t k = 1; k <= 3; ++k) normals.push_back(number(words[k]));
-            } else if (key == "vt") {
-                for (std::size_t k = 1; k < words.size(); ++k) number(words[k]);
-                ++n_texcoords;
-            } else if (key == "f") {
-                if (words.size() < 4)
-                    obj_fail(start_line, key,
-                             "a face needs at least 3 vertices, got " +
-                                 std::to_string(words.size() - 1));
-                if (!first_face_line) first_face_line = start_line;
-                const long nv_now = static_cast<long>(positions.size() / 3);
-                const long nn_now = static_cast<long>(normals.size() / 3);
-                const long nt_now = static_cast<long>(n_texcoords);
-                auto index = [&](std::string_view w, long count,
-                                 const char* what) -> int {
-                    long k = 0;
-                    auto r = std::from_chars(w.data(), w.data() + w.size(), k);
-                    if (r.ec != std::errc() || r.ptr != w.data() + w.size())
-                        obj_fail(start_line, key,
-                                 std::string("malformed ") + what + " index '" +
-                                     std::string(w) + "'");
-                    if (k == 0)
-                        obj_fail(start_line, key,
-                                 std::string(what) + " index 0 (OBJ counts from 1)");
-                    long resolved =
-                        k > 0 ? k - 1 : count + k; // negative: relative to the end
-                    if (resolved < 0 || resolved >= count)
-                        obj_fail(start_line, key,
-                                 std::string(what) + " index " + std::to_string(k) +
-                                     " out of range (" + std::to_string(count) +
-                                     " defined)");
-                    return static_cast<int>(resolved);
-                };
-                for (std::size_t k = 1; k < words.size(); ++k) {
-                    std::string_view w = words[k];
-                    std::size_t s1 = w.find('/');
-                    std::string_view vpart = w.substr(0, s1);
-                    verts.push_back(index(vpart, nv_now, "vertex"));
-                    int normal = -1;
-                    if (s1 != std::string_view::npos) {
-                        std::string_view rest = w.substr(s1 + 1);
-                        std::size_t s2 = rest.find('/');
-                        std::string_view tpart = rest.substr(0, s2);
-                        if (!tpart.empty()) index(tpart, nt_now, "texture");
-                        if (s2 != std::string_view::npos) {
-                            std::string_view npart = rest.substr(s2 + 1);
-                            if (!npart.empty()) normal = index(npart, nn_now, "normal");
-                        }
-                    }
-                    if (normal < 0) all_normals = false;
-                    corner_normals.push_back(normal);
-                }
-                nverts.push_back(static_cast<int>(words.size() - 1));
-            } else if (key == "g" || key == "o" || key == "s" || key == "usemtl" ||
-                       key == "mtllib" || key == "l") {
-                // grouping, smoothing, materials and lines carry nothing for us
-            } else if (warned.insert(key).second) {
-                m_scene.warnings.push_back(path + ":" + std::to_string(start_line) +
-                                           ": unsupported OBJ statement '" + key +
-                                           "', skipped");
-            }
-        }
-        if (nverts.empty()) {
-            m_scene.warnings.push_back(path + ": no faces, nothing imported");
-            return;
-        }
-        Primitive p;
-        p.kind = PrimitiveKind::PointsPolygons;
-        std::size_t used = vertex_count(verts);
-        Param P;
-        P.name = "P";
-        P.type = ParamType::Point;
-        P.storage = ParamClass::Vertex;
-        // Vertices after the last one used are dropped: the count is max index + 1.
-        P.numbers.assign(positions.begin(),
-                         positions.begin() + static_cast<long>(3 * used));
-        p.params.items.push_back(std::move(P));
-        if (all_normals) {
-            Param N;
-            N.name = "N";
-            N.type = ParamType::Normal;
-            N.storage = ParamClass::FaceVarying;
-            N.numbers.reserve(3 * corner_normals.size());
-            for (int n : corner_normals)
-                for (int c = 0; c < 3; ++c)
-                    N.numbers.push_back(normals[static_cast<std::size_t>(3 * n + c)]);
-            p.params.items.push_back(std::move(N));
-        }
-        p.nverts = std::move(nverts);
-        p.verts = std::move(verts);
+    /// The mesh of an OBJ file, as a primitive under the current state.
+    void add_obj(const std::string& text, const std::string& path) {
+        auto mesh = detail::import_obj(text, path, m_scene.warnings);
+        if (!mesh) return;
         Statement at;
         at.name = "ReadArchive";
-        at.file = file;
-        at.line = first_face_line;
-        add_primitive(at, std::move(p), Matrix4(1.0),
-                      path + ":" + std::to_string(first_face_line));
+        at.file = std::make_shared<const std::string>(path);
+        at.line = mesh->first_face_line;
+        add_primitive(at, std::move(mesh->primitive), Matrix4(1.0),
+                      path + ":" + std::to_string(mesh->first_face_line));
     }
 
     // --- state ---------------------------------------------------------------
