@@ -5,11 +5,8 @@
 
 #include "sss/scene/rib.h"
 
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <set>
-#include <sstream>
+#include <string_view>
 #include <unordered_map>
 
 #include "rib_args.h"
@@ -17,6 +14,77 @@
 
 namespace sss {
 namespace rib {
+
+namespace {
+
+/// Requests that do not change what this toolchain computes.
+bool ignored(std::string_view name) {
+    static const std::set<std::string_view> names = {
+        "version",
+        "Version",
+        "Shutter",
+        "ArchiveRecord",
+        "Camera",
+        "Exposure",
+        "Quantize",
+        "PixelFilter",
+        "PixelVariance",
+        "Imager",
+        "DepthOfField",
+        "RelativeDetail",
+        "ErrorHandler",
+        "Matte",
+        "Bound",
+        "GeometricApproximation",
+        "TextureCoordinates",
+    };
+    return names.count(name) > 0;
+}
+
+/// Requests understood but not supported: one warning each.
+bool unsupported(std::string_view name) {
+    static const std::set<std::string_view> names = {
+        "Displacement",
+        "Atmosphere",
+        "Interior",
+        "Exterior",
+        "Deformation",
+        "Detail",
+        "DetailRange",
+        "Points",
+        "Curves",
+        "Blobby",
+        "NuPatch",
+        "TrimCurve",
+        "HierarchicalSubdivisionMesh",
+        "ClippingPlane",
+        "IfBegin",
+        "ElseIf",
+        "Else",
+        "IfEnd",
+        "MakeTexture",
+        "MakeShadow",
+        "MakeBump",
+        "MakeLatLongEnvironment",
+        "MakeCubeFaceEnvironment",
+        "MakeBrickMap",
+        "System",
+        "Resource",
+        "ResourceBegin",
+        "ResourceEnd",
+        "Shader",
+        "Bxdf",
+        "Pattern",
+        "Integrator",
+        "DisplayFilter",
+        "SampleFilter",
+        "Light",
+        "Volume",
+    };
+    return names.count(name) > 0;
+}
+
+} // namespace
 
 void Reader::read_text(std::string_view text, const std::string& path) {
     m_scene.path = path;
@@ -40,7 +108,7 @@ Scene Reader::finish(const std::string& path) {
     return std::move(m_scene);
 }
 
-void Reader::execute(const Statement& s) {
+bool Reader::diverted(const Statement& s) {
     // Inline archives are recorded, not executed.
     if (m_recording) {
         if (s.name == "ArchiveBegin") {
@@ -50,12 +118,12 @@ void Reader::execute(const Statement& s) {
                 m_archives[m_record_name] = std::move(m_record);
                 m_record.clear();
                 m_recording = false;
-                return;
+                return true;
             }
             --m_record_depth;
         }
         m_record.push_back(s);
-        return;
+        return true;
     }
     // Frames other than the selected one are skipped entirely.
     if (m_skipping) {
@@ -63,14 +131,18 @@ void Reader::execute(const Statement& s) {
             m_skipping = false;
         else if (s.name == "FrameBegin")
             fail(s, "nested FrameBegin");
-        return;
+        return true;
     }
     // Motion blocks: only the first time sample is used.
     if (m_in_motion && s.name != "MotionEnd") {
-        if (m_motion_used) return;
+        if (m_motion_used) return true;
         m_motion_used = true;
     }
-    static const std::unordered_map<std::string_view, Handler> handlers = {
+    return false;
+}
+
+const Reader::HandlerTable& Reader::handlers() {
+    static const HandlerTable table = {
         // options
         {"Format", &Reader::do_format},
         {"FrameAspectRatio", &Reader::do_frame_aspect},
@@ -147,70 +219,17 @@ void Reader::execute(const Statement& s) {
         {"PatchMesh", &Reader::do_patch_mesh},
         {"Geometry", &Reader::do_geometry},
     };
-    // Requests that do not change what this toolchain computes.
-    static const std::set<std::string_view> ignored = {
-        "version",
-        "Version",
-        "Shutter",
-        "ArchiveRecord",
-        "Camera",
-        "Exposure",
-        "Quantize",
-        "PixelFilter",
-        "PixelVariance",
-        "Imager",
-        "DepthOfField",
-        "RelativeDetail",
-        "ErrorHandler",
-        "Matte",
-        "Bound",
-        "GeometricApproximation",
-        "TextureCoordinates",
-    };
-    // Requests understood but not supported: one warning each.
-    static const std::set<std::string_view> unsupported = {"Displacement",
-                                                           "Atmosphere",
-                                                           "Interior",
-                                                           "Exterior",
-                                                           "Deformation",
-                                                           "Detail",
-                                                           "DetailRange",
-                                                           "Points",
-                                                           "Curves",
-                                                           "Blobby",
-                                                           "NuPatch",
-                                                           "TrimCurve",
-                                                           "HierarchicalSubdivisionMesh",
-                                                           "ClippingPlane",
-                                                           "IfBegin",
-                                                           "ElseIf",
-                                                           "Else",
-                                                           "IfEnd",
-                                                           "MakeTexture",
-                                                           "MakeShadow",
-                                                           "MakeBump",
-                                                           "MakeLatLongEnvironment",
-                                                           "MakeCubeFaceEnvironment",
-                                                           "MakeBrickMap",
-                                                           "System",
-                                                           "Resource",
-                                                           "ResourceBegin",
-                                                           "ResourceEnd",
-                                                           "Shader",
-                                                           "Bxdf",
-                                                           "Pattern",
-                                                           "Integrator",
-                                                           "DisplayFilter",
-                                                           "SampleFilter",
-                                                           "Light",
-                                                           "Volume"};
+    return table;
+}
 
-    auto it = handlers.find(s.name);
-    if (it != handlers.end()) {
+void Reader::execute(const Statement& s) {
+    if (diverted(s)) return;
+    auto it = handlers().find(s.name);
+    if (it != handlers().end()) {
         (this->*(it->second))(s);
-    } else if (ignored.count(s.name)) {
+    } else if (ignored(s.name)) {
         // nothing to do
-    } else if (unsupported.count(s.name)) {
+    } else if (unsupported(s.name)) {
         warn_once("unsupported " + s.name, s, s.name + " is not supported, skipped");
     } else {
         warn_once("unknown " + s.name, s, "unknown statement " + s.name + ", skipped");
@@ -229,12 +248,7 @@ void Reader::warn_once(const std::string& key, const Statement& s,
 } // namespace rib
 
 Scene read_rib(const std::string& path, const RibReadOptions& options) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    if (in.bad()) throw IoError(path, "read error");
-    Scene scene = parse_rib(ss.str(), path, options);
+    Scene scene = parse_rib(rib::slurp(path, ""), path, options);
     scene.sources.insert(scene.sources.begin(), path);
     return scene;
 }

@@ -58,10 +58,17 @@ public:
 
 private:
     using Handler = void (Reader::*)(const Statement&);
+    using HandlerTable = std::unordered_map<std::string_view, Handler>;
 
     // --- rib.cpp: dispatch and warnings ---------------------------------------
 
+    /// Runs the statement's handler, or warns about a request it skips.
     void execute(const Statement& s);
+    /// True when `s` is taken before its handler: recorded into an inline
+    /// archive, skipped with a frame not read, or a later motion sample.
+    bool diverted(const Statement& s);
+    /// Request name -> handler.
+    static const HandlerTable& handlers();
     void warn(const Statement& s, const std::string& what);
     void warn_once(const std::string& key, const Statement& s, const std::string& what);
 
