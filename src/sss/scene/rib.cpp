@@ -5,7 +5,10 @@
 
 #include "sss/scene/rib.h"
 
+#include <functional>
 #include <set>
+#include <sstream>
+#include <string>
 #include <string_view>
 #include <unordered_map>
 
@@ -17,70 +20,34 @@ namespace rib {
 
 namespace {
 
+using NameSet = std::set<std::string, std::less<>>;
+
+/// The names of a space-separated list.
+NameSet name_set(const char* names) {
+    NameSet out;
+    std::istringstream in(names);
+    for (std::string w; in >> w;) out.insert(w);
+    return out;
+}
+
 /// Requests that do not change what this toolchain computes.
 bool ignored(std::string_view name) {
-    static const std::set<std::string_view> names = {
-        "version",
-        "Version",
-        "Shutter",
-        "ArchiveRecord",
-        "Camera",
-        "Exposure",
-        "Quantize",
-        "PixelFilter",
-        "PixelVariance",
-        "Imager",
-        "DepthOfField",
-        "RelativeDetail",
-        "ErrorHandler",
-        "Matte",
-        "Bound",
-        "GeometricApproximation",
-        "TextureCoordinates",
-    };
+    static const NameSet names = name_set(
+        "version Version Shutter ArchiveRecord Camera Exposure Quantize PixelFilter "
+        "PixelVariance Imager DepthOfField RelativeDetail ErrorHandler Matte Bound "
+        "GeometricApproximation TextureCoordinates");
     return names.count(name) > 0;
 }
 
 /// Requests understood but not supported: one warning each.
 bool unsupported(std::string_view name) {
-    static const std::set<std::string_view> names = {
-        "Displacement",
-        "Atmosphere",
-        "Interior",
-        "Exterior",
-        "Deformation",
-        "Detail",
-        "DetailRange",
-        "Points",
-        "Curves",
-        "Blobby",
-        "NuPatch",
-        "TrimCurve",
-        "HierarchicalSubdivisionMesh",
-        "ClippingPlane",
-        "IfBegin",
-        "ElseIf",
-        "Else",
-        "IfEnd",
-        "MakeTexture",
-        "MakeShadow",
-        "MakeBump",
-        "MakeLatLongEnvironment",
-        "MakeCubeFaceEnvironment",
-        "MakeBrickMap",
-        "System",
-        "Resource",
-        "ResourceBegin",
-        "ResourceEnd",
-        "Shader",
-        "Bxdf",
-        "Pattern",
-        "Integrator",
-        "DisplayFilter",
-        "SampleFilter",
-        "Light",
-        "Volume",
-    };
+    static const NameSet names = name_set(
+        "Displacement Atmosphere Interior Exterior Deformation Detail DetailRange "
+        "Points Curves Blobby NuPatch TrimCurve HierarchicalSubdivisionMesh "
+        "ClippingPlane IfBegin ElseIf Else IfEnd MakeTexture MakeShadow MakeBump "
+        "MakeLatLongEnvironment MakeCubeFaceEnvironment MakeBrickMap System Resource "
+        "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
+        "SampleFilter Light Volume");
     return names.count(name) > 0;
 }
 
