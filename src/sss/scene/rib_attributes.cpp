@@ -12,6 +12,7 @@ namespace sss::rib {
 
 namespace {
 
+/// The three numbers of a Color or Opacity request.
 glm::dvec3 take_color(const Statement& s) {
     std::size_t i = 0;
     auto n = take_numbers(s, i, 3);
@@ -19,6 +20,7 @@ glm::dvec3 take_color(const Statement& s) {
     return {n[0], n[1], n[2]};
 }
 
+/// One basis of a Basis request: a name or 16 numbers, then its step.
 Basis take_basis(const Statement& s, std::size_t& i, const char* which) {
     need_args(s, i, which);
     Basis b;

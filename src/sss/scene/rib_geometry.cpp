@@ -34,18 +34,21 @@ void check_counts(const Statement& s, const ParamList& params, const ClassCounts
     }
 }
 
+/// The vertices a topology uses: its largest index + 1.
 std::size_t vertex_count(const std::vector<int>& verts) {
     int m = -1;
     for (int v : verts) m = std::max(m, v);
     return static_cast<std::size_t>(m + 1);
 }
 
+/// The sum of counts (nvertices, nloops).
 std::size_t sum(const std::vector<int>& v) {
     std::size_t total = 0;
     for (int k : v) total += static_cast<std::size_t>(k);
     return total;
 }
 
+/// The vertex indices must be as many as the vertex counts add up to.
 void check_indices(const Statement& s, const std::vector<int>& verts,
                    std::size_t expected) {
     if (verts.size() != expected)
@@ -79,6 +82,7 @@ void patch_dir(const Statement& s, const char* dir, int n, bool wrap, bool bicub
     }
 }
 
+/// A PatchMesh wrap mode: "periodic" (true) or "nonperiodic" (false).
 bool take_wrap(const Statement& s, std::size_t& i, const char* what) {
     std::string w = take_string(s, i, what);
     if (w == "periodic") return true;

@@ -18,10 +18,12 @@ namespace sss::rib {
 
 namespace {
 
+/// "file.rib:12" where a block opened.
 std::string where_saved(const SavedState& s) {
     return *s.file + ":" + std::to_string(s.line);
 }
 
+/// The spaces the RI names itself; CoordinateSystem cannot redefine them.
 bool predefined_space(std::string_view n) {
     return n == "world" || n == "camera" || n == "object" || n == "shader" ||
            n == "current" || n == "screen" || n == "raster" || n == "NDC";
