@@ -6,12 +6,12 @@
 #include "rib_reader.h"
 
 #include <cmath>
-#include <numbers>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 
 #include "rib_args.h"
+#include "sss/util/math.h"
 #include "sss/util/name_table.h"
 
 namespace sss::rib {
@@ -255,7 +255,7 @@ void Reader::do_skew(const Statement& s) {
     if (!(beta > 1e-12 * glm::length(v1))) fail(s, "skew vectors are parallel");
     glm::dvec3 b = perp / beta;
     double theta = std::atan2(alpha, beta) + glm::radians(n[0]);
-    if (!(std::abs(theta) < std::numbers::pi / 2 - 1e-9))
+    if (!(std::abs(theta) < kPi / 2 - 1e-9))
         fail(s, "skew angle turns the vector past the skew axis");
     double k = std::tan(theta) - alpha / beta;
     Matrix4 m(1.0);

@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
 #include "sss/util/name_table.h"
 
 namespace sss {
@@ -278,7 +278,7 @@ double Camera::pixel_size_at(double distance) const {
     auto sw = resolved_screen_window();
     double width = sw[1] - sw[0];
     if (!perspective) return width / static_cast<double>(xres);
-    double half_angle = fov * std::numbers::pi / 360.0;
+    double half_angle = fov * kPi / 360.0;
     return width * std::max(distance, near_clip) * std::tan(half_angle) /
            static_cast<double>(xres);
 }
@@ -298,7 +298,7 @@ Matrix4 Camera::world_to_ndc() const {
     const auto sw = resolved_screen_window();
     Matrix4 proj(1.0);
     if (perspective) {
-        const double c = 1.0 / std::tan(fov * 3.14159265358979323846 / 360.0);
+        const double c = 1.0 / std::tan(fov * kPi / 360.0);
         const double n = near_clip, f = far_clip;
         proj = Matrix4(0.0);
         proj[0][0] = c;
