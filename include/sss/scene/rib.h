@@ -5,8 +5,8 @@
 #include <optional>
 #include <string>
 
-#include "sss/util/error.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 namespace sss {
 
@@ -16,16 +16,30 @@ class RibError : public FormatError {
 public:
     RibError(const std::string& path, int line, const std::string& statement,
              const std::string& what)
-        : FormatError(Composed{},
-                      path + (line > 0 ? ":" + std::to_string(line) : std::string()) +
-                          ": " + (statement.empty() ? std::string() : statement + ": ") +
-                          what,
-                      path),
+        : FormatError(Composed{}, compose(path, line, statement, what), path),
           m_line(line), m_statement(statement) {}
     int line() const { return m_line; }
     const std::string& statement() const { return m_statement; }
 
 private:
+    static std::string compose(const std::string& path, int line,
+                               const std::string& statement, const std::string& what) {
+        // Appended piece by piece: GCC 12 at -O3 warns (-Wrestrict, a false
+        // positive) on ":" + std::to_string(line) inlined here.
+        std::string out = path;
+        if (line > 0) {
+            out += ':';
+            out += std::to_string(line);
+        }
+        out += ": ";
+        if (!statement.empty()) {
+            out += statement;
+            out += ": ";
+        }
+        out += what;
+        return out;
+    }
+
     int m_line;
     std::string m_statement;
 };

@@ -1,5 +1,9 @@
 #pragma once
 /// \file scene.h
+/// The scene module owns the scene description (primitives, attributes,
+/// lights, options and camera), the RIB reader (rib.h) and the OBJ import it
+/// uses; it may use util only.
+///
 /// The scene layer shared by ptbake and render: what a RIB file describes,
 /// resolved into world space. The RIB reader (rib.h) fills it; the dicer
 /// (dice.h), the lights (lights.h) and the tools read it.
@@ -43,9 +47,15 @@ enum class ParamClass { Constant, Uniform, Varying, Vertex, FaceVarying, FaceVer
 /// Numbers per element of a type: 1 (float, integer, string), 3 (color,
 /// point, vector, normal), 4 (hpoint) or 16 (matrix).
 int param_type_components(ParamType type);
+/// RIB spelling of a type ("float", "integer", ...).
 const char* param_type_name(ParamType type);
+/// The type spelled `name` in a RIB declaration ("integer" also as "int");
+/// nullopt if unknown.
+std::optional<ParamType> parse_param_type(std::string_view name);
 /// RIB spelling of a storage class ("uniform", "facevarying", ...).
 const char* param_class_name(ParamClass storage);
+/// The storage class spelled `name`; nullopt if unknown.
+std::optional<ParamClass> parse_param_class(std::string_view name);
 
 /// One "name" value pair of a RIB parameter list, with its resolved
 /// declaration (inline, `Declare`d or predeclared).
@@ -141,6 +151,7 @@ enum class PrimitiveKind {
     PatchMesh,
     Teapot
 };
+/// The RIB request of a kind ("PointsPolygons", "Sphere", ...).
 const char* primitive_kind_name(PrimitiveKind kind);
 
 /// One primitive as the RIB gave it, in its object space.

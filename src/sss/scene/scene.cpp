@@ -6,9 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
+#include "sss/util/name_table.h"
 
 namespace sss {
 
@@ -31,46 +32,65 @@ int param_type_components(ParamType type) {
     return 1;
 }
 
+namespace {
+
+// The RIB spellings. "int" is an alias the RIB reader accepts in declarations.
+constexpr NameTable<ParamClass, 6> kParamClassNames({{
+    {ParamClass::Constant, "constant"},
+    {ParamClass::Uniform, "uniform"},
+    {ParamClass::Varying, "varying"},
+    {ParamClass::Vertex, "vertex"},
+    {ParamClass::FaceVarying, "facevarying"},
+    {ParamClass::FaceVertex, "facevertex"},
+}});
+
+constexpr NameTable<ParamType, 10> kParamTypeNames({{
+    {ParamType::Float, "float"},
+    {ParamType::Integer, "integer"},
+    {ParamType::String, "string"},
+    {ParamType::Color, "color"},
+    {ParamType::Point, "point"},
+    {ParamType::Vector, "vector"},
+    {ParamType::Normal, "normal"},
+    {ParamType::HPoint, "hpoint"},
+    {ParamType::Matrix, "matrix"},
+    {ParamType::Integer, "int"},
+}});
+
+constexpr NameTable<PrimitiveKind, 15> kPrimitiveKindNames({{
+    {PrimitiveKind::Polygon, "Polygon"},
+    {PrimitiveKind::GeneralPolygon, "GeneralPolygon"},
+    {PrimitiveKind::PointsPolygons, "PointsPolygons"},
+    {PrimitiveKind::PointsGeneralPolygons, "PointsGeneralPolygons"},
+    {PrimitiveKind::SubdivisionMesh, "SubdivisionMesh"},
+    {PrimitiveKind::Sphere, "Sphere"},
+    {PrimitiveKind::Cylinder, "Cylinder"},
+    {PrimitiveKind::Cone, "Cone"},
+    {PrimitiveKind::Disk, "Disk"},
+    {PrimitiveKind::Torus, "Torus"},
+    {PrimitiveKind::Hyperboloid, "Hyperboloid"},
+    {PrimitiveKind::Paraboloid, "Paraboloid"},
+    {PrimitiveKind::Patch, "Patch"},
+    {PrimitiveKind::PatchMesh, "PatchMesh"},
+    {PrimitiveKind::Teapot, "Teapot"},
+}});
+
+} // namespace
+
 const char* param_class_name(ParamClass c) {
-    switch (c) {
-    case ParamClass::Constant:
-        return "constant";
-    case ParamClass::Uniform:
-        return "uniform";
-    case ParamClass::Varying:
-        return "varying";
-    case ParamClass::Vertex:
-        return "vertex";
-    case ParamClass::FaceVarying:
-        return "facevarying";
-    case ParamClass::FaceVertex:
-        return "facevertex";
-    }
-    return "?";
+    return kParamClassNames.name(c);
+}
+
+std::optional<ParamClass> parse_param_class(std::string_view name) {
+    return kParamClassNames.parse(name);
 }
 
 const char* param_type_name(ParamType type) {
-    switch (type) {
-    case ParamType::Float:
-        return "float";
-    case ParamType::Integer:
-        return "integer";
-    case ParamType::String:
-        return "string";
-    case ParamType::Color:
-        return "color";
-    case ParamType::Point:
-        return "point";
-    case ParamType::Vector:
-        return "vector";
-    case ParamType::Normal:
-        return "normal";
-    case ParamType::HPoint:
-        return "hpoint";
-    case ParamType::Matrix:
-        return "matrix";
-    }
-    return "?";
+    return kParamTypeNames.name(type);
+}
+
+std::optional<ParamType> parse_param_type(std::string_view name) {
+    return kParamTypeNames.parse(name);
 }
 
 int Param::element_size() const {
@@ -243,39 +263,7 @@ std::size_t ClassCounts::of(ParamClass c) const {
 }
 
 const char* primitive_kind_name(PrimitiveKind kind) {
-    switch (kind) {
-    case PrimitiveKind::Polygon:
-        return "Polygon";
-    case PrimitiveKind::GeneralPolygon:
-        return "GeneralPolygon";
-    case PrimitiveKind::PointsPolygons:
-        return "PointsPolygons";
-    case PrimitiveKind::PointsGeneralPolygons:
-        return "PointsGeneralPolygons";
-    case PrimitiveKind::SubdivisionMesh:
-        return "SubdivisionMesh";
-    case PrimitiveKind::Sphere:
-        return "Sphere";
-    case PrimitiveKind::Cylinder:
-        return "Cylinder";
-    case PrimitiveKind::Cone:
-        return "Cone";
-    case PrimitiveKind::Disk:
-        return "Disk";
-    case PrimitiveKind::Torus:
-        return "Torus";
-    case PrimitiveKind::Hyperboloid:
-        return "Hyperboloid";
-    case PrimitiveKind::Paraboloid:
-        return "Paraboloid";
-    case PrimitiveKind::Patch:
-        return "Patch";
-    case PrimitiveKind::PatchMesh:
-        return "PatchMesh";
-    case PrimitiveKind::Teapot:
-        return "Teapot";
-    }
-    return "?";
+    return kPrimitiveKindNames.name(kind);
 }
 
 std::array<double, 4> Camera::resolved_screen_window() const {
@@ -290,7 +278,7 @@ double Camera::pixel_size_at(double distance) const {
     auto sw = resolved_screen_window();
     double width = sw[1] - sw[0];
     if (!perspective) return width / static_cast<double>(xres);
-    double half_angle = fov * std::numbers::pi / 360.0;
+    double half_angle = fov * kPi / 360.0;
     return width * std::max(distance, near_clip) * std::tan(half_angle) /
            static_cast<double>(xres);
 }
@@ -310,7 +298,7 @@ Matrix4 Camera::world_to_ndc() const {
     const auto sw = resolved_screen_window();
     Matrix4 proj(1.0);
     if (perspective) {
-        const double c = 1.0 / std::tan(fov * 3.14159265358979323846 / 360.0);
+        const double c = 1.0 / std::tan(fov * kPi / 360.0);
         const double n = near_clip, f = far_clip;
         proj = Matrix4(0.0);
         proj[0][0] = c;

@@ -1,0 +1,178 @@
+/// \file rib_archives.cpp
+/// The reader's files, frames and archives: RIB and OBJ files read through
+/// ReadArchive or DelayedReadArchive, inline archives recorded and replayed,
+/// and the FrameBegin blocks selected or skipped.
+
+#include "rib_reader.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "obj_import.h"
+#include "rib_args.h"
+
+namespace sss::rib {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kMaxArchiveDepth = 32;
+
+bool ends_with_obj(const std::string& path) {
+    return path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".obj";
+}
+
+/// `name` relative to the folder of the file that names it.
+std::string resolve_path(const Statement& s, const std::string& name) {
+    fs::path p(name);
+    if (p.is_absolute()) return name;
+    fs::path base = fs::path(*s.file).parent_path();
+    return (base / p).lexically_normal().string();
+}
+
+} // namespace
+
+// --- files -----------------------------------------------------------------
+
+void Reader::run_text(std::string_view text, std::shared_ptr<const std::string> path) {
+    Lexer lexer(text, std::move(path));
+    Statement st;
+    while (lexer.next(st)) execute(st);
+}
+
+void Reader::run_file(const Statement& from, const std::string& path) {
+    if (m_depth >= kMaxArchiveDepth)
+        fail(from, "archives nested more than " + std::to_string(kMaxArchiveDepth) +
+                       " deep (does \"" + path + "\" read itself?)");
+    const bool obj = ends_with_obj(path);
+    if (obj && !m_object && !m_in_world)
+        fail(from, "geometry outside WorldBegin/WorldEnd");
+    std::string text = slurp(path, " (ReadArchive at " + where(from) + ")");
+    if (std::find(m_scene.sources.begin(), m_scene.sources.end(), path) ==
+        m_scene.sources.end())
+        m_scene.sources.push_back(path);
+    ++m_depth;
+    if (obj)
+        add_obj(text, path);
+    else
+        run_text(text, std::make_shared<const std::string>(path));
+    --m_depth;
+}
+
+std::string slurp(const std::string& path, const std::string& context) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        throw IoError(path,
+                      std::string("cannot open") + context + ": " + std::strerror(errno));
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) throw IoError(path, "read error");
+    return ss.str();
+}
+
+// --- frames ----------------------------------------------------------------
+
+void Reader::do_frame_begin(const Statement& s) {
+    std::size_t i = 0;
+    int number = to_int(s, take_number(s, i), "frame number");
+    no_more_args(s, i);
+    if (m_in_frame) fail(s, "nested FrameBegin");
+    if (m_in_world) fail(s, "FrameBegin inside WorldBegin/WorldEnd");
+    m_frames_seen = true;
+    bool wanted = !m_frame_read && (!m_options.frame || *m_options.frame == number);
+    if (!wanted) {
+        m_skipping = true;
+        m_skip_line = s.line;
+        m_skip_file = s.file;
+        return;
+    }
+    m_frame_read = true;
+    m_in_frame = true;
+    m_scene.options.frame = number;
+    push(s, Block::Frame);
+}
+
+void Reader::do_frame_end(const Statement& s) {
+    no_more_args(s, 0);
+    if (!m_in_frame) fail(s, "FrameEnd without FrameBegin");
+    SavedState saved = pop(s, Block::Frame);
+    restore_all(saved);
+    m_in_frame = false;
+}
+
+// --- archives --------------------------------------------------------------
+
+void Reader::do_archive_begin(const Statement& s) {
+    std::size_t i = 0;
+    m_record_name = take_string(s, i, "archive name");
+    m_recording = true;
+    m_record_depth = 0;
+    m_record_line = s.line;
+    m_record_file = s.file;
+    m_record.clear();
+}
+
+void Reader::do_archive_end(const Statement& s) {
+    fail(s, "ArchiveEnd without ArchiveBegin");
+}
+
+void Reader::read_archive(const Statement& s, const std::string& name) {
+    auto it = m_archives.find(name);
+    if (it != m_archives.end()) {
+        if (m_depth >= kMaxArchiveDepth)
+            fail(s, "archives nested more than " + std::to_string(kMaxArchiveDepth) +
+                        " deep (does \"" + name + "\" read itself?)");
+        // Copy: the archive may be redefined while it is replayed.
+        std::vector<Statement> body = it->second;
+        ++m_depth;
+        for (const Statement& st : body) execute(st);
+        --m_depth;
+        return;
+    }
+    run_file(s, resolve_path(s, name));
+}
+
+void Reader::do_read_archive(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "archive file name");
+    take_params(s, i, true);
+    read_archive(s, name);
+}
+
+void Reader::do_procedural(const Statement& s) {
+    std::size_t i = 0;
+    std::string kind = take_string(s, i, "procedural name");
+    if (kind != "DelayedReadArchive") {
+        warn_once("procedural " + kind, s,
+                  "Procedural \"" + kind + "\" is not supported, skipped");
+        return;
+    }
+    auto files = take_string_array(s, i, "archive file name");
+    auto bound = take_float_array(s, i, "bound");
+    no_more_args(s, i);
+    if (files.size() != 1) fail(s, "DelayedReadArchive needs exactly one file name");
+    if (bound.size() != 6) fail(s, "bound must have 6 numbers");
+    // A procedural runs in a copy of the graphics state.
+    push(s, Block::Attribute);
+    read_archive(s, files[0]);
+    SavedState saved = pop(s, Block::Attribute);
+    restore_all(saved);
+}
+
+void Reader::add_obj(const std::string& text, const std::string& path) {
+    auto mesh = detail::import_obj(text, path, m_scene.warnings);
+    if (!mesh) return;
+    Statement at;
+    at.name = "ReadArchive";
+    at.file = std::make_shared<const std::string>(path);
+    at.line = mesh->first_face_line;
+    add_primitive(at, std::move(mesh->primitive), Matrix4(1.0),
+                  path + ":" + std::to_string(mesh->first_face_line));
+}
+
+} // namespace sss::rib

@@ -1,0 +1,179 @@
+/// \file rib_options.cpp
+/// The reader's option requests: image format, camera projection and screen
+/// window, displays, hider, `Option` and the parameter declarations.
+
+#include "rib_reader.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rib_args.h"
+
+namespace sss::rib {
+
+bool Reader::option_allowed(const Statement& s) {
+    if (!m_in_world) return true;
+    warn(s, s.name + " inside WorldBegin/WorldEnd has no effect, ignored");
+    return false;
+}
+
+void Reader::do_format(const Statement& s) {
+    std::size_t i = 0;
+    auto n = take_numbers(s, i, 3);
+    no_more_args(s, i);
+    int xres = to_int(s, n[0], "xresolution");
+    int yres = to_int(s, n[1], "yresolution");
+    if (xres < 1 || yres < 1) fail(s, "resolution must be positive");
+    if (!(n[2] > 0.0)) fail(s, "pixel aspect ratio must be positive, got " + fmt(n[2]));
+    if (!option_allowed(s)) return;
+    m_scene.options.camera.xres = xres;
+    m_scene.options.camera.yres = yres;
+    m_scene.options.camera.pixel_aspect = n[2];
+}
+
+void Reader::do_frame_aspect(const Statement& s) {
+    std::size_t i = 0;
+    double a = take_number(s, i);
+    no_more_args(s, i);
+    if (!(a > 0.0)) fail(s, "frame aspect ratio must be positive, got " + fmt(a));
+    if (option_allowed(s)) m_frame_aspect = a;
+}
+
+void Reader::do_screen_window(const Statement& s) {
+    std::size_t i = 0;
+    auto n = take_numbers(s, i, 4);
+    no_more_args(s, i);
+    if (n[0] == n[1] || n[2] == n[3]) fail(s, "empty screen window");
+    if (option_allowed(s))
+        m_scene.options.camera.screen_window = {n[0], n[1], n[2], n[3]};
+}
+
+void Reader::do_crop_window(const Statement& s) {
+    std::size_t i = 0;
+    auto n = take_numbers(s, i, 4);
+    no_more_args(s, i);
+    for (double v : n)
+        if (v < 0.0 || v > 1.0) fail(s, "crop window values must lie in [0,1]");
+    // Only restricts which pixels are rendered: nothing to record here.
+}
+
+void Reader::do_projection(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "projection name");
+    ParamList params = take_params(s, i, true);
+    if (!option_allowed(s)) return;
+    Camera& cam = m_scene.options.camera;
+    if (name == "perspective") {
+        double fov = params.get_float("fov", cam.fov);
+        if (!(fov > 0.0 && fov < 180.0))
+            fail(s, "fov must lie in (0, 180) degrees, got " + fmt(fov));
+        cam.perspective = true;
+        cam.fov = fov;
+    } else if (name == "orthographic") {
+        cam.perspective = false;
+    } else {
+        fail(s, "unsupported projection \"" + name + "\" (perspective or orthographic)");
+    }
+    // RI: the projection marks camera space; the CTM restarts from identity.
+    if (m_ctm != Matrix4(1.0))
+        warn(s, "transformations before Projection are part of the screen "
+                "transformation and are ignored");
+    m_ctm = Matrix4(1.0);
+}
+
+void Reader::do_clipping(const Statement& s) {
+    std::size_t i = 0;
+    auto n = take_numbers(s, i, 2);
+    no_more_args(s, i);
+    if (!(n[0] > 0.0) || !(n[1] > n[0]))
+        fail(s, "need 0 < near < far, got " + fmt(n[0]) + " " + fmt(n[1]));
+    if (!option_allowed(s)) return;
+    m_scene.options.camera.near_clip = n[0];
+    m_scene.options.camera.far_clip = n[1];
+}
+
+void Reader::do_pixel_samples(const Statement& s) {
+    std::size_t i = 0;
+    auto n = take_numbers(s, i, 2);
+    no_more_args(s, i);
+    for (double v : n)
+        if (!(v >= 1.0 && v <= 1024.0)) fail(s, "pixel samples must lie in [1, 1024]");
+    if (!option_allowed(s)) return;
+    m_scene.options.pixel_samples[0] = static_cast<int>(std::ceil(n[0]));
+    m_scene.options.pixel_samples[1] = static_cast<int>(std::ceil(n[1]));
+}
+
+void Reader::do_display(const Statement& s) {
+    std::size_t i = 0;
+    DisplaySpec d;
+    d.name = take_string(s, i, "display name");
+    d.type = take_string(s, i, "display type");
+    d.mode = take_string(s, i, "display mode");
+    d.params = take_params(s, i, true);
+    if (!d.name.empty() && d.name[0] == '+') {
+        d.additional = true;
+        d.name.erase(0, 1);
+    }
+    if (d.name.empty()) fail(s, "empty display name");
+    if (!option_allowed(s)) return;
+    // A primary display replaces every earlier display.
+    if (!d.additional) m_scene.options.displays.clear();
+    m_scene.options.displays.push_back(std::move(d));
+}
+
+void Reader::do_display_channel(const Statement& s) {
+    std::size_t i = 0;
+    std::string text = take_string(s, i, "channel declaration");
+    take_params(s, i, true); // per-channel filter settings: not used
+    Decl decl;
+    std::string name, type_text;
+    std::string err = parse_decl(text, true, decl, &name, &type_text);
+    if (!err.empty()) fail(s, err);
+    if (!option_allowed(s)) return;
+    auto& chans = m_scene.options.display_channels;
+    auto it = std::find_if(chans.begin(), chans.end(),
+                           [&](const auto& c) { return c.first == name; });
+    if (it != chans.end())
+        it->second = type_text;
+    else
+        chans.emplace_back(name, type_text);
+    m_decls[name] = decl;
+}
+
+void Reader::do_hider(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "hider name");
+    take_params(s, i, true);
+    if (option_allowed(s)) m_scene.options.hider = name;
+}
+
+void Reader::do_option(const Statement& s) {
+    std::size_t i = 0;
+    std::string group = take_string(s, i, "option name");
+    ParamList params = take_params(s, i, true);
+    ParamList& dst = m_scene.options.groups[group];
+    for (Param& p : params.items) dst.set(std::move(p));
+}
+
+void Reader::do_color_samples(const Statement& s) {
+    std::size_t i = 0;
+    auto a = take_float_array(s, i, "nRGB matrix");
+    auto b = take_float_array(s, i, "RGBn matrix");
+    no_more_args(s, i);
+    if (a.size() != 9 || b.size() != 9) fail(s, "only 3 color samples are supported");
+}
+
+void Reader::do_declare(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "name");
+    std::string text = take_string(s, i, "declaration");
+    no_more_args(s, i);
+    if (name.empty() || name.find_first_of(" \t\n[]") != std::string::npos)
+        fail(s, "bad parameter name \"" + name + "\"");
+    Decl decl;
+    std::string err = parse_decl(text, false, decl, nullptr);
+    if (!err.empty()) fail(s, err);
+    m_decls[name] = decl;
+}
+
+} // namespace sss::rib

@@ -1,0 +1,229 @@
+#pragma once
+/// \file rib_reader.h
+/// The RIB interpreter: a Reader executes statements in order, keeps the RI
+/// graphics state (transform, attributes, blocks) and fills a Scene. Its
+/// member functions are defined per kind of request, one file each (named
+/// below with each group).
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "rib_lexer.h"
+#include "rib_params.h"
+#include "sss/scene/rib.h"
+#include "sss/scene/scene.h"
+
+namespace sss::rib {
+
+/// The blocks that save and restore (part of) the graphics state.
+enum class Block { Attribute, Transform, World, Frame, Object, Solid };
+
+/// "AttributeBegin", "WorldBegin"...: the request that opens a block.
+const char* block_begin_name(Block b);
+
+/// The attribute half of the graphics state, with a cached immutable
+/// snapshot so that primitives made under unchanged attributes share it.
+struct AttributeState {
+    Attributes attrs;
+    std::shared_ptr<const Attributes> snapshot;
+};
+
+/// The graphics state saved by an open block, and where the block opened.
+struct SavedState {
+    Block block;
+    Matrix4 ctm;
+    AttributeState attributes; // unused for TransformBegin
+    int line;
+    std::shared_ptr<const std::string> file;
+};
+
+/// The whole text of a file; throws IoError "cannot open<context>: <reason>".
+std::string slurp(const std::string& path, const std::string& context);
+
+class Reader {
+public:
+    explicit Reader(const RibReadOptions& options)
+        : m_options(options), m_decls(predeclared()) {}
+
+    /// Executes every statement of `text` (read from `path`).
+    void read_text(std::string_view text, const std::string& path);
+    /// The scene read, after the checks at the end of the file.
+    Scene finish(const std::string& path);
+
+private:
+    using Handler = void (Reader::*)(const Statement&);
+    using HandlerTable = std::unordered_map<std::string_view, Handler>;
+
+    // --- rib.cpp: dispatch and warnings ---------------------------------------
+
+    /// Runs the statement's handler, or warns about a request it skips.
+    void execute(const Statement& s);
+    /// True when `s` is taken before its handler: recorded into an inline
+    /// archive, skipped with a frame not read, or a later motion sample.
+    bool diverted(const Statement& s);
+    /// Request name -> handler.
+    static const HandlerTable& handlers();
+    void warn(const Statement& s, const std::string& what);
+    void warn_once(const std::string& key, const Statement& s, const std::string& what);
+
+    // --- rib_params.cpp: parameter lists --------------------------------------
+
+    /// The "name" value pairs from argument i on. `single`: every parameter
+    /// must hold exactly one element (shader calls, options); otherwise any
+    /// whole number of elements (primitives, checked against the topology).
+    ParamList take_params(const Statement& s, std::size_t i, bool single);
+
+    // --- rib_archives.cpp: files, frames and archives -------------------------
+
+    void run_text(std::string_view text, std::shared_ptr<const std::string> path);
+    void run_file(const Statement& from, const std::string& path);
+    void read_archive(const Statement& s, const std::string& name);
+    /// The mesh of an OBJ file, as a primitive under the current state.
+    void add_obj(const std::string& text, const std::string& path);
+    void do_frame_begin(const Statement& s);
+    void do_frame_end(const Statement& s);
+    void do_archive_begin(const Statement& s);
+    void do_archive_end(const Statement& s);
+    void do_read_archive(const Statement& s);
+    void do_procedural(const Statement& s);
+
+    // --- rib_state.cpp: graphics state, blocks and transforms -----------------
+
+    Attributes& attrs_mut();
+    std::shared_ptr<const Attributes> snapshot();
+    void push(const Statement& s, Block block);
+    SavedState pop(const Statement& s, Block block);
+    void restore_all(SavedState& saved);
+    /// CTM = CTM * m: the new transform applies to points first.
+    void concat(const Matrix4& m);
+    /// True when the current space is left-handed (camera space is).
+    bool current_left_handed() const;
+    void do_world_begin(const Statement& s);
+    void do_world_end(const Statement& s);
+    void do_attribute_begin(const Statement& s);
+    void do_attribute_end(const Statement& s);
+    void do_transform_begin(const Statement& s);
+    void do_transform_end(const Statement& s);
+    void do_solid_begin(const Statement& s);
+    void do_solid_end(const Statement& s);
+    void do_motion_begin(const Statement& s);
+    void do_motion_end(const Statement& s);
+    void do_object_begin(const Statement& s);
+    void do_object_end(const Statement& s);
+    void do_object_instance(const Statement& s);
+    void do_identity(const Statement& s);
+    void do_transform(const Statement& s);
+    void do_concat_transform(const Statement& s);
+    void do_translate(const Statement& s);
+    void do_rotate(const Statement& s);
+    void do_scale(const Statement& s);
+    void do_skew(const Statement& s);
+    void do_perspective(const Statement& s);
+    void do_coordinate_system(const Statement& s);
+    void do_coord_sys_transform(const Statement& s);
+
+    // --- rib_options.cpp: options, camera and declarations --------------------
+
+    /// Options are frozen inside the world block: such requests only warn.
+    bool option_allowed(const Statement& s);
+    void do_format(const Statement& s);
+    void do_frame_aspect(const Statement& s);
+    void do_screen_window(const Statement& s);
+    void do_crop_window(const Statement& s);
+    void do_projection(const Statement& s);
+    void do_clipping(const Statement& s);
+    void do_pixel_samples(const Statement& s);
+    void do_display(const Statement& s);
+    void do_display_channel(const Statement& s);
+    void do_hider(const Statement& s);
+    void do_option(const Statement& s);
+    void do_color_samples(const Statement& s);
+    void do_declare(const Statement& s);
+
+    // --- rib_attributes.cpp: attributes, shaders and lights -------------------
+
+    /// A shader call with its space; before WorldBegin the space is camera-relative
+    /// and is converted at WorldBegin.
+    ShaderRef make_shader(const Statement& s, const std::string& name, ParamList params);
+    void set_light(int index, bool on);
+    void do_attribute(const Statement& s);
+    void do_color(const Statement& s);
+    void do_opacity(const Statement& s);
+    void do_sides(const Statement& s);
+    void do_orientation(const Statement& s);
+    void do_reverse_orientation(const Statement& s);
+    void do_shading_rate(const Statement& s);
+    void do_shading_interpolation(const Statement& s);
+    void do_surface(const Statement& s);
+    void do_light_source(const Statement& s);
+    void do_illuminate(const Statement& s);
+    void do_basis(const Statement& s);
+
+    // --- rib_geometry.cpp: primitives ------------------------------------------
+
+    /// Stores a primitive under the current transform and attributes (or in
+    /// the object being defined).
+    void add_primitive(const Statement& s, Primitive p, const Matrix4& object_to_ctm,
+                       const std::string& source);
+    void add_primitive(const Statement& s, Primitive p);
+    /// Makes "P" the position parameter (from Pw or, for patches, Pz) and
+    /// checks it holds `n_points` points.
+    void resolve_positions(const Statement& s, ParamList& params, std::size_t n_points,
+                           int grid_nu = 0, int grid_nv = 0, bool uwrap = false,
+                           bool vwrap = false);
+    void do_polygon(const Statement& s);
+    void do_general_polygon(const Statement& s);
+    void do_points_polygons(const Statement& s);
+    void do_points_general_polygons(const Statement& s);
+    void do_subdivision_mesh(const Statement& s);
+    void do_quadric(const Statement& s);
+    void do_patch(const Statement& s);
+    void do_patch_mesh(const Statement& s);
+    void do_geometry(const Statement& s);
+
+    // --- state -----------------------------------------------------------------
+
+    RibReadOptions m_options;
+    Scene m_scene;
+    std::unordered_map<std::string, Decl> m_decls;
+    Matrix4 m_ctm{1.0};
+    AttributeState m_attr;
+    std::vector<SavedState> m_stack;
+    bool m_in_world = false;
+    Matrix4 m_world_to_camera{1.0};
+    std::optional<double> m_frame_aspect;
+    std::map<std::string, Matrix4> m_camera_spaces; // CoordinateSystem before WorldBegin
+    std::set<std::string> m_warned;
+    int m_depth = 0;
+    // frames
+    bool m_in_frame = false;
+    bool m_frame_read = false;
+    bool m_frames_seen = false;
+    bool m_skipping = false;
+    int m_skip_line = 0;
+    std::shared_ptr<const std::string> m_skip_file;
+    // motion blocks
+    bool m_in_motion = false;
+    bool m_motion_used = false;
+    // lights and objects
+    std::unordered_map<std::string, int> m_light_handles;
+    std::unordered_map<std::string, std::vector<Primitive>> m_objects;
+    std::vector<Primitive>* m_object = nullptr;
+    std::string m_object_handle;
+    // inline archives
+    std::unordered_map<std::string, std::vector<Statement>> m_archives;
+    bool m_recording = false;
+    int m_record_depth = 0;
+    std::string m_record_name;
+    int m_record_line = 0;
+    std::shared_ptr<const std::string> m_record_file;
+    std::vector<Statement> m_record;
+};
+
+} // namespace sss::rib
