@@ -57,7 +57,7 @@ std::string usage() {
     return buf;
 }
 
-int run(const std::vector<std::string>& argv) {
+int run_job(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::BakeOptions opt;
     sss::MaterialSpec material;
@@ -140,6 +140,20 @@ int run(const std::vector<std::string>& argv) {
         std::fflush(stdout);
     }
     return 0;
+}
+
+/// run_job, with the bake's errors about what the command line sets told in
+/// the options' words.
+int run(const std::vector<std::string>& argv) {
+    try {
+        return run_job(argv);
+    } catch (const sss::MissingBakeFileError& e) {
+        throw sss::ValueError(std::string(e.what()) + " (give one, or ptbake -o FILE)");
+    } catch (const sss::SpacingMaterialError& e) {
+        throw sss::UsageError(e.source() +
+                              ": -spacing mfp needs a material (-material NAME ...) "
+                              "for objects baked without bake_sss_params");
+    }
 }
 
 } // namespace

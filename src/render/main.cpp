@@ -53,6 +53,7 @@ int run(const std::vector<std::string>& argv) {
             return 0;
         } else if (o == "o") {
             opt.output = args.value(o);
+            opt.output_label = "option -o";
         } else if (o == "res") {
             opt.xres = args.integer(o, 1, 65536);
             opt.yres = args.integer(o, 1, 65536);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "sss/cli/tool.h"
+#include "sss/diffusion/material.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "test_util.h"
@@ -232,6 +233,33 @@ TEST(RunTool, MissingFrameNamesTheOption) {
     EXPECT_EQ(rc, 2);
     EXPECT_EQ(err, "mytool ERROR: file name: 'x.####.ptc' has a frame pattern; give the "
                    "frame with -frame N\nmytool: try 'mytool --help'\n");
+}
+
+TEST(RunTool, MaterialErrorsNameTheOptions) {
+    sss::MaterialSpec both;
+    both.scattering = glm::dvec3(1.0);
+    both.albedo = glm::dvec3(0.5);
+    testing::internal::CaptureStderr();
+    int rc = call_run_tool({"mytool"}, [&](const std::vector<std::string>&) {
+        both.validate();
+        return 0;
+    });
+    std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 2);
+    EXPECT_EQ(err,
+              "mytool ERROR: give the material either as -scattering/-absorption or "
+              "as -albedo/-diffusemeanfreepath, not both\nmytool: try 'mytool --help'\n");
+
+    sss::MaterialSpec bright;
+    bright.albedo = glm::dvec3(0.5, 1.5, 0.5);
+    testing::internal::CaptureStderr();
+    rc = call_run_tool({"mytool"}, [&](const std::vector<std::string>&) {
+        bright.validate();
+        return 0;
+    });
+    err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 1);
+    EXPECT_EQ(err, "mytool ERROR: impossible -albedo value 1.500000\n");
 }
 
 TEST(RunTool, RuntimeErrorsExit1) {

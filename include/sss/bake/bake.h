@@ -26,9 +26,10 @@
 #include <string>
 #include <vector>
 
-#include "sss/diffusion/material.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/diffusion/material.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 namespace sss {
 
@@ -47,8 +48,9 @@ struct BakeOptions {
     /// The material the bake is for (-material ...): enables the spacing
     /// check (a warning when points are farther apart than its mean free path).
     std::optional<MaterialSpec> material;
-    /// Scene length of one mm (-unitlength), for bake_sss_params' dmfp (mm)
-    /// when no `material` is given.
+    /// Scene length of one mm: the bake's one scene scale, for the material's
+    /// mean free path and bake_sss_params' dmfp (mm). A given `material` must
+    /// have the same unitlength (ValueError otherwise).
     double unitlength = 1.0;
     std::optional<int> frame; ///< -frame N, for frame patterns in file names
     std::string output;       ///< -o: every bake goes to this one file
@@ -79,6 +81,25 @@ struct BakeReport {
     double trace_build_seconds = 0.0;
     double light_seconds = 0.0;
     double write_seconds = 0.0;
+};
+
+/// A baked primitive whose shader names no "filename" while no single
+/// output file (BakeOptions::output) is given.
+class MissingBakeFileError : public ValueError {
+public:
+    explicit MissingBakeFileError(const std::string& what);
+};
+
+/// spacing_from_material without a material, for an object that does not
+/// carry its own (bake_sss_params). A UsageError; source() is the object's
+/// "file.rib:12".
+class SpacingMaterialError : public UsageError {
+public:
+    explicit SpacingMaterialError(std::string source);
+    const std::string& source() const { return m_source; }
+
+private:
+    std::string m_source;
 };
 
 /// Smallest mean free path 1/sigma_t' over the colour channels of a

@@ -9,7 +9,9 @@
 /// scanner and the shared option groups, so a main needs this one header
 /// (plus the library headers of the job it runs).
 
+#include <exception>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +40,13 @@ int run_tool(const std::string& tool, int argc, char** argv,
 /// opt (without dashes) was one of them: the tool then exits 0.
 bool standard_option(const std::string& tool, const std::string& opt,
                      const std::string& usage);
+
+/// The message a tool prints for a library error that concerns something its
+/// command line sets, in the options' words: a frame pattern without a frame
+/// ("...; give the frame with -frame N"), a material given in both forms, an
+/// impossible material value ("impossible -albedo value ..."). nullopt for
+/// any other error (its what() is the message). run_tool uses it.
+std::optional<std::string> option_wording(const std::exception& e);
 
 /// Prints "<tool> WARNING: <what>" on stderr.
 void warn(const std::string& tool, const std::string& what);

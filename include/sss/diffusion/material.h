@@ -14,6 +14,8 @@
 
 #include <glm/vec3.hpp>
 
+#include "sss/util/error.h"
+
 namespace sss {
 
 /// One entry of the measured-material table.
@@ -61,6 +63,32 @@ AlbedoDmfp albedo_dmfp_from_coefficients(const ChannelCoefficients& c);
 /// given ones (lengths in whatever unit dmfp is in).
 ChannelCoefficients coefficients_from_albedo_dmfp(double albedo, double dmfp, double ior);
 
+/// An impossible material value (negative or NaN coefficient, albedo above 1,
+/// non-positive mean free path, ior or unitlength). field() is the setting's
+/// PRMan name ("scattering", "absorption", "albedo", "diffusemeanfreepath",
+/// "ior", "unitlength"), so a command line can name its option.
+class MaterialValueError : public ValueError {
+public:
+    MaterialValueError(std::string field, double value);
+    const std::string& field() const { return m_field; }
+    double value() const { return m_value; }
+
+private:
+    std::string m_field;
+    double m_value;
+};
+
+/// A material given both as scattering/absorption coefficients and as
+/// albedo/diffuse mean free path. A UsageError: the caller must pick one form.
+class MaterialFormError : public UsageError {
+public:
+    MaterialFormError();
+};
+
+/// MaterialValueError unless unitlength (the scene length of one mm) is finite
+/// and > 0. The one check of it, for materials and for bakes.
+void check_unitlength(double unitlength);
+
 /// How the user gave the material: what ptfilter's options fill in.
 /// Starts as the named preset (default marble); -scattering/-absorption or
 /// -albedo/-diffusemeanfreepath replace parts of it.
@@ -79,7 +107,8 @@ struct MaterialSpec {
     bool uses_albedo_form() const {
         return albedo || dmfp || albedo_from_file || dmfp_from_file;
     }
-    /// Checks consistency and values; throws ValueError / UsageError.
+    /// Checks consistency and values: UsageError for an unknown preset,
+    /// MaterialFormError, MaterialValueError.
     void validate() const;
     /// Resolved ior.
     double resolved_ior() const;

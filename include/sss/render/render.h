@@ -24,6 +24,8 @@ struct RenderJobOptions {
     std::optional<int>
         frame;          ///< -frame N: frame patterns in Display names and shader files
     std::string output; ///< -o IMAGE: replaces the primary Display's file name
+    /// How messages name `output` (the command line passes "option -o").
+    std::string output_label = "output image";
     Progress* progress = nullptr;
     std::string command_line; ///< stored in image metadata
     /// Overrides for quick tests: 0 = use the scene's Format / PixelSamples.

@@ -115,8 +115,7 @@ std::string bake_file(const Primitive& prim, const BakeOptions& options,
     const ShaderRef& sh = *prim.attributes->surface;
     const std::string where = prim.source + ": " + sh.name;
     std::string name = sh.params.get_string("filename", "");
-    if (name.empty())
-        throw ValueError(where + " has no \"filename\" (give one, or ptbake -o FILE)");
+    if (name.empty()) throw MissingBakeFileError(where + " has no \"filename\"");
     return expand_frame_pattern(name, frame, where + " filename");
 }
 
@@ -238,14 +237,24 @@ double shadow_ray_offset(const DicedSurface& d, std::size_t begin, std::size_t e
 // ---------------------------------------------------------------------------
 // The phases of bake_clouds
 
-/// The dicing spacing (0: ShadingRate) and the -material's mean free path.
+/// The dicing spacing (0: ShadingRate) and the given material's mean free path.
 struct BakeSpacing {
     double spacing = 0.0;
     std::optional<double> material_mfp;
 };
 
-/// Resolves -spacing (a length, or "mfp" from the -material) and checks it
-/// and -unitlength.
+/// The bake's one scene scale is options.unitlength; a material given for the
+/// bake must use the same one.
+void check_units(const BakeOptions& options) {
+    check_unitlength(options.unitlength);
+    if (options.material && options.material->unitlength != options.unitlength)
+        throw ValueError(
+            "the material's unitlength " + std::to_string(options.material->unitlength) +
+            " differs from the bake's " + std::to_string(options.unitlength));
+}
+
+/// Resolves the spacing (a length, or from the material's mean free path)
+/// and checks it and the unitlength.
 BakeSpacing resolve_spacing(const BakeOptions& options) {
     BakeSpacing out;
     out.spacing = options.spacing;
@@ -256,8 +265,7 @@ BakeSpacing resolve_spacing(const BakeOptions& options) {
     }
     if (!(out.spacing >= 0.0) || !std::isfinite(out.spacing))
         throw ValueError("impossible spacing " + std::to_string(out.spacing));
-    if (!(options.unitlength > 0.0) || !std::isfinite(options.unitlength))
-        throw ValueError("impossible unitlength " + std::to_string(options.unitlength));
+    check_units(options);
     return out;
 }
 
@@ -317,7 +325,8 @@ BakePlan plan_jobs(const Scene& scene, const BakeOptions& options,
 
 /// The mean free path each job's points should respect: the -material's,
 /// else a bake_sss_params object's own (the smallest over its range).
-/// UsageError when -spacing mfp leaves a job without one.
+/// SpacingMaterialError when the spacing from the mean free path leaves a job
+/// without one.
 void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
                          std::optional<double> material_mfp, BakePlan& plan) {
     const std::vector<BakeJob>& jobs = plan.jobs;
@@ -326,7 +335,7 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
         const BakeJob& job = jobs[j];
         if (job.kind != BakeShader::SssParams) continue;
         MaterialSpec m = options.material ? *options.material : MaterialSpec{};
-        const double unit = options.material ? m.unitlength : options.unitlength;
+        const double unit = options.unitlength;
         const double a = mfp_mm(m, &job.albedo, &job.dmfp) * unit;
         const double b = mfp_mm(m, &job.albedo2, &job.dmfp2) * unit;
         plan.job_mfp[j] = std::min(plan.job_mfp[j].value_or(a), std::min(a, b));
@@ -334,9 +343,7 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
     if (options.spacing_from_material && !options.material)
         for (std::size_t j = 0; j < jobs.size(); ++j)
             if (!plan.job_mfp[j])
-                throw UsageError(scene.primitives[jobs[j].prim].source +
-                                 ": -spacing mfp needs a material (-material NAME ...) "
-                                 "for objects baked without bake_sss_params");
+                throw SpacingMaterialError(scene.primitives[jobs[j].prim].source);
 }
 
 /// Dices what is baked or casts shadows; the rest is not needed.
@@ -390,7 +397,8 @@ void check_spacing(const Scene& scene, const BakePlan& plan,
             char buf[256];
             std::snprintf(buf, sizeof buf,
                           ": points up to %.4g apart, coarser than the material's mean "
-                          "free path %.4g (use -spacing %.4g or a smaller ShadingRate)",
+                          "free path %.4g (dice at a spacing of %.4g or a smaller "
+                          "ShadingRate)",
                           std::sqrt(hi), *mfp, *mfp);
             report.warnings.push_back(scene.primitives[job.prim].source + buf);
         }
@@ -647,5 +655,13 @@ BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
     if (options.progress) options.progress->finish();
     return report;
 }
+
+MissingBakeFileError::MissingBakeFileError(const std::string& what) : ValueError(what) {}
+
+SpacingMaterialError::SpacingMaterialError(std::string source)
+    : UsageError(source +
+                 ": the spacing from the mean free path needs a material for objects "
+                 "baked without bake_sss_params"),
+      m_source(std::move(source)) {}
 
 } // namespace sss

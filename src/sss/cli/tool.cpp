@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 #include <new>
+#include <optional>
 #include <sstream>
 
 #include <OpenEXR/OpenEXRConfig.h>
@@ -14,6 +15,7 @@
 #include <oneapi/tbb/version.h>
 #include <zlib.h>
 
+#include "sss/diffusion/material.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 
@@ -52,6 +54,19 @@ void print_error(const std::string& tool, const std::string& what) {
 
 } // namespace
 
+std::optional<std::string> option_wording(const std::exception& e) {
+    // The library names settings; a tool names the options that set them.
+    if (const auto* frame = dynamic_cast<const MissingFrameError*>(&e))
+        return std::string(frame->what()) + "; give the frame with -frame N";
+    if (dynamic_cast<const MaterialFormError*>(&e))
+        return std::string("give the material either as -scattering/-absorption or as "
+                           "-albedo/-diffusemeanfreepath, not both");
+    if (const auto* value = dynamic_cast<const MaterialValueError*>(&e))
+        return "impossible -" + value->field() + " value " +
+               std::to_string(value->value());
+    return std::nullopt;
+}
+
 int run_tool(const std::string& tool, int argc, char** argv,
              const std::function<int(const std::vector<std::string>&)>& body) {
     install_signal_handlers();
@@ -66,15 +81,13 @@ int run_tool(const std::string& tool, int argc, char** argv,
             return status == 0 ? 1 : status;
         }
         return status;
-    } catch (const MissingFrameError& e) {
-        // The library cannot know how a frame is given; a tool takes -frame.
-        print_error(tool, std::string(e.what()) + "; give the frame with -frame N");
-        std::cerr << tool << ": try '" << tool << " --help'\n";
-        return 2;
     } catch (const UsageError& e) {
-        print_error(tool, e.what());
+        print_error(tool, option_wording(e).value_or(e.what()));
         std::cerr << tool << ": try '" << tool << " --help'\n";
         return 2;
+    } catch (const MaterialValueError& e) {
+        print_error(tool, option_wording(e).value_or(e.what()));
+        return 1;
     } catch (const std::bad_alloc&) {
         print_error(tool, "out of memory");
         return 1;

@@ -129,32 +129,41 @@ ChannelCoefficients coefficients_from_albedo_dmfp(double albedo, double dmfp,
     return c;
 }
 
+MaterialValueError::MaterialValueError(std::string field, double value)
+    : ValueError("impossible " + field + " value " + std::to_string(value)),
+      m_field(std::move(field)), m_value(value) {}
+
+MaterialFormError::MaterialFormError()
+    : UsageError("the material is given both as scattering/absorption coefficients and "
+                 "as albedo/diffuse mean free path; give one form") {}
+
+void check_unitlength(double unitlength) {
+    if (!(std::isfinite(unitlength) && unitlength > 0.0))
+        throw MaterialValueError("unitlength", unitlength);
+}
+
 void MaterialSpec::validate() const {
     if (!find_material(preset))
         throw UsageError("unknown material '" + preset + "' (known: " + material_names() +
                          ")");
-    if ((scattering || absorption) && uses_albedo_form())
-        throw UsageError("give the material either as -scattering/-absorption or as "
-                         "-albedo/-diffusemeanfreepath, not both");
+    if ((scattering || absorption) && uses_albedo_form()) throw MaterialFormError();
     auto check = [](const std::optional<glm::dvec3>& v, const char* what, bool positive,
                     double maxv) {
         if (!v) return;
         for (int i = 0; i < 3; ++i) {
             double x = (*v)[i];
             if (!std::isfinite(x) || x < 0.0 || (positive && x <= 0.0) || x > maxv)
-                throw ValueError(std::string("impossible ") + what + " value " +
-                                 std::to_string(x));
+                throw MaterialValueError(what, x);
         }
     };
     const double inf = std::numeric_limits<double>::infinity();
-    check(scattering, "-scattering", false, inf);
-    check(absorption, "-absorption", false, inf);
-    check(albedo, "-albedo", false, 1.0);
-    check(dmfp, "-diffusemeanfreepath", true, inf);
+    check(scattering, "scattering", false, inf);
+    check(absorption, "absorption", false, inf);
+    check(albedo, "albedo", false, 1.0);
+    check(dmfp, "diffusemeanfreepath", true, inf);
     if (ior && !(std::isfinite(*ior) && *ior > 0.0))
-        throw ValueError("impossible -ior value " + std::to_string(*ior));
-    if (!(std::isfinite(unitlength) && unitlength > 0.0))
-        throw ValueError("impossible -unitlength value " + std::to_string(unitlength));
+        throw MaterialValueError("ior", *ior);
+    check_unitlength(unitlength);
 }
 
 double MaterialSpec::resolved_ior() const {

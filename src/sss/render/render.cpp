@@ -739,10 +739,11 @@ std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions
     }
     // Names first: a bad pattern is a usage error before any rendering.
     for (std::size_t i = 0; i < displays.size(); ++i)
-        displays[i].name = expand_frame_pattern(
-            displays[i].name, frame,
-            static_cast<int>(i) == primary && !options.output.empty() ? "option -o"
-                                                                      : "Display");
+        displays[i].name =
+            expand_frame_pattern(displays[i].name, frame,
+                                 static_cast<int>(i) == primary && !options.output.empty()
+                                     ? options.output_label
+                                     : "Display");
     return displays;
 }
 
