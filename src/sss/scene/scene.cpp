@@ -35,26 +35,19 @@ int param_type_components(ParamType type) {
 namespace {
 
 // The RIB spellings. "int" is an alias the RIB reader accepts in declarations.
+// clang-format off
 constexpr NameTable<ParamClass, 6> kParamClassNames({{
-    {ParamClass::Constant, "constant"},
-    {ParamClass::Uniform, "uniform"},
-    {ParamClass::Varying, "varying"},
-    {ParamClass::Vertex, "vertex"},
-    {ParamClass::FaceVarying, "facevarying"},
-    {ParamClass::FaceVertex, "facevertex"},
+    {ParamClass::Constant, "constant"}, {ParamClass::Uniform, "uniform"},
+    {ParamClass::Varying, "varying"}, {ParamClass::Vertex, "vertex"},
+    {ParamClass::FaceVarying, "facevarying"}, {ParamClass::FaceVertex, "facevertex"},
 }});
 
 constexpr NameTable<ParamType, 10> kParamTypeNames({{
-    {ParamType::Float, "float"},
-    {ParamType::Integer, "integer"},
-    {ParamType::String, "string"},
-    {ParamType::Color, "color"},
-    {ParamType::Point, "point"},
-    {ParamType::Vector, "vector"},
-    {ParamType::Normal, "normal"},
-    {ParamType::HPoint, "hpoint"},
-    {ParamType::Matrix, "matrix"},
-    {ParamType::Integer, "int"},
+    {ParamType::Float, "float"}, {ParamType::Integer, "integer"},
+    {ParamType::String, "string"}, {ParamType::Color, "color"},
+    {ParamType::Point, "point"}, {ParamType::Vector, "vector"},
+    {ParamType::Normal, "normal"}, {ParamType::HPoint, "hpoint"},
+    {ParamType::Matrix, "matrix"}, {ParamType::Integer, "int"},
 }});
 
 constexpr NameTable<PrimitiveKind, 15> kPrimitiveKindNames({{
@@ -63,17 +56,13 @@ constexpr NameTable<PrimitiveKind, 15> kPrimitiveKindNames({{
     {PrimitiveKind::PointsPolygons, "PointsPolygons"},
     {PrimitiveKind::PointsGeneralPolygons, "PointsGeneralPolygons"},
     {PrimitiveKind::SubdivisionMesh, "SubdivisionMesh"},
-    {PrimitiveKind::Sphere, "Sphere"},
-    {PrimitiveKind::Cylinder, "Cylinder"},
-    {PrimitiveKind::Cone, "Cone"},
-    {PrimitiveKind::Disk, "Disk"},
-    {PrimitiveKind::Torus, "Torus"},
-    {PrimitiveKind::Hyperboloid, "Hyperboloid"},
-    {PrimitiveKind::Paraboloid, "Paraboloid"},
-    {PrimitiveKind::Patch, "Patch"},
-    {PrimitiveKind::PatchMesh, "PatchMesh"},
-    {PrimitiveKind::Teapot, "Teapot"},
+    {PrimitiveKind::Sphere, "Sphere"}, {PrimitiveKind::Cylinder, "Cylinder"},
+    {PrimitiveKind::Cone, "Cone"}, {PrimitiveKind::Disk, "Disk"},
+    {PrimitiveKind::Torus, "Torus"}, {PrimitiveKind::Hyperboloid, "Hyperboloid"},
+    {PrimitiveKind::Paraboloid, "Paraboloid"}, {PrimitiveKind::Patch, "Patch"},
+    {PrimitiveKind::PatchMesh, "PatchMesh"}, {PrimitiveKind::Teapot, "Teapot"},
 }});
+// clang-format on
 
 } // namespace
 
