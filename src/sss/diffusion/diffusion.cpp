@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/parallel_sort.h>
@@ -17,38 +18,37 @@
 #include <glm/vector_relational.hpp>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
+#include "sss/util/name_table.h"
 #include "sss/util/progress.h"
 
 namespace sss {
 
+namespace {
+
+// The first name of a criterion is the one written; "prman" and "jensen" are
+// accepted aliases.
+constexpr NameTable<Criterion, 5> kCriterionNames({{
+    {Criterion::Error, "error"},
+    {Criterion::SolidAngleBox, "bbox"},
+    {Criterion::SolidAngleBox, "prman"},
+    {Criterion::SolidAngleCentroid, "centroid"},
+    {Criterion::SolidAngleCentroid, "jensen"},
+}});
+
+} // namespace
+
 bool parse_criterion(const char* name, Criterion& out) {
-    std::string_view n(name);
-    if (n == "error")
-        out = Criterion::Error;
-    else if (n == "bbox" || n == "prman")
-        out = Criterion::SolidAngleBox;
-    else if (n == "centroid" || n == "jensen")
-        out = Criterion::SolidAngleCentroid;
-    else
-        return false;
-    return true;
+    std::optional<Criterion> c = kCriterionNames.parse(name);
+    if (c) out = *c;
+    return c.has_value();
 }
 
 const char* criterion_name(Criterion c) {
-    switch (c) {
-    case Criterion::Error:
-        return "error";
-    case Criterion::SolidAngleBox:
-        return "bbox";
-    case Criterion::SolidAngleCentroid:
-        return "centroid";
-    }
-    return "?";
+    return kCriterionNames.name(c);
 }
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A source disk is integrated (rather than taken as a point) when its radius
 // exceeds kNearKappa times the distance softened by the profile's core length.

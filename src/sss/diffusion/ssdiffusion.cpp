@@ -8,13 +8,13 @@
 #include <tuple>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
 #include "sss/util/progress.h"
 
 namespace sss {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Albedo at or above 1 is clamped here (with one warning), as PRMan does at 0.999.
 constexpr double kMaxAlbedo = 0.99999;
 // Per-point materials share profile tables; at most this many distinct ones.
