@@ -4,7 +4,9 @@
 
 #include "sss/diffusion/diffusion.h"
 
+#include <algorithm>
 #include <optional>
+#include <string>
 
 #include "sss/util/error.h"
 #include "sss/util/name_table.h"
@@ -41,21 +43,15 @@ const char* criterion_name(Criterion c) {
     return kCriterionNames.name(c);
 }
 
-using diffusion_detail::build_tables;
-using diffusion_detail::build_tree;
-using diffusion_detail::choose_buckets;
-using diffusion_detail::evaluate_buckets;
-using diffusion_detail::Tables;
-using diffusion_detail::tolerance_model;
-using diffusion_detail::ToleranceModel;
-using diffusion_detail::Tree;
+namespace {
 
-std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
-                                          const DiffusionOptions& options,
-                                          DiffusionStats* stats_out) {
-    const std::size_t n = pb.positions.size();
-    std::vector<glm::vec3> result(n, glm::vec3(0.0f));
-    if (n == 0) return result;
+using namespace diffusion_detail;
+
+// Evaluates into result[original index]: every receiver (receivers null) or
+// the listed ones against the whole cloud.
+void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
+              const std::vector<std::size_t>* receivers, std::vector<glm::vec3>& result,
+              DiffusionStats* stats_out) {
     if (pb.profiles.size() < 3 && pb.profile_index.empty())
         throw ValueError("diffusion needs three channel profiles");
     Stopwatch watch;
@@ -64,12 +60,64 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
     Tree tree = build_tree(pb);
     stats.nodes = tree.nodes.size();
     stats.build_seconds = watch.seconds();
-    ToleranceModel tolerance = tolerance_model(pb, tree, options.max_solid_angle);
-    evaluate_buckets({pb, options, tables, tree, tolerance}, choose_buckets(tree), result,
-                     stats);
+    const DiffusionReference reference =
+        options.reference ? *options.reference : reference_of(tree.power_area);
+    ToleranceModel tolerance = tolerance_model(pb, reference, options.max_solid_angle);
+    std::vector<uint32_t> buckets = choose_buckets(tree);
+    EvaluationContext cx{pb, options, tables, tree, tolerance};
+    std::vector<uint8_t> wanted;
+    if (receivers) {
+        // Wanted receivers by sorted position; only their buckets are evaluated.
+        std::vector<uint32_t> position(tree.order.size());
+        for (std::size_t s = 0; s < tree.order.size(); ++s)
+            position[tree.order[s]] = uint32_t(s);
+        wanted.assign(tree.order.size(), 0);
+        for (std::size_t i : *receivers) wanted[position[i]] = 1;
+        cx.wanted = wanted.data();
+        cx.wanted_count =
+            std::size_t(std::count(wanted.begin(), wanted.end(), uint8_t(1)));
+        std::erase_if(buckets, [&](uint32_t k) {
+            const Node& b = tree.nodes[k];
+            return std::none_of(wanted.begin() + b.first,
+                                wanted.begin() + b.first + b.count,
+                                [](uint8_t w) { return w != 0; });
+        });
+    }
+    evaluate_buckets(cx, buckets, result, stats);
     stats.eval_seconds = watch.seconds() - stats.build_seconds;
     if (stats_out) *stats_out = stats;
+}
+
+} // namespace
+
+std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
+                                          const DiffusionOptions& options,
+                                          DiffusionStats* stats_out) {
+    const std::size_t n = pb.positions.size();
+    std::vector<glm::vec3> result(n, glm::vec3(0.0f));
+    if (n == 0) return result;
+    evaluate(pb, options, nullptr, result, stats_out);
     return result;
+}
+
+std::vector<glm::vec3> evaluate_diffusion_at(const DiffusionProblem& pb,
+                                             const DiffusionOptions& options,
+                                             const std::vector<std::size_t>& receivers,
+                                             DiffusionStats* stats_out) {
+    const std::size_t n = pb.positions.size();
+    for (std::size_t i : receivers)
+        if (i >= n)
+            throw ValueError("diffusion receiver " + std::to_string(i) +
+                             " out of range (" + std::to_string(n) + " points)");
+    if (receivers.empty()) {
+        if (stats_out) *stats_out = DiffusionStats{};
+        return {};
+    }
+    std::vector<glm::vec3> all(n, glm::vec3(0.0f));
+    evaluate(pb, options, &receivers, all, stats_out);
+    std::vector<glm::vec3> out(receivers.size());
+    for (std::size_t k = 0; k < receivers.size(); ++k) out[k] = all[receivers[k]];
+    return out;
 }
 
 } // namespace sss

@@ -40,7 +40,9 @@ struct Scratch {
 };
 
 // Buckets of one material with the error criterion: one traversal for the
-// bucket, then the vectorised block loops over its receivers.
+// bucket, then the vectorised block loops over its receivers. Always the whole
+// bucket, wanted or not: each receiver then keeps its place in the vector
+// loops, so a subset gets the whole run's numbers bit for bit.
 void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                     const ReceiverChannels& first_rc, Scratch& w,
                     std::vector<glm::vec3>& result) {
@@ -152,6 +154,7 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
     // (FMA) in far_node, and mixed-material results change in the last bits.
     const bool quadrupole = cx.options.criterion == Criterion::Error;
     for (uint32_t s = bucket.first; s < bucket.first + bucket.count; ++s) {
+        if (cx.wanted && !cx.wanted[s]) continue;
         uint32_t original = tree.order[s];
         ReceiverChannels rc =
             pb.profile_index.empty() ? first_rc : receiver_channels(pb, tables, original);
@@ -205,6 +208,14 @@ void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch&
     evaluate_each(cx, bucket, first_rc, w, result);
 }
 
+// How many of the bucket's receivers are wanted.
+std::size_t wanted_in(const EvaluationContext& cx, const Node& bucket) {
+    if (!cx.wanted) return bucket.count;
+    return std::size_t(std::count_if(cx.wanted + bucket.first,
+                                     cx.wanted + bucket.first + bucket.count,
+                                     [](uint8_t w) { return w != 0; }));
+}
+
 } // namespace
 
 std::vector<uint32_t> choose_buckets(const Tree& tree) {
@@ -226,7 +237,7 @@ std::vector<uint32_t> choose_buckets(const Tree& tree) {
 
 void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& buckets,
                       std::vector<glm::vec3>& result, DiffusionStats& stats) {
-    const std::size_t n = cx.pb.positions.size();
+    const std::size_t n = cx.wanted ? cx.wanted_count : cx.pb.positions.size();
     std::atomic<std::size_t> done{0};
     std::atomic<std::size_t> far_total{0}, near_total{0}, quad_total{0};
     oneapi::tbb::parallel_for(
@@ -235,7 +246,7 @@ void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& 
             Scratch w;
             for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
                 evaluate_bucket(cx, buckets[bi], w, result);
-                const std::size_t count = cx.tree.nodes[buckets[bi]].count;
+                const std::size_t count = wanted_in(cx, cx.tree.nodes[buckets[bi]]);
                 std::size_t now = done.fetch_add(count) + count;
                 if (cx.options.progress) cx.options.progress->update(now, n);
             }

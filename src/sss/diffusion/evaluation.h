@@ -4,6 +4,7 @@
 /// the traversal of its criterion followed by the vectorised block path (one
 /// material) or the receiver-by-receiver path.
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -28,10 +29,14 @@ struct EvaluationContext {
     const Tables& tables;
     const Tree& tree;
     const ToleranceModel& tolerance;
+    // The receivers to evaluate, by sorted position (non-zero: wanted); null:
+    // all of them. A bucket on the block path is evaluated whole either way.
+    const uint8_t* wanted = nullptr;
+    std::size_t wanted_count = 0; // receivers wanted in all (progress total)
 };
 
-// Evaluates the receivers of the given buckets in parallel into
-// result[original index]; adds the term counts to stats.
+// Evaluates the (wanted) receivers of the given buckets in parallel into
+// result[original index]; sets the term counts of stats.
 void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& buckets,
                       std::vector<glm::vec3>& result, DiffusionStats& stats);
 

@@ -196,4 +196,10 @@ Tree build_tree(const DiffusionProblem& pb) {
     return tree;
 }
 
+Tree sorted_sources(const DiffusionProblem& pb) {
+    Tree tree;
+    sort_sources(pb, sorted_morton_keys(pb.positions), tree);
+    return tree;
+}
+
 } // namespace sss::diffusion_detail

@@ -55,6 +55,10 @@ struct Tree {
 // tree does not depend on the thread count.
 Tree build_tree(const DiffusionProblem& pb);
 
+// The sources in the tree's order (order, pos_rho2, power_area, normal),
+// without the nodes.
+Tree sorted_sources(const DiffusionProblem& pb);
+
 // Squared distance between two boxes (0 when they overlap).
 inline float box_distance2(const glm::vec3& alo, const glm::vec3& ahi,
                            const glm::vec3& blo, const glm::vec3& bhi) {

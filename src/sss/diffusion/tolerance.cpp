@@ -29,16 +29,31 @@ uint32_t reference_node(const Tree& tree, uint32_t bucket, double region) {
 
 } // namespace
 
-ToleranceModel tolerance_model(const DiffusionProblem& pb, const Tree& tree,
+DiffusionReference reference_of(const std::vector<glm::vec4>& power_area) {
+    double asum = 0, aphi[3] = {0, 0, 0};
+    for (const glm::vec4& pa : power_area) {
+        asum += pa.w;
+        for (int ch = 0; ch < 3; ++ch) {
+            double w = pa[ch];
+            aphi[ch] += std::abs(w);
+        }
+    }
+    DiffusionReference ref;
+    ref.area = float(asum);
+    for (int ch = 0; ch < 3; ++ch) ref.abs_power[ch] = float(aphi[ch]);
+    return ref;
+}
+
+ToleranceModel tolerance_model(const DiffusionProblem& pb,
+                               const DiffusionReference& reference,
                                double max_solid_angle) {
     ToleranceModel m;
     // Reference magnitude for the error tolerance: the local mean |E| over a
     // region about one diffusion length wide (with a floor at a fraction of the
     // global mean, so dark regions do not demand unbounded work).
     for (int ch = 0; ch < 3; ++ch)
-        m.global_abs[ch] = tree.nodes[0].area > 0
-                               ? tree.expansions[0].abs_phi[ch] / tree.nodes[0].area
-                               : 0.0;
+        m.global_abs[ch] =
+            reference.area > 0 ? reference.abs_power[ch] / reference.area : 0.0;
     for (const Profile& p : pb.profiles)
         if (p.total() > 0)
             m.region = std::max(m.region, std::min(p.dmfp(), p.cutoff_radius(1e-3)));
@@ -52,7 +67,7 @@ ToleranceModel tolerance_model(const DiffusionProblem& pb, const Tree& tree,
     // fraction of the surface the points span (tiny areas). Without these
     // bounds every node was dropped as negligible there (100 % error).
     m.reach.resize(pb.profiles.size());
-    const double rho_all = std::sqrt(double(tree.nodes[0].area) / kPi);
+    const double rho_all = std::sqrt(double(reference.area) / kPi);
     for (std::size_t k = 0; k < pb.profiles.size(); ++k)
         m.reach[k] = pb.profiles[k].disk(rho_all);
     return m;
@@ -103,3 +118,12 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
 }
 
 } // namespace sss::diffusion_detail
+
+namespace sss {
+
+DiffusionReference diffusion_reference(const DiffusionProblem& problem) {
+    return diffusion_detail::reference_of(
+        diffusion_detail::sorted_sources(problem).power_area);
+}
+
+} // namespace sss

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/vec4.hpp>
+
 #include "sss/diffusion/diffusion.h"
 
 #include "octree.h"
@@ -22,8 +24,13 @@ struct ToleranceModel {
     std::vector<double> reach;        // per profile: disk(sqrt(total area / pi))
 };
 
-ToleranceModel tolerance_model(const DiffusionProblem& pb, const Tree& tree,
+ToleranceModel tolerance_model(const DiffusionProblem& pb,
+                               const DiffusionReference& reference,
                                double max_solid_angle);
+
+// The reference from the sources in the tree's order (Tree::power_area): the
+// same sums, in the same order, as the root node's area and abs_phi.
+DiffusionReference reference_of(const std::vector<glm::vec4>& power_area);
 
 // One bucket's tolerance per channel, and the distinct tables of its receivers
 // (the error bounds hold for every one of them).
