@@ -67,43 +67,40 @@ bool same_bits(const glm::vec3& a, const glm::vec3& b) {
     return std::memcmp(&a, &b, sizeof(glm::vec3)) == 0;
 }
 
-/// Checks every subset against the whole run, at 1 and 2 threads.
-void expect_subsets_match(const sss::DiffusionProblem& pb,
-                          const sss::DiffusionOptions& opt, const std::string& what) {
-    std::vector<glm::vec3> whole = sss::evaluate_diffusion(pb, opt);
-    for (const std::vector<std::size_t>& rec : subsets(pb.positions.size())) {
-        for (int threads : {1, 2}) {
-            sss::ThreadLimit limit(threads);
-            std::vector<glm::vec3> part = sss::evaluate_diffusion_at(pb, opt, rec);
-            ASSERT_EQ(part.size(), rec.size());
-            std::size_t differ = 0;
-            for (std::size_t k = 0; k < rec.size(); ++k)
-                if (!same_bits(part[k], whole[rec[k]])) ++differ;
-            EXPECT_EQ(differ, 0u) << what << ": " << rec.size() << " receivers from "
-                                  << rec[0] << ", " << threads << " threads";
+/// Checks every subset against the whole run, for every criterion, at 1 and
+/// 2 threads.
+void expect_subsets_match(const sss::DiffusionProblem& pb, const std::string& what,
+                          double max_solid_angle = 1.0) {
+    for (sss::Criterion crit : kCriteria) {
+        sss::DiffusionOptions opt;
+        opt.criterion = crit;
+        opt.max_solid_angle = max_solid_angle;
+        std::vector<glm::vec3> whole = sss::evaluate_diffusion(pb, opt);
+        for (const std::vector<std::size_t>& rec : subsets(pb.positions.size())) {
+            for (int threads : {1, 2}) {
+                sss::ThreadLimit limit(threads);
+                std::vector<glm::vec3> part = sss::evaluate_diffusion_at(pb, opt, rec);
+                ASSERT_EQ(part.size(), rec.size());
+                std::size_t differ = 0;
+                for (std::size_t k = 0; k < rec.size(); ++k)
+                    if (!same_bits(part[k], whole[rec[k]])) ++differ;
+                EXPECT_EQ(differ, 0u)
+                    << what << ", " << sss::criterion_name(crit) << ": " << rec.size()
+                    << " receivers from " << rec[0] << ", " << threads << " threads";
+            }
         }
     }
 }
 
-TEST(DiffusionSubset, SphereEveryCriterion) {
-    sss::DiffusionProblem pb = sphere_problem();
-    for (sss::Criterion crit : kCriteria) {
-        sss::DiffusionOptions opt;
-        opt.criterion = crit;
-        expect_subsets_match(pb, opt, sss::criterion_name(crit));
-    }
+TEST(DiffusionSubset, Sphere) {
+    expect_subsets_match(sphere_problem(), "sphere");
 }
 
 TEST(DiffusionSubset, ThinBoxOtherSettings) {
     sss::DiffusionProblem pb =
         problem_from(synthetic(sss::SyntheticShape::Box, 20000, 40.0),
                      material_profiles("skin1", 1.0, sss::ProfileKind::Better));
-    for (sss::Criterion crit : kCriteria) {
-        sss::DiffusionOptions opt;
-        opt.criterion = crit;
-        opt.max_solid_angle = 0.3;
-        expect_subsets_match(pb, opt, sss::criterion_name(crit));
-    }
+    expect_subsets_match(pb, "thin box", 0.3);
 }
 
 // Per-point materials: buckets of mixed materials take the receiver-by-receiver
@@ -117,12 +114,7 @@ TEST(DiffusionSubset, PerPointMaterials) {
         pb.profile_index[i] = (i % 5 == 0 || pb.positions[i].x > 5.0f)
                                   ? glm::u32vec3(3, 4, 5)
                                   : glm::u32vec3(0, 1, 2);
-    for (sss::Criterion crit : kCriteria) {
-        sss::DiffusionOptions opt;
-        opt.criterion = crit;
-        expect_subsets_match(pb, opt,
-                             std::string("per point, ") + sss::criterion_name(crit));
-    }
+    expect_subsets_match(pb, "per point");
 }
 
 // Identical points make one big leaf whose sum is shared by its receivers.
@@ -133,12 +125,7 @@ TEST(DiffusionSubset, CoincidentPoints) {
         pb.positions[i] = pb.positions[0];
         pb.normals[i] = pb.normals[0];
     }
-    for (sss::Criterion crit : kCriteria) {
-        sss::DiffusionOptions opt;
-        opt.criterion = crit;
-        expect_subsets_match(pb, opt,
-                             std::string("coincident, ") + sss::criterion_name(crit));
-    }
+    expect_subsets_match(pb, "coincident");
 }
 
 // The default reference is diffusion_reference(problem); passing it changes
