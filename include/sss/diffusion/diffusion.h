@@ -2,9 +2,15 @@
 /// \file diffusion.h
 /// Subsurface diffusion over a point cloud: M_o(x_i) = sum_j R(|x_i - P_j|) A_j E_j,
 /// evaluated exactly (all pairs) or hierarchically over an octree.
+///
+/// The diffusion module owns the materials, the profiles, the hierarchical and
+/// exact evaluations and the ptfilter -ssdiffusion job (ssdiffusion.h). It uses
+/// util and cloud only; its private pieces (tables, octree, traversal, kernels)
+/// live next to its sources.
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <glm/ext/vector_uint3.hpp>
@@ -47,12 +53,35 @@ struct DiffusionProblem {
     std::vector<glm::u32vec3> profile_index;
 };
 
+/// The whole-cloud quantities the error criterion's tolerance is relative to.
+/// Every other input of a receiver's result is local to it or part of the
+/// octree, so a run over part of the receivers gives the whole run's numbers
+/// when it is given the whole cloud's reference (a farm that splits the
+/// receivers across machines passes the same reference to every part).
+struct DiffusionReference {
+    /// Total source area, sum A: bounds the tolerance for objects small
+    /// against the profile.
+    float area = 0;
+    /// Sum |A E| per channel; abs_power / area, the cloud's mean |E|, is the
+    /// floor of the local reference level.
+    float abs_power[3] = {0, 0, 0};
+
+    bool operator==(const DiffusionReference&) const = default;
+};
+
+/// The reference of a whole problem: the sums in double over the points in
+/// the octree's (Morton) order, rounded to float, exactly as evaluate_diffusion()
+/// forms them when options.reference is unset. O(n log n) (it sorts the points).
+DiffusionReference diffusion_reference(const DiffusionProblem& problem);
+
 /// Evaluation settings.
 struct DiffusionOptions {
     /// PRMan's time/quality knob: smaller is slower and more accurate.
     double max_solid_angle = 1.0;
     Criterion criterion = Criterion::Error;
     Progress* progress = nullptr; ///< optional ALF_PROGRESS reporter
+    /// The tolerance reference; unset: the problem's own (diffusion_reference()).
+    std::optional<DiffusionReference> reference;
 };
 
 /// Counters of one hierarchical evaluation.
@@ -70,6 +99,18 @@ struct DiffusionStats {
 std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& problem,
                                           const DiffusionOptions& options,
                                           DiffusionStats* stats = nullptr);
+
+/// Hierarchical evaluation at the given receivers (indices into the problem's
+/// points, repeats allowed) against the whole cloud: result[k] is bit for bit
+/// what evaluate_diffusion(problem, options) gives at receivers[k], whatever
+/// the subset and the thread count, for the same options.reference. Builds the
+/// whole octree; the evaluation work is that of the receivers' buckets (up to
+/// 64 neighbouring points each). Throws ValueError on an index out of range.
+/// Stats count the work done; progress counts distinct receivers.
+std::vector<glm::vec3> evaluate_diffusion_at(const DiffusionProblem& problem,
+                                             const DiffusionOptions& options,
+                                             const std::vector<std::size_t>& receivers,
+                                             DiffusionStats* stats = nullptr);
 
 /// Exact evaluation in double precision, all pairs, at the given receivers
 /// (all points when empty). The same point model as the hierarchical path:

@@ -5,14 +5,16 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
+#include "sss/util/name_table.h"
 
 namespace sss {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Fresnel reflectance for light inside a medium of relative index eta
@@ -83,30 +85,26 @@ double burley_shape(double albedo) {
     return 3.5 + 100.0 * t * t * t * t;
 }
 
+// The first name of a kind is the one written; the others are accepted aliases.
+constexpr NameTable<ProfileKind, 6> kProfileKindNames({{
+    {ProfileKind::Classic, "classic"},
+    {ProfileKind::Classic, "dipole"},
+    {ProfileKind::Better, "better"},
+    {ProfileKind::Better, "betterdipole"},
+    {ProfileKind::Burley, "burley"},
+    {ProfileKind::Burley, "normalized"},
+}});
+
 } // namespace
 
 bool parse_profile_kind(std::string_view name, ProfileKind& out) {
-    if (name == "classic" || name == "dipole")
-        out = ProfileKind::Classic;
-    else if (name == "better" || name == "betterdipole")
-        out = ProfileKind::Better;
-    else if (name == "burley" || name == "normalized")
-        out = ProfileKind::Burley;
-    else
-        return false;
-    return true;
+    std::optional<ProfileKind> kind = kProfileKindNames.parse(name);
+    if (kind) out = *kind;
+    return kind.has_value();
 }
 
 const char* profile_kind_name(ProfileKind kind) {
-    switch (kind) {
-    case ProfileKind::Classic:
-        return "classic";
-    case ProfileKind::Better:
-        return "better";
-    case ProfileKind::Burley:
-        return "burley";
-    }
-    return "?";
+    return kProfileKindNames.name(kind);
 }
 
 Profile Profile::from_coefficients(ProfileKind kind, const ChannelCoefficients& c) {

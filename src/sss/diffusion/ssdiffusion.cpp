@@ -1,3 +1,7 @@
+/// \file ssdiffusion.cpp
+/// The ptfilter -ssdiffusion job in phases: the cloud read into a problem in mm,
+/// the materials as (quantised) profiles, the evaluation, the output cloud.
+
 #include "sss/diffusion/ssdiffusion.h"
 
 #include <algorithm>
@@ -8,13 +12,13 @@
 #include <tuple>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
 #include "sss/util/progress.h"
 
 namespace sss {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Albedo at or above 1 is clamped here (with one warning), as PRMan does at 0.999.
 constexpr double kMaxAlbedo = 0.99999;
 // Per-point materials share profile tables; at most this many distinct ones.
@@ -118,15 +122,13 @@ std::vector<std::string> describe_material(const SsDiffusionOptions& o) {
     return lines;
 }
 
-PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
-                       SsDiffusionReport* report) {
-    Stopwatch watch;
-    SsDiffusionReport local;
-    SsDiffusionReport& rep = report ? *report : local;
-    const MaterialSpec& m = o.material;
-    rep.material_lines = describe_material(o);
-    const std::size_t n = in.size();
+namespace {
 
+// The cloud's points as a diffusion problem in mm: positions, normals, areas
+// and irradiance, the channels checked.
+DiffusionProblem read_points(const PointCloud& in, const SsDiffusionOptions& o,
+                             SsDiffusionReport& rep) {
+    const std::size_t n = in.size();
     // The diffusion is evaluated in mm, the material's own unit, not in scene
     // units: its profile tables are floats whose entries go as powers of the
     // material's lengths (R ~ 1/l^2, its r^2-derivatives up to ~1/l^8), which
@@ -134,7 +136,7 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     // below ~1e-6 or above ~1e5: a cm scene scaled by 1e-5 or 3e6. In mm,
     // real materials' lengths are 0.01 to 100 and sum R A E is the same (R A
     // has no unit), so the result does not depend on the scene's scale.
-    const double to_mm = 1.0 / m.unitlength;
+    const double to_mm = 1.0 / o.material.unitlength;
     DiffusionProblem pb;
     pb.positions.resize(n);
     for (std::size_t i = 0; i < n; ++i)
@@ -169,73 +171,109 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
             pb.irradiance[i] = {rad.data[3 * i], rad.data[3 * i + 1],
                                 rad.data[3 * i + 2]};
     }
+    return pb;
+}
 
-    // Material: constant, or per point from the _albedo / _diffusemeanfreepath channels.
-    const std::vector<Profile> constant = constant_profiles(o, 1.0); // in mm
-    if ((m.albedo_from_file || m.dmfp_from_file) && n > 0) {
-        const Channel* ach = m.albedo_from_file ? &require_channel(in, o.albedo_channel,
-                                                                   3, "-albedo fromfile")
-                                                : nullptr;
-        const Channel* dch =
-            m.dmfp_from_file
-                ? &require_channel(in, o.dmfp_channel, 3, "-diffusemeanfreepath fromfile")
-                : nullptr;
-        glm::dvec3 albedo0, dmfp0;
-        m.resolve_albedo_dmfp(albedo0, dmfp0);
-        const double ior = m.resolved_ior();
-        bool clamped = false;
-        // Quantise per-point values so points share tables; coarsen until the
-        // number of distinct profiles fits.
-        // dmfp_steps stays >= 1 (0 made the dmfp NaN); the last level keeps
-        // every distinct value rather than stopping half-way.
-        for (int albedo_steps = 65536, dmfp_steps = 1024;;
-             albedo_steps /= 2, dmfp_steps = std::max(1, dmfp_steps / 2)) {
-            std::map<std::tuple<int64_t, int64_t>, uint32_t> index;
-            std::vector<std::tuple<double, double>> keys;
-            pb.profile_index.assign(n, glm::u32vec3(0));
-            bool overflow = false;
-            for (std::size_t i = 0; i < n && !overflow; ++i) {
-                for (int ch = 0; ch < 3; ++ch) {
-                    double a = ach ? ach->data[3 * i + ch] : albedo0[ch];
-                    double d = dch ? dch->data[3 * i + ch] : dmfp0[ch];
-                    if (!(a >= 0.0) || !std::isfinite(a))
-                        throw ValueError("channel '" + o.albedo_channel +
-                                         "': impossible albedo " + std::to_string(a) +
-                                         " at point " + std::to_string(i));
-                    if (!(d > 0.0) || !std::isfinite(d))
-                        throw ValueError(
-                            "channel '" + o.dmfp_channel +
-                            "': diffuse mean free path must be positive, got " +
-                            std::to_string(d) + " at point " + std::to_string(i));
-                    if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
-                    int64_t ka = albedo_key(a, albedo_steps);
-                    int64_t kd = std::llround(std::log2(d) * dmfp_steps);
-                    auto [it, fresh] = index.try_emplace({ka, kd}, uint32_t(keys.size()));
-                    if (fresh) {
-                        keys.emplace_back(albedo_of_key(ka, albedo_steps),
-                                          std::exp2(double(kd) / dmfp_steps));
-                        if (keys.size() > kMaxDistinctProfiles && albedo_steps > 16)
-                            overflow = true;
-                    }
-                    pb.profile_index[i][ch] = it->second;
-                }
+// Where the per-point material values come from: a channel, else the
+// constant material's value.
+struct PointMaterialSource {
+    const Channel* albedo = nullptr;
+    const Channel* dmfp = nullptr;
+    glm::dvec3 albedo0, dmfp0;
+};
+
+// One quantisation level of the per-point materials: sets pb.profile_index
+// and the distinct (albedo, dmfp) keys. False when the keys overflow
+// kMaxDistinctProfiles and a coarser level remains.
+bool quantise_materials(const PointMaterialSource& src, const SsDiffusionOptions& o,
+                        int albedo_steps, int dmfp_steps, DiffusionProblem& pb,
+                        std::vector<std::tuple<double, double>>& keys, bool& clamped) {
+    const std::size_t n = pb.positions.size();
+    std::map<std::tuple<int64_t, int64_t>, uint32_t> index;
+    keys.clear();
+    pb.profile_index.assign(n, glm::u32vec3(0));
+    bool overflow = false;
+    for (std::size_t i = 0; i < n && !overflow; ++i) {
+        for (int ch = 0; ch < 3; ++ch) {
+            double a = src.albedo ? src.albedo->data[3 * i + ch] : src.albedo0[ch];
+            double d = src.dmfp ? src.dmfp->data[3 * i + ch] : src.dmfp0[ch];
+            if (!(a >= 0.0) || !std::isfinite(a))
+                throw ValueError("channel '" + o.albedo_channel +
+                                 "': impossible albedo " + std::to_string(a) +
+                                 " at point " + std::to_string(i));
+            if (!(d > 0.0) || !std::isfinite(d))
+                throw ValueError("channel '" + o.dmfp_channel +
+                                 "': diffuse mean free path must be positive, got " +
+                                 std::to_string(d) + " at point " + std::to_string(i));
+            if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
+            int64_t ka = albedo_key(a, albedo_steps);
+            int64_t kd = std::llround(std::log2(d) * dmfp_steps);
+            auto [it, fresh] = index.try_emplace({ka, kd}, uint32_t(keys.size()));
+            if (fresh) {
+                keys.emplace_back(albedo_of_key(ka, albedo_steps),
+                                  std::exp2(double(kd) / dmfp_steps));
+                if (keys.size() > kMaxDistinctProfiles && albedo_steps > 16)
+                    overflow = true;
             }
-            if (overflow && albedo_steps > 16) continue;
-            pb.profiles.clear();
-            for (auto [a, d] : keys)
-                pb.profiles.push_back(
-                    Profile::from_albedo_dmfp(o.profile, a, d, ior)); // in mm
-            rep.distinct_profiles = keys.size();
-            break;
+            pb.profile_index[i][ch] = it->second;
         }
-        if (clamped)
-            rep.warnings.push_back("albedo values >= 1 were clamped to " +
-                                   std::to_string(kMaxAlbedo));
+    }
+    return !(overflow && albedo_steps > 16);
+}
+
+// Per-point materials from the _albedo / _diffusemeanfreepath channels:
+// pb.profiles and pb.profile_index.
+void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
+                        DiffusionProblem& pb, SsDiffusionReport& rep) {
+    const MaterialSpec& m = o.material;
+    PointMaterialSource src;
+    src.albedo = m.albedo_from_file
+                     ? &require_channel(in, o.albedo_channel, 3, "-albedo fromfile")
+                     : nullptr;
+    src.dmfp = m.dmfp_from_file ? &require_channel(in, o.dmfp_channel, 3,
+                                                   "-diffusemeanfreepath fromfile")
+                                : nullptr;
+    m.resolve_albedo_dmfp(src.albedo0, src.dmfp0);
+    const double ior = m.resolved_ior();
+    bool clamped = false;
+    // Quantise per-point values so points share tables; coarsen until the
+    // number of distinct profiles fits.
+    // dmfp_steps stays >= 1 (0 made the dmfp NaN); the last level keeps
+    // every distinct value rather than stopping half-way.
+    std::vector<std::tuple<double, double>> keys;
+    for (int albedo_steps = 65536, dmfp_steps = 1024;;
+         albedo_steps /= 2, dmfp_steps = std::max(1, dmfp_steps / 2)) {
+        if (!quantise_materials(src, o, albedo_steps, dmfp_steps, pb, keys, clamped))
+            continue;
+        pb.profiles.clear();
+        for (auto [a, d] : keys)
+            pb.profiles.push_back(
+                Profile::from_albedo_dmfp(o.profile, a, d, ior)); // in mm
+        rep.distinct_profiles = keys.size();
+        break;
+    }
+    if (clamped)
+        rep.warnings.push_back("albedo values >= 1 were clamped to " +
+                               std::to_string(kMaxAlbedo));
+}
+
+// Material: constant, or per point from the _albedo / _diffusemeanfreepath channels.
+void assign_profiles(const PointCloud& in, const SsDiffusionOptions& o,
+                     DiffusionProblem& pb, SsDiffusionReport& rep) {
+    const MaterialSpec& m = o.material;
+    const std::vector<Profile> constant = constant_profiles(o, 1.0); // in mm
+    if ((m.albedo_from_file || m.dmfp_from_file) && in.size() > 0) {
+        per_point_profiles(in, o, pb, rep);
     } else {
         pb.profiles = constant;
         rep.distinct_profiles = 3;
     }
+}
 
+// The diffusion at every point: all pairs with -exact, else the octree.
+std::vector<glm::vec3> evaluate(const DiffusionProblem& pb, const SsDiffusionOptions& o,
+                                SsDiffusionReport& rep) {
+    const std::size_t n = pb.positions.size();
     std::vector<glm::vec3> result;
     if (o.exact) {
         std::vector<glm::dvec3> exact =
@@ -250,7 +288,14 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
         result = evaluate_diffusion(pb, o.diffusion, &rep.stats);
     }
     if (o.diffusion.progress) o.diffusion.progress->finish();
+    return result;
+}
 
+// The output cloud: the input's points and header, the result as a color
+// channel (after the input channels with keep_channels).
+PointCloud output_cloud(const PointCloud& in, const SsDiffusionOptions& o,
+                        const std::vector<glm::vec3>& result) {
+    const std::size_t n = in.size();
     PointCloud out;
     out.positions = in.positions;
     out.normals = in.normals;
@@ -265,6 +310,21 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     dst.data.resize(3 * n);
     for (std::size_t i = 0; i < n; ++i)
         for (int ch = 0; ch < 3; ++ch) dst.data[3 * i + ch] = result[i][ch];
+    return out;
+}
+
+} // namespace
+
+PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
+                       SsDiffusionReport* report) {
+    Stopwatch watch;
+    SsDiffusionReport local;
+    SsDiffusionReport& rep = report ? *report : local;
+    rep.material_lines = describe_material(o);
+    DiffusionProblem pb = read_points(in, o, rep);
+    assign_profiles(in, o, pb, rep);
+    std::vector<glm::vec3> result = evaluate(pb, o, rep);
+    PointCloud out = output_cloud(in, o, result);
     rep.seconds = watch.seconds();
     return out;
 }

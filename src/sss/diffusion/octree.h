@@ -1,0 +1,69 @@
+#pragma once
+/// \file octree.h
+/// The octree over the Morton-sorted sources: nodes with their bounds, area and
+/// disk sizes, and each node's moments (monopole, dipole, quadrupole) per channel.
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "sss/diffusion/diffusion.h"
+
+namespace sss::diffusion_detail {
+
+// Octree over Morton-sorted points.
+constexpr uint32_t kLeafSize = 8;
+constexpr uint32_t kNone = 0xffffffffu;
+
+struct Node {
+    glm::vec3 lo, hi;
+    uint32_t first = 0, count = 0;
+    uint32_t child_first = kNone;
+    uint32_t child_count = 0;
+    uint32_t parent = kNone;
+    float area = 0;
+    float radius = 0;  // max |p - c|
+    float max_rho = 0; // largest source disk radius
+};
+
+// Moments of a node about its centroid c, per colour channel.
+struct Expansion {
+    glm::vec3 c;
+    float phi[3];
+    float abs_phi[3];
+    float d[3][3];   // sum A E (p - c)
+    float q[3][6];   // sum A E (p - c)(p - c)^T: xx xy xz yy yz zz
+    float d_norm[3]; // |d[ch]|
+};
+
+struct Tree {
+    std::vector<Node> nodes;
+    std::vector<Expansion> expansions;
+    std::vector<uint32_t> order; // sorted position -> original index
+    // Sorted source data.
+    std::vector<glm::vec4> pos_rho2;   // x y z rho^2
+    std::vector<glm::vec4> power_area; // A E (rgb), A
+    std::vector<glm::vec3> normal;
+};
+
+// Sorts the sources into Morton order and builds the nodes (breadth first,
+// leaves of at most kLeafSize points) and their moments. Deterministic: the
+// tree does not depend on the thread count.
+Tree build_tree(const DiffusionProblem& pb);
+
+// The sources in the tree's order (order, pos_rho2, power_area, normal),
+// without the nodes.
+Tree sorted_sources(const DiffusionProblem& pb);
+
+// Squared distance between two boxes (0 when they overlap).
+inline float box_distance2(const glm::vec3& alo, const glm::vec3& ahi,
+                           const glm::vec3& blo, const glm::vec3& bhi) {
+    glm::vec3 gap = glm::max(glm::vec3(0.0f), glm::max(blo - ahi, alo - bhi));
+    return glm::dot(gap, gap);
+}
+
+} // namespace sss::diffusion_detail

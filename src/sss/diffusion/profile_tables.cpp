@@ -1,0 +1,82 @@
+/// \file profile_tables.cpp
+/// Builds the q = r^2 profile tables: finite-difference derivatives, the
+/// quadrupole remainder bound and the running maxima from the far end.
+
+#include "profile_tables.h"
+
+#include <cmath>
+
+namespace sss::diffusion_detail {
+
+namespace {
+
+double q_of_bits(uint32_t bits) {
+    return double(std::bit_cast<float>(bits));
+}
+
+} // namespace
+
+Tables build_tables(const std::vector<Profile>& profiles) {
+    Tables t;
+    double lmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+    for (const Profile& p : profiles) {
+        if (p.total() <= 0.0) continue;
+        double core = p.core_length() > 0.0 ? p.core_length() : 1e-2 / p.sigma_tr();
+        lmin = std::min(lmin, core);
+        rmax = std::max(rmax, p.cutoff_radius(1e-7));
+    }
+    if (!(rmax > 0.0) || !std::isfinite(lmin)) {
+        lmin = 1.0;
+        rmax = 1.0;
+    }
+    float q0 = float(std::max(1e-30, 1e-8 * lmin * lmin));
+    t.bits0 = std::bit_cast<uint32_t>(q0);
+    double qend = std::min(1e36, std::max(rmax * rmax, 4.0 * double(q0)));
+    uint32_t bend = std::bit_cast<uint32_t>(float(qend));
+    t.count = ((bend - t.bits0) >> kShift) + 3;
+    t.channels.resize(profiles.size());
+    for (std::size_t pi = 0; pi < profiles.size(); ++pi) {
+        const Profile& p = profiles[pi];
+        ChannelTable& ct = t.channels[pi];
+        ct.entries.assign(t.count, TableEntry{0, 0, 0, 0});
+        ct.error_bound.assign(t.count, 0.0f);
+        ct.max_value.assign(t.count, 0.0f);
+        ct.max_d1.assign(t.count, 0.0f);
+        ct.max_d2.assign(t.count, 0.0f);
+        ct.core2 = float(p.core_length() * p.core_length());
+        if (p.total() <= 0.0) continue;
+        double rcut = p.cutoff_radius(1e-7);
+        auto F = [&](double q) { return p.eval(std::sqrt(std::max(q, 0.0))); };
+        std::vector<double> g(t.count, 0.0);
+        for (uint32_t k = 0; k + 1 < t.count; ++k) {
+            double q = q_of_bits(t.bits0 + (k << kShift));
+            if (std::sqrt(q) > rcut) break;
+            double h = 2e-3 * q;
+            double fm2 = F(q - 2 * h), fm = F(q - h), f0 = F(q), fp = F(q + h),
+                   fp2 = F(q + 2 * h);
+            double d1 = (fp - fm) / (2 * h);
+            double d2 = (fp - 2 * f0 + fm) / (h * h);
+            double d3 = (fp2 - 2 * fp + 2 * fm - fm2) / (2 * h * h * h);
+            ct.entries[k] = {float(f0), float(d1), float(d2), 0.0f};
+            double w = std::sqrt(q);
+            // Third-order terms dropped by the quadrupole expansion of F(|w - delta|^2):
+            // 2 |F''| |w| s^3 + (4/3) |F'''| |w|^3 s^3, per unit s^3 and power.
+            g[k] = 2.0 * std::abs(d2) * w + (4.0 / 3.0) * std::abs(d3) * w * w * w;
+        }
+        // Running maxima from the far end make both bounds valid for every q' >= q.
+        double gmax = 0.0, fmax = 0.0, d1max = 0.0, d2max = 0.0;
+        for (uint32_t k = t.count; k-- > 0;) {
+            gmax = std::max(gmax, g[k]);
+            fmax = std::max(fmax, double(ct.entries[k].f));
+            d1max = std::max(d1max, std::abs(double(ct.entries[k].df)));
+            d2max = std::max(d2max, std::abs(double(ct.entries[k].d2f)));
+            ct.error_bound[k] = float(std::min(gmax, 1e30));
+            ct.max_value[k] = float(std::min(fmax, 1e30));
+            ct.max_d1[k] = float(std::min(d1max, 1e30));
+            ct.max_d2[k] = float(std::min(d2max, 1e30));
+        }
+    }
+    return t;
+}
+
+} // namespace sss::diffusion_detail

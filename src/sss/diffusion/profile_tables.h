@@ -1,0 +1,86 @@
+#pragma once
+/// \file profile_tables.h
+/// The channel profiles as float tables in q = r^2 (values, derivatives and the
+/// running maxima the error criterion bounds with), and the tables a receiver
+/// reads.
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/ext/vector_uint3.hpp>
+
+#include "sss/diffusion/diffusion.h"
+#include "sss/diffusion/profile.h"
+
+namespace sss::diffusion_detail {
+
+// Profile tables in q = r^2. The index is read from the float bits of q, so
+// entries are spaced 2^-kPerOctaveBits octaves apart (log-like spacing that
+// resolves both the r -> 0 core and the exponential tail) and linear in q
+// inside each interval.
+constexpr int kPerOctaveBits = 5;
+constexpr int kShift = 23 - kPerOctaveBits;
+constexpr float kFracScale = 1.0f / float(1u << kShift);
+
+struct TableEntry {
+    float f, df, d2f, pad; // F(q), F'(q), F''(q)
+};
+
+struct ChannelTable {
+    std::vector<TableEntry> entries;
+    std::vector<float> error_bound; // G(q): bound on the quadrupole remainder
+    std::vector<float> max_value;   // max_{q' >= q} F(q')
+    std::vector<float> max_d1;      // max_{q' >= q} |F'(q')|
+    std::vector<float> max_d2;      // max_{q' >= q} |F''(q')|
+    float core2 = 0;                // core length squared
+};
+
+struct Tables {
+    uint32_t bits0 = 0;
+    uint32_t count = 0;
+    std::vector<ChannelTable> channels;
+
+    struct Lookup {
+        uint32_t index;
+        float frac;
+        bool valid;
+    };
+    Lookup locate(float q) const {
+        uint32_t b = std::bit_cast<uint32_t>(q);
+        uint32_t off = b > bits0 ? b - bits0 : 0u;
+        uint32_t idx = off >> kShift;
+        return {idx, float(off & ((1u << kShift) - 1)) * kFracScale, idx + 1 < count};
+    }
+};
+
+// Tables of every profile over one q range, from 1e-8 of the smallest core
+// length squared out to where the widest profile has lost all but 1e-7.
+Tables build_tables(const std::vector<Profile>& profiles);
+
+// The tables and profiles one receiver reads, per channel.
+struct ReceiverChannels {
+    const ChannelTable* table[3];
+    const Profile* profile[3];
+    float near_core2; // smallest core^2 of the three channels
+};
+
+// The channels of the receiver at original index `original`.
+inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
+                                          const Tables& tables, uint32_t original) {
+    ReceiverChannels rc;
+    glm::u32vec3 idx =
+        pb.profile_index.empty() ? glm::u32vec3(0, 1, 2) : pb.profile_index[original];
+    float core2 = std::numeric_limits<float>::max();
+    for (int ch = 0; ch < 3; ++ch) {
+        rc.table[ch] = &tables.channels[idx[ch]];
+        rc.profile[ch] = &pb.profiles[idx[ch]];
+        core2 = std::min(core2, rc.table[ch]->core2);
+    }
+    rc.near_core2 = core2;
+    return rc;
+}
+
+} // namespace sss::diffusion_detail

@@ -1,0 +1,114 @@
+/// \file traversal.cpp
+/// The octree walk, and the per-node test of each criterion that steers it.
+
+#include "traversal.h"
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vector_relational.hpp>
+
+namespace sss::diffusion_detail {
+
+namespace {
+
+// What a criterion makes of one node.
+enum class Verdict {
+    Far,  // use the node's expansion
+    Mono, // use its monopole only
+    Drop, // negligible
+    Open  // too close: a leaf goes to the near list, a node to its children
+};
+
+// Depth-first walk from the root; judge(node, expansion) -> Verdict.
+template <class Judge>
+void walk(const Tree& tree, NodeLists& lists, Judge&& judge) {
+    lists.far.clear();
+    lists.mono.clear();
+    lists.near.clear();
+    std::vector<uint32_t>& stack = lists.stack;
+    stack.clear();
+    stack.push_back(0);
+    while (!stack.empty()) {
+        uint32_t k = stack.back();
+        stack.pop_back();
+        const Node& node = tree.nodes[k];
+        switch (judge(node, tree.expansions[k])) {
+        case Verdict::Far:
+            lists.far.push_back(k);
+            break;
+        case Verdict::Mono:
+            lists.mono.push_back(k);
+            break;
+        case Verdict::Drop:
+            break;
+        case Verdict::Open:
+            if (node.child_count == 0) {
+                lists.near.push_back(k);
+            } else {
+                for (uint32_t c = node.child_count; c-- > 0;)
+                    stack.push_back(node.child_first + c);
+            }
+            break;
+        }
+    }
+}
+
+} // namespace
+
+void traverse_error(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
+                    const glm::vec3& blo, const glm::vec3& bhi, NodeLists& lists) {
+    walk(tree, lists, [&](const Node& node, const Expansion& ex) {
+        float d2 = box_distance2(blo, bhi, node.lo, node.hi);
+        float r = node.radius;
+        // Single points are exact as near terms; the expansion
+        // needs the receivers well outside the node.
+        if (!(node.count > 1 && d2 > 2.25f * r * r)) return Verdict::Open;
+        Tables::Lookup l = tables.locate(d2);
+        bool accept = true, drop = true, mono = true;
+        // Farthest receiver from the centroid bounds |w|.
+        glm::vec3 far_corner = glm::max(glm::abs(blo - ex.c), glm::abs(bhi - ex.c));
+        double wmax = glm::length(far_corner);
+        if (l.valid) {
+            for (int ch = 0; ch < 3; ++ch) {
+                for (const ChannelTable* ct : tol.tables[ch]) {
+                    double ap = ex.abs_phi[ch];
+                    uint32_t i = l.index;
+                    if (ap * r * r * r * ct->error_bound[i] > tol.tol[ch]) accept = false;
+                    if (ap * ct->max_value[i] > tol.skip[ch]) drop = false;
+                    // Error of dropping the dipole and
+                    // quadrupole terms.
+                    double m2 = ap * r * r;
+                    double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
+                                      2.0 * ct->max_d2[i] * wmax * wmax * m2;
+                    if (mono_err > 0.1 * tol.tol[ch]) mono = false;
+                }
+            }
+        }
+        if (accept && !drop && mono) return Verdict::Mono;
+        if (drop) return Verdict::Drop;
+        return accept ? Verdict::Far : Verdict::Open;
+    });
+}
+
+void traverse_solid_angle_box(const Tree& tree, double eps, const glm::vec3& blo,
+                              const glm::vec3& bhi, NodeLists& lists) {
+    walk(tree, lists, [&](const Node& node, const Expansion&) {
+        glm::vec3 g(node.max_rho);
+        float d2 = box_distance2(blo, bhi, node.lo - g, node.hi + g);
+        bool accept = d2 > 0.0f && node.area <= eps * d2;
+        return accept ? Verdict::Far : Verdict::Open;
+    });
+}
+
+void traverse_solid_angle_centroid(const Tree& tree, double eps, const glm::vec3& x,
+                                   NodeLists& lists) {
+    walk(tree, lists, [&](const Node& node, const Expansion& ex) {
+        bool inside = glm::all(glm::greaterThanEqual(x, node.lo)) &&
+                      glm::all(glm::lessThanEqual(x, node.hi));
+        glm::vec3 w = x - ex.c;
+        bool accept = !inside && node.area < eps * glm::dot(w, w);
+        return accept ? Verdict::Far : Verdict::Open;
+    });
+}
+
+} // namespace sss::diffusion_detail
