@@ -61,6 +61,26 @@ std::string usage() {
     return buf;
 }
 
+/// The input files as error messages name them.
+std::string input_names(const std::vector<std::string>& files) {
+    std::string names;
+    for (const std::string& f : files) names += (names.empty() ? "" : ", ") + f;
+    return names;
+}
+
+/// The option that names a channel of each role.
+const char* channel_option(sss::MissingChannelError::Role role) {
+    switch (role) {
+    case sss::MissingChannelError::Role::Radiance:
+        return "-radiancechannel";
+    case sss::MissingChannelError::Role::Albedo:
+        return "-albedo fromfile";
+    case sss::MissingChannelError::Role::Dmfp:
+        return "-diffusemeanfreepath fromfile";
+    }
+    return "?";
+}
+
 int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::SsDiffusionOptions opt;
@@ -144,11 +164,13 @@ int run(const std::vector<std::string>& argv) {
     sss::PointCloud out;
     try {
         out = sss::ssdiffusion(cloud, opt, &report);
+    } catch (const sss::MissingChannelError& e) {
+        throw sss::ValueError(input_names(files) + ": input has no channel '" +
+                              e.channel() + "' (set it with " + channel_option(e.role()) +
+                              "; channels present: " + e.present() + ")");
     } catch (const sss::ValueError& e) {
         // Name the input files: the library only sees the merged cloud.
-        std::string names;
-        for (const std::string& f : files) names += (names.empty() ? "" : ", ") + f;
-        throw sss::ValueError(names + ": " + e.what());
+        throw sss::ValueError(input_names(files) + ": " + e.what());
     }
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
     double filter_s = job.seconds() - read_s;

@@ -6,10 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "sss/cloud/point_cloud.h"
 #include "sss/diffusion/diffusion.h"
 #include "sss/diffusion/material.h"
-#include "sss/cloud/point_cloud.h"
 #include "sss/diffusion/profile.h"
+#include "sss/util/error.h"
 
 namespace sss {
 
@@ -39,6 +40,27 @@ struct SsDiffusionReport {
 /// Describes the constant material (albedo, dmfp, sigma_s', sigma_a, ior in
 /// scene units) as text lines; validates it (throws ValueError/UsageError).
 std::vector<std::string> describe_material(const SsDiffusionOptions& options);
+
+/// A channel the diffusion reads is missing from the input. role() says what
+/// the channel is for, so a command line can name the option that sets it.
+class MissingChannelError : public ValueError {
+public:
+    enum class Role {
+        Radiance, ///< the irradiance to diffuse (radiance_channel)
+        Albedo,   ///< per-point albedo (albedo_from_file)
+        Dmfp      ///< per-point diffuse mean free path (dmfp_from_file)
+    };
+    MissingChannelError(Role role, std::string channel, std::string present);
+    Role role() const { return m_role; }
+    const std::string& channel() const { return m_channel; }
+    /// "type name, ..." of the channels the input has, or "none".
+    const std::string& present() const { return m_present; }
+
+private:
+    Role m_role;
+    std::string m_channel;
+    std::string m_present;
+};
 
 /// Runs the diffusion on a (merged) cloud. The output holds P, N, radius and
 /// `color <output_channel>` (plus the input channels with keep_channels), and

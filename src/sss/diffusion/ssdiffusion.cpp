@@ -53,15 +53,14 @@ std::string fmt3(const glm::dvec3& v) {
 }
 
 const Channel& require_channel(const PointCloud& cloud, const std::string& name,
-                               int components, const char* option) {
+                               int components, MissingChannelError::Role role) {
     const Channel* c = cloud.find_channel(name);
     if (!c) {
         std::string have;
         for (const Channel& ch : cloud.channels)
             have += (have.empty() ? "" : ", ") + std::string(channel_type_name(ch.type)) +
                     " " + ch.name;
-        throw ValueError("input has no channel '" + name + "' (set it with " + option +
-                         "; channels present: " + (have.empty() ? "none" : have) + ")");
+        throw MissingChannelError(role, name, have.empty() ? "none" : have);
     }
     if (c->components() != components)
         throw ValueError("channel '" + name + "' is " + channel_type_name(c->type) +
@@ -165,8 +164,8 @@ DiffusionProblem read_points(const PointCloud& in, const SsDiffusionOptions& o,
             pb.areas[i] = float(kPi * (in.radii[i] * to_mm) * (in.radii[i] * to_mm));
     }
     if (n > 0) {
-        const Channel& rad =
-            require_channel(in, o.radiance_channel, 3, "-radiancechannel");
+        const Channel& rad = require_channel(in, o.radiance_channel, 3,
+                                             MissingChannelError::Role::Radiance);
         for (std::size_t i = 0; i < n; ++i)
             pb.irradiance[i] = {rad.data[3 * i], rad.data[3 * i + 1],
                                 rad.data[3 * i + 2]};
@@ -227,11 +226,11 @@ void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
                         DiffusionProblem& pb, SsDiffusionReport& rep) {
     const MaterialSpec& m = o.material;
     PointMaterialSource src;
-    src.albedo = m.albedo_from_file
-                     ? &require_channel(in, o.albedo_channel, 3, "-albedo fromfile")
-                     : nullptr;
+    src.albedo = m.albedo_from_file ? &require_channel(in, o.albedo_channel, 3,
+                                                       MissingChannelError::Role::Albedo)
+                                    : nullptr;
     src.dmfp = m.dmfp_from_file ? &require_channel(in, o.dmfp_channel, 3,
-                                                   "-diffusemeanfreepath fromfile")
+                                                   MissingChannelError::Role::Dmfp)
                                 : nullptr;
     m.resolve_albedo_dmfp(src.albedo0, src.dmfp0);
     const double ior = m.resolved_ior();
@@ -328,5 +327,11 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     rep.seconds = watch.seconds();
     return out;
 }
+
+MissingChannelError::MissingChannelError(Role role, std::string channel,
+                                         std::string present)
+    : ValueError("input has no channel '" + channel + "' (channels present: " + present +
+                 ")"),
+      m_role(role), m_channel(std::move(channel)), m_present(std::move(present)) {}
 
 } // namespace sss
