@@ -20,8 +20,8 @@
 
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud_io.h"
-#include "sss/diffusion/ssdiffusion.h"
 #include "sss/cloud/synthetic.h"
+#include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"
 

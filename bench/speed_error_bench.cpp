@@ -72,13 +72,13 @@
 #include "latlong_mesh.h"
 #include "sss/bake/bake.h"
 #include "sss/brick/brickmap.h"
-#include "sss/util/error.h"
-#include "sss/light/lights.h"
-#include "sss/cloud/point_cloud_io.h"
-#include "sss/scene/rib.h"
-#include "sss/diffusion/ssdiffusion.h"
-#include "sss/cloud/synthetic.h"
 #include "sss/cli/tool.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/cloud/synthetic.h"
+#include "sss/diffusion/ssdiffusion.h"
+#include "sss/light/lights.h"
+#include "sss/scene/rib.h"
+#include "sss/util/error.h"
 
 extern char** environ;
 

@@ -17,11 +17,11 @@
 #include <string>
 #include <vector>
 
-#include "sss/util/error.h"
-#include "sss/cloud/point_cloud_io.h"
-#include "sss/diffusion/ssdiffusion.h"
-#include "sss/cloud/synthetic.h"
 #include "sss/cli/tool.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/cloud/synthetic.h"
+#include "sss/diffusion/ssdiffusion.h"
+#include "sss/util/error.h"
 
 namespace {
 

@@ -8,8 +8,8 @@
 #include <glm/geometric.hpp>
 
 #include "sss/bake/bake.h"
-#include "sss/util/error.h"
 #include "sss/scene/rib.h"
+#include "sss/util/error.h"
 #include "sss/util/threads.h"
 
 namespace {

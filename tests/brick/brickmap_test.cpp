@@ -23,9 +23,9 @@
 #include <unistd.h>
 
 #include "sss/brick/brickmap.h"
-#include "sss/util/error.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/synthetic.h"
+#include "sss/util/error.h"
 #include "sss/util/threads.h"
 
 namespace fs = std::filesystem;

@@ -24,9 +24,9 @@
 
 #include <glm/geometric.hpp>
 
-#include "sss/util/error.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/util/error.h"
 
 namespace fs = std::filesystem;
 using sss::Channel;

@@ -14,10 +14,10 @@
 #include <glm/geometric.hpp>
 #include <oneapi/tbb/parallel_for.h>
 
-#include "sss/cloud/point_cloud_lookup.h"
-#include "sss/util/error.h"
 #include "sss/cloud/point_cloud.h"
+#include "sss/cloud/point_cloud_lookup.h"
 #include "sss/cloud/synthetic.h"
+#include "sss/util/error.h"
 
 using sss::ChannelType;
 using sss::PointCloud;

@@ -23,10 +23,10 @@
 #include <sys/resource.h>
 
 #include "sss/brick/brickmap.h"
-#include "sss/util/error.h"
 #include "sss/cloud/point_cloud_io.h"
-#include "sss/scene/rib.h"
 #include "sss/cloud/synthetic.h"
+#include "sss/scene/rib.h"
+#include "sss/util/error.h"
 #include "test_util.h"
 
 #include "sss/util/byte_io.h" // ByteSink: gzip files for the sweeps

@@ -22,8 +22,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "sss/dice/dice.h"
-#include "sss/util/error.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 namespace {
 

@@ -21,8 +21,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "sss/dice/dice.h"
-#include "sss/util/error.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 // The shared normal rule (internal header of the library).
 #include "../../src/sss/dice/dice_common.h"

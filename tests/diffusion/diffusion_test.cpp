@@ -20,13 +20,13 @@
 
 #include <glm/geometric.hpp>
 
-#include "sss/diffusion/diffusion.h"
-#include "sss/util/error.h"
-#include "sss/diffusion/material.h"
 #include "sss/cloud/point_cloud.h"
+#include "sss/cloud/synthetic.h"
+#include "sss/diffusion/diffusion.h"
+#include "sss/diffusion/material.h"
 #include "sss/diffusion/profile.h"
 #include "sss/diffusion/ssdiffusion.h"
-#include "sss/cloud/synthetic.h"
+#include "sss/util/error.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"
 

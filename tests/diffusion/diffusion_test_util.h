@@ -7,9 +7,9 @@
 #include <utility>
 #include <vector>
 
+#include "sss/cloud/point_cloud.h"
 #include "sss/diffusion/diffusion.h"
 #include "sss/diffusion/material.h"
-#include "sss/cloud/point_cloud.h"
 #include "sss/diffusion/profile.h"
 
 namespace sss::test {

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "sss/util/error.h"
 #include "sss/diffusion/material.h"
 #include "sss/diffusion/profile.h"
+#include "sss/util/error.h"
 
 namespace sss {
 // Readable names for the parameterised tests' ctest entries.

@@ -13,9 +13,9 @@
 
 #include "sss/bake/bake.h"
 #include "sss/brick/brickmap.h"
+#include "sss/diffusion/ssdiffusion.h"
 #include "sss/render/render.h"
 #include "sss/scene/rib.h"
-#include "sss/diffusion/ssdiffusion.h"
 #include "test_util.h"
 
 namespace {

@@ -18,10 +18,10 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "sss/util/error.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 namespace {
 

@@ -22,9 +22,9 @@
 #include <OpenImageIO/imageio.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "sss/util/error.h"
 #include "sss/render/image_io.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 namespace fs = std::filesystem;
 using sss::DisplaySpec;

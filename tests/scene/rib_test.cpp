@@ -14,9 +14,9 @@
 #include <glm/matrix.hpp>
 #include <glm/vec4.hpp>
 
-#include "sss/util/error.h"
 #include "sss/scene/rib.h"
 #include "sss/scene/scene.h"
+#include "sss/util/error.h"
 
 namespace fs = std::filesystem;
 

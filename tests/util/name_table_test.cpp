@@ -41,9 +41,9 @@ TEST(NameTable, UsableAtCompileTime) {
 }
 
 TEST(NameTable, ChannelTypesRoundTrip) {
-    for (sss::ChannelType t : {sss::ChannelType::Float, sss::ChannelType::Color,
-                               sss::ChannelType::Point, sss::ChannelType::Vector,
-                               sss::ChannelType::Normal, sss::ChannelType::Matrix})
+    for (sss::ChannelType t :
+         {sss::ChannelType::Float, sss::ChannelType::Color, sss::ChannelType::Point,
+          sss::ChannelType::Vector, sss::ChannelType::Normal, sss::ChannelType::Matrix})
         EXPECT_EQ(sss::parse_channel_type(sss::channel_type_name(t)), t);
     EXPECT_STREQ(sss::channel_type_name(sss::ChannelType::Color), "color");
     EXPECT_FALSE(sss::parse_channel_type("colour").has_value());

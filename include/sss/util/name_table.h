@@ -15,7 +15,8 @@ namespace sss {
 
 /// A fixed table of (enum value, name) pairs. The first pair of a value gives
 /// its name; parse() also accepts later aliases of the same value.
-template <class E, std::size_t N> class NameTable {
+template <class E, std::size_t N>
+class NameTable {
 public:
     using Entry = std::pair<E, const char*>;
 

@@ -28,11 +28,11 @@
 #include <tbb/parallel_sort.h>
 
 #include "brickmap_format.h"
-#include "sss/util/hash.h"
-#include "sss/util/byte_io.h"
 #include "sss/brick/brickmap.h"
-#include "sss/util/error.h"
 #include "sss/util/atomic_output.h"
+#include "sss/util/byte_io.h"
+#include "sss/util/error.h"
+#include "sss/util/hash.h"
 #include "sss/util/progress.h"
 
 namespace sss {

@@ -12,9 +12,9 @@
 #include <set>
 
 #include "point_cloud_io_detail.h"
-#include "sss/util/error.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
+#include "sss/util/error.h"
 
 namespace sss {
 

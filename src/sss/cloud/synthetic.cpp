@@ -11,8 +11,8 @@
 
 #include <glm/geometric.hpp>
 
-#include "sss/util/hash.h"
 #include "sss/util/error.h"
+#include "sss/util/hash.h"
 
 namespace sss {
 

@@ -11,9 +11,9 @@
 
 #include <glm/vec3.hpp>
 
-#include "sss/util/hash.h"
-#include "sss/util/error.h"
 #include "sss/light/lights.h"
+#include "sss/util/error.h"
+#include "sss/util/hash.h"
 
 namespace sss {
 

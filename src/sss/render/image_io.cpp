@@ -22,8 +22,8 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "sss/util/error.h"
 #include "sss/util/atomic_output.h"
+#include "sss/util/error.h"
 
 namespace sss {
 

@@ -12,9 +12,9 @@
 #include <glm/vec3.hpp>
 
 #include "sss/brick/brickmap.h"
-#include "sss/light/lights.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_lookup.h"
+#include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
 
