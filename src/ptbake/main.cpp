@@ -13,6 +13,7 @@
 #include "sss/scene/rib.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/parse.h"
 
 namespace {
 
@@ -127,10 +128,8 @@ int run_job(const std::vector<std::string>& argv) {
         std::printf("ptbake: micropolygon size %.4g to %.4g scene units\n",
                     report.min_spacing, report.max_spacing);
         for (const sss::BakeFileReport& f : report.files) {
-            std::string ch;
-            for (const std::string& c : f.channels) ch += (ch.empty() ? "" : ", ") + c;
             std::printf("ptbake: wrote %s: %zu points, area %.6g, channels %s\n",
-                        f.path.c_str(), f.points, f.area, ch.c_str());
+                        f.path.c_str(), f.points, f.area, sss::join(f.channels).c_str());
         }
         std::printf("ptbake: read %.3f s, dice %.3f s, occluders %.3f s, light %.3f s, "
                     "write %.3f s, total %.3f s, threads %d\n",

@@ -13,6 +13,7 @@
 #include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/parse.h"
 
 namespace {
 
@@ -59,13 +60,6 @@ std::string usage() {
         "  --help, --version\n",
         sss::material_names().c_str());
     return buf;
-}
-
-/// The input files as error messages name them.
-std::string input_names(const std::vector<std::string>& files) {
-    std::string names;
-    for (const std::string& f : files) names += (names.empty() ? "" : ", ") + f;
-    return names;
 }
 
 /// The option that names a channel of each role.
@@ -165,12 +159,12 @@ int run(const std::vector<std::string>& argv) {
     try {
         out = sss::ssdiffusion(cloud, opt, &report);
     } catch (const sss::MissingChannelError& e) {
-        throw sss::ValueError(input_names(files) + ": input has no channel '" +
+        throw sss::ValueError(sss::join(files) + ": input has no channel '" +
                               e.channel() + "' (set it with " + channel_option(e.role()) +
                               "; channels present: " + e.present() + ")");
     } catch (const sss::ValueError& e) {
         // Name the input files: the library only sees the merged cloud.
-        throw sss::ValueError(input_names(files) + ": " + e.what());
+        throw sss::ValueError(sss::join(files) + ": " + e.what());
     }
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
     double filter_s = job.seconds() - read_s;

@@ -22,6 +22,7 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/parse.h"
 #include "sss/util/progress.h"
 #include "sss/util/version.h"
 
@@ -81,9 +82,7 @@ BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& in
         return build_brick_map(clouds, options, output);
     } catch (const ValueError& e) {
         // The library only sees clouds; name the files they came from.
-        std::string names;
-        for (const std::string& f : inputs) names += (names.empty() ? "" : ", ") + f;
-        throw ValueError(names + ": " + e.what());
+        throw ValueError(join(inputs) + ": " + e.what());
     }
 }
 

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "sss/util/parse.h"
+
 namespace sss {
 
 bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
@@ -40,8 +42,7 @@ bool outputs_up_to_date(const std::string& tool, const std::vector<std::string>&
         const fs::file_time_type t = fs::last_write_time(out, ec);
         if (ec || (newest_input && !(t > *newest_input))) return false;
     }
-    std::string names;
-    for (const std::string& out : outputs) names += (names.empty() ? "" : ", ") + out;
+    const std::string names = join(outputs);
     std::printf("%s: %s %s newer than %s inputs; nothing to do\n", tool.c_str(),
                 names.c_str(), outputs.size() == 1 ? "is" : "are",
                 outputs.size() == 1 ? "its" : "their");

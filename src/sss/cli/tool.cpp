@@ -85,14 +85,11 @@ int run_tool(const std::string& tool, int argc, char** argv,
         print_error(tool, option_wording(e).value_or(e.what()));
         std::cerr << tool << ": try '" << tool << " --help'\n";
         return 2;
-    } catch (const MaterialValueError& e) {
-        print_error(tool, option_wording(e).value_or(e.what()));
-        return 1;
     } catch (const std::bad_alloc&) {
         print_error(tool, "out of memory");
         return 1;
     } catch (const std::exception& e) {
-        print_error(tool, e.what());
+        print_error(tool, option_wording(e).value_or(e.what()));
         return 1;
     } catch (...) {
         print_error(tool, "unknown exception");

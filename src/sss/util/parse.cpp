@@ -28,4 +28,13 @@ std::string format_number(double v) {
     return out.str();
 }
 
+std::string join(const std::vector<std::string>& words, const std::string& sep) {
+    std::string out;
+    for (const std::string& w : words) {
+        if (!out.empty()) out += sep;
+        out += w;
+    }
+    return out;
+}
+
 } // namespace sss
