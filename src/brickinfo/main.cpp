@@ -90,15 +90,6 @@ struct Request {
 std::optional<Request> parse_request(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     Request r;
-    sss::RunOptions& running = r.running;
-    sss::PointCloudWriteOptions& wopt = r.wopt;
-    sss::BrickMapPictureOptions& picture = r.picture;
-    sss::BrickMapCloudLookupOptions& lookup = r.lookup;
-    std::string& picture_path = r.picture_path;
-    std::string& lookup_in = r.lookup_in;
-    std::string& lookup_out = r.lookup_out;
-    bool& info = r.info;
-    bool& have_slice = r.have_slice;
     std::vector<std::string> files;
     bool have_level = false, have_axis = false;
     bool picture_option = false; // an option that only makes sense with -picture
@@ -109,15 +100,15 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
         if (sss::standard_option(kTool, o, kUsage)) {
             return std::nullopt;
         } else if (o == "info") {
-            info = args.integer(o, 0, 1) != 0;
+            r.info = args.integer(o, 0, 1) != 0;
         } else if (o == "picture") {
-            picture_path = args.value(o);
+            r.picture_path = args.value(o);
         } else if (o == "level") {
             if (args.peek() == "all") {
                 args.value(o);
-                picture.level = -1;
+                r.picture.level = -1;
             } else {
-                picture.level = args.integer(o, 0, 30);
+                r.picture.level = args.integer(o, 0, 30);
             }
             have_level = picture_option = true;
         } else if (o == "axis") {
@@ -126,46 +117,46 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
             const std::string word = args.positional();
             const bool signed_word =
                 word.size() == 2 && (word[0] == '-' || word[0] == '+');
-            picture.view_from_negative = signed_word && word[0] == '-';
+            r.picture.view_from_negative = signed_word && word[0] == '-';
             const std::string a = signed_word ? word.substr(1) : word;
             if (a != "x" && a != "y" && a != "z")
                 throw sss::UsageError("option -axis: '" + word +
                                       "' is not x, y, z, -x, -y or -z");
-            picture.axis = axis_index(o, a);
+            r.picture.axis = axis_index(o, a);
             have_axis = picture_option = true;
         } else if (o == "slice") {
-            picture.mode = sss::BrickMapPictureMode::Slice;
-            picture.axis = axis_index(o, args.value(o));
-            picture.slice = args.number(o);
-            have_slice = picture_option = true;
+            r.picture.mode = sss::BrickMapPictureMode::Slice;
+            r.picture.axis = axis_index(o, args.value(o));
+            r.picture.slice = args.number(o);
+            r.have_slice = picture_option = true;
         } else if (o == "channel") {
-            picture.channel = args.value(o);
+            r.picture.channel = args.value(o);
             picture_option = true;
         } else if (o == "tree") {
             if (args.peek() == "all") {
                 args.value(o);
-                picture.tree = -1;
+                r.picture.tree = -1;
             } else {
-                picture.tree = args.integer(o, 0, 6);
+                r.picture.tree = args.integer(o, 0, 6);
             }
             picture_option = true;
         } else if (o == "size") {
-            picture.size = args.integer(o, 16, 4096);
+            r.picture.size = args.integer(o, 16, 4096);
             picture_option = true;
         } else if (o == "lookup") {
-            lookup_in = args.value(o);
-            lookup_out = args.value(o);
+            r.lookup_in = args.value(o);
+            r.lookup_out = args.value(o);
         } else if (o == "filterradius") {
             filter_radius = float(args.non_negative(o));
         } else if (o == "filterscale") {
-            lookup.filter_scale = float(args.positive(o));
+            r.lookup.filter_scale = float(args.positive(o));
             have_filterscale = true;
         } else if (o == "compare") {
-            lookup.compare = args.integer(o, 0, 1) != 0;
+            r.lookup.compare = args.integer(o, 0, 1) != 0;
             have_compare = true;
-        } else if (sss::write_option(args, o, wopt)) {
+        } else if (sss::write_option(args, o, r.wopt)) {
             continue;
-        } else if (sss::run_option(args, o, running)) {
+        } else if (sss::run_option(args, o, r.running)) {
             continue;
         } else {
             throw sss::UsageError("unknown option -" + o);
@@ -175,79 +166,76 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
         throw sss::UsageError(files.empty()
                                   ? "no brick map given (usage: brickinfo file.bkm)"
                                   : "more than one brick map given");
-    if (picture_option && picture_path.empty())
+    if (picture_option && r.picture_path.empty())
         throw sss::UsageError(
             "-level, -axis, -slice, -channel, -tree and -size need -picture");
-    if (have_level && have_slice)
+    if (have_level && r.have_slice)
         throw sss::UsageError("-level and -slice exclude each other");
-    if (have_axis && have_slice)
+    if (have_axis && r.have_slice)
         throw sss::UsageError("-axis is for -level pictures; -slice names its own axis");
-    if ((have_filterscale || have_compare) && lookup_in.empty())
+    if ((have_filterscale || have_compare) && r.lookup_in.empty())
         throw sss::UsageError("-filterscale and -compare need -lookup");
-    if (filter_radius && lookup_in.empty() && !have_slice)
+    if (filter_radius && r.lookup_in.empty() && !r.have_slice)
         throw sss::UsageError("-filterradius needs -lookup or -slice");
-    if (!picture_path.empty() && !ends_with_png(picture_path))
-        throw sss::UsageError("option -picture: '" + picture_path +
+    if (!r.picture_path.empty() && !ends_with_png(r.picture_path))
+        throw sss::UsageError("option -picture: '" + r.picture_path +
                               "' does not end in .png (pictures are PNG files)");
 
-    r.map_path = sss::expand_frame_pattern(files[0], running.frame, "brick map");
-    if (!picture_path.empty())
-        picture_path =
-            sss::expand_frame_pattern(picture_path, running.frame, "option -picture");
-    if (!lookup_in.empty()) {
-        lookup_in = sss::expand_frame_pattern(lookup_in, running.frame, "option -lookup");
-        lookup_out =
-            sss::expand_frame_pattern(lookup_out, running.frame, "option -lookup");
+    r.map_path = sss::expand_frame_pattern(files[0], r.running.frame, "brick map");
+    if (!r.picture_path.empty())
+        r.picture_path =
+            sss::expand_frame_pattern(r.picture_path, r.running.frame, "option -picture");
+    if (!r.lookup_in.empty()) {
+        r.lookup_in =
+            sss::expand_frame_pattern(r.lookup_in, r.running.frame, "option -lookup");
+        r.lookup_out =
+            sss::expand_frame_pattern(r.lookup_out, r.running.frame, "option -lookup");
     }
     if (filter_radius) {
-        lookup.filter_radius = *filter_radius;
-        picture.filter_radius = *filter_radius;
+        r.lookup.filter_radius = *filter_radius;
+        r.picture.filter_radius = *filter_radius;
     }
     return r;
 }
 
 /// -picture: draws the map and reports what was drawn.
 void write_picture(const sss::BrickMap& map, const Request& request) {
-    const std::string& picture_path = request.picture_path;
-    const sss::BrickMapPictureOptions& picture = request.picture;
-    const bool have_slice = request.have_slice;
     const sss::BrickMapPictureReport r =
-        sss::write_brick_map_picture(map, picture, picture_path);
+        sss::write_brick_map_picture(map, request.picture, request.picture_path);
     std::printf("brickinfo: wrote %s: %d x %d, %s; %zu pixels with data",
-                picture_path.c_str(), r.width, r.height, r.description.c_str(),
+                request.picture_path.c_str(), r.width, r.height, r.description.c_str(),
                 r.pixels_with_data);
-    if (picture.mode == sss::BrickMapPictureMode::Level)
+    if (request.picture.mode == sss::BrickMapPictureMode::Level)
         std::printf(", %zu samples drawn", r.samples_drawn);
     std::printf("\n");
     std::fflush(stdout);
     if (r.pixels_with_data == 0)
-        sss::warn(kTool, picture_path + ": no data in the picture (" +
-                             (have_slice ? "does the plane cross the map? " : "") +
-                             "does the tree hold data?)");
+        sss::warn(kTool,
+                  request.picture_path + ": no data in the picture (" +
+                      (request.have_slice ? "does the plane cross the map? " : "") +
+                      "does the tree hold data?)");
 }
 
 /// -lookup: evaluates the map at every point of a cloud, writes the result and
 /// reports the differences to the input.
 void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
-    const std::string& lookup_in = r.lookup_in;
-    const std::string& lookup_out = r.lookup_out;
-    sss::BrickMapCloudLookupOptions& lookup = r.lookup;
-    const sss::PointCloud cloud = sss::read_point_cloud(lookup_in);
-    lookup.progress = job.progress();
+    const sss::PointCloud cloud = sss::read_point_cloud(r.lookup_in);
+    r.lookup.progress = job.progress();
     const sss::Stopwatch watch;
     sss::BrickMapCloudLookupReport report;
-    const sss::PointCloud out = sss::lookup_brick_map_cloud(map, cloud, lookup, &report);
+    const sss::PointCloud out =
+        sss::lookup_brick_map_cloud(map, cloud, r.lookup, &report);
     const double seconds = watch.seconds();
-    sss::write_point_cloud(out, lookup_out, r.wopt);
+    sss::write_point_cloud(out, r.lookup_out, r.wopt);
     char radius[64];
-    if (lookup.filter_radius >= 0.0f)
-        std::snprintf(radius, sizeof radius, "%g", double(lookup.filter_radius));
+    if (r.lookup.filter_radius >= 0.0f)
+        std::snprintf(radius, sizeof radius, "%g", double(r.lookup.filter_radius));
     else
         std::snprintf(radius, sizeof radius, "point radius x %g",
-                      double(lookup.filter_scale));
+                      double(r.lookup.filter_scale));
     std::printf("brickinfo: lookup %s -> %s: %zu points, %zu without data, filter radius "
                 "%s, %.3f s\n",
-                lookup_in.c_str(), lookup_out.c_str(), report.points, report.misses,
+                r.lookup_in.c_str(), r.lookup_out.c_str(), report.points, report.misses,
                 radius, seconds);
     for (const sss::ChannelDifference& d : report.differences)
         std::printf("brickinfo: compare %s: rms %.6g max %.6g (input rms %.6g, relative "
@@ -256,10 +244,10 @@ void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
                     d.reference_rms > 0.0 ? 100.0 * d.rms / d.reference_rms : 0.0);
     for (const std::string& name : report.not_compared)
         std::printf("brickinfo: compare %s: not in %s (or another type)\n", name.c_str(),
-                    lookup_in.c_str());
+                    r.lookup_in.c_str());
     std::fflush(stdout);
     if (report.misses > 0)
-        sss::warn(kTool, lookup_in + ": " + std::to_string(report.misses) +
+        sss::warn(kTool, r.lookup_in + ": " + std::to_string(report.misses) +
                              " points have no map data around them (written as 0)");
 }
 
