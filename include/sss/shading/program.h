@@ -1,0 +1,173 @@
+#pragma once
+/// \file program.h
+/// The shading module owns the RenderMan Shading Language: the compiler
+/// (preprocess.h, compiler.h), compiled shaders (this file), the engine that
+/// runs them over batches of shading points (engine.h) and the built-in
+/// function library. It may use light (the ray tracer), brick and cloud (3-D
+/// texture lookups), scene and util, with OpenImageIO behind its sources.
+///
+/// A compiled shader, as the compiler produces it and a `.slo` file stores
+/// it: a table of typed symbols and a list of operations over them, with
+/// structured control flow (each `if`, loop, `illuminance`... op names the
+/// op ranges of its parts), in the manner of OSL's `.oso` files. User
+/// functions are inlined by the compiler (RSL forbids recursion), so a
+/// Program has no calls besides built-ins.
+///
+/// Operations (`Op::name`; the result, when there is one, is args[0]):
+///  - `assign d s`: d = s; s may be a float for a triple (replicated) or a
+///    matrix (s * identity), or any of point/vector/normal for another.
+///  - `neg d a`, `add d a b`, `sub`, `mul`, `div`: component by component, a
+///    float operand replicated; `mul` of two matrices is the matrix product,
+///    `div` of two matrices is a * inverse(b); float * matrix scales.
+///  - `dot d a b` (RSL `.`), `cross d a b` (RSL `^`).
+///  - `eq ne lt le gt ge d a b`, `and or d a b`, `not d a`: d is a float 0/1.
+///  - `aref d array index`, `aassign array index s`: array element (index
+///    rounded down, bounds-checked at run time).
+///  - `construct d [space] x y z` (color/point/vector/normal from three
+///    floats) or `construct d [space] m00 ... m33` (matrix, row-major) or
+///    `construct d space f` (matrix space f*I): the optional space (a string
+///    symbol) converts the value into the current space, or from a colour
+///    space into rgb.
+///  - `cast d space s`: s (a triple or matrix) taken as being in `space`,
+///    converted to the current space (or colour space -> rgb).
+///  - `if c`: the then-part is ops [i+1, jump[0]), the else-part
+///    [jump[0], jump[1]); c is a float.
+///  - `loop c`: init [i+1, jump[0]), condition [jump[0], jump[1]) which sets
+///    c, body [jump[1], jump[2]), step [jump[2], jump[3]). `while` and `for`
+///    both become `loop`.
+///  - `break` / `continue` with `level` (1 = innermost loop).
+///  - `block`: ops [i+1, jump[0]) form an inlined function body; `return`
+///    inside it ends it for the running points (the function's result was
+///    assigned by the op before). A `return` outside any `block` ends the
+///    shader for those points.
+///  - `illuminance cat p axis angle`: body [i+1, jump[0]) run once per light
+///    (cat is "" without a category; no axis/angle: angle = PI and axis 0
+///    means the whole sphere).
+///  - `illuminate p axis angle` / `solar axis angle` (light shaders): body
+///    [i+1, jump[0]); without axis/angle the angle symbol holds -1.
+///  - anything else is a built-in function call (builtins.h lists every
+///    name and its overloads); token-value lists follow the fixed arguments
+///    as (string, value) symbol pairs. `texture`, `environment` and `shadow`
+///    always carry the channel (a float symbol) as their second argument.
+
+#include <array>
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace sss {
+
+/// The basic types of RSL.
+enum class ShadingType : uint8_t {
+    Void,
+    Float,
+    Color,
+    Point,
+    Vector,
+    Normal,
+    Matrix,
+    String
+};
+
+/// RSL spelling ("float", "color", ...).
+const char* shading_type_name(ShadingType t);
+/// Floats per value: 1 for float and string (a string is a table index), 3
+/// for the triples, 16 for matrix, 0 for void.
+int shading_type_floats(ShadingType t);
+/// point, vector or normal.
+bool is_point_like(ShadingType t);
+/// color, point, vector or normal.
+bool is_triple(ShadingType t);
+
+/// A type with an optional fixed array length.
+struct TypeSpec {
+    ShadingType type = ShadingType::Float;
+    int array = 0; ///< 0: not an array; > 0: fixed length
+
+    bool is_array() const { return array > 0; }
+    /// Floats per element times elements.
+    int floats() const { return shading_type_floats(type) * (array > 0 ? array : 1); }
+    bool operator==(const TypeSpec&) const = default;
+};
+/// "float", "color[3]", ...
+std::string type_spec_name(const TypeSpec& t);
+
+/// The kinds of shaders.
+enum class ShaderKind : uint8_t { Surface, Displacement, Light, Volume, Imager };
+const char* shader_kind_name(ShaderKind k);
+
+/// What a symbol is.
+enum class SymbolKind : uint8_t {
+    Param,       ///< shader parameter (read-only in the body)
+    OutputParam, ///< `output` shader parameter
+    Global,      ///< P, N, Ci, ... (bound by the engine)
+    Local,       ///< a variable of the body or of an inlined function
+    Temp,        ///< compiler temporary
+    Const        ///< literal (value in `numbers` / `strings`)
+};
+
+/// One symbol of a Program.
+struct Symbol {
+    std::string name; ///< unique within the program (inlined locals are renamed)
+    TypeSpec type;
+    bool varying = false; ///< false: one value for the whole batch
+    SymbolKind kind = SymbolKind::Temp;
+    /// Const values; also a parameter's default when it is a constant
+    /// expression (then init_begin == init_end).
+    std::vector<float> numbers;
+    std::vector<std::string> strings;
+    /// Parameters: ops [init_begin, init_end) compute the default into the
+    /// symbol (empty when `numbers`/`strings` hold it).
+    int init_begin = -1;
+    int init_end = -1;
+};
+
+/// Where an op came from, for run-time messages.
+struct SourceLocation {
+    int file = -1; ///< index into Program::files
+    int line = 0;
+    int column = 0;
+};
+
+/// One operation.
+struct Op {
+    std::string name;
+    std::vector<int> args;                   ///< symbol indices
+    std::array<int, 4> jump{-1, -1, -1, -1}; ///< op indices (control flow)
+    int level = 0;                           ///< break / continue
+    /// Bit i set: args[i] is written by the op (results and output args).
+    uint64_t writes = 0;
+    SourceLocation where;
+};
+
+/// A compiled shader.
+struct Program {
+    ShaderKind kind = ShaderKind::Surface;
+    std::string name; ///< the shader's name (the .slo's stem)
+    std::vector<Symbol> symbols;
+    std::vector<Op> ops;            ///< parameter defaults first, then the body
+    int body_begin = 0;             ///< first op of the body
+    std::vector<std::string> files; ///< source files (SourceLocation::file)
+    std::string source_path;        ///< the .sl it was compiled from
+
+    /// Index of the symbol `name`, or -1.
+    int find(const std::string& name) const;
+    /// Parameter symbol indices in declaration order.
+    std::vector<int> parameters() const;
+};
+
+/// A .slo file that cannot be read.
+/// (Thrown as sss::ValueError with the file name and line.)
+///
+/// Writes `program` in the .slo text format (docs/shading.md, "Compiled
+/// shaders"): a versioned header, the symbols and the ops.
+void write_program(const Program& program, std::ostream& out);
+/// Reads a .slo written by write_program; `path` names it in errors.
+/// Validates everything (symbol indices, jump ranges, types) so that a
+/// damaged file is an error, never a crash in the engine.
+Program read_program(std::istream& in, const std::string& path);
+/// read_program from a file.
+Program read_program_file(const std::string& path);
+
+} // namespace sss
