@@ -55,8 +55,9 @@ std::string standard_shader_dir() {
 }
 
 std::vector<std::string> shader_search_path(const Scene& scene) {
-    const std::string rib_dir =
-        scene.path.empty() ? std::string(".") : fs::path(scene.path).parent_path().string();
+    const std::string rib_dir = scene.path.empty()
+                                    ? std::string(".")
+                                    : fs::path(scene.path).parent_path().string();
     const std::string base = rib_dir.empty() ? std::string(".") : rib_dir;
     const std::string standard = standard_shader_dir();
     std::vector<std::string> defaults = {base};
@@ -84,8 +85,8 @@ std::vector<std::string> shader_search_path(const Scene& scene) {
 ShaderLibrary::ShaderLibrary(std::vector<std::string> search_path)
     : m_path(std::move(search_path)) {}
 
-std::shared_ptr<const Program> ShaderLibrary::load(const std::string& name, ShaderKind kind,
-                                                   const std::string& where) {
+std::shared_ptr<const Program>
+ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string& where) {
     std::lock_guard<std::mutex> lock(m_mutex);
     auto it = m_loaded.find(name);
     std::shared_ptr<const Program> program;
@@ -97,7 +98,8 @@ std::shared_ptr<const Program> ShaderLibrary::load(const std::string& name, Shad
             const fs::path slo = fs::path(dir) / (name + ".slo");
             const fs::path sl = fs::path(dir) / (name + ".sl");
             if (fs::is_regular_file(slo, ec)) {
-                program = std::make_shared<const Program>(read_program_file(slo.string()));
+                program =
+                    std::make_shared<const Program>(read_program_file(slo.string()));
                 break;
             }
             if (fs::is_regular_file(sl, ec)) {
@@ -107,7 +109,8 @@ std::shared_ptr<const Program> ShaderLibrary::load(const std::string& name, Shad
                     options.include_dirs.push_back(standard);
                 CompileResult result = compile_file(sl.string(), options);
                 for (Program& p : result.shaders)
-                    if (p.name == name) program = std::make_shared<const Program>(std::move(p));
+                    if (p.name == name)
+                        program = std::make_shared<const Program>(std::move(p));
                 if (!program)
                     throw ShaderNotFoundError(where + ": " + sl.string() +
                                               " does not define a shader named '" + name +
@@ -116,10 +119,9 @@ std::shared_ptr<const Program> ShaderLibrary::load(const std::string& name, Shad
             }
         }
         if (!program)
-            throw ShaderNotFoundError(where + ": shader '" + name +
-                                      "' not found (no " + name + ".slo or " + name +
-                                      ".sl in the shader search path " +
-                                      join_path(m_path) + ")");
+            throw ShaderNotFoundError(
+                where + ": shader '" + name + "' not found (no " + name + ".slo or " +
+                name + ".sl in the shader search path " + join_path(m_path) + ")");
         m_loaded.emplace(name, program);
     }
     if (program->kind != kind)

@@ -1,0 +1,51 @@
+#pragma once
+/// \file scene_shaders.h
+/// The shaders of a scene bound for one job (ptbake or render): every
+/// distinct Surface call and every light source as a ShaderInstance, loaded
+/// along the scene's shader search path (shader_library.h). Frame patterns
+/// ("%04d", "####") in string parameters are expanded with the job's frame,
+/// so `"string filename" ["orbit_ssd.%04d.bkm"]` reads the frame's file.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sss/scene/scene.h"
+#include "sss/shading/engine.h"
+#include "sss/shading/shader_library.h"
+
+namespace sss {
+
+struct SceneShaders {
+    std::unique_ptr<ShaderLibrary> library;
+    /// Distinct surface instances (one per Surface call).
+    std::vector<std::unique_ptr<ShaderInstance>> surfaces;
+    /// Per primitive: its surface shader (defaultsurface without a Surface).
+    std::vector<const ShaderInstance*> surface_of;
+    /// Per scene light (Scene::lights order).
+    std::vector<std::unique_ptr<ShaderInstance>> lights;
+    /// Per primitive: the lights that are on for it, in Scene::lights order.
+    std::vector<std::vector<const ShaderInstance*>> lights_of;
+    /// Parameters the shaders do not declare, and similar notes.
+    std::vector<std::string> warnings;
+
+    /// Whether any bound program (surface or light) calls `op`.
+    bool uses(std::string_view op) const;
+};
+
+/// Whether `program` has an op named `op`.
+bool program_uses(const Program& program, std::string_view op);
+
+/// Loads and binds the scene's shaders. Throws ShaderNotFoundError (a shader
+/// the search path does not have, naming the call and the path),
+/// ShaderCompileError, ValueError (parameters of the wrong type).
+SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
+
+/// String parameter values of the bound shaders that name existing files
+/// (textures, brick maps, point clouds a shader reads), each once: the
+/// inputs of `-newer 1`.
+std::vector<std::string> shader_input_files(const SceneShaders& shaders);
+
+} // namespace sss

@@ -1,0 +1,126 @@
+/// \file scene_shaders.cpp
+/// Binding a scene's Surface and LightSource calls to compiled shaders
+/// (scene_shaders.h).
+
+#include "sss/shading/scene_shaders.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <system_error>
+
+#include "sss/util/frame_pattern.h"
+
+namespace sss {
+
+namespace {
+
+/// The call's parameters with frame patterns in strings expanded; strings
+/// that are not valid patterns ("50%") stay as they are.
+ParamList expand_strings(const ParamList& params, std::optional<int> frame,
+                         const std::string& where) {
+    ParamList out = params;
+    for (Param& p : out.items) {
+        if (p.type != ParamType::String) continue;
+        for (std::string& s : p.strings) {
+            if (s.find('%') == std::string::npos && s.find('#') == std::string::npos)
+                continue;
+            try {
+                s = expand_frame_pattern(s, frame, where + " \"" + p.name + "\"");
+            } catch (const MissingFrameError&) {
+                throw;
+            } catch (const Error&) {
+                // Not a frame pattern: left alone.
+            }
+        }
+    }
+    return out;
+}
+
+std::string call_where(const ShaderRef& ref, const char* request) {
+    return (ref.source.empty() ? std::string() : ref.source + ": ") + request + " \"" +
+           ref.name + "\"";
+}
+
+} // namespace
+
+bool program_uses(const Program& program, std::string_view op) {
+    return std::any_of(program.ops.begin(), program.ops.end(),
+                       [&](const Op& o) { return o.name == op; });
+}
+
+bool SceneShaders::uses(std::string_view op) const {
+    for (const auto& s : surfaces)
+        if (program_uses(s->program(), op)) return true;
+    for (const auto& l : lights)
+        if (program_uses(l->program(), op)) return true;
+    return false;
+}
+
+SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
+    SceneShaders out;
+    out.library = std::make_unique<ShaderLibrary>(shader_search_path(scene));
+    ShaderLibrary& library = *out.library;
+
+    for (const LightInstance& light : scene.lights) {
+        const std::string where =
+            call_where(light.shader, light.area ? "AreaLightSource" : "LightSource");
+        auto program = library.load(light.shader.name, ShaderKind::Light, where);
+        out.lights.push_back(std::make_unique<ShaderInstance>(
+            program, expand_strings(light.shader.params, frame, where),
+            light.shader.shader_to_world, where, &out.warnings));
+    }
+
+    std::map<const ShaderRef*, const ShaderInstance*> by_ref;
+    std::map<const Attributes*, std::size_t> lights_by_attributes;
+    const ShaderInstance* fallback = nullptr;
+    out.surface_of.resize(scene.primitives.size(), nullptr);
+    out.lights_of.resize(scene.primitives.size());
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        const Primitive& prim = scene.primitives[i];
+        const Attributes& attr = attributes_of(prim);
+        const ShaderRef* ref = attr.surface ? &*attr.surface : nullptr;
+        if (!ref) {
+            if (!fallback) {
+                const std::string where = "defaultsurface";
+                auto program = library.load("defaultsurface", ShaderKind::Surface, where);
+                out.surfaces.push_back(std::make_unique<ShaderInstance>(
+                    program, ParamList{}, Matrix4(1.0), where, &out.warnings));
+                fallback = out.surfaces.back().get();
+            }
+            out.surface_of[i] = fallback;
+        } else if (auto it = by_ref.find(ref); it != by_ref.end()) {
+            out.surface_of[i] = it->second;
+        } else {
+            const std::string where = call_where(*ref, "Surface");
+            auto program = library.load(ref->name, ShaderKind::Surface, where);
+            out.surfaces.push_back(std::make_unique<ShaderInstance>(
+                program, expand_strings(ref->params, frame, where), ref->shader_to_world,
+                where, &out.warnings));
+            out.surface_of[i] = out.surfaces.back().get();
+            by_ref.emplace(ref, out.surface_of[i]);
+        }
+        for (int l : attr.lights_on)
+            if (l >= 0 && static_cast<std::size_t>(l) < out.lights.size())
+                out.lights_of[i].push_back(out.lights[static_cast<std::size_t>(l)].get());
+    }
+    return out;
+}
+
+std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
+    std::vector<std::string> files;
+    const auto add = [&](const ShaderInstance& s) {
+        for (const ShaderArgument& a : s.arguments())
+            for (const std::string& v : a.strings) {
+                std::error_code ec;
+                if (v.empty() || !std::filesystem::is_regular_file(v, ec)) continue;
+                if (std::find(files.begin(), files.end(), v) == files.end())
+                    files.push_back(v);
+            }
+    };
+    for (const auto& s : shaders.surfaces) add(*s);
+    for (const auto& l : shaders.lights) add(*l);
+    return files;
+}
+
+} // namespace sss
