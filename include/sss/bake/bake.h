@@ -4,22 +4,18 @@
 /// clouds. It may use dice, light, diffusion's materials, cloud, scene and
 /// util.
 ///
-/// The ptbake job as one library call: every primitive with a bake shader is
-/// diced into micropolygons, lit (ambient + diffuse with ray-traced shadows)
-/// and written as point clouds; every other primitive only casts shadows.
-///
-/// Built-in bake shaders (Surface "name" params), each taking "string
-/// filename" and "string displaychannels" (comma or space separated) as in
-/// RenderMan's bake3d:
-///  - bake_radiance_t  "float Kdt" (1): _radiance_t = Kdt * irradiance.
-///  - bake_sss_params  as bake_radiance_t, plus _albedo and _diffusemeanfreepath
-///    (mm, as ptfilter's fromfile expects) from "color albedo" / "color dmfp",
-///    or, with "float noisefreq" > 0, a 3D noise blend towards "color albedo2"
-///    / "color dmfp2" in shader space (frequency in cycles per shader unit).
-///  - bake_constant    bakes the primitive's colour (Cs: per vertex if given,
-///    else Color; negative allowed) into every channel listed (default
-///    _radiance_t): blockers inside objects.
-/// `float _area` is always written.
+/// The ptbake job as one library call, as PRMan bakes: every primitive whose
+/// surface shader (RSL, found along the shader search path) calls bake3d is
+/// diced into micropolygons; the shader runs over their centres (what
+/// bake3d's "interpolate" mode bakes) with the scene's light shaders, and
+/// what bake3d writes becomes the point clouds (the shader picks the files
+/// and channels). Every other primitive only casts shadows. The pipeline's
+/// bake shaders are RSL sources in shaders/: bake_radiance_t (_radiance_t =
+/// Kdt x (ambient + diffuse)), bake_sss_params (also _albedo and
+/// _diffusemeanfreepath from a material preset or colours, optionally
+/// blended with noise) and bake_constant (the colour Cs: blockers).
+/// `float _area` is always written (a shader's own "_area" value, else the
+/// micropolygon's area).
 
 #include <cstddef>
 #include <optional>
@@ -41,8 +37,9 @@ struct BakeOptions {
     double spacing = 0.0;
     /// Pick the spacing from the material (-spacing mfp): its smallest mean
     /// free path 1/sigma_t' in scene units, times mfp_fraction. Without
-    /// `material`, each bake_sss_params object uses its own albedo/dmfp range
-    /// (other bake shaders then have no material: UsageError).
+    /// `material`, each object whose shader has albedo and dmfp parameters
+    /// (bake_sss_params) uses their range (other objects then have no
+    /// material: UsageError).
     bool spacing_from_material = false;
     double mfp_fraction = 1.0;
     /// The material the bake is for (-material ...): enables the spacing

@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <utility>
@@ -22,10 +23,12 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec4.hpp>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "sss/dice/dice.h"
-#include "sss/light/lights.h"
+#include "sss/shading/engine.h"
+#include "sss/shading/scene_shaders.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
@@ -34,58 +37,21 @@
 namespace sss {
 namespace {
 
-enum class BakeShader { RadianceT, SssParams, Constant };
-
 // Surfaces that only cast shadows are diced this many times coarser (edge
 // length) than baked ones: 1/64 of the triangles, and the chord error of a
 // curved occluder stays a small fraction of its size.
 constexpr double kOccluderCoarsening = 8.0;
+/// Shading points per batch: the unit of parallel work.
+constexpr std::size_t kChunk = 256;
 
-std::optional<BakeShader> bake_shader_kind(const std::string& name) {
-    if (name == "bake_radiance_t") return BakeShader::RadianceT;
-    if (name == "bake_sss_params") return BakeShader::SssParams;
-    if (name == "bake_constant") return BakeShader::Constant;
-    return std::nullopt;
-}
-
-// Channels a bake shader can write, besides _area.
-std::vector<std::string> produced_channels(BakeShader kind) {
-    switch (kind) {
-    case BakeShader::RadianceT:
-        return {"_radiance_t"};
-    case BakeShader::SssParams:
-        return {"_radiance_t", "_albedo", "_diffusemeanfreepath"};
-    case BakeShader::Constant:
-        return {"_radiance_t"};
-    }
-    return {};
-}
-
-std::vector<std::string> split_channel_list(const std::string& text) {
-    std::vector<std::string> out;
-    std::string cur;
-    for (char c : text) {
-        if (c == ',' || c == ' ' || c == '\t') {
-            if (!cur.empty()) out.push_back(cur);
-            cur.clear();
-        } else {
-            cur += c;
-        }
-    }
-    if (!cur.empty()) out.push_back(cur);
-    return out;
-}
-
-// What one baked primitive writes.
+// What one baked primitive is: its shader, and the file its shader names.
 struct BakeJob {
     std::size_t prim = 0;
-    BakeShader kind = BakeShader::RadianceT;
-    std::string file;
-    std::vector<std::string> channels; // without _area
-    // Material parameters (bake_sss_params).
+    const ShaderInstance* shader = nullptr;
+    std::string file; ///< the shader's "filename" (or -o); "" when unknown
+    // The material range of a bake_sss_params-style shader (albedo, dmfp mm).
+    bool has_material = false;
     glm::dvec3 albedo{0.0}, albedo2{0.0}, dmfp{0.0}, dmfp2{0.0};
-    double noise_freq = 0.0;
-    double kdt = 1.0;
 };
 
 // The DisplayChannel declaration of a channel, if any, must agree with what
@@ -108,63 +74,63 @@ void check_declared_type(const Scene& scene, const std::string& channel,
     }
 }
 
-/// The file a baked primitive goes to: -o, else its shader's "filename".
-std::string bake_file(const Primitive& prim, const BakeOptions& options,
-                      std::optional<int> frame) {
-    if (!options.output.empty()) return options.output;
-    const ShaderRef& sh = *prim.attributes->surface;
-    const std::string where = prim.source + ": " + sh.name;
-    std::string name = sh.params.get_string("filename", "");
-    if (name.empty()) throw MissingBakeFileError(where + " has no \"filename\"");
-    return expand_frame_pattern(name, frame, where + " filename");
+/// A colour parameter of a bound shader: the RIB's value, else the
+/// shader's constant default, else `fallback`.
+glm::dvec3 color_parameter(const ShaderInstance& shader, const std::string& name,
+                           const glm::dvec3& fallback) {
+    for (const ShaderArgument& a : shader.arguments())
+        if (a.name == name && !a.numbers.empty()) {
+            if (a.numbers.size() >= 3) return {a.numbers[0], a.numbers[1], a.numbers[2]};
+            return glm::dvec3(a.numbers[0]);
+        }
+    const int index = shader.program().find(name);
+    if (index >= 0) {
+        const Symbol& s = shader.program().symbols[static_cast<std::size_t>(index)];
+        if (s.numbers.size() >= 3) return {s.numbers[0], s.numbers[1], s.numbers[2]};
+        if (s.numbers.size() == 1) return glm::dvec3(s.numbers[0]);
+    }
+    return fallback;
 }
 
-BakeJob make_job(const Scene& scene, std::size_t index, BakeShader kind,
-                 const BakeOptions& options, std::optional<int> frame) {
+/// The file a baked primitive goes to: -o, else its shader's "filename"
+/// ("" when the shader has no such parameter: then only bake3d knows).
+std::string bake_file(const Primitive& prim, const ShaderInstance& shader,
+                      const BakeOptions& options) {
+    if (!options.output.empty()) return options.output;
+    const std::optional<std::string> name = shader.string_parameter("filename");
+    if (name && name->empty())
+        throw MissingBakeFileError(prim.source + ": " + shader.program().name +
+                                   " has no \"filename\"");
+    return name ? *name : std::string();
+}
+
+BakeJob make_job(const Scene& scene, std::size_t index, const ShaderInstance& shader,
+                 const BakeOptions& options) {
     const Primitive& prim = scene.primitives[index];
-    const ShaderRef& sh = *prim.attributes->surface;
-    const std::string where = prim.source + ": " + sh.name;
+    const std::string where = prim.source + ": " + shader.program().name;
     BakeJob job;
     job.prim = index;
-    job.kind = kind;
-
-    job.file = bake_file(prim, options, frame);
-
-    const std::vector<std::string> produced = produced_channels(kind);
-    std::string list = sh.params.get_string("displaychannels", "");
-    std::vector<std::string> wanted = split_channel_list(list);
-    if (wanted.empty()) wanted = produced;
-    for (const std::string& c : wanted) {
-        if (c == "_area") continue; // always written
-        bool ok = kind == BakeShader::Constant ||
-                  std::find(produced.begin(), produced.end(), c) != produced.end();
-        if (!ok) {
-            std::string names;
-            for (const std::string& p : produced) names += p + ", ";
-            throw ValueError(where + " cannot bake channel '" + c + "' (it bakes " +
-                             names + "_area)");
-        }
-        if (std::find(job.channels.begin(), job.channels.end(), c) == job.channels.end())
-            job.channels.push_back(c);
-        check_declared_type(scene, c, ChannelType::Color, where);
-    }
+    job.shader = &shader;
+    job.file = bake_file(prim, shader, options);
     check_declared_type(scene, "_area", ChannelType::Float, where);
 
-    job.kdt = sh.params.get_float("Kdt", 1.0);
-    if (!std::isfinite(job.kdt)) throw ValueError(where + ": Kdt is not finite");
-    if (kind == BakeShader::SssParams) {
+    // A shader with a material (bake_sss_params and shaders like it): the
+    // range its points take, for the spacing checks.
+    const Program& program = shader.program();
+    if (program.find("dmfp") >= 0 && program.find("albedo") >= 0) {
         MaterialSpec preset;
-        preset.preset = sh.params.get_string("material", "marble");
-        if (!find_material(preset.preset))
-            throw ValueError(where + ": unknown material '" + preset.preset +
-                             "' (known: " + material_names() + ")");
-        glm::dvec3 a, d;
-        preset.resolve_albedo_dmfp(a, d);
-        job.albedo = sh.params.get_vec3("albedo", a);
-        job.dmfp = sh.params.get_vec3("dmfp", d);
-        job.albedo2 = sh.params.get_vec3("albedo2", job.albedo);
-        job.dmfp2 = sh.params.get_vec3("dmfp2", job.dmfp);
-        job.noise_freq = sh.params.get_float("noisefreq", 0.0);
+        preset.preset = shader.string_parameter("material").value_or("marble");
+        glm::dvec3 a(0.0), d(0.0);
+        if (find_material(preset.preset)) preset.resolve_albedo_dmfp(a, d);
+        const auto given = [&](const char* name, const glm::dvec3& fallback) {
+            const glm::dvec3 v = color_parameter(shader, name, glm::dvec3(-1.0));
+            return v == glm::dvec3(-1.0) ? fallback : v;
+        };
+        job.albedo = given("albedo", a);
+        job.dmfp = given("dmfp", d);
+        job.albedo2 = given("albedo2", job.albedo);
+        job.dmfp2 = given("dmfp2", job.dmfp);
+        job.has_material = true;
         for (int i = 0; i < 3; ++i) {
             for (double v : {job.albedo[i], job.albedo2[i]})
                 if (!(v >= 0.0 && v <= 1.0))
@@ -175,8 +141,6 @@ BakeJob make_job(const Scene& scene, std::size_t index, BakeShader kind,
                     throw ValueError(where + ": impossible dmfp " + std::to_string(v) +
                                      " (must be > 0, in mm)");
         }
-        if (!(job.noise_freq >= 0.0 && std::isfinite(job.noise_freq)))
-            throw ValueError(where + ": noisefreq must be >= 0");
     }
     return job;
 }
@@ -269,17 +233,6 @@ BakeSpacing resolve_spacing(const BakeOptions& options) {
     return out;
 }
 
-/// The scene's lights; their warnings and the shadow-casting ones counted
-/// in the report.
-std::vector<Light> bake_lights(const Scene& scene, BakeReport& report) {
-    std::vector<std::string> light_warnings;
-    std::vector<Light> lights = resolve_lights(scene, &light_warnings);
-    for (const std::string& w : light_warnings) report.warnings.push_back(w);
-    for (const Light& l : lights)
-        if (l.shadows) ++report.shadow_lights;
-    return lights;
-}
-
 /// What the bake does with each primitive.
 struct BakePlan {
     std::vector<BakeJob> jobs;
@@ -289,51 +242,43 @@ struct BakePlan {
     std::vector<std::optional<double>> job_mfp;
 };
 
-/// Which primitives are baked (a job each, in primitive order) and which
-/// only cast shadows; ValueError when nothing is baked.
-BakePlan plan_jobs(const Scene& scene, const BakeOptions& options,
-                   std::optional<int> frame, bool any_shadows, BakeReport& report) {
+/// Which primitives are baked (those whose surface shader calls bake3d, a
+/// job each, in primitive order) and which only cast shadows; ValueError
+/// when nothing is baked.
+BakePlan plan_jobs(const Scene& scene, const SceneShaders& shaders,
+                   const BakeOptions& options, bool any_shadows, BakeReport& report) {
     BakePlan plan;
     plan.job_of.assign(scene.primitives.size(), -1);
     plan.occluder.assign(scene.primitives.size(), 0);
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const Primitive& prim = scene.primitives[i];
-        const auto& surf = prim.attributes->surface;
-        std::optional<BakeShader> kind;
-        if (surf) {
-            kind = bake_shader_kind(surf->name);
-            if (!kind && surf->name.rfind("bake", 0) == 0)
-                report.warnings.push_back(
-                    prim.source + ": unknown bake shader '" + surf->name +
-                    "' (known: bake_radiance_t, bake_sss_params, "
-                    "bake_constant); the object only casts shadows");
-        }
+        const ShaderInstance& shader = *shaders.surface_of[i];
         plan.occluder[i] = any_shadows && prim.attributes->visible_to("transmission");
-        if (kind) {
+        if (program_uses(shader.program(), "bake3d")) {
             plan.job_of[i] = static_cast<int>(plan.jobs.size());
-            plan.jobs.push_back(make_job(scene, i, *kind, options, frame));
+            plan.jobs.push_back(make_job(scene, i, shader, options));
         }
     }
     report.baked_primitives = plan.jobs.size();
     if (plan.jobs.empty())
-        throw ValueError(
-            scene.path +
-            ": nothing to bake (no primitive has a bake shader: Surface "
-            "\"bake_radiance_t\", \"bake_sss_params\" or \"bake_constant\")");
+        throw ValueError(scene.path +
+                         ": nothing to bake (no primitive's surface shader calls bake3d, "
+                         "e.g. Surface \"bake_radiance_t\", \"bake_sss_params\" or "
+                         "\"bake_constant\")");
     return plan;
 }
 
 /// The mean free path each job's points should respect: the -material's,
-/// else a bake_sss_params object's own (the smallest over its range).
-/// SpacingMaterialError when the spacing from the mean free path leaves a job
-/// without one.
+/// else the object's own material range (bake_sss_params). A
+/// SpacingMaterialError when the spacing from the mean free path leaves a
+/// job without one.
 void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
                          std::optional<double> material_mfp, BakePlan& plan) {
     const std::vector<BakeJob>& jobs = plan.jobs;
     plan.job_mfp.assign(jobs.size(), material_mfp);
     for (std::size_t j = 0; j < jobs.size(); ++j) {
         const BakeJob& job = jobs[j];
-        if (job.kind != BakeShader::SssParams) continue;
+        if (!job.has_material) continue;
         MaterialSpec m = options.material ? *options.material : MaterialSpec{};
         const double unit = options.unitlength;
         const double a = mfp_mm(m, &job.albedo, &job.dmfp) * unit;
@@ -423,174 +368,260 @@ std::unique_ptr<RayTracer> build_occluders(const Scene& scene, const BakePlan& p
     return tracer;
 }
 
-/// The irradiance at every micropolygon of every job (none for
-/// bake_constant). Seeds are global point indices, so the result does not
-/// depend on how the work is split between threads.
-std::vector<std::vector<glm::dvec3>>
-light_points(const Scene& scene, const BakeOptions& options,
-             const std::vector<Light>& lights, const std::vector<BakeJob>& jobs,
-             const std::vector<DicedSurface>& diced, const RayTracer* tracer) {
-    const double extent = tracer ? tracer->scene_extent() : 0.0;
+/// What bake3d calls hand over while a chunk is shaded: collected per chunk
+/// (through a thread-local sink), so the clouds come out in point order for
+/// any number of threads.
+class BakeServices final : public ShadingServices {
+public:
+    BakeServices(const Scene& scene, const RayTracer* occluders, std::optional<int> frame,
+                 const std::string& output)
+        : m_scene(scene), m_occluders(occluders), m_frame(frame), m_output(output) {}
+    const Scene& scene() const override { return m_scene; }
+    const RayTracer* occluders() const override { return m_occluders; }
+    std::optional<int> frame() const override { return m_frame; }
+    void bake3d(Bake3dRecord&& record) override {
+        if (!m_output.empty()) record.file = m_output;
+        if (s_sink) s_sink->push_back(std::move(record));
+    }
+    void message(const std::string& text) override {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        std::fputs(text.c_str(), stdout);
+        if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
+        std::fflush(stdout);
+    }
+    /// Where this thread's bake3d records go (null: dropped).
+    static void set_sink(std::vector<Bake3dRecord>* sink) { s_sink = sink; }
+
+private:
+    const Scene& m_scene;
+    const RayTracer* m_occluders;
+    std::optional<int> m_frame;
+    std::string m_output;
+    std::mutex m_mutex;
+    static thread_local std::vector<Bake3dRecord>* s_sink;
+};
+thread_local std::vector<Bake3dRecord>* BakeServices::s_sink = nullptr;
+
+/// Runs every job's surface shader over its micropolygons (a batch per
+/// chunk of kChunk points, micropolygon centres as bake3d's "interpolate"
+/// mode bakes them) and returns the bake3d records of each chunk in order.
+/// Point seeds are global point indices, so the result does not depend on
+/// how the work is split between threads.
+std::vector<std::vector<Bake3dRecord>>
+shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders& shaders,
+             const std::vector<BakeJob>& jobs, const std::vector<DicedSurface>& diced,
+             const RayTracer* tracer, std::optional<int> frame, BakeReport& report) {
     std::size_t total_points = 0;
     std::vector<std::size_t> first_point(jobs.size());
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
-        first_point[j] = total_points;
-        total_points += diced[jobs[j].prim].size();
-    }
-    std::vector<std::vector<glm::dvec3>> irr(jobs.size());
-    constexpr std::size_t kChunk = 256;
     struct Chunk {
         std::size_t job, begin, end;
     };
     std::vector<Chunk> chunks;
     for (std::size_t j = 0; j < jobs.size(); ++j) {
+        first_point[j] = total_points;
         const std::size_t n = diced[jobs[j].prim].size();
-        if (jobs[j].kind == BakeShader::Constant) continue;
-        irr[j].resize(n);
+        total_points += n;
         for (std::size_t b = 0; b < n; b += kChunk)
             chunks.push_back({j, b, std::min(n, b + kChunk)});
     }
+    ShadingResources resources;
+    BakeServices services(scene, tracer, frame, options.output);
+    const Camera& camera = scene.options.camera;
+    const glm::dmat4& to_camera = camera.world_to_camera;
+    const glm::dmat3 normal_to_camera =
+        glm::transpose(glm::inverse(glm::dmat3(camera.world_to_camera)));
+    std::vector<std::vector<Bake3dRecord>> records(chunks.size());
     std::atomic<std::size_t> done{0};
+    std::atomic<uint64_t> nonfinite{0};
+    tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
+        [&] { return std::make_unique<ShadingContext>(resources, services); });
     tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t c) {
+        ShadingContext& context = *contexts.local();
         const Chunk& ch = chunks[c];
         const BakeJob& job = jobs[ch.job];
+        const Primitive& prim = scene.primitives[job.prim];
+        const Attributes& attr = attributes_of(prim);
         const DicedSurface& d = diced[job.prim];
-        const double offset =
-            shadow_ray_offset(d, ch.begin, ch.end, static_cast<double>(extent));
-        irradiance_batch(lights, scene.primitives[job.prim].attributes->lights_on,
-                         d.centers.data() + ch.begin, d.normals.data() + ch.begin,
-                         ch.end - ch.begin, tracer, first_point[ch.job] + ch.begin,
-                         offset, irr[ch.job].data() + ch.begin);
-        if (options.progress)
-            options.progress->update(done += ch.end - ch.begin, total_points);
+        const std::size_t n = ch.end - ch.begin;
+        ShadingBatch batch;
+        batch.size = n;
+        batch.layout = BatchLayout::Points;
+        batch.primitive = &prim;
+        batch.P.resize(n);
+        batch.N.resize(n);
+        batch.I.resize(n);
+        batch.Cs.resize(n);
+        batch.Os.assign(n, glm::vec3(attr.opacity));
+        batch.dicing_area.resize(n);
+        batch.radius.resize(n);
+        batch.seeds.resize(n);
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::size_t i = ch.begin + k;
+            const glm::dvec3 pc =
+                glm::dvec3(to_camera * glm::dvec4(glm::dvec3(d.centers[i]), 1.0));
+            batch.P[k] = glm::vec3(pc);
+            batch.I[k] = camera.perspective ? glm::vec3(pc) : glm::vec3(0.0f, 0.0f, 1.0f);
+            batch.N[k] = glm::vec3(glm::normalize(normal_to_camera * glm::dvec3(d.normals[i])));
+            batch.Cs[k] = d.colors.empty() ? glm::vec3(attr.color) : d.colors[i];
+            batch.dicing_area[k] = d.areas[i];
+            batch.radius[k] = d.radii[i];
+            batch.seeds[k] = first_point[ch.job] + i;
+        }
+        batch.Ng = batch.N;
+        BakeServices::set_sink(&records[c]);
+        const auto& lights = shaders.lights_of[job.prim];
+        try {
+            context.execute(*job.shader, batch, LightList(lights.data(), lights.size()));
+        } catch (...) {
+            BakeServices::set_sink(nullptr);
+            throw;
+        }
+        BakeServices::set_sink(nullptr);
+        nonfinite += context.nonfinite_count();
+        if (options.progress) options.progress->update(done += n, total_points);
     });
-    return irr;
+    if (nonfinite.load() > 0)
+        report.warnings.push_back(std::to_string(nonfinite.load()) +
+                                  " shading points gave NaN or infinite values, "
+                                  "written as 0");
+    return records;
 }
 
-/// The output files, in first-use order, and the channels each gets.
-struct OutputFiles {
-    std::vector<std::string> paths;
-    std::map<std::string, std::size_t> index; ///< path -> position in paths
-    std::vector<std::vector<std::string>> channels;
-};
-
-/// Lists the files the jobs bake into, each with the union of its jobs'
-/// channels (warning when they differ), and starts their reports.
-OutputFiles plan_files(const Scene& scene, const std::vector<BakeJob>& jobs,
-                       BakeReport& report) {
-    OutputFiles files;
-    for (const BakeJob& job : jobs) {
-        auto [it, inserted] = files.index.emplace(job.file, files.paths.size());
-        if (inserted) {
-            files.paths.push_back(job.file);
-            files.channels.push_back(job.channels);
-            BakeFileReport fr;
-            fr.path = job.file;
-            report.files.push_back(fr);
-        } else if (files.channels[it->second] != job.channels) {
-            report.warnings.push_back(scene.primitives[job.prim].source +
-                                      ": bakes other channels than the "
-                                      "first object baked into " +
-                                      job.file + "; missing channels are filled with 0");
-            std::vector<std::string>& have = files.channels[it->second];
-            for (const std::string& c : job.channels)
-                if (std::find(have.begin(), have.end(), c) == have.end())
-                    have.push_back(c);
-        }
+/// The channel type of a value bake3d wrote with `floats` floats: a
+/// DisplayChannel declaration decides between the triples.
+ChannelType baked_channel_type(const Scene& scene, const std::string& name, int floats) {
+    if (floats == 1) return ChannelType::Float;
+    if (floats == 16) return ChannelType::Matrix;
+    for (const auto& [declared, type] : scene.options.display_channels) {
+        if (declared != name) continue;
+        std::string last = type;
+        const auto sp = last.find_last_of(" \t");
+        if (sp != std::string::npos) last = last.substr(sp + 1);
+        const auto t = parse_channel_type(last);
+        if (t && channel_type_size(*t) == 3) return *t;
     }
-    return files;
+    return ChannelType::Color;
 }
 
-/// An empty cloud of `points` points with _area and the given colour
-/// channels, and the camera's matrices and format.
-PointCloud make_cloud(const Camera& cam, std::size_t points,
-                      const std::vector<std::string>& channels) {
-    PointCloud cloud;
-    cloud.resize(points);
-    cloud.add_channel("_area", ChannelType::Float);
-    for (const std::string& c : channels) cloud.add_channel(c, ChannelType::Color);
-    store_matrix(cam.world_to_camera, cloud.world_to_eye);
-    store_matrix(cam.world_to_ndc(), cloud.world_to_ndc);
-    cloud.format = {float(cam.xres), float(cam.yres), float(cam.pixel_aspect)};
-    return cloud;
-}
-
-/// Writes one job's micropolygons into `cloud` from point `base` on: their
-/// geometry, _area and the job's channels.
-void write_job(const Primitive& prim, const BakeJob& job, const DicedSurface& d,
-               const std::vector<glm::dvec3>& irr, std::size_t base, PointCloud& cloud,
-               BakeFileReport& file_report) {
-    file_report.points += d.size();
-    file_report.objects.push_back(prim.source);
-    Channel* area = cloud.find_channel("_area");
-    const Matrix4 to_shader = glm::inverse(prim.attributes->surface->shader_to_world);
-    for (std::size_t i = 0; i < d.size(); ++i) {
-        cloud.positions[base + i] = d.centers[i];
-        cloud.normals[base + i] = d.normals[i];
-        cloud.radii[base + i] = d.radii[i];
-        area->data[base + i] = d.areas[i];
-        file_report.area += d.areas[i];
-    }
-    for (const std::string& name : job.channels) {
-        Channel* ch = cloud.find_channel(name);
-        for (std::size_t i = 0; i < d.size(); ++i) {
-            glm::dvec3 v(0.0);
-            if (job.kind == BakeShader::Constant) {
-                v = d.colors.empty() ? prim.attributes->color : glm::dvec3(d.colors[i]);
-            } else if (name == "_radiance_t") {
-                v = job.kdt * irr[i];
-            } else {
-                double t = 0.0;
-                if (job.noise_freq > 0.0) {
-                    glm::dvec3 ps =
-                        glm::dvec3(to_shader * glm::dvec4(glm::dvec3(d.centers[i]), 1.0));
-                    t = noise3(ps * job.noise_freq);
-                }
-                v = name == "_albedo" ? glm::mix(job.albedo, job.albedo2, t)
-                                      : glm::mix(job.dmfp, job.dmfp2, t);
-            }
-            for (int k = 0; k < 3; ++k) {
-                float x = static_cast<float>(v[k]);
-                if (!std::isfinite(x))
-                    throw ValueError(prim.source + ": " + name +
-                                     " is not finite at micropolygon " +
-                                     std::to_string(i));
-                ch->data[(base + i) * 3 + k] = x;
-            }
-        }
-    }
-}
-
-/// The point clouds by output file, in first-use order: every job's points
-/// in primitive order.
+/// The point clouds by output file, in first-use order, from the bake3d
+/// records in chunk order: every file gets the union of the channels baked
+/// into it (points that did not bake a channel get 0, with a warning), and
+/// `_area` always.
 std::vector<std::pair<std::string, PointCloud>>
 gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
-              const std::vector<DicedSurface>& diced,
-              const std::vector<std::vector<glm::dvec3>>& irr, BakeReport& report) {
-    const OutputFiles out = plan_files(scene, jobs, report);
-    std::vector<std::pair<std::string, PointCloud>> files;
-    for (std::size_t f = 0; f < out.paths.size(); ++f) {
-        std::size_t n = 0;
-        for (const BakeJob& job : jobs)
-            if (out.index.at(job.file) == f) n += diced[job.prim].size();
-        files.emplace_back(out.paths[f],
-                           make_cloud(scene.options.camera, n, out.channels[f]));
+              std::vector<std::vector<Bake3dRecord>>& records, BakeReport& report) {
+    struct FilePlan {
+        std::string path;
+        std::vector<std::pair<std::string, ChannelType>> channels;
+        std::size_t points = 0;
+        bool mixed = false;
+    };
+    std::vector<FilePlan> files;
+    std::map<std::string, std::size_t> index;
+    for (const auto& chunk : records)
+        for (const Bake3dRecord& r : chunk) {
+            if (r.file.empty())
+                throw MissingBakeFileError(scene.path + ": bake3d was called without a file "
+                                                        "name (give the shader a "
+                                                        "\"filename\" or ptbake -o)");
+            auto [it, inserted] = index.emplace(r.file, files.size());
+            if (inserted) {
+                FilePlan f;
+                f.path = r.file;
+                f.channels.emplace_back("_area", ChannelType::Float);
+                files.push_back(f);
+            }
+            FilePlan& f = files[it->second];
+            f.points += r.P.size();
+            for (std::size_t c = 0; c < r.channels.size(); ++c) {
+                const std::string& name = r.channels[c];
+                const ChannelType type =
+                    baked_channel_type(scene, name, r.channel_floats[c]);
+                auto found = std::find_if(f.channels.begin(), f.channels.end(),
+                                          [&](const auto& e) { return e.first == name; });
+                if (found == f.channels.end()) {
+                    if (!inserted || f.points != r.P.size()) f.mixed = true;
+                    f.channels.emplace_back(name, type);
+                } else if (channel_type_size(found->second) != r.channel_floats[c]) {
+                    throw ValueError(r.file + ": channel " + name +
+                                     " is baked with different types");
+                }
+                check_declared_type(scene, name, type, r.file);
+            }
+        }
+    for (const BakeJob& job : jobs)
+        if (!job.file.empty() && !index.count(job.file))
+            report.warnings.push_back(scene.primitives[job.prim].source +
+                                      ": the shader baked no point into " + job.file);
+
+    const Camera& cam = scene.options.camera;
+    std::vector<std::pair<std::string, PointCloud>> out;
+    for (FilePlan& f : files) {
+        PointCloud cloud;
+        cloud.resize(f.points);
+        for (const auto& [name, type] : f.channels) cloud.add_channel(name, type);
+        store_matrix(cam.world_to_camera, cloud.world_to_eye);
+        store_matrix(cam.world_to_ndc(), cloud.world_to_ndc);
+        cloud.format = {float(cam.xres), float(cam.yres), float(cam.pixel_aspect)};
+        if (f.mixed)
+            report.warnings.push_back(f.path +
+                                      ": objects bake different channels into this file; "
+                                      "missing channels are filled with 0");
+        out.emplace_back(f.path, std::move(cloud));
+        BakeFileReport fr;
+        fr.path = f.path;
+        report.files.push_back(fr);
     }
     std::vector<std::size_t> fill(files.size(), 0);
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
-        const BakeJob& job = jobs[j];
-        const std::size_t f = out.index.at(job.file);
-        const DicedSurface& d = diced[job.prim];
-        write_job(scene.primitives[job.prim], job, d, irr[j], fill[f], files[f].second,
-                  report.files[f]);
-        fill[f] += d.size();
+    for (std::size_t c = 0; c < records.size(); ++c) {
+        for (Bake3dRecord& r : records[c]) {
+            const std::size_t fi = index.at(r.file);
+            PointCloud& cloud = out[fi].second;
+            BakeFileReport& fr = report.files[fi];
+            const std::size_t base = fill[fi];
+            const std::size_t n = r.P.size();
+            Channel* area = cloud.find_channel("_area");
+            int area_offset = -1;
+            int offset = 0;
+            for (std::size_t k = 0; k < r.channels.size(); ++k) {
+                if (r.channels[k] == "_area" && r.channel_floats[k] == 1) area_offset = offset;
+                offset += r.channel_floats[k];
+            }
+            const int stride = offset;
+            for (std::size_t i = 0; i < n; ++i) {
+                cloud.positions[base + i] = r.P[i];
+                cloud.normals[base + i] = r.N[i];
+                cloud.radii[base + i] = r.radius[i];
+                const float a = area_offset >= 0 ? r.values[i * stride + area_offset]
+                                                 : (r.area.empty() ? 0.0f : r.area[i]);
+                area->data[base + i] = a;
+                fr.area += a;
+            }
+            offset = 0;
+            for (std::size_t k = 0; k < r.channels.size(); ++k) {
+                const int floats = r.channel_floats[k];
+                if (r.channels[k] != "_area") {
+                    Channel* ch = cloud.find_channel(r.channels[k]);
+                    for (std::size_t i = 0; i < n; ++i)
+                        for (int q = 0; q < floats; ++q)
+                            ch->data[(base + i) * floats + q] =
+                                r.values[i * stride + offset + q];
+                }
+                offset += floats;
+            }
+            fr.points += n;
+            fill[fi] += n;
+            r = Bake3dRecord{}; // frees the record's memory as the cloud fills
+        }
     }
-    for (std::size_t f = 0; f < files.size(); ++f) {
-        for (const Channel& c : files[f].second.channels)
-            report.files[f].channels.push_back(std::string(channel_type_name(c.type)) +
-                                               " " + c.name);
-    }
-    return files;
+    for (const BakeJob& job : jobs)
+        if (auto it = index.find(job.file); it != index.end())
+            report.files[it->second].objects.push_back(scene.primitives[job.prim].source);
+    for (std::size_t f = 0; f < out.size(); ++f)
+        for (const Channel& c : out[f].second.channels)
+            report.files[f].channels.push_back(std::string(channel_type_name(c.type)) + " " +
+                                               c.name);
+    return out;
 }
 
 } // namespace
@@ -608,10 +639,16 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
 
     const BakeSpacing spacing = resolve_spacing(options);
-    const std::vector<Light> lights = bake_lights(scene, report);
-    const bool any_shadows = std::any_of(lights.begin(), lights.end(),
-                                         [](const Light& l) { return l.shadows; });
-    BakePlan plan = plan_jobs(scene, options, frame, any_shadows, report);
+    const SceneShaders shaders = bind_scene_shaders(scene, frame);
+    for (const std::string& w : shaders.warnings) report.warnings.push_back(w);
+    bool any_shadows = false;
+    for (const char* op : {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
+        any_shadows = any_shadows || shaders.uses(op);
+    for (const auto& light : shaders.lights)
+        if (program_uses(light->program(), "shadow") ||
+            program_uses(light->program(), "transmission"))
+            ++report.shadow_lights;
+    BakePlan plan = plan_jobs(scene, shaders, options, any_shadows, report);
     job_mean_free_paths(scene, options, spacing.material_mfp, plan);
 
     const std::vector<DicedSurface> diced =
@@ -623,23 +660,24 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         build_occluders(scene, plan, diced, any_shadows, report);
     report.trace_build_seconds = watch.seconds() - report.dice_seconds;
 
-    const std::vector<std::vector<glm::dvec3>> irr =
-        light_points(scene, options, lights, plan.jobs, diced, tracer.get());
+    std::vector<std::vector<Bake3dRecord>> records =
+        shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(), frame, report);
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 
-    return gather_clouds(scene, plan.jobs, diced, irr, report);
+    return gather_clouds(scene, plan.jobs, records, report);
 }
 
 std::vector<std::string> bake_output_files(const Scene& scene,
                                            const BakeOptions& options) {
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    const SceneShaders shaders = bind_scene_shaders(scene, frame);
     std::vector<std::string> files;
-    for (const Primitive& prim : scene.primitives) {
-        const auto& surf = prim.attributes->surface;
-        if (!surf || !bake_shader_kind(surf->name)) continue;
-        std::string file = bake_file(prim, options, frame);
-        if (std::find(files.begin(), files.end(), file) == files.end())
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        const ShaderInstance& shader = *shaders.surface_of[i];
+        if (!program_uses(shader.program(), "bake3d")) continue;
+        std::string file = bake_file(scene.primitives[i], shader, options);
+        if (!file.empty() && std::find(files.begin(), files.end(), file) == files.end())
             files.push_back(std::move(file));
     }
     return files;

@@ -1,8 +1,8 @@
 /// \file render.cpp
 /// The final renderer (docs/render.md): every primitive is diced into
 /// triangles with vertex normals and ray traced with Embree; camera samples
-/// are stratified and jittered per pixel by a hash, shaded with the built-in
-/// shaders (shaders.cpp), composited front to back through semi-transparent
+/// are stratified and jittered per pixel by a hash, shaded by the scene's RSL
+/// shaders (sss/shading) in batches of hits, composited front to back through semi-transparent
 /// surfaces and reconstructed with RenderMan's 2 x 2 Gaussian filter. The
 /// image holds the beauty, Z and the AOVs; render_scene writes the Displays.
 /// render_image runs its phases in order (camera, lights and shaders,
@@ -19,8 +19,11 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,12 +32,13 @@
 #include <glm/mat4x4.hpp>
 #include <glm/matrix.hpp>
 #include <glm/vec4.hpp>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "shading.h"
 #include "sss/dice/dice.h"
-#include "sss/light/lights.h"
+#include "sss/shading/engine.h"
+#include "sss/shading/scene_shaders.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
@@ -46,10 +50,6 @@
 namespace sss {
 
 namespace {
-
-using detail::ShadeResult;
-using detail::ShadingEnv;
-using detail::ShadingPoint;
 
 /// Pixels per tile side: the unit of parallel work and of filter splatting.
 constexpr int kTile = 16;
@@ -68,15 +68,6 @@ constexpr double kOpaque = 1e-4;
 /// The reconstruction filter: RenderMan's gaussian 2 x 2 (radius 1 pixel).
 constexpr double kFilterRadius = 1.0;
 
-// Filtered sample values: beauty RGBA, then the AOVs (ambient, diffuse,
-// specular, sss as RGB; occlusion), then the filter weight.
-constexpr int kAmbient = 4;
-constexpr int kDiffuse = 7;
-constexpr int kSpecular = 10;
-constexpr int kSss = 13;
-constexpr int kOcclusion = 16;
-constexpr int kValues = 17;
-constexpr int kSlots = kValues + 1; // + weight
 
 /// Whether `Attribute "visibility" name` leaves the primitive visible.
 bool visible_to(const Primitive& prim, const char* name) {
@@ -223,10 +214,37 @@ std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
     return colors;
 }
 
-/// One camera sample's values, before filtering.
-struct SampleValue {
-    float v[kValues];
-    float depth; ///< camera z of the first visible surface, or +inf
+/// An AOV of the image: an output variable of the surface shaders.
+struct Aov {
+    std::string variable; ///< the shaders' output variable ("_diffuse", "Csss")
+    std::string layer;    ///< image layer ("diffuse") or channel name
+    int floats = 3;       ///< 1 (float) or 3 (colour, point, vector, normal)
+    bool as_rgb = false;  ///< a float written as layer.R/G/B (occlusion)
+    float fallback = 0.0f; ///< value where a shader has no such variable
+    int offset = 0;       ///< first value in a sample
+};
+
+/// Writes shader printf output, one message at a time.
+class RenderServices final : public ShadingServices {
+public:
+    RenderServices(const Scene& scene, std::optional<int> frame)
+        : m_scene(scene), m_frame(frame) {}
+    const Scene& scene() const override { return m_scene; }
+    const RayTracer* occluders() const override { return m_occluders; }
+    void message(const std::string& text) override {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        std::fputs(text.c_str(), stdout);
+        if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
+        std::fflush(stdout);
+    }
+    std::optional<int> frame() const override { return m_frame; }
+    void set_occluders(const RayTracer* tracer) { m_occluders = tracer; }
+
+private:
+    const Scene& m_scene;
+    std::optional<int> m_frame;
+    const RayTracer* m_occluders = nullptr;
+    std::mutex m_mutex;
 };
 
 /// Everything the pixel loop reads (immutable once built).
@@ -235,8 +253,11 @@ struct Renderer {
     Camera camera;
     std::optional<CameraRays> rays;
     int nx = 1, ny = 1; ///< pixel samples
-    std::vector<Light> lights;
-    detail::ShaderSet shaders;
+    SceneShaders shaders;
+    std::unique_ptr<ShadingResources> resources;
+    std::unique_ptr<RenderServices> services;
+    std::vector<Aov> aovs;
+    int values = 4;                         ///< per sample: RGBA, then the AOVs
     std::vector<Surface> surfaces;          ///< by primitive
     std::vector<uint32_t> camera_primitive; ///< camera mesh -> primitive
     std::unique_ptr<RayTracer> camera_tracer;
@@ -246,40 +267,70 @@ struct Renderer {
     /// Pixel size per unit of depth (perspective; hits lie beyond hither), or
     /// the pixel size (orthographic): Camera::pixel_size_at without its tan().
     double pixel_per_depth = 0.0;
+    glm::dmat3 normal_to_camera{1.0}; ///< inverse transpose of world->camera
+    glm::dvec3 camera_x{1, 0, 0}, camera_y{0, 1, 0}; ///< camera axes in world space
     std::atomic<uint64_t> camera_rays{0};
-    std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
-
-    void sample(double x, double y, uint64_t key, std::vector<LightSample>& scratch,
-                SampleValue& out, uint64_t& camera_count, uint64_t& shadow_count,
-                bool& bad) const;
+    std::atomic<uint64_t> nan_points{0};
 };
 
-void Renderer::sample(double x, double y, uint64_t key, std::vector<LightSample>& scratch,
-                      SampleValue& out, uint64_t& camera_count, uint64_t& shadow_count,
-                      bool& bad) const {
-    std::fill(out.v, out.v + kValues, 0.0f);
-    out.depth = std::numeric_limits<float>::infinity();
+/// One camera sample of a tile, while its ray goes through the layers.
+struct CameraSample {
+    ShadowRay ray;
     double units = 1.0;
-    ShadowRay ray = rays->ray(x, y, &units);
-    const glm::dvec3 dir(ray.direction);
-    glm::dvec3 trans(1.0);
-    glm::dvec3 beauty(0.0), ambient(0.0), diffuse(0.0), specular(0.0), sss(0.0);
-    double occlusion = 0.0;
+    uint64_t key = 0;
+    double sx = 0.0, sy = 0.0;
+    glm::dvec3 trans{1.0};
     int layers = 0;
+    int hits = 0;
+    bool active = true;
+    float depth = std::numeric_limits<float>::infinity();
+};
+
+/// A surface a camera ray hit, to be shaded.
+struct SurfaceHit {
+    uint32_t sample = 0;
+    uint32_t primitive = 0;
+    glm::dvec3 p, n, ng; ///< world: point on the smooth surface, normals (oriented)
+    glm::dvec3 dir;      ///< the ray's direction
+    glm::dvec3 cs, os;
+    glm::dvec3 dpdx, dpdy; ///< one pixel's footprint on the tangent plane
+    double radius = 0.0;   ///< texture3d filter radius
+    float depth = 0.0f;
+    uint64_t seed = 0;
+};
+
+/// Finds what each active sample's ray hits next; samples whose ray leaves
+/// the scene (or runs out of layers) become inactive. Hits that are not
+/// shaded (slivers, one-sided back faces, transparent surfaces) only move
+/// the ray on.
+void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
+                std::vector<SurfaceHit>& hits, uint64_t& camera_count) {
+    hits.clear();
+    const Scene& scene = *job.scene;
     // Continuing past a hit: far enough to leave its triangle behind, near
     // enough not to skip a surface behind it.
-    const float skip_base = static_cast<float>(1e-6 * extent);
-    for (int k = 0; k < kMaxHits && layers < kMaxLayers; ++k) {
-        if (!(ray.tnear <= ray.tfar)) break;
-        const RayHit hit = camera_tracer->intersect(ray);
+    const float skip_base = static_cast<float>(1e-6 * job.extent);
+    for (std::size_t s = 0; s < samples.size(); ++s) {
+        CameraSample& cs = samples[s];
+        if (!cs.active) continue;
+        ShadowRay& ray = cs.ray;
+        if (!(ray.tnear <= ray.tfar) || cs.hits >= kMaxHits || cs.layers >= kMaxLayers) {
+            cs.active = false;
+            continue;
+        }
+        const RayHit hit = job.camera_tracer->intersect(ray);
         ++camera_count;
-        if (!hit.hit) break;
+        ++cs.hits;
+        if (!hit.hit) {
+            cs.active = false;
+            continue;
+        }
         ray.tnear = hit.t + skip_base + 1e-6f * hit.t;
 
-        const uint32_t prim_index = camera_primitive[hit.mesh];
-        const Surface& surf = surfaces[prim_index];
-        const Primitive& prim = scene->primitives[prim_index];
+        const uint32_t prim_index = job.camera_primitive[hit.mesh];
+        const Surface& surf = job.surfaces[prim_index];
+        const Primitive& prim = scene.primitives[prim_index];
         const Attributes& attr = attributes_of(prim);
         const DicedSurface& d = surf.diced;
         const uint32_t* tri = &d.triangles[3 * std::size_t(hit.triangle)];
@@ -289,6 +340,7 @@ void Renderer::sample(double x, double y, uint64_t key, std::vector<LightSample>
             n2(d.vertex_normals[tri[2]]);
         const double b1 = hit.u, b2 = hit.v, b0 = 1.0 - b1 - b2;
         const glm::dvec3 p = b0 * v0 + b1 * v1 + b2 * v2;
+        const glm::dvec3 dir(ray.direction);
 
         glm::dvec3 ng(hit.geometric_normal);
         const double ng_len = glm::length(ng);
@@ -305,17 +357,16 @@ void Renderer::sample(double x, double y, uint64_t key, std::vector<LightSample>
         const glm::dvec3 os = glm::clamp(attr.opacity, 0.0, 1.0);
         if (os == glm::dvec3(0.0)) continue;
 
-        ShadingPoint sp;
-        sp.n = n;
-        sp.nf = back ? -n : n;
-        const glm::dvec3 ngf = back ? -ng : ng;
-        sp.v = -dir;
+        SurfaceHit h;
+        h.sample = static_cast<uint32_t>(s);
+        h.primitive = prim_index;
         // The point on the smooth surface the vertex normals describe
         // (Hanika 2021): the barycentric blend of p projected onto each
         // vertex's tangent plane. Shadow and occlusion rays start there,
         // clear of the flat triangles' own shadows near the terminator; it
         // is used only on the side it bulges to, and never farther than the
         // triangle's size.
+        const glm::dvec3 ngf = back ? -ng : ng;
         glm::dvec3 smooth = b0 * (p - glm::dot(p - v0, n0) * n0) +
                             b1 * (p - glm::dot(p - v1, n1) * n1) +
                             b2 * (p - glm::dot(p - v2, n2) * n2);
@@ -323,59 +374,139 @@ void Renderer::sample(double x, double y, uint64_t key, std::vector<LightSample>
         const double size =
             std::max({glm::length(v1 - v0), glm::length(v2 - v1), glm::length(v0 - v2)});
         if (!(lift > 0.0) || !(glm::length(smooth - p) < 0.5 * size)) smooth = p;
-        sp.p = smooth;
-        sp.cs = surf.triangle_colors.empty()
-                    ? attr.color
-                    : glm::dvec3(surf.triangle_colors[hit.triangle]);
-        const double depth = hit.t / units;
-        sp.filter_radius =
-            0.5 * std::sqrt(std::max(attr.shading_rate, 0.0)) *
-            (camera.perspective ? pixel_per_depth * depth : pixel_per_depth);
-        sp.ray_offset = 1e-5 * extent;
-        sp.seed =
-            detail::splitmix64(key ^ (0xA5A5A5A5ull + static_cast<uint64_t>(layers)));
-
-        ShadingEnv env;
-        env.lights = &lights;
-        env.active = &attr.lights_on;
-        env.occluders = occluders;
-        env.scratch = &scratch;
-        ShadeResult r;
-        detail::shade(shaders.shaders[shaders.of_primitive[prim_index]], sp, env, r);
-        shadow_count += r.rays;
-
-        if (layers == 0) out.depth = static_cast<float>(depth);
-        const glm::dvec3 w = trans * os;
-        const glm::dvec3 ci = r.ambient + r.diffuse + r.specular + r.sss + r.emission;
-        beauty += w * ci;
-        ambient += w * r.ambient;
-        diffuse += w * r.diffuse;
-        specular += w * r.specular;
-        sss += w * r.sss;
-        occlusion += (w.x + w.y + w.z) / 3.0 * r.occlusion;
-        trans *= 1.0 - os;
-        ++layers;
-        if (std::max({trans.x, trans.y, trans.z}) < kOpaque) break;
+        h.p = smooth;
+        h.n = n;
+        h.ng = ng;
+        h.dir = dir;
+        h.cs = surf.triangle_colors.empty() ? attr.color
+                                            : glm::dvec3(surf.triangle_colors[hit.triangle]);
+        h.os = os;
+        const double depth = hit.t / cs.units;
+        h.depth = static_cast<float>(depth);
+        const double pixel =
+            job.camera.perspective ? job.pixel_per_depth * depth : job.pixel_per_depth;
+        h.radius = 0.5 * std::sqrt(std::max(attr.shading_rate, 0.0)) * pixel;
+        // The pixel's footprint: the camera's x and y steps of one pixel,
+        // projected along the ray onto the tangent plane (capped at grazing
+        // angles).
+        const double cosine = glm::dot(dir, ng);
+        const auto project = [&](const glm::dvec3& step) {
+            glm::dvec3 v = step;
+            if (std::abs(cosine) > 1e-6) v -= dir * (glm::dot(step, ng) / cosine);
+            const double cap = 8.0 * pixel;
+            const double len = glm::length(v);
+            return len > cap ? v * (cap / len) : v;
+        };
+        h.dpdx = project(job.camera_x * pixel);
+        h.dpdy = project(job.camera_y * pixel);
+        h.seed = detail::splitmix64(cs.key ^
+                                    (0xA5A5A5A5ull + static_cast<uint64_t>(cs.layers)));
+        hits.push_back(h);
     }
-    const double alpha = 1.0 - (trans.x + trans.y + trans.z) / 3.0;
-    const auto put = [&](int at, const glm::dvec3& c) {
-        out.v[at] = static_cast<float>(c.x);
-        out.v[at + 1] = static_cast<float>(c.y);
-        out.v[at + 2] = static_cast<float>(c.z);
-    };
-    put(0, beauty);
-    out.v[3] = static_cast<float>(alpha);
-    put(kAmbient, ambient);
-    put(kDiffuse, diffuse);
-    put(kSpecular, specular);
-    put(kSss, sss);
-    out.v[kOcclusion] = static_cast<float>(occlusion);
-    // A sample that went wrong numerically is dropped (black, transparent)
-    // rather than spreading NaN through the filter; render_image reports it.
-    bad = false;
-    for (float v : out.v)
-        if (!std::isfinite(v)) bad = true;
-    if (bad) std::fill(out.v, out.v + kValues, 0.0f);
+}
+
+/// Shades the hits of one pass, primitive by primitive in batches, and
+/// composites each into its sample (front to back).
+void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>& hits,
+                std::vector<CameraSample>& samples, std::vector<float>& values) {
+    std::stable_sort(hits.begin(), hits.end(),
+                     [](const SurfaceHit& a, const SurfaceHit& b) {
+                         return a.primitive < b.primitive;
+                     });
+    constexpr std::size_t kBatch = 256;
+    const glm::dmat4& to_camera = job.camera.world_to_camera;
+    ShadingBatch batch;
+    std::vector<float> out;
+    std::size_t begin = 0;
+    while (begin < hits.size()) {
+        const uint32_t prim_index = hits[begin].primitive;
+        std::size_t end = begin;
+        while (end < hits.size() && end - begin < kBatch &&
+               hits[end].primitive == prim_index)
+            ++end;
+        const std::size_t n = end - begin;
+        const Primitive& prim = job.scene->primitives[prim_index];
+        batch = ShadingBatch{};
+        batch.size = n;
+        batch.layout = BatchLayout::Points;
+        batch.primitive = &prim;
+        batch.P.resize(n);
+        batch.N.resize(n);
+        batch.Ng.resize(n);
+        batch.I.resize(n);
+        batch.dPdu.resize(n);
+        batch.dPdv.resize(n);
+        batch.Cs.resize(n);
+        batch.Os.resize(n);
+        batch.du.assign(n, 1.0f);
+        batch.dv.assign(n, 1.0f);
+        batch.dicing_area.resize(n);
+        batch.radius.resize(n);
+        batch.seeds.resize(n);
+        for (std::size_t k = 0; k < n; ++k) {
+            const SurfaceHit& h = hits[begin + k];
+            const glm::dvec3 pc = glm::dvec3(to_camera * glm::dvec4(h.p, 1.0));
+            const glm::dvec3 oc =
+                glm::dvec3(to_camera * glm::dvec4(glm::dvec3(samples[h.sample].ray.origin), 1.0));
+            batch.P[k] = glm::vec3(pc);
+            batch.I[k] = glm::vec3(pc - oc);
+            batch.N[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.n));
+            batch.Ng[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.ng));
+            batch.dPdu[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdx);
+            batch.dPdv[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdy);
+            batch.Cs[k] = glm::vec3(h.cs);
+            batch.Os[k] = glm::vec3(h.os);
+            batch.dicing_area[k] = static_cast<float>(glm::length(glm::cross(
+                glm::dvec3(batch.dPdu[k]), glm::dvec3(batch.dPdv[k]))));
+            batch.radius[k] = static_cast<float>(h.radius);
+            batch.seeds[k] = h.seed;
+        }
+        const ShaderInstance& shader = *job.shaders.surface_of[prim_index];
+        const auto& lights = job.shaders.lights_of[prim_index];
+        context.execute(shader, batch, LightList(lights.data(), lights.size()));
+        job.nan_points += context.nonfinite_count();
+
+        // AOVs this shader has.
+        std::vector<std::vector<float>> aov_values(job.aovs.size());
+        std::vector<char> has(job.aovs.size(), 0);
+        for (std::size_t a = 0; a < job.aovs.size(); ++a) {
+            TypeSpec type;
+            if (context.output(job.aovs[a].variable, type, aov_values[a]) &&
+                !type.is_array() && shading_type_floats(type.type) == job.aovs[a].floats &&
+                type.type != ShadingType::String)
+                has[a] = 1;
+        }
+        for (std::size_t k = 0; k < n; ++k) {
+            const SurfaceHit& h = hits[begin + k];
+            CameraSample& cs = samples[h.sample];
+            float* v = &values[std::size_t(h.sample) * job.values];
+            const glm::dvec3 ci(batch.Ci[k]);
+            const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k]), 0.0, 1.0);
+            if (cs.layers == 0) cs.depth = h.depth;
+            const glm::dvec3 w = cs.trans;
+            for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(w[c] * ci[c]);
+            const double coverage = (w.x * oi.x + w.y * oi.y + w.z * oi.z) / 3.0;
+            for (std::size_t a = 0; a < job.aovs.size(); ++a) {
+                const Aov& aov = job.aovs[a];
+                float* dst = v + aov.offset;
+                if (aov.floats == 3) {
+                    for (int c = 0; c < 3; ++c) {
+                        const double x = has[a] ? aov_values[a][k * 3 + c] : aov.fallback;
+                        dst[c] += static_cast<float>(w[c] * x);
+                    }
+                } else {
+                    const double x = has[a] ? aov_values[a][k] : aov.fallback;
+                    const float add = static_cast<float>(coverage * x);
+                    dst[0] += add;
+                    if (aov.as_rgb) dst[1] += add, dst[2] += add;
+                }
+            }
+            cs.trans *= 1.0 - oi;
+            ++cs.layers;
+            if (std::max({cs.trans.x, cs.trans.y, cs.trans.z}) < kOpaque) cs.active = false;
+        }
+        begin = end;
+    }
 }
 
 /// RenderMan's gaussian filter of width 2, one axis: exp(-2 d^2), |d| < 1.
@@ -383,12 +514,17 @@ double filter_weight(double d) {
     return std::abs(d) < kFilterRadius ? std::exp(-2.0 * d * d) : 0.0;
 }
 
-/// Image channel names, in order.
-std::vector<std::string> image_channels() {
+/// Image channel names, in order: beauty, Z, then each AOV (a colour as
+/// layer.R/G/B, a float as one channel, occlusion as occlusion.R/G/B).
+std::vector<std::string> image_channels(const std::vector<Aov>& aovs) {
     std::vector<std::string> names = {"R", "G", "B", "A", "Z"};
-    for (const char* layer : {"ambient", "diffuse", "specular", "sss", "occlusion"})
-        for (const char* c : {"R", "G", "B"})
-            names.push_back(std::string(layer) + "." + c);
+    for (const Aov& aov : aovs) {
+        if (aov.floats == 3 || aov.as_rgb) {
+            for (const char* c : {"R", "G", "B"}) names.push_back(aov.layer + "." + c);
+        } else {
+            names.push_back(aov.layer);
+        }
+    }
     return names;
 }
 
@@ -420,19 +556,114 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     const double d = job.camera.perspective ? std::max(1.0, job.camera.near_clip) : 1.0;
     job.pixel_per_depth =
         job.camera.pixel_size_at(d) / (job.camera.perspective ? d : 1.0);
+    const glm::dmat3 linear(job.camera.world_to_camera);
+    job.normal_to_camera = glm::transpose(glm::inverse(linear));
+    const glm::dmat3 to_world = glm::inverse(linear);
+    job.camera_x = glm::normalize(to_world * glm::dvec3(1, 0, 0));
+    job.camera_y = glm::normalize(to_world * glm::dvec3(0, 1, 0));
 }
 
-/// Lights and shaders (brick maps and point clouds are opened here, so a
-/// missing file stops the render before any work); true when some light or
-/// shader traces shadow or occlusion rays.
-bool resolve_lighting(Renderer& job, const Scene& scene, std::optional<int> frame,
-                      RenderReport& report) {
-    job.lights = resolve_lights(scene, &report.warnings);
-    job.shaders = detail::resolve_surface_shaders(scene, frame, report.warnings);
+/// The standard AOVs: the output variables of the standard shaders, under
+/// the layer names of the image.
+struct StandardAov {
+    const char* variable;
+    const char* layer;
+    int floats;
+    float fallback;
+};
+constexpr StandardAov kStandardAovs[] = {{"_ambient", "ambient", 3, 0.0f},
+                                         {"_diffuse", "diffuse", 3, 0.0f},
+                                         {"_specular", "specular", 3, 0.0f},
+                                         {"_sss", "sss", 3, 0.0f},
+                                         {"_occlusion", "occlusion", 1, 1.0f}};
+
+/// The names a Display mode or DisplayChannel asks for, by their last word.
+std::vector<std::string> requested_outputs(const Scene& scene) {
+    std::vector<std::string> names;
+    const auto add = [&](std::string item) {
+        const auto b = item.find_first_not_of(" \t");
+        if (b == std::string::npos) return;
+        item = item.substr(b, item.find_last_not_of(" \t") - b + 1);
+        const auto space = item.find_last_of(" \t");
+        if (space != std::string::npos) item = item.substr(space + 1);
+        if (std::find(names.begin(), names.end(), item) == names.end())
+            names.push_back(item);
+    };
+    for (const DisplaySpec& d : scene.options.displays) {
+        std::size_t start = 0;
+        while (true) {
+            const std::size_t comma = d.mode.find(',', start);
+            add(d.mode.substr(start, comma == std::string::npos ? std::string::npos
+                                                                : comma - start));
+            if (comma == std::string::npos) break;
+            start = comma + 1;
+        }
+    }
+    for (const auto& [name, type] : scene.options.display_channels) add(name);
+    return names;
+}
+
+/// The AOVs: the standard ones, then every output variable of a surface
+/// shader that a Display or DisplayChannel names.
+std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
+    std::vector<Aov> aovs;
+    for (const StandardAov& s : kStandardAovs) {
+        Aov a;
+        a.variable = s.variable;
+        a.layer = s.layer;
+        a.floats = s.floats;
+        a.as_rgb = s.floats == 1;
+        a.fallback = s.fallback;
+        aovs.push_back(a);
+    }
+    static const char* const reserved[] = {"rgba", "rgb", "a", "z", "Ci", "Oi", "Z",
+                                           "rgbz", "rgbaz"};
+    for (const std::string& name : requested_outputs(scene)) {
+        if (std::find(std::begin(reserved), std::end(reserved), name) != std::end(reserved))
+            continue;
+        if (std::any_of(aovs.begin(), aovs.end(),
+                        [&](const Aov& a) { return a.layer == name || a.variable == name; }))
+            continue;
+        for (const auto& shader : shaders.surfaces) {
+            const Program& program = shader->program();
+            const int index = program.find(name);
+            if (index < 0) continue;
+            const Symbol& symbol = program.symbols[static_cast<std::size_t>(index)];
+            if (symbol.kind != SymbolKind::OutputParam || symbol.type.is_array()) continue;
+            const int floats = shading_type_floats(symbol.type.type);
+            if (floats != 1 && floats != 3) continue;
+            if (symbol.type.type == ShadingType::String) continue;
+            Aov a;
+            a.variable = name;
+            a.layer = name;
+            a.floats = floats;
+            aovs.push_back(a);
+            break;
+        }
+    }
+    int offset = 4;
+    for (Aov& a : aovs) {
+        a.offset = offset;
+        offset += a.as_rgb ? 3 : a.floats;
+    }
+    return aovs;
+}
+
+/// Shaders, lights, AOVs and shading resources (textures, brick maps and
+/// point clouds are opened on first use); true when some light or shader
+/// traces shadow or occlusion rays.
+bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame,
+                     RenderReport& report) {
+    job.shaders = bind_scene_shaders(scene, frame);
+    for (const std::string& w : job.shaders.warnings) report.warnings.push_back(w);
+    job.resources = std::make_unique<ShadingResources>();
+    job.services = std::make_unique<RenderServices>(scene, frame);
+    job.aovs = plan_aovs(scene, job.shaders);
+    job.values = 4;
+    for (const Aov& a : job.aovs) job.values += a.as_rgb ? 3 : a.floats;
     bool any_shadows = false;
-    for (const Light& l : job.lights) any_shadows = any_shadows || l.shadows;
-    for (const detail::SurfaceShader& s : job.shaders.shaders)
-        any_shadows = any_shadows || s.occlusion_samples > 0;
+    for (const char* op : {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
+        any_shadows = any_shadows || job.shaders.uses(op);
     return any_shadows;
 }
 
@@ -535,75 +766,103 @@ struct TileGrid {
 /// Sides of a tile's buffer: one pixel wider on every side (the filter's reach).
 constexpr int kSpan = kTile + 2;
 
-/// Renders every tile: each splats its own samples into its buffer of
-/// kSpan x kSpan pixels of kSlots values, and keeps the nearest depth of
-/// its pixels in `depth`.
+/// Renders every tile: its camera samples go through the scene layer by
+/// layer (each pass traces every live sample's ray to its next surface and
+/// shades the hits in batches per primitive), then each splats into the
+/// tile's buffer of kSpan x kSpan pixels of job.values + 1 floats; the
+/// nearest depth of its pixels goes to `depth`.
 std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid,
                                              const RenderJobOptions& options,
                                              std::vector<float>& depth) {
     const int width = grid.width, height = grid.height;
     const std::size_t tiles = grid.count();
+    const int slots = job.values + 1; // + weight
     std::vector<std::vector<float>> tile_sums(tiles);
     std::atomic<std::size_t> tiles_done{0};
+    tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts([&] {
+        return std::make_unique<ShadingContext>(*job.resources, *job.services);
+    });
     tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
+        ShadingContext& context = *contexts.local();
         const int x0 = grid.x0(t);
         const int y0 = grid.y0(t);
         const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
         std::vector<float>& sums = tile_sums[t];
-        sums.assign(std::size_t(kSpan) * kSpan * kSlots, 0.0f);
-        std::vector<LightSample> scratch;
-        uint64_t camera_count = 0, shadow_count = 0, bad_count = 0;
-        SampleValue value;
+        sums.assign(std::size_t(kSpan) * kSpan * slots, 0.0f);
+        uint64_t camera_count = 0, bad_count = 0;
+
+        // The tile's samples, pixel by pixel in row order.
+        std::vector<CameraSample> samples;
+        samples.reserve(std::size_t(x1 - x0) * (y1 - y0) * job.nx * job.ny);
         for (int py = y0; py < y1; ++py) {
             for (int px = x0; px < x1; ++px) {
                 const uint64_t pixel_key =
                     detail::splitmix64((uint64_t(uint32_t(py)) << 32) | uint32_t(px));
-                float& z = depth[std::size_t(py) * width + px];
                 for (int j = 0; j < job.ny; ++j) {
                     for (int i = 0; i < job.nx; ++i) {
-                        const uint64_t key = detail::splitmix64(
+                        CameraSample cs;
+                        cs.key = detail::splitmix64(
                             pixel_key +
                             uint64_t(j * job.nx + i) * detail::kSplitMixIncrement);
-                        const double sx = px + (i + detail::unit_double(key)) / job.nx;
-                        const double sy =
-                            py +
-                            (j + detail::unit_double(detail::splitmix64(key))) / job.ny;
-                        bool bad = false;
-                        job.sample(sx, sy, key, scratch, value, camera_count,
-                                   shadow_count, bad);
-                        bad_count += bad ? 1 : 0;
-                        z = std::min(z, value.depth);
-                        // Splat into the pixels whose filter reaches the
-                        // sample: this pixel and its 8 neighbours at most.
-                        double wx[3], wy[3];
-                        for (int k = 0; k < 3; ++k) {
-                            const int qx = px - 1 + k, qy = py - 1 + k;
-                            wx[k] = qx >= 0 && qx < width ? filter_weight(sx - (qx + 0.5))
-                                                          : 0.0;
-                            wy[k] = qy >= 0 && qy < height
-                                        ? filter_weight(sy - (qy + 0.5))
-                                        : 0.0;
-                        }
-                        for (int ky = 0; ky < 3; ++ky) {
-                            if (wy[ky] == 0.0) continue;
-                            for (int kx = 0; kx < 3; ++kx) {
-                                if (wx[kx] == 0.0) continue;
-                                const float w = static_cast<float>(wx[kx] * wy[ky]);
-                                // Buffer cell of pixel (px - 1 + kx, py - 1 + ky).
-                                float* acc = &sums[(std::size_t(py - y0 + ky) * kSpan +
-                                                    (px - x0 + kx)) *
-                                                   kSlots];
-                                for (int c = 0; c < kValues; ++c)
-                                    acc[c] += w * value.v[c];
-                                acc[kValues] += w;
-                            }
-                        }
+                        cs.sx = px + (i + detail::unit_double(cs.key)) / job.nx;
+                        cs.sy = py +
+                                (j + detail::unit_double(detail::splitmix64(cs.key))) /
+                                    job.ny;
+                        cs.ray = job.rays->ray(cs.sx, cs.sy, &cs.units);
+                        samples.push_back(cs);
                     }
                 }
             }
         }
+        std::vector<float> values(samples.size() * job.values, 0.0f);
+        std::vector<SurfaceHit> hits;
+        while (true) {
+            trace_pass(job, samples, hits, camera_count);
+            if (hits.empty() && std::none_of(samples.begin(), samples.end(),
+                                             [](const CameraSample& c) { return c.active; }))
+                break;
+            shade_pass(job, context, hits, samples, values);
+        }
+
+        for (std::size_t s = 0; s < samples.size(); ++s) {
+            const CameraSample& cs = samples[s];
+            float* v = &values[s * job.values];
+            v[3] = static_cast<float>(1.0 - (cs.trans.x + cs.trans.y + cs.trans.z) / 3.0);
+            // A sample that went wrong numerically is dropped (black,
+            // transparent) rather than spreading NaN through the filter.
+            bool bad = false;
+            for (int c = 0; c < job.values; ++c)
+                if (!std::isfinite(v[c])) bad = true;
+            if (bad) {
+                std::fill(v, v + job.values, 0.0f);
+                ++bad_count;
+            }
+            const int px = static_cast<int>(std::floor(cs.sx));
+            const int py = static_cast<int>(std::floor(cs.sy));
+            float& z = depth[std::size_t(py) * width + px];
+            z = std::min(z, cs.depth);
+            // Splat into the pixels whose filter reaches the sample: this
+            // pixel and its 8 neighbours at most.
+            double wx[3], wy[3];
+            for (int k = 0; k < 3; ++k) {
+                const int qx = px - 1 + k, qy = py - 1 + k;
+                wx[k] = qx >= 0 && qx < width ? filter_weight(cs.sx - (qx + 0.5)) : 0.0;
+                wy[k] = qy >= 0 && qy < height ? filter_weight(cs.sy - (qy + 0.5)) : 0.0;
+            }
+            for (int ky = 0; ky < 3; ++ky) {
+                if (wy[ky] == 0.0) continue;
+                for (int kx = 0; kx < 3; ++kx) {
+                    if (wx[kx] == 0.0) continue;
+                    const float w = static_cast<float>(wx[kx] * wy[ky]);
+                    // Buffer cell of pixel (px - 1 + kx, py - 1 + ky).
+                    float* acc =
+                        &sums[(std::size_t(py - y0 + ky) * kSpan + (px - x0 + kx)) * slots];
+                    for (int c = 0; c < job.values; ++c) acc[c] += w * v[c];
+                    acc[job.values] += w;
+                }
+            }
+        }
         job.camera_rays += camera_count;
-        job.shadow_rays += shadow_count;
         job.bad_samples += bad_count;
         if (options.progress) options.progress->update(++tiles_done, tiles);
     });
@@ -612,10 +871,10 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
 
 /// Adds the tiles up in a fixed order, the same sums for any thread count,
 /// freeing each tile's buffer once added.
-std::vector<float> add_tiles(const TileGrid& grid,
+std::vector<float> add_tiles(const TileGrid& grid, int slots,
                              std::vector<std::vector<float>>& tile_sums) {
     const int width = grid.width, height = grid.height;
-    std::vector<float> sums(std::size_t(width) * height * kSlots, 0.0f);
+    std::vector<float> sums(std::size_t(width) * height * slots, 0.0f);
     for (std::size_t t = 0; t < grid.count(); ++t) {
         const int x0 = grid.x0(t);
         const int y0 = grid.y0(t);
@@ -626,9 +885,9 @@ std::vector<float> add_tiles(const TileGrid& grid,
             for (int tx = 0; tx < kSpan; ++tx) {
                 const int px = x0 - 1 + tx;
                 if (px < 0 || px >= width) continue;
-                const float* src = &tile[(std::size_t(ty) * kSpan + tx) * kSlots];
-                float* dst = &sums[(std::size_t(py) * width + px) * kSlots];
-                for (int c = 0; c < kSlots; ++c) dst[c] += src[c];
+                const float* src = &tile[(std::size_t(ty) * kSpan + tx) * slots];
+                float* dst = &sums[(std::size_t(py) * width + px) * slots];
+                for (int c = 0; c < slots; ++c) dst[c] += src[c];
             }
         }
         std::vector<float>().swap(tile_sums[t]);
@@ -637,34 +896,35 @@ std::vector<float> add_tiles(const TileGrid& grid,
 }
 
 /// The image: filtered sums divided by their weights, and the depth.
-Image resolve_pixels(const TileGrid& grid, const std::vector<float>& sums,
-                     const std::vector<float>& depth) {
+Image resolve_pixels(const Renderer& job, const TileGrid& grid,
+                     const std::vector<float>& sums, const std::vector<float>& depth) {
     const int width = grid.width, height = grid.height;
-    Image image(width, height, image_channels());
+    const int slots = job.values + 1;
+    Image image(width, height, image_channels(job.aovs));
     for (int py = 0; py < height; ++py) {
         for (int px = 0; px < width; ++px) {
-            const float* s = &sums[(std::size_t(py) * width + px) * kSlots];
+            const float* s = &sums[(std::size_t(py) * width + px) * slots];
             float* out = image.pixel(px, py);
-            const float weight = s[kValues];
+            const float weight = s[job.values];
             const float inv = weight > 0.0f ? 1.0f / weight : 0.0f;
             for (int c = 0; c < 4; ++c) out[c] = s[c] * inv;
             const float z = depth[std::size_t(py) * width + px];
             out[4] = std::isfinite(z) ? z : 0.0f; // no hit: 0
-            for (int c = 0; c < 12; ++c) out[5 + c] = s[kAmbient + c] * inv;
-            const float occ = s[kOcclusion] * inv;
-            out[17] = out[18] = out[19] = occ;
+            for (int c = 4; c < job.values; ++c) out[c + 1] = s[c] * inv;
         }
     }
     return image;
 }
 
-/// The ray counts, and a warning about samples that went wrong numerically.
+/// The ray counts, and warnings about samples that went wrong numerically.
 void report_rays(const Renderer& job, RenderReport& report) {
     report.camera_rays = job.camera_rays.load();
-    report.shadow_rays = job.shadow_rays.load();
     if (job.bad_samples.load() > 0)
         report.warnings.push_back(std::to_string(job.bad_samples.load()) +
                                   " samples had non-finite values and were left black");
+    if (job.nan_points.load() > 0)
+        report.warnings.push_back(std::to_string(job.nan_points.load()) +
+                                  " shading points gave NaN or infinite values, written as 0");
 }
 
 } // namespace
@@ -678,19 +938,21 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
 
     Renderer job;
     setup_camera(job, scene, options);
-    const bool any_shadows = resolve_lighting(job, scene, frame, report);
+    const bool any_shadows = resolve_shading(job, scene, frame, report);
     bool separate_shadows = false;
     const std::vector<std::size_t> to_dice =
         plan_surfaces(job, any_shadows, &separate_shadows);
     dice_surfaces(job, to_dice);
     build_tracers(job, to_dice, any_shadows, separate_shadows, report);
+    job.services->set_occluders(job.occluders);
     report.setup_seconds = watch.seconds();
 
     const TileGrid grid(job.camera.xres, job.camera.yres);
     std::vector<float> depth(std::size_t(grid.width) * grid.height,
                              std::numeric_limits<float>::infinity());
     std::vector<std::vector<float>> tile_sums = render_tiles(job, grid, options, depth);
-    Image image = resolve_pixels(grid, add_tiles(grid, tile_sums), depth);
+    Image image =
+        resolve_pixels(job, grid, add_tiles(grid, job.values + 1, tile_sums), depth);
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
@@ -753,7 +1015,8 @@ RenderFiles render_files(const Scene& scene, const RenderJobOptions& options) {
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
     RenderFiles files;
     files.inputs = scene.sources;
-    for (const std::string& f : detail::diffusion_files(scene, frame))
+    const SceneShaders shaders = bind_scene_shaders(scene, frame);
+    for (const std::string& f : shader_input_files(shaders))
         if (std::find(files.inputs.begin(), files.inputs.end(), f) == files.inputs.end())
             files.inputs.push_back(f);
     int primary = -1;
