@@ -100,6 +100,11 @@ public:
                    std::vector<int>& channel_floats, float* out, uint8_t* found,
                    std::string* error);
 
+    /// Forgets what is known of `file` (2-D and 3-D), so that the next call
+    /// opens it again: for a file written during the job (bake3d, then
+    /// texture3d). Unreadable files are otherwise remembered as such.
+    void invalidate(const std::string& file);
+
 private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;
