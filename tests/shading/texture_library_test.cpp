@@ -22,6 +22,8 @@
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/shading/bake3d_file.h"
+#include "sss/util/error.h"
 
 using sss::detail::TextureLibrary;
 using sss::detail::TextureOptions;
@@ -146,6 +148,38 @@ TEST(RslTextureOptions, EveryOptionAndUnknownNames) {
     EXPECT_FALSE(set_texture_option(o, "", &half, 1, nullptr));
     EXPECT_EQ(o.sblur, before.sblur);
     EXPECT_EQ(o.fill, before.fill);
+}
+
+TEST(RslTextureOptions, Texture3dAndBake3dOptions) {
+    const float two = 2.0f, half = 0.5f, one = 1.0f;
+    const std::string shader = "shader";
+    sss::detail::Texture3dOptions t;
+    EXPECT_TRUE(set_texture3d_option(t, "coordsystem", nullptr, 0, &shader));
+    EXPECT_EQ(t.coordsystem, "shader");
+    EXPECT_TRUE(set_texture3d_option(t, "filterradius", &half, 1, nullptr));
+    EXPECT_EQ(t.filterradius, 0.5f);
+    EXPECT_TRUE(set_texture3d_option(t, "filterscale", &two, 1, nullptr));
+    EXPECT_EQ(t.filterscale, 2.0f);
+    EXPECT_TRUE(set_texture3d_option(t, "maxdepth", &two, 1, nullptr));
+    EXPECT_EQ(t.maxdepth, 2);
+    EXPECT_TRUE(set_texture3d_option(t, "radius", &one, 1, nullptr)); // Pixie
+    EXPECT_EQ(t.filterradius, 1.0f);
+    EXPECT_TRUE(set_texture3d_option(t, "radiusscale", &half, 1, nullptr));
+    EXPECT_EQ(t.filterscale, 0.5f);
+    EXPECT_TRUE(set_texture3d_option(t, "interpolate", &one, 1, nullptr));
+    EXPECT_FALSE(set_texture3d_option(t, "blur", &one, 1, nullptr));
+
+    sss::detail::Bake3dOptions b;
+    EXPECT_LT(b.radius, 0.0f);
+    EXPECT_TRUE(set_bake3d_option(b, "radius", &half, 1, nullptr));
+    EXPECT_EQ(b.radius, 0.5f);
+    EXPECT_TRUE(set_bake3d_option(b, "radiusscale", &two, 1, nullptr));
+    EXPECT_EQ(b.radiusscale, 2.0f);
+    EXPECT_TRUE(set_bake3d_option(b, "coordsystem", nullptr, 0, &shader));
+    EXPECT_EQ(b.coordsystem, "shader");
+    EXPECT_TRUE(set_bake3d_option(b, "interpolate", &one, 1, nullptr));
+    EXPECT_TRUE(b.interpolate);
+    EXPECT_FALSE(set_bake3d_option(b, "filterradius", &one, 1, nullptr));
 }
 
 // ---------------------------------------------------------------------------
@@ -398,6 +432,21 @@ TEST(RslEnvironment, LatLongConvention) {
             EXPECT_NEAR(out[1], c.t, 0.01f)
                 << file << " " << c.dir.x << "," << c.dir.y << "," << c.dir.z;
         }
+    // RISpec 3.2's z-up maps (longitude 0 = +x at s = 0): at direction d,
+    // what ours gives at (d.y, d.z, -d.x).
+    for (const glm::vec3 d : {glm::vec3(1, 0.5f, 0.2f), glm::vec3(-0.3f, 1, -0.4f),
+                              glm::vec3(0.2f, -1, 0.6f), glm::vec3(-1, -0.1f, -0.5f)}) {
+        const glm::vec3 u = d / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+        float s = std::atan2(u.y, u.x) / (2 * kPi);
+        if (s < 0) s += 1;
+        const float t = 0.5f - std::asin(u.z) / kPi;
+        const glm::vec3 ours(u.y, u.z, -u.x);
+        float st[2];
+        ASSERT_TRUE(lib.environment(tx, 0, 2, {}, 1, &ours, nullptr, nullptr, nullptr, st,
+                                    nullptr));
+        EXPECT_NEAR(st[0], s, 0.01f) << d.x << "," << d.y << "," << d.z;
+        EXPECT_NEAR(st[1], t, 0.01f) << d.x << "," << d.y << "," << d.z;
+    }
     // Straight up: the top row (t near 0), whatever s.
     const glm::vec3 up(0, 1, 0);
     float out[2];
@@ -581,4 +630,92 @@ TEST(RslTexture3d, MissingAndCorruptFiles) {
     EXPECT_TRUE(lib.texture3d(later, channels, 1, &P, nullptr, nullptr, nullptr, floats,
                               &out, &found, nullptr));
     EXPECT_EQ(found, 1);
+}
+
+// ---------------------------------------------------------------------------
+// bake3d files
+
+TEST(RslBake3dFile, RecordsMergeIntoACloudThatTexture3dReads) {
+    TempDir dir;
+    const std::string file = dir.file("baked.ptc");
+    const std::string other = dir.file("other.ptc");
+    // Two records for `file` (the second without "_area", with a new
+    // channel "_n" declared a normal), one for `other`.
+    sss::Bake3dRecord a;
+    a.file = file;
+    a.channels = {"_radiance_t", "_area"};
+    a.channel_floats = {3, 1};
+    a.P = {{0, 0, 0}, {0.1f, 0, 0}};
+    a.N = {{0, 0, 1}, {0, 0, 1}};
+    a.radius = {0.05f, 0.05f};
+    a.values = {1, 2, 3, 0.01f, 4, 5, 6, 0.02f};
+    sss::Bake3dRecord b;
+    b.file = file;
+    b.channels = {"_n", "_radiance_t"};
+    b.channel_floats = {3, 3};
+    b.P = {{0.2f, 0, 0}};
+    b.N = {{0, 0, 1}};
+    b.radius = {0.05f};
+    b.values = {0, 1, 0, 7, 8, 9};
+    sss::Bake3dRecord c = a;
+    c.file = other;
+    const sss::ChannelDeclarations declared = {{"_n", "normal"}};
+
+    const std::vector<sss::Bake3dRecord> records = {a, b, c};
+    const sss::PointCloud cloud = sss::bake3d_point_cloud({records.data(), 2}, declared);
+    ASSERT_EQ(cloud.size(), 3u);
+    ASSERT_EQ(cloud.channels.size(), 3u);
+    EXPECT_EQ(cloud.channels[0].name, "_radiance_t");
+    EXPECT_EQ(cloud.channels[0].type, sss::ChannelType::Color);
+    EXPECT_EQ(cloud.channels[1].type, sss::ChannelType::Float);
+    EXPECT_EQ(cloud.channels[2].type, sss::ChannelType::Normal);
+    EXPECT_EQ(cloud.channels[0].data, (std::vector<float>{1, 2, 3, 4, 5, 6, 7, 8, 9}));
+    EXPECT_EQ(cloud.channels[1].data, (std::vector<float>{0.01f, 0.02f, 0.0f}));
+    EXPECT_EQ(cloud.positions[2], glm::vec3(0.2f, 0, 0));
+    EXPECT_EQ(cloud.radii[1], 0.05f);
+
+    EXPECT_EQ(sss::write_bake3d_files(records, declared),
+              (std::vector<std::string>{file, other}));
+    EXPECT_EQ(sss::read_point_cloud(file).size(), 3u);
+    EXPECT_EQ(sss::read_point_cloud(other).size(), 2u);
+
+    // texture3d reads it back: at the third point, its colour.
+    TextureLibrary lib;
+    const std::vector<std::string> channels = {"_radiance_t"};
+    const glm::vec3 P(0.2f, 0, 0), N(0, 0, 1);
+    std::vector<int> floats;
+    float out[3];
+    uint8_t found = 0;
+    ASSERT_TRUE(lib.texture3d(file, channels, 1, &P, &N, nullptr, nullptr, floats, out,
+                              &found, nullptr));
+    EXPECT_EQ(found, 1);
+    EXPECT_GT(out[0], 4.0f); // the nearest points dominate
+    EXPECT_LE(out[0], 7.0f);
+}
+
+TEST(RslBake3dFile, InconsistentRecordsAreRejected) {
+    sss::Bake3dRecord r;
+    r.file = "x.ptc";
+    r.channels = {"v"};
+    r.channel_floats = {1};
+    r.P = {{0, 0, 0}};
+    r.values = {1, 2}; // two floats for one point of one float
+    EXPECT_THROW(sss::bake3d_point_cloud({&r, 1}), sss::ValueError);
+    r.values = {1};
+    EXPECT_NO_THROW(sss::bake3d_point_cloud({&r, 1}));
+    EXPECT_THROW(sss::bake3d_point_cloud({&r, 1}, {{"v", "color"}}), sss::ValueError);
+    sss::Bake3dRecord wide = r;
+    wide.channel_floats = {3};
+    wide.values = {1, 2, 3};
+    const std::vector<sss::Bake3dRecord> both = {r, wide};
+    EXPECT_THROW(sss::bake3d_point_cloud(both), sss::ValueError);
+    try {
+        sss::write_bake3d_files(both);
+        FAIL() << "no error";
+    } catch (const sss::ValueError& e) {
+        EXPECT_EQ(std::string(e.what()).rfind("x.ptc: ", 0), 0u) << e.what();
+    }
+    r.channel_floats = {2};
+    r.values = {1, 2};
+    EXPECT_THROW(sss::bake3d_point_cloud({&r, 1}), sss::ValueError);
 }

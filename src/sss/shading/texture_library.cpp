@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 
 #include <OpenImageIO/texture.h>
 
@@ -61,10 +62,13 @@ OIIO::TextureOpt oiio_options(const TextureOptions& options, int channel) {
     return opt;
 }
 
-/// "file: reason", without OIIO's own repetition of the file name.
+/// "file: reason" from OIIO's message: its first line, without OIIO's own
+/// "Could not open file:" and repetitions of the file name.
 std::string file_error(const std::string& file, std::string reason) {
-    while (!reason.empty() && (reason.back() == '\n' || reason.back() == ' '))
-        reason.pop_back();
+    reason = reason.substr(0, reason.find('\n'));
+    for (const std::string& prefix : {std::string("Could not open file: "), file + ": "})
+        if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
+    while (!reason.empty() && reason.back() == ' ') reason.pop_back();
     if (reason.empty()) reason = "cannot be read as a texture";
     return file + ": " + reason;
 }
@@ -95,6 +99,42 @@ bool set_texture_option(TextureOptions& options, std::string_view name,
         if (number) options.fill = x;
     } else if (name == "lerp") {
         if (number) options.lerp = std::clamp(static_cast<int>(std::lround(x)), 0, 2);
+    } else {
+        return false;
+    }
+    return true;
+}
+
+bool set_texture3d_option(Texture3dOptions& options, std::string_view name,
+                          const float* numbers, int count, const std::string* text) {
+    const bool number = numbers && count >= 1;
+    const float x = number ? numbers[0] : 0.0f;
+    if (name == "coordsystem") {
+        if (text) options.coordsystem = *text;
+    } else if (name == "filterradius" || name == "radius") {
+        if (number) options.filterradius = x;
+    } else if (name == "filterscale" || name == "radiusscale") {
+        if (number) options.filterscale = x;
+    } else if (name == "maxdepth") {
+        if (number) options.maxdepth = static_cast<int>(std::lround(x));
+    } else if (name != "interpolate") {
+        return false;
+    }
+    return true;
+}
+
+bool set_bake3d_option(Bake3dOptions& options, std::string_view name,
+                       const float* numbers, int count, const std::string* text) {
+    const bool number = numbers && count >= 1;
+    const float x = number ? numbers[0] : 0.0f;
+    if (name == "radius") {
+        if (number) options.radius = x;
+    } else if (name == "radiusscale") {
+        if (number) options.radiusscale = x;
+    } else if (name == "coordsystem") {
+        if (text) options.coordsystem = *text;
+    } else if (name == "interpolate") {
+        if (number) options.interpolate = x != 0.0f;
     } else {
         return false;
     }
@@ -137,6 +177,15 @@ std::shared_ptr<TextureFile> TextureLibrary::Impl::open(const std::string& file)
         entry = slot;
     }
     std::call_once(entry->once, [&] {
+        // A missing file is told apart here: OIIO's words for it are long.
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(file, ec)) {
+            entry->error =
+                file + ": " +
+                (std::filesystem::exists(file, ec) ? "not a regular file"
+                                                   : "no such file or directory");
+            return;
+        }
         OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
         entry->handle = ts->get_texture_handle(OIIO::ustring(file), pt);
         OIIO::ImageSpec spec;
