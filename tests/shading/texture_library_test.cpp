@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -278,6 +279,11 @@ TEST(RslTexture, MipMappedTxLookupsAndBlur) {
             EXPECT_NEAR(filtered(lib, file, 0.5f, 0.5f, 0.25f, o), 0.5f, 0.06f)
                 << filter << " lerp " << lerp;
         }
+    // A plain (scanline, single-level) image is MIP-mapped on the fly.
+    const std::string plain = dir.file("check.exr");
+    ASSERT_TRUE(checkerboard(64, 4).write(plain));
+    EXPECT_NEAR(filtered(lib, plain, 0.5f, 0.5f, 0.25f), 0.5f, 0.05f);
+    EXPECT_NEAR(lookup(lib, plain, 0, 1, 0.5f, 0.5f, blur)[0], 0.5f, 0.05f);
     // "none": the nearest texel, even between texels.
     TextureOptions nearest;
     nearest.filter = "none";
@@ -335,8 +341,9 @@ TEST(RslTexture, MissingOrBrokenFilesFailCleanly) {
     const std::string missing = dir.file("nothere.tx");
     const std::string broken = dir.file("broken.tif");
     sss::test::write_bytes(broken, sss::test::Bytes{'I', 'I', 42, 0, 1, 2, 3});
-    TextureLibrary lib;
     testing::internal::CaptureStderr();
+    auto lib_owner = std::make_unique<TextureLibrary>();
+    TextureLibrary& lib = *lib_owner;
     for (const std::string& file : {missing, broken, missing}) {
         const float s = 0.5f, t = 0.5f;
         float out[3] = {0, 0, 0};
@@ -352,6 +359,7 @@ TEST(RslTexture, MissingOrBrokenFilesFailCleanly) {
         float res[2];
         EXPECT_FALSE(lib.texture_info(file, "resolution", 2, res, nullptr));
     }
+    lib_owner.reset(); // nothing left to print at destruction either
     EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
 }
 
