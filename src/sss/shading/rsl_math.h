@@ -65,8 +65,9 @@ bool rsl_rgb_to_color(std::string_view space, const glm::vec3& rgb, glm::vec3& c
 /// "linear" (piecewise linear through the interior knots, like PRMan).
 /// `values`: `count` values of `components` floats each, consecutive. t is
 /// clamped to [0,1]. Returns false for an unknown basis or too few values
-/// (catmull-rom, b-spline, power: >= 4; bezier: 4+3k; hermite: 4+2k;
-/// linear: >= 4, the first and last being unused like catmull-rom's).
+/// (catmull-rom, b-spline: >= 4; bezier: 4+3k; hermite: 4+2k; power: 4k;
+/// linear: >= 4, the first and last being unused like catmull-rom's). An
+/// empty basis name is catmull-rom.
 bool rsl_spline(std::string_view basis, float t, const float* values, int count,
                 int components, float* out);
 
