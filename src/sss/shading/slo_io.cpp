@@ -27,6 +27,7 @@
 
 #include "builtins.h"
 #include "sss/shading/program.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -555,6 +556,18 @@ Program read_program_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path, "cannot open");
     return read_program(in, path);
+}
+
+void write_program_file(const Program& program, const std::string& path) {
+    AtomicOutput out(path);
+    {
+        std::ofstream f(out.temp_path(), std::ios::binary | std::ios::trunc);
+        if (!f) throw IoError(path, "cannot create");
+        write_program(program, f);
+        f.flush();
+        if (!f) throw IoError(path, "cannot write");
+    }
+    out.commit();
 }
 
 } // namespace sss
