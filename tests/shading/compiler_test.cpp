@@ -647,3 +647,26 @@ TEST(RslErrors, DeepNestingIsAnError) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(RslErrors, InliningIsBounded) {
+    // 100 functions each calling the previous one: too deep to inline.
+    std::string deep = "float f0(float x) { return x; }\n";
+    for (int i = 1; i < 100; ++i)
+        deep += "float f" + std::to_string(i) + "(float x) { return f" +
+                std::to_string(i - 1) + "(x); }\n";
+    deep += "surface s() { Ci = f99(1); }\n";
+    auto ds = sss::test::compile_errors(deep);
+    EXPECT_TRUE(sss::test::has_error(ds, "nested more than 64 deep"));
+    // Each calling the previous twice: 2^30 ops, stopped by the size limit.
+    std::string wide = "float g0(float x) { return x + 1; }\n";
+    for (int i = 1; i < 31; ++i)
+        wide += "float g" + std::to_string(i) + "(float x) { return g" +
+                std::to_string(i - 1) + "(x) + g" + std::to_string(i - 1) + "(x); }\n";
+    wide += "surface s() { Ci = g30(u); }\n";
+    ds = sss::test::compile_errors(wide);
+    EXPECT_TRUE(sss::test::has_error(ds, "shader too large"));
+}
+
+} // namespace

@@ -27,8 +27,10 @@ namespace sss::detail {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr std::size_t kMaxOps = 2000000;
-constexpr std::size_t kMaxSymbols = 1000000;
+constexpr std::size_t kMaxOps = 500000;
+constexpr std::size_t kMaxSymbols = 500000;
+constexpr std::size_t kMaxInlineDepth = 64; ///< calls inside calls inside calls...
+constexpr int kDemotionPasses = 8;          ///< then every undeclared local is varying
 
 // --- globals (shading.md section 4) ------------------------------------------
 
@@ -233,9 +235,10 @@ std::string tname(const TypeSpec& t) {
 class Generator {
 public:
     Generator(const SourceFile& file, const ShaderDef& shader, DiagnosticSink& diags,
-              const std::set<std::string>& forced, std::set<std::string>& newly_forced)
+              const std::set<std::string>& forced, std::set<std::string>& newly_forced,
+              bool demote)
         : m_file(file), m_shader(shader), m_d(diags), m_forced(forced),
-          m_newly(newly_forced) {}
+          m_newly(newly_forced), m_demote(demote) {}
 
     Program run() {
         m_p.kind = m_shader.kind;
@@ -1256,6 +1259,11 @@ private:
                   "recursive call of '" + f.name + "' (RSL functions cannot recurse)");
             return {};
         }
+        if (m_inline.size() >= kMaxInlineDepth) {
+            error(call.loc, "function calls nested more than " +
+                                std::to_string(kMaxInlineDepth) + " deep");
+            throw CompileAbort{};
+        }
         const int inst = ++m_instances;
         const std::string suffix = "@" + std::to_string(inst);
         const std::string prefix = f.name + "::";
@@ -1426,7 +1434,8 @@ private:
                        std::to_string(m_funcs.back().instance);
             const std::string name = unique_name(base);
             bool vary = d.storage == Storage::Varying;
-            const bool tentative = d.storage == Storage::Default && !m_forced.count(name);
+            const bool tentative =
+                m_demote && d.storage == Storage::Default && !m_forced.count(name);
             if (d.storage == Storage::Default && !tentative) vary = true;
             Var v;
             v.sym = add_symbol(name, t, vary, SymbolKind::Local);
@@ -1712,6 +1721,7 @@ private:
     DiagnosticSink& m_d;
     const std::set<std::string>& m_forced;
     std::set<std::string>& m_newly;
+    const bool m_demote;
     Program m_p;
     unsigned m_kind_bit = kS;
     SrcLoc m_loc;
@@ -1745,15 +1755,17 @@ std::vector<Program> generate(const SourceFile& file, DiagnosticSink& diags) {
             std::set<std::string> newly;
             Program program;
             bool aborted = false;
+            // After a few passes, stop demoting: every undeclared local varying.
+            const bool demote = pass < kDemotionPasses;
             try {
-                program = Generator(file, shader, sink, forced, newly).run();
+                program = Generator(file, shader, sink, forced, newly, demote).run();
             } catch (const CompileAbort&) {
                 aborted = true;
             }
             std::size_t before = forced.size();
             forced.insert(newly.begin(), newly.end());
-            // Marks only grow, so this ends; the bound is a safety net.
-            if (aborted || forced.size() == before || pass >= 64) {
+            // Marks only grow, so this ends; without demotion nothing is marked.
+            if (aborted || forced.size() == before || !demote) {
                 const int errors_before = diags.error_count();
                 diags.absorb(sink);
                 if (aborted) throw CompileAbort{};
