@@ -670,3 +670,33 @@ TEST(RslErrors, InliningIsBounded) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(RslCompiler, CompileTextRunsThePreprocessor) {
+    sss::PreprocessOptions options;
+    options.defines.emplace_back("KD", "0.25");
+    const sss::CompileResult r = sss::compile_text(
+        "#define HALF(x) ((x) / 2)\n/* comment */\nsurface s(float Kd = KD) {\n"
+        "#ifdef KD\n  Ci = HALF(Kd);\n#endif\n}\n",
+        "m.sl", options);
+    ASSERT_EQ(r.shaders.size(), 1u);
+    const sss::Program& p = r.shaders[0];
+    EXPECT_EQ(p.symbols[p.find("Kd")].numbers, std::vector<float>{0.25f});
+    EXPECT_EQ(p.files.at(0), "m.sl");
+    ASSERT_FALSE(p.ops.empty());
+    EXPECT_EQ(p.ops.back().where.line, 5);
+    try {
+        sss::compile_text("surface s() {\n#line 40 \"other.sl\"\n  Ci = nope;\n}\n",
+                          "m.sl");
+        ADD_FAILURE() << "compiled";
+    } catch (const sss::ShaderCompileError& e) {
+        ASSERT_FALSE(e.diagnostics().empty());
+        EXPECT_EQ(e.diagnostics()[0].file, "other.sl");
+        EXPECT_EQ(e.diagnostics()[0].line, 40);
+        EXPECT_EQ(e.diagnostics()[0].column, 8);
+        EXPECT_EQ(std::string(e.what()), "other.sl:40:8: error: unknown variable 'nope'");
+    }
+}
+
+} // namespace
