@@ -402,7 +402,7 @@ surface s(string map = "a.tx"; string names[2] = {"x", "y"}) {
 
 TEST(RslCompiler, OutputArgumentsOfBuiltins) {
     const Program p = compile_one(R"(
-surface s() {
+surface s(float Kfs = 1) {
     float Kr, Kt;
     fresnel(normalize(I), normalize(N), 1.5, Kr, Kt);
     float res[2];
@@ -410,7 +410,7 @@ surface s() {
     point q = P;
     setxcomp(q, 1);
     float val = 0;
-    float found = texture3d("c.ptc", P, N, "_radiosity", val);
+    float found = texture3d("c.ptc", P, N, "filterscale", Kfs, "_radiosity", val);
     Ci = Kr + Kt + ok + found + val;
 }
 )");
@@ -427,7 +427,7 @@ surface s() {
     EXPECT_EQ(sx->writes, 1u);
     const Op* t3 = find_op(p, "texture3d");
     ASSERT_TRUE(t3);
-    EXPECT_EQ(t3->writes, 1u | (1u << 5));
+    EXPECT_EQ(t3->writes, 1u | (1u << 7)); // the channel value, not the filterscale
 }
 
 TEST(RslCompiler, FunctionsInlinedWithOutputAndExtern) {

@@ -1169,6 +1169,21 @@ private:
         return builtin_call(*bp, bm, args, e);
     }
 
+    // In a '@' token-value list (texture3d), a value is written when it is a
+    // writable variable, unless its name is one of the options that are read.
+    bool written_token(const ArgInfo& name, const ArgInfo& value) {
+        static const std::set<std::string> inputs = {
+            "filterscale", "filterradius", "radius",       "coordsystem", "interpolate",
+            "maxdepth",    "blur",         "lerp",         "width",       "maxdist",
+            "samples",     "bias",         "cachelifetime"};
+        if (!value.is_var || value.var.readonly) return false;
+        if (name.val.ok() && is_const(name.val.sym) &&
+            !m_p.symbols[name.val.sym].strings.empty() &&
+            inputs.count(m_p.symbols[name.val.sym].strings[0]))
+            return false;
+        return true;
+    }
+
     Val builtin_call(const Proto& p, const Match& m, std::vector<ArgInfo>& args,
                      const Expr& e) {
         const std::string& name = p.sig->name;
@@ -1184,7 +1199,9 @@ private:
                 a.literal = false;
             }
             if (!a.val.ok()) return {};
-            if (s.output) {
+            if (s.output && m.token_value[i] && !written_token(args[i - 1], a)) {
+                // An option of a '@' list that is read, not a looked-up channel.
+            } else if (s.output) {
                 if (!a.is_var) {
                     error(a.expr->loc, "argument " + std::to_string(i + 1) + " of '" +
                                            name +
