@@ -49,6 +49,50 @@
 ///    name and its overloads); token-value lists follow the fixed arguments
 ///    as (string, value) symbol pairs. `texture`, `environment` and `shadow`
 ///    always carry the channel (a float symbol) as their second argument.
+///
+/// What the compiler emits, in more detail (the front end's conventions):
+///  - Built-in calls: args[0] is the result unless the overload returns void
+///    (`fresnel`, `setxcomp`, `printf`...: then the arguments start at
+///    args[0]); the arguments follow in source order, converted to the
+///    overload's types (a float for a triple, point/vector/normal among
+///    themselves), except output arguments, which are the variables
+///    themselves, with their bits set in `writes` (texture3d's token values
+///    too). `texture("f"[2], s, t)` is `texture r "f" 2 s t`; without a
+///    subscript the channel is the constant 0.
+///  - Every op that computes a value writes args[0] (writes == 1): assign,
+///    arithmetic, comparisons, aref, construct, cast; `aassign` writes its
+///    array (args[0]). Control ops (if, loop, block, illuminance...,
+///    break, continue, return) write nothing and have writes == 0.
+///  - `eq`/`ne` get operands of one type (a float compared with a triple is
+///    first assigned to a triple temp); `lt le gt ge and or not` take floats.
+///    A condition that is a triple is compared `ne` against 0.
+///  - `?:` becomes an `if` whose two parts assign a temp.
+///  - `construct`: args [d, x, y, z], [d, space, x, y, z], [d, 16 floats],
+///    [d, space, 16 floats] or [d, space, f] (matrix); `point "sp" 1` is
+///    `construct d sp f f f`. Triples of constants without a space are
+///    constants, not ops.
+///  - `return` in the body of the shader (outside any block) ends the shader
+///    for the running points; in an inlined function it ends the block, the
+///    result (symbol "<function>::result@<n>") having been assigned just
+///    before. A void function's `return` has no assignment before it.
+///  - `illuminance`: all four arguments are always present: category ""
+///    when absent; axis the constant vector (0,0,0) and angle PI when
+///    absent. `illuminate p axis angle` / `solar axis angle`: the constant
+///    vector (0,0,0) and -1 when absent.
+///  - `break`/`continue` count `loop` ops only (not illuminance), within
+///    the enclosing block (a function cannot break its caller's loop).
+///  - Symbols: temps are "$t<n>", constants "$c<n>" (deduplicated), locals of
+///    the body keep their name ("x", or "x@2" when a name is reused in
+///    another scope), inlined functions' parameters and locals are
+///    "<function>::<name>@<n>" (n: the inlining). A by-reference parameter
+///    whose argument is a variable of the same type (always for output and
+///    array parameters) is that variable: no symbol of its own.
+///  - A parameter whose default is constant has its value in
+///    numbers/strings and init_begin == init_end == -1; otherwise its default
+///    ops are [init_begin, init_end), before body_begin, in declaration order.
+///  - Symbol::varying is final: locals declared without `uniform`/`varying`
+///    are uniform when every assignment to them is uniform and not under a
+///    varying condition (nor after a varying break/continue/return).
 
 #include <array>
 #include <cstdint>
@@ -169,5 +213,8 @@ void write_program(const Program& program, std::ostream& out);
 Program read_program(std::istream& in, const std::string& path);
 /// read_program from a file.
 Program read_program_file(const std::string& path);
+/// write_program to a file, atomically (util/atomic_output.h). Throws IoError.
+/// (An addition of the front end, for the `shader` tool.)
+void write_program_file(const Program& program, const std::string& path);
 
 } // namespace sss

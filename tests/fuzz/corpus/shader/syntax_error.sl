@@ -1,0 +1,5 @@
+surface bad() {
+    float x = 1
+    Ci = x;
+    color c = P;
+}

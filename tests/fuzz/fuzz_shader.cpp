@@ -1,0 +1,63 @@
+// libFuzzer target: the RSL compiler front end (lexer, parser, checker,
+// code generator) on the input as preprocessed text, then the .slo writer
+// and reader on every shader it compiles (the round trip must succeed and
+// reproduce the same text). Inputs that start with "sss-slo" go to the .slo
+// reader instead, which must reject damage cleanly. docs/fuzzing.md.
+//
+// The preprocessor is not run: #include could read files outside the corpus.
+
+#include <sstream>
+#include <string>
+
+#include "fuzz_common.h"
+#include "sss/shading/compiler.h"
+#include "sss/shading/program.h"
+
+namespace {
+
+sss::PreprocessResult as_preprocessed(const std::string& text) {
+    sss::PreprocessResult r;
+    r.text = text;
+    r.files = {"fuzz.sl"};
+    int lines = 1;
+    for (char c : text) lines += c == '\n';
+    for (int i = 0; i < lines; ++i) r.lines.push_back({0, i + 1});
+    return r;
+}
+
+void round_trip(const sss::Program& program) {
+    std::ostringstream out;
+    sss::write_program(program, out);
+    std::istringstream in(out.str());
+    sss::Program back;
+    try {
+        back = sss::read_program(in, "fuzz.slo");
+    } catch (const sss::Error& e) {
+        sss::fuzz::finding(std::string("a compiled program does not read back: ") +
+                           e.what());
+    }
+    std::ostringstream again;
+    sss::write_program(back, again);
+    sss::fuzz::require(again.str() == out.str(), ".slo round trip changed the program");
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    if (size > 64 * 1024) return 0; // keeps every run short
+    const std::string text(reinterpret_cast<const char*>(data), size);
+    if (text.rfind("sss-slo", 0) == 0) {
+        sss::fuzz::run_expecting_errors([&] {
+            std::istringstream in(text);
+            const sss::Program p = sss::read_program(in, "fuzz.slo");
+            round_trip(p);
+        });
+        return 0;
+    }
+    sss::fuzz::run_expecting_errors([&] {
+        const sss::CompileResult result =
+            sss::compile_preprocessed(as_preprocessed(text));
+        for (const sss::Program& p : result.shaders) round_trip(p);
+    });
+    return 0;
+}
