@@ -37,7 +37,8 @@ struct PreprocessResult {
     std::vector<std::string> files; ///< files read, the main one first
 };
 
-/// A preprocessing error: file:line:column: message, with the source line.
+/// A preprocessing error. what() is "file:line:column: message"; the source
+/// line is kept apart.
 class PreprocessError : public ValueError {
 public:
     PreprocessError(std::string file, int line, int column, const std::string& message,
@@ -45,11 +46,15 @@ public:
     const std::string& file() const { return m_file; }
     int line() const { return m_line; }
     int column() const { return m_column; }
+    /// The text of the line the error points into (after `#line`, still the
+    /// physical line that was read).
+    const std::string& source_line() const { return m_source_line; }
 
 private:
     std::string m_file;
     int m_line = 0;
     int m_column = 0;
+    std::string m_source_line;
 };
 
 /// Preprocesses the file at `path`.

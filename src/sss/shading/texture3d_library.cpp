@@ -1,0 +1,218 @@
+// The texture library's 3-D side: texture3d on brick maps and point clouds,
+// with the renderer's semantics (src/sss/render/shaders.cpp DiffusionSource):
+// brick maps blend their levels by the filter radius, point clouds average
+// their nearest points.
+
+#include "texture_library.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include <glm/common.hpp>
+
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/util/error.h"
+#include "texture_library_impl.h"
+
+namespace sss::detail {
+
+namespace {
+
+bool ends_with_nocase(const std::string& s, const std::string& suffix) {
+    if (s.size() < suffix.size()) return false;
+    return std::equal(suffix.rbegin(), suffix.rend(), s.rbegin(), [](char a, char b) {
+        return std::tolower(static_cast<unsigned char>(a)) ==
+               std::tolower(static_cast<unsigned char>(b));
+    });
+}
+
+/// Cells per axis are kept below 2^20 so that a cell's three coordinates
+/// pack into one 64-bit key.
+constexpr int kCellBits = 21;
+constexpr float kMaxCells = float(1 << (kCellBits - 1));
+/// A query is near the data within this many median point radii (about two
+/// point spacings of a bake: points are as far apart as their diameter).
+constexpr float kReachInRadii = 4.0f;
+/// Neighbour cells searched each way; farther reaches use the bounding box.
+constexpr int kMaxCellRange = 2;
+
+uint64_t cell_key(int64_t x, int64_t y, int64_t z) {
+    const uint64_t mask = (uint64_t(1) << kCellBits) - 1;
+    return (uint64_t(x) & mask) | ((uint64_t(y) & mask) << kCellBits) |
+           ((uint64_t(z) & mask) << (2 * kCellBits));
+}
+
+} // namespace
+
+void Texture3dFile::index_cloud() {
+    const PointCloud& c = *cloud;
+    if (c.size() == 0) return;
+    const Bounds3 b = c.bounds();
+    lo = b.lo;
+    hi = b.hi;
+    const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    std::vector<float> radii;
+    radii.reserve(c.radii.size());
+    for (float r : c.radii)
+        if (r > 0.0f && std::isfinite(r)) radii.push_back(r);
+    float reach = 0.0f;
+    if (!radii.empty()) {
+        auto mid = radii.begin() + radii.size() / 2;
+        std::nth_element(radii.begin(), mid, radii.end());
+        reach = kReachInRadii * *mid;
+    } else {
+        // No radii: about two mean spacings of points spread over the box.
+        reach = 2.0f * extent / std::cbrt(float(c.size()));
+    }
+    cell = std::max({reach, extent / kMaxCells, 1e-6f});
+    origin = lo;
+    for (const glm::vec3& p : c.positions) {
+        const glm::vec3 g = (p - origin) / cell;
+        occupied.insert(cell_key(int64_t(g.x), int64_t(g.y), int64_t(g.z)));
+    }
+}
+
+bool Texture3dFile::near_data(const glm::vec3& p, float radius) const {
+    if (occupied.empty()) return false;
+    const float reach = std::max(cell, std::isfinite(radius) ? radius : 0.0f);
+    // Far outside the bounding box: no point there.
+    for (int a = 0; a < 3; ++a)
+        if (p[a] < lo[a] - reach || p[a] > hi[a] + reach) return false;
+    const int range = static_cast<int>(std::ceil(reach / cell));
+    if (range > kMaxCellRange) return true; // a large filter: the box suffices
+    const glm::vec3 g = glm::floor((p - origin) / cell);
+    const int64_t cx = int64_t(g.x), cy = int64_t(g.y), cz = int64_t(g.z);
+    for (int64_t z = cz - range; z <= cz + range; ++z)
+        for (int64_t y = cy - range; y <= cy + range; ++y)
+            for (int64_t x = cx - range; x <= cx + range; ++x) {
+                if (x < 0 || y < 0 || z < 0) continue;
+                if (occupied.count(cell_key(x, y, z))) return true;
+            }
+    return false;
+}
+
+std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& file) {
+    std::shared_ptr<Texture3dFile> entry;
+    {
+        std::lock_guard lock(mutex);
+        auto& slot = files3d[file];
+        if (!slot) slot = std::make_shared<Texture3dFile>();
+        entry = slot;
+    }
+    std::call_once(entry->once, [&] {
+        Texture3dFile& f = *entry;
+        try {
+            std::error_code ec;
+            if (!std::filesystem::is_regular_file(file, ec))
+                throw IoError(file, std::filesystem::exists(file, ec)
+                                        ? "not a regular file"
+                                        : "no such file or directory");
+            if (ends_with_nocase(file, ".ptc") || ends_with_nocase(file, ".ply")) {
+                f.cloud = std::make_unique<PointCloud>(read_point_cloud(file));
+                std::vector<std::string> names;
+                for (const Channel& c : f.cloud->channels) {
+                    names.push_back(c.name);
+                    f.channels.push_back({c.name, f.data_size, c.components()});
+                    f.data_size += c.components();
+                }
+                f.lookup = std::make_unique<PointCloudLookup>(*f.cloud, names);
+                f.index_cloud();
+            } else {
+                f.map = std::make_unique<BrickMap>(file);
+                for (const auto& [name, type] : f.map->info().channels)
+                    f.channels.push_back(
+                        {name, f.map->channel_offset(name), channel_type_size(type)});
+                f.data_size = f.map->info().data_size;
+            }
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            // Library messages already start with the file name.
+            f.error = what.rfind(file, 0) == 0 ? what : file + ": " + what;
+            f.map.reset();
+            f.lookup.reset();
+            f.cloud.reset();
+        }
+    });
+    return entry;
+}
+
+bool TextureLibrary::texture3d(const std::string& file,
+                               std::span<const std::string> channels, std::size_t count,
+                               const glm::vec3* P, const glm::vec3* N,
+                               const float* radius, const uint8_t* mask,
+                               std::vector<int>& channel_floats, float* out,
+                               uint8_t* found, std::string* error) {
+    channel_floats.assign(channels.size(), 0);
+    if (found) std::fill(found, found + count, uint8_t(0));
+    const std::shared_ptr<Texture3dFile> f = m_impl->open3d(file);
+    if (!f->error.empty()) {
+        if (error) *error = f->error;
+        return false;
+    }
+
+    // Where each requested channel's floats come from.
+    std::vector<const Texture3dFile::Channel*> sources(channels.size(), nullptr);
+    std::string missing;
+    int stride = 0;
+    for (std::size_t k = 0; k < channels.size(); ++k) {
+        sources[k] = f->find(channels[k]);
+        if (sources[k]) {
+            channel_floats[k] = sources[k]->floats;
+            stride += sources[k]->floats;
+        } else {
+            missing += (missing.empty() ? "" : ", ") + ("\"" + channels[k] + "\"");
+        }
+    }
+    if (!missing.empty() && error) {
+        std::string names;
+        for (const Texture3dFile::Channel& c : f->channels)
+            names += (names.empty() ? "" : ", ") + c.name;
+        *error = file + ": no channel " + missing +
+                 " (it has: " + (names.empty() ? "none" : names) + ")";
+    }
+    if (stride == 0) return false;
+
+    std::vector<float> buf(std::size_t(std::max(f->data_size, 1)));
+    for (std::size_t i = 0; i < count; ++i) {
+        if (mask && !mask[i]) continue;
+        const glm::vec3 p = P[i];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+        glm::vec3 n = N ? N[i] : glm::vec3(0.0f);
+        if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
+            n = glm::vec3(0.0f);
+        float r = radius ? radius[i] : 0.0f;
+        if (!(r > 0.0f) || !std::isfinite(r)) r = 0.0f;
+        bool hit = false;
+        if (f->map) {
+            hit = f->map->lookup(p, n, r, buf.data());
+        } else {
+            // Point clouds: always the nearest points (a fixed radius may hold
+            // none), as the renderer reads them; found only near the data.
+            hit = f->near_data(p, r) && f->lookup->lookup(p, n, 0.0f, buf.data());
+        }
+        if (!hit) continue;
+        float* dst = out + i * std::size_t(stride);
+        for (const Texture3dFile::Channel* c : sources) {
+            if (!c) continue;
+            std::copy_n(buf.data() + c->offset, c->floats, dst);
+            dst += c->floats;
+        }
+        if (found) found[i] = 1;
+    }
+    return true;
+}
+
+void TextureLibrary::invalidate(const std::string& file) {
+    {
+        std::lock_guard lock(m_impl->mutex);
+        // Calls in flight keep their entries (shared_ptr) until they finish.
+        m_impl->files.erase(file);
+        m_impl->files3d.erase(file);
+    }
+    m_impl->ts->invalidate(OIIO::ustring(file), true);
+}
+
+} // namespace sss::detail
