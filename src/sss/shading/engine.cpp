@@ -28,10 +28,7 @@
 #include "engine_internal.h"
 #include "sss/util/hash.h"
 
-#if __has_include("texture_library.h")
 #include "texture_library.h"
-#define SSS_HAVE_TEXTURE_LIBRARY 1
-#endif
 
 namespace sss {
 
@@ -671,9 +668,7 @@ std::optional<float> ShaderInstance::float_parameter(const std::string& name) co
 // ShadingResources
 
 ShadingResources::Impl::Impl() {
-#ifdef SSS_HAVE_TEXTURE_LIBRARY
     textures = std::make_unique<detail::TextureLibrary>();
-#endif
 }
 ShadingResources::Impl::~Impl() = default;
 
