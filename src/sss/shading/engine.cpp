@@ -36,9 +36,9 @@ namespace detail {
 
 const char* global_name(int g) {
     static const char* const kNames[G_count] = {
-        "P",  "N",  "Ng", "I",  "E",  "dPdu", "dPdv",   "Cs",   "Os",   "u",
-        "v",  "du", "dv", "s",  "t",  "Ci",   "Oi",     "L",    "Cl",   "Ol",
-        "Ps", "ncomps", "time", "dtime", "dPdtime", "alpha"};
+        "P",  "N",  "Ng", "I",      "E",    "dPdu",  "dPdv",    "Cs",   "Os",
+        "u",  "v",  "du", "dv",     "s",    "t",     "Ci",      "Oi",   "L",
+        "Cl", "Ol", "Ps", "ncomps", "time", "dtime", "dPdtime", "alpha"};
     return g >= 0 && g < G_count ? kNames[g] : "?";
 }
 
@@ -46,9 +46,10 @@ std::string BoundProgram::where(int index) const {
     const Program& p = *program;
     if (index >= 0 && static_cast<std::size_t>(index) < p.ops.size()) {
         const SourceLocation& w = p.ops[index].where;
-        std::string file = w.file >= 0 && static_cast<std::size_t>(w.file) < p.files.size()
-                               ? p.files[w.file]
-                               : p.source_path;
+        std::string file =
+            w.file >= 0 && static_cast<std::size_t>(w.file) < p.files.size()
+                ? p.files[w.file]
+                : p.source_path;
         if (file.empty()) file = "<" + p.name + ">";
         if (w.line > 0) return file + ":" + std::to_string(w.line);
         return file;
@@ -111,7 +112,8 @@ void Frame::recount() {
 }
 
 std::vector<uint8_t>& Frame::push_mask() {
-    if (static_cast<std::size_t>(mask_depth) >= mask_pool.size()) mask_pool.emplace_back();
+    if (static_cast<std::size_t>(mask_depth) >= mask_pool.size())
+        mask_pool.emplace_back();
     std::vector<uint8_t>& m = mask_pool[mask_depth++];
     m.resize(n);
     return m;
@@ -223,7 +225,8 @@ void Frame::run(int begin, int end) {
                 recount();
                 if (active > 0 && op.jump[0] > i + 1) run(i + 1, op.jump[0]);
                 if (op.jump[1] > op.jump[0]) {
-                    for (std::size_t k = 0; k < n; ++k) mask[k] = other[k] && stop[k] == 0;
+                    for (std::size_t k = 0; k < n; ++k)
+                        mask[k] = other[k] && stop[k] == 0;
                     recount();
                     if (active > 0) run(op.jump[0], op.jump[1]);
                 }
@@ -382,14 +385,14 @@ struct Validator {
             } else if (op.name == "illuminance" || op.name == "illuminate" ||
                        op.name == "solar") {
                 range(i, i + 1, j[0], end);
-                walk(i + 1, j[0], loops + (op.name == "illuminance" ? 1 : 0), blocks,
+                walk(i + 1, j[0], loops, blocks,
                      in_illuminance || op.name == "illuminance");
                 i = j[0];
             } else {
                 if ((op.name == "break" || op.name == "continue") &&
                     (op.level < 1 || op.level > loops))
-                    fail(i, "'" + op.name + " " + std::to_string(op.level) + "' outside " +
-                                std::to_string(op.level) + " loops");
+                    fail(i, "'" + op.name + " " + std::to_string(op.level) +
+                                "' outside " + std::to_string(op.level) + " loops");
                 ++i;
             }
         }
@@ -417,7 +420,8 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
     }
     if (name == "illuminance") {
         b.ia = C_Illuminance;
-        if (in.program.kind != ShaderKind::Surface && in.program.kind != ShaderKind::Volume) {
+        if (in.program.kind != ShaderKind::Surface &&
+            in.program.kind != ShaderKind::Volume) {
             why = "illuminance is only for surface and volume shaders";
             return false;
         }
@@ -465,12 +469,14 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
         const int elements = sym.type.array > 0 ? sym.type.array : 1;
         if (sym.type.type == ShadingType::String) {
             if (!sym.strings.empty() && static_cast<int>(sym.strings.size()) != elements)
-                fail(-1, "symbol '" + sym.name + "' has " + std::to_string(sym.strings.size()) +
-                             " strings for " + std::to_string(elements) + " elements");
+                fail(-1, "symbol '" + sym.name + "' has " +
+                             std::to_string(sym.strings.size()) + " strings for " +
+                             std::to_string(elements) + " elements");
         } else if (!sym.numbers.empty() &&
                    static_cast<int>(sym.numbers.size()) != sym.type.floats()) {
-            fail(-1, "symbol '" + sym.name + "' has " + std::to_string(sym.numbers.size()) +
-                         " numbers for a " + type_spec_name(sym.type));
+            fail(-1, "symbol '" + sym.name + "' has " +
+                         std::to_string(sym.numbers.size()) + " numbers for a " +
+                         type_spec_name(sym.type));
         }
         if (sym.kind == SymbolKind::Param || sym.kind == SymbolKind::OutputParam) {
             bp->params.push_back(s);
@@ -521,7 +527,8 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
         std::string why;
         if (is_control(op.name)) {
             if (!bind_control(info, b, why))
-                fail(i, why.empty() ? "bad arguments to '" + signature_of(p, op) + "'" : why);
+                fail(i, why.empty() ? "bad arguments to '" + signature_of(p, op) + "'"
+                                    : why);
             b.fn = nullptr;
             if (op.name == "illuminate" || op.name == "solar") bp->has_illuminate = true;
             continue;
@@ -578,7 +585,8 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
       m_where(std::move(where)) {
     if (!m_program) throw ValueError(m_where + ": no shader program");
     const Program& p = *m_program;
-    const std::string prefix = (m_where.empty() ? "" : m_where + ": ") + "shader '" + p.name + "'";
+    const std::string prefix =
+        (m_where.empty() ? "" : m_where + ": ") + "shader '" + p.name + "'";
     m_bound = detail::bind_program(m_program);
 
     for (const Param& param : params.items) {
@@ -596,15 +604,13 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
         arg.name = param.name;
         arg.type = TypeSpec{rib_shading_type(param.type),
                             param.array_size > 1 ? param.array_size : 0};
-        const std::string got = std::string(param_type_name(param.type)) +
-                                (param.array_size > 1
-                                     ? "[" + std::to_string(param.array_size) + "]"
-                                     : "") +
-                                " with " +
-                                std::to_string(param.type == ParamType::String
-                                                   ? param.strings.size()
-                                                   : param.numbers.size()) +
-                                (param.type == ParamType::String ? " strings" : " numbers");
+        const std::string got =
+            std::string(param_type_name(param.type)) +
+            (param.array_size > 1 ? "[" + std::to_string(param.array_size) + "]" : "") +
+            " with " +
+            std::to_string(param.type == ParamType::String ? param.strings.size()
+                                                           : param.numbers.size()) +
+            (param.type == ParamType::String ? " strings" : " numbers");
         auto mismatch = [&] {
             throw ValueError(prefix + ": parameter '" + param.name + "' is a " +
                              type_spec_name(sym.type) + ", given a " + got);
@@ -620,7 +626,8 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
             if (param.type == ParamType::HPoint) {
                 if (param.numbers.size() % 4 != 0) mismatch();
                 for (std::size_t k = 0; k + 3 < param.numbers.size(); k += 4) {
-                    const double w = param.numbers[k + 3] != 0.0 ? param.numbers[k + 3] : 1.0;
+                    const double w =
+                        param.numbers[k + 3] != 0.0 ? param.numbers[k + 3] : 1.0;
                     for (int c = 0; c < 3; ++c)
                         numbers.push_back(static_cast<float>(param.numbers[k + c] / w));
                 }
@@ -637,7 +644,8 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
     }
 }
 
-std::optional<std::string> ShaderInstance::string_parameter(const std::string& name) const {
+std::optional<std::string>
+ShaderInstance::string_parameter(const std::string& name) const {
     for (const ShaderArgument& a : m_arguments)
         if (a.name == name && !a.strings.empty()) return a.strings[0];
     const int s = m_program->find(name);
@@ -813,7 +821,8 @@ void fill3(const detail::Slot& sl, std::size_t n, const std::vector<glm::vec3>* 
            const glm::vec3& fallback) {
     const std::size_t reps = sl.varying ? n : 1;
     const bool ok = src && src->size() >= n && n > 0;
-    for (std::size_t i = 0; i < reps; ++i) detail::st3(sl.at(i), ok ? (*src)[i] : fallback);
+    for (std::size_t i = 0; i < reps; ++i)
+        detail::st3(sl.at(i), ok ? (*src)[i] : fallback);
 }
 
 void fill1(const detail::Slot& sl, std::size_t n, const std::vector<float>* src,
@@ -830,7 +839,9 @@ void ShadingContext::Impl::load_surface_globals(detail::Frame& f) {
     const ShadingBatch& b = *batch;
     const std::size_t n = f.n;
     const int* g = f.bound->globals;
-    auto sl = [&](int id) -> const Slot* { return g[id] >= 0 ? &f.slots[g[id]] : nullptr; };
+    auto sl = [&](int id) -> const Slot* {
+        return g[id] >= 0 ? &f.slots[g[id]] : nullptr;
+    };
     auto has = [&](const std::vector<glm::vec3>& v) { return v.size() >= n && n > 0; };
     const Attributes* attr = b.primitive ? &attributes_of(*b.primitive) : nullptr;
     const glm::vec3 cs = attr ? glm::vec3(attr->color) : glm::vec3(1.0f);
@@ -909,7 +920,8 @@ void ShadingContext::Impl::init_params(detail::Frame& f, bool primvars) {
         for (const ShaderArgument& a : inst.arguments())
             if (a.name == sym.name) given = &a;
         if (given) {
-            write_argument(*this, f.slots[s], sym, *given, f.n, f.shader_to_current, true);
+            write_argument(*this, f.slots[s], sym, *given, f.n, f.shader_to_current,
+                           true);
         } else if (sym.init_begin >= 0 && sym.init_end > sym.init_begin) {
             std::fill(f.mask.begin(), f.mask.end(), 1);
             f.active = f.n;
@@ -921,10 +933,12 @@ void ShadingContext::Impl::init_params(detail::Frame& f, bool primvars) {
             const int s = p.find(a.name);
             if (s < 0) continue;
             const Symbol& sym = p.symbols[s];
-            if (sym.kind != SymbolKind::Param && sym.kind != SymbolKind::OutputParam) continue;
+            if (sym.kind != SymbolKind::Param && sym.kind != SymbolKind::OutputParam)
+                continue;
             if (!primvar_fits(sym, a, f.n)) {
-                const std::string text = f.bound->describe(-1) + ": primitive variable '" +
-                                         a.name + "' does not fit the parameter (a " +
+                const std::string text = f.bound->describe(-1) +
+                                         ": primitive variable '" + a.name +
+                                         "' does not fit the parameter (a " +
                                          type_spec_name(sym.type) + "); ignored";
                 if (resources.impl().first_time(text)) services.warning(text);
                 continue;
@@ -950,7 +964,8 @@ void ShadingContext::Impl::run_body(detail::Frame& f) {
     f.run(f.program->body_begin, static_cast<int>(f.program->ops.size()));
 }
 
-ShadingContext::ShadingContext(const ShadingResources& resources, ShadingServices& services)
+ShadingContext::ShadingContext(const ShadingResources& resources,
+                               ShadingServices& services)
     : m_impl(std::make_unique<Impl>(resources, services)) {}
 ShadingContext::~ShadingContext() = default;
 
@@ -991,9 +1006,11 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
     if (batch.layout == BatchLayout::Grid &&
         static_cast<std::size_t>(batch.nu) * static_cast<std::size_t>(batch.nv) != n)
         throw ValueError("shading: grid batch of " + std::to_string(batch.nu) + " x " +
-                         std::to_string(batch.nv) + " points has size " + std::to_string(n));
+                         std::to_string(batch.nv) + " points has size " +
+                         std::to_string(n));
     if (batch.layout == BatchLayout::Triplets && n % 3 != 0)
-        throw ValueError("shading: a batch of triplets has " + std::to_string(n) + " points");
+        throw ValueError("shading: a batch of triplets has " + std::to_string(n) +
+                         " points");
     c.batch = &batch;
     c.lights = lights;
     c.reset_strings();
@@ -1002,10 +1019,12 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
     c.world_to_camera = scene.options.camera.world_to_camera;
     c.camera_to_world = glm::inverse(c.world_to_camera);
     c.object_to_current =
-        c.world_to_camera * (batch.primitive ? batch.primitive->object_to_world : Matrix4(1.0));
+        c.world_to_camera *
+        (batch.primitive ? batch.primitive->object_to_world : Matrix4(1.0));
     c.light_states.clear();
     c.light_states.resize(lights.size());
-    for (std::size_t k = 0; k < lights.size(); ++k) c.light_states[k].instance = lights[k];
+    for (std::size_t k = 0; k < lights.size(); ++k)
+        c.light_states[k].instance = lights[k];
     c.nonfinite = 0;
     c.last_shader = shader.program().name;
     c.last_where = shader.where().empty() ? shader.bound().where(-1) : shader.where();
@@ -1056,8 +1075,9 @@ std::size_t ShadingContext::nonfinite_points() const {
 
 std::string ShadingContext::nonfinite_message() const {
     if (m_impl->nonfinite == 0) return "";
-    return std::to_string(m_impl->nonfinite) + " points of shader '" + m_impl->last_shader +
-           "' at " + m_impl->last_where + " gave NaN or infinity; written as 0";
+    return std::to_string(m_impl->nonfinite) + " points of shader '" +
+           m_impl->last_shader + "' at " + m_impl->last_where +
+           " gave NaN or infinity; written as 0";
 }
 
 bool ShadingContext::output(const std::string& name, TypeSpec& type,

@@ -80,7 +80,8 @@ void derivative(Frame& f, const Slot& x, int comps, int dir, const std::string& 
                         if (c == 0)
                             diff = -1.5f * X(0) + 2.0f * X(1) - 0.5f * X(2);
                         else if (c == len - 1)
-                            diff = 1.5f * X(len - 1) - 2.0f * X(len - 2) + 0.5f * X(len - 3);
+                            diff =
+                                1.5f * X(len - 1) - 2.0f * X(len - 2) + 0.5f * X(len - 3);
                         else
                             diff = 0.5f * (X(c + 1) - X(c - 1));
                     }
@@ -201,8 +202,8 @@ void op_calculatenormal(Frame& f, const BoundOp& b) {
     // RenderMan's rule (as the dicer's normals): dPdu x dPdv, flipped when
     // the object-to-current transform mirrors or the orientation is inside.
     const ShadingBatch* batch = f.ctx->batch;
-    const bool inside = batch && batch->primitive &&
-                        attributes_of(*batch->primitive).orientation_inside;
+    const bool inside =
+        batch && batch->primitive && attributes_of(*batch->primitive).orientation_inside;
     const bool mirror = glm::determinant(glm::dmat3(f.ctx->object_to_current)) < 0.0;
     const float sign = (mirror != inside) ? -1.0f : 1.0f;
     f.each(d.varying, [&](std::size_t i) {
@@ -263,7 +264,8 @@ void op_comp(Frame& f, const BoundOp& b) {
     f.each(d.varying, [&](std::size_t i) {
         int k;
         if (matrix)
-            k = comp_index(f, b, *f.ptr(b, 2, i), 4) * 4 + comp_index(f, b, *f.ptr(b, 3, i), 4);
+            k = comp_index(f, b, *f.ptr(b, 2, i), 4) * 4 +
+                comp_index(f, b, *f.ptr(b, 3, i), 4);
         else
             k = comp_index(f, b, *f.ptr(b, 2, i), 3);
         *d.at(i) = x.at(i)[k];
@@ -290,7 +292,8 @@ void op_setcomp(Frame& f, const BoundOp& b) {
         int k;
         float v;
         if (matrix) {
-            k = comp_index(f, b, *f.ptr(b, 1, i), 4) * 4 + comp_index(f, b, *f.ptr(b, 2, i), 4);
+            k = comp_index(f, b, *f.ptr(b, 1, i), 4) * 4 +
+                comp_index(f, b, *f.ptr(b, 2, i), 4);
             v = *f.ptr(b, 3, i);
         } else {
             k = comp_index(f, b, *f.ptr(b, 1, i), 3);
@@ -369,7 +372,8 @@ void op_rotate_point(Frame& f, const BoundOp& b) {
         const glm::dvec3 k = axis / len;
         const glm::dvec3 v = q - p0;
         const double c = std::cos(angle), s = std::sin(angle);
-        const glm::dvec3 r = v * c + glm::cross(k, v) * s + k * glm::dot(k, v) * (1.0 - c);
+        const glm::dvec3 r =
+            v * c + glm::cross(k, v) * s + k * glm::dot(k, v) * (1.0 - c);
         st3(d.at(i), glm::vec3(p0 + r));
     });
 }
@@ -415,7 +419,8 @@ glm::vec3 refract_dir(const glm::vec3& I, const glm::vec3& n, float eta) {
 void op_refract(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     f.each(d.varying, [&](std::size_t i) {
-        st3(d.at(i), refract_dir(ld3(f.ptr(b, 1, i)), ld3(f.ptr(b, 2, i)), *f.ptr(b, 3, i)));
+        st3(d.at(i),
+            refract_dir(ld3(f.ptr(b, 1, i)), ld3(f.ptr(b, 2, i)), *f.ptr(b, 3, i)));
     });
 }
 
@@ -562,7 +567,8 @@ void op_ctransform(Frame& f, const BoundOp& b) {
         }
         const std::string& to = f.str(b, two ? 2 : 1, i);
         glm::vec3 out;
-        if (!rsl_rgb_to_color(to, c, out)) f.fail(b, "unknown colour space \"" + to + "\"");
+        if (!rsl_rgb_to_color(to, c, out))
+            f.fail(b, "unknown colour space \"" + to + "\"");
         st3(d.at(i), out);
     });
 }
@@ -611,11 +617,11 @@ void op_matrix_xform(Frame& f, const BoundOp& b) {
     });
 }
 
-#define SSS_SIMPLE_BINDER(name, cond, fnp)                                                \
-    bool name(const BindInfo& in, BoundOp& b, std::string&) {                             \
-        if (!(cond)) return false;                                                        \
-        b.fn = fnp;                                                                       \
-        return true;                                                                      \
+#define SSS_SIMPLE_BINDER(name, cond, fnp)                                               \
+    bool name(const BindInfo& in, BoundOp& b, std::string&) {                            \
+        if (!(cond)) return false;                                                       \
+        b.fn = fnp;                                                                      \
+        return true;                                                                     \
     }
 SSS_SIMPLE_BINDER(bind_length, in.nargs() == 2 && in.is_float(0) && in.is_triple_(1),
                   op_length)
@@ -635,7 +641,8 @@ SSS_SIMPLE_BINDER(bind_refract,
                   in.nargs() == 4 && in.is_ptype(0) && in.is_ptype(1) && in.is_ptype(2) &&
                       in.is_float(3),
                   op_refract)
-SSS_SIMPLE_BINDER(bind_depth, in.nargs() == 2 && in.is_float(0) && in.is_ptype(1), op_depth)
+SSS_SIMPLE_BINDER(bind_depth, in.nargs() == 2 && in.is_float(0) && in.is_ptype(1),
+                  op_depth)
 SSS_SIMPLE_BINDER(bind_determinant, in.nargs() == 2 && in.is_float(0) && in.is_matrix(1),
                   op_determinant)
 SSS_SIMPLE_BINDER(bind_translate,

@@ -77,8 +77,8 @@ using OpFn = void (*)(Frame&, const BoundOp&);
 /// One op bound to its implementation, with what the binder chose.
 struct BoundOp {
     OpFn fn = nullptr;
-    const Op* op = nullptr; ///< in the Program (kept alive by BoundProgram)
-    int index = 0;          ///< op index
+    const Op* op = nullptr;             ///< in the Program (kept alive by BoundProgram)
+    int index = 0;                      ///< op index
     int ia = 0, ib = 0, ic = 0, id = 0; ///< variant data of the binder
 };
 
@@ -86,7 +86,7 @@ struct BoundOp {
 struct BoundProgram {
     std::shared_ptr<const Program> program;
     std::vector<BoundOp> ops;
-    int globals[G_count];       ///< symbol index of each global, or -1
+    int globals[G_count];        ///< symbol index of each global, or -1
     bool has_illuminate = false; ///< a light with illuminate or solar
     std::vector<int> params;     ///< parameter symbols, in declaration order
 
@@ -125,11 +125,11 @@ struct BindInfo {
 using Binder = bool (*)(const BindInfo&, BoundOp&, std::string& why);
 using BinderTable = std::unordered_map<std::string, Binder>;
 
-void register_core_ops(BinderTable& t);     // engine_ops.cpp
-void register_math(BinderTable& t);         // engine_math.cpp
-void register_geometry(BinderTable& t);     // engine_geometry.cpp
-void register_lighting(BinderTable& t);     // engine_lighting.cpp
-void register_texture(BinderTable& t);      // engine_texture.cpp
+void register_core_ops(BinderTable& t); // engine_ops.cpp
+void register_math(BinderTable& t);     // engine_math.cpp
+void register_geometry(BinderTable& t); // engine_geometry.cpp
+void register_lighting(BinderTable& t); // engine_lighting.cpp
+void register_texture(BinderTable& t);  // engine_texture.cpp
 
 /// One symbol's storage in a frame.
 struct Slot {
@@ -161,8 +161,8 @@ struct Frame {
     std::vector<uint8_t> mask;
     std::size_t active = 0;
     std::vector<uint32_t> stop;
-    int loop_depth = 0;  ///< enclosing loops (illuminance counts)
-    int block_depth = 0; ///< enclosing blocks
+    int loop_depth = 0;                         ///< enclosing loops (illuminance is none)
+    int block_depth = 0;                        ///< enclosing blocks
     std::deque<std::vector<uint8_t>> mask_pool; ///< stable references
     int mask_depth = 0;
     std::vector<uint32_t> calls; ///< per op: how many times it ran (random)

@@ -11,10 +11,11 @@
 ///    travels; no axis: L = 0) for every point. Points an illuminate or solar
 ///    body ran for are "lit"; a light shader with neither is an ambient
 ///    light: it contributes to ambient() only, and illuminance loops skip it.
-///  - `illuminance(cat, P, axis, angle)`: a loop over the lights (break and
-///    continue count it as a loop level) whose body runs, per light, for the
+///  - `illuminance(cat, P, axis, angle)`: a loop over the lights whose body runs, per
+///  light, for the
 ///    points the light lit within the angle of the axis, with L = -L of the
-///    light (towards the light), Cl and Ol. Categories: the light's uniform
+///    light (towards the light), Cl and Ol. It is not a loop level for
+///    break and continue (as the compiler counts them). Categories: the light's uniform
 ///    string parameter `__category` (comma separated); the loop's category
 ///    is a comma-separated list of names, each required (any of them) or,
 ///    with a leading '-', excluded.
@@ -96,7 +97,8 @@ void store3(const Slot* s, std::size_t i, const glm::vec3& v) {
 } // namespace
 
 LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
-                                        const std::vector<uint8_t>& mask, std::size_t active) {
+                                        const std::vector<uint8_t>& mask,
+                                        std::size_t active) {
     LightState& ls = light_states[index];
     const std::size_t n = batch->size;
     const ShaderInstance& inst = *ls.instance;
@@ -115,13 +117,16 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
             if (mask[i] && (!ls.computed[i] || ls.Ps[i] != Pat(i))) ok = false;
         if (ok) return ls;
     }
-    if (depth > 4) throw ShaderRuntimeError(inst.bound().describe(-1) + ": lights nest too deep");
+    if (depth > 4)
+        throw ShaderRuntimeError(inst.bound().describe(-1) + ": lights nest too deep");
     ++depth;
     Frame& lf = *ls.frame;
     setup_frame(lf, inst, n);
     lf.is_light = true;
     const int* g = lf.bound->globals;
-    auto sl = [&](int id) -> const Slot* { return g[id] >= 0 ? &lf.slots[id >= 0 ? g[id] : 0] : nullptr; };
+    auto sl = [&](int id) -> const Slot* {
+        return g[id] >= 0 ? &lf.slots[id >= 0 ? g[id] : 0] : nullptr;
+    };
     if (const Slot* s = sl(G_Ps))
         for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), Pat(i));
     if (const Slot* s = sl(G_P)) {
@@ -158,7 +163,8 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
 
 namespace detail {
 
-void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end, bool solar) {
+void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
+                    bool solar) {
     const std::size_t n = f.n;
     const int* g = f.bound->globals;
     const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
@@ -261,9 +267,6 @@ void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
     std::vector<uint8_t>& entry = f.push_mask();
     entry = f.mask;
     std::vector<uint8_t>& base = f.push_mask();
-    const int depth = ++f.loop_depth;
-    const uint32_t cont = StopContinue | (static_cast<uint32_t>(depth) << 2);
-    const uint32_t brk = StopBreak | (static_cast<uint32_t>(depth) << 2);
     for (std::size_t li = 0; li < ctx.lights.size(); ++li) {
         std::size_t cnt = 0;
         for (std::size_t i = 0; i < n; ++i) {
@@ -289,13 +292,8 @@ void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
         });
         f.current_light = static_cast<int>(li);
         f.run(body_begin, body_end);
-        for (std::size_t i = 0; i < n; ++i)
-            if (f.stop[i] == cont) f.stop[i] = 0;
     }
     f.current_light = -1;
-    for (std::size_t i = 0; i < n; ++i)
-        if (f.stop[i] == brk) f.stop[i] = 0;
-    --f.loop_depth;
     std::size_t c = 0;
     for (std::size_t i = 0; i < n; ++i) {
         f.mask[i] = entry[i] && f.stop[i] == 0;
@@ -424,8 +422,8 @@ RayOptions ray_options(Frame& f, const BoundOp& b, int first) {
     RayOptions o;
     const std::size_t i0 = f.first_active();
     for_options(f, b, first, [&](const std::string& name, int k) {
-        if (f.slot(b, k).nf != 1 || f.program->symbols[b.op->args[k]].type.type ==
-                                        ShadingType::String)
+        if (f.slot(b, k).nf != 1 ||
+            f.program->symbols[b.op->args[k]].type.type == ShadingType::String)
             return;
         const float v = *f.ptr(b, k, i0);
         if (name == "samples")
@@ -454,7 +452,8 @@ struct Tracer {
 
     Tracer(Frame& fr, const BoundOp& b, const RayOptions& o)
         : f(fr), rt(fr.ctx->services.occluders()), to_world(fr.ctx->camera_to_world),
-          offset(o.bias >= 0.0f ? o.bias : (fr.ctx->batch ? fr.ctx->batch->ray_offset : 0.0f)),
+          offset(o.bias >= 0.0f ? o.bias
+                                : (fr.ctx->batch ? fr.ctx->batch->ray_offset : 0.0f)),
           seed(fr.ctx->batch ? fr.ctx->batch->seed : 0), op(b.index),
           call(fr.calls[b.index]++) {}
 
@@ -518,10 +517,10 @@ struct Tracer {
             double turn = rotation + k * 0.6180339887498949;
             turn -= std::floor(turn);
             const double phi = 2.0 * 3.14159265358979323846 * turn;
-            const glm::vec3 d = glm::normalize(
-                glm::vec3(static_cast<float>(s * std::cos(phi))) * t1 +
-                glm::vec3(static_cast<float>(s * std::sin(phi))) * t2 +
-                glm::vec3(static_cast<float>(c)) * dir);
+            const glm::vec3 d =
+                glm::normalize(glm::vec3(static_cast<float>(s * std::cos(phi))) * t1 +
+                               glm::vec3(static_cast<float>(s * std::sin(phi))) * t2 +
+                               glm::vec3(static_cast<float>(c)) * dir);
             rays[k] = ShadowRay{origin, d, 0.0f, tfar};
         }
         rt->occluded(rays.data(), rays.size(), hits.data());
@@ -557,7 +556,8 @@ void op_shadow(Frame& f, const BoundOp& b) {
             else
                 occluded = 1.0f - t.visible(i, p, p - L, false, o.samples, o.cone);
         } else if (f.current_light >= 0 && Ls) {
-            occluded = 1.0f - t.visible(i, p, p + ld3(Ls->at(i)), false, o.samples, o.cone);
+            occluded =
+                1.0f - t.visible(i, p, p + ld3(Ls->at(i)), false, o.samples, o.cone);
         }
         std::fill(d.at(i), d.at(i) + nc, occluded);
     });
@@ -586,7 +586,8 @@ void op_transmission(Frame& f, const BoundOp& b) {
 
 bool bind_transmission(const BindInfo& in, BoundOp& b, std::string&) {
     const int n = in.nargs();
-    if (n < 3 || (n - 3) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) || !in.is_ptype(2))
+    if (n < 3 || (n - 3) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2))
         return false;
     b.fn = op_transmission;
     return true;
@@ -620,21 +621,23 @@ void op_occlusion(Frame& f, const BoundOp& b) {
         const uint64_t h = point_hash(t.seed, i, t.op, t.call);
         const double rotation = unit_double(h);
         const double smax = std::sin(o.coneangle);
-        const float tfar = o.maxdist > 0.0f ? o.maxdist : std::numeric_limits<float>::infinity();
+        const float tfar =
+            o.maxdist > 0.0f ? o.maxdist : std::numeric_limits<float>::infinity();
         const glm::vec3 origin = p + w * t.offset;
         std::vector<ShadowRay> rays(samples);
         std::vector<uint8_t> hits(samples);
         for (int k = 0; k < samples; ++k) {
             const double r2 =
-                (k + unit_double(splitmix64(h + 1 + static_cast<uint64_t>(k)))) / samples *
-                smax * smax;
+                (k + unit_double(splitmix64(h + 1 + static_cast<uint64_t>(k)))) /
+                samples * smax * smax;
             double turn = rotation + k * 0.6180339887498949;
             turn -= std::floor(turn);
             const double phi = 2.0 * 3.14159265358979323846 * turn;
             const double r = std::sqrt(r2);
             const double z = std::sqrt(std::max(0.0, 1.0 - r2));
-            const glm::vec3 dir = glm::normalize(float(r * std::cos(phi)) * t1 +
-                                                 float(r * std::sin(phi)) * t2 + float(z) * w);
+            const glm::vec3 dir =
+                glm::normalize(float(r * std::cos(phi)) * t1 +
+                               float(r * std::sin(phi)) * t2 + float(z) * w);
             rays[k] = ShadowRay{origin, dir, 0.0f, tfar};
         }
         rt->occluded(rays.data(), rays.size(), hits.data());
@@ -646,8 +649,8 @@ void op_occlusion(Frame& f, const BoundOp& b) {
 
 bool bind_occlusion(const BindInfo& in, BoundOp& b, std::string&) {
     const int n = in.nargs();
-    if (n < 4 || (n - 4) % 2 != 0 || !in.is_float(0) || !in.is_ptype(1) || !in.is_ptype(2) ||
-        !in.is_float(3))
+    if (n < 4 || (n - 4) % 2 != 0 || !in.is_float(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2) || !in.is_float(3))
         return false;
     b.fn = op_occlusion;
     return true;
@@ -661,7 +664,8 @@ void op_unsupported_zero(Frame& f, const BoundOp& b) {
 
 bool bind_trace(const BindInfo& in, BoundOp& b, std::string&) {
     const int n = in.nargs();
-    if (n < 3 || (n - 3) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) || !in.is_ptype(2))
+    if (n < 3 || (n - 3) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2))
         return false;
     b.fn = op_unsupported_zero;
     return true;
@@ -669,8 +673,8 @@ bool bind_trace(const BindInfo& in, BoundOp& b, std::string&) {
 
 bool bind_indirectdiffuse(const BindInfo& in, BoundOp& b, std::string&) {
     const int n = in.nargs();
-    if (n < 4 || (n - 4) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) || !in.is_ptype(2) ||
-        !in.is_float(3))
+    if (n < 4 || (n - 4) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2) || !in.is_float(3))
         return false;
     b.fn = op_unsupported_zero;
     return true;

@@ -37,11 +37,11 @@ void op_elem(Frame& f, const BoundOp& b) {
         s[j] = &f.slot(b, j + 1);
         step[j] = s[j]->nf == 1 ? 0 : 1;
     }
+    float v[64] = {};
     f.each(d.varying, [&](std::size_t i) {
         const float* p[64];
         for (int j = 0; j < na; ++j) p[j] = s[j]->at(i);
         float r[16];
-        float v[64];
         for (int k = 0; k < nd; ++k) {
             for (int j = 0; j < na; ++j) v[j] = p[j][k * step[j]];
             r[k] = F::eval(v, na);
@@ -122,7 +122,9 @@ struct FMax {
     }
 };
 struct FClamp {
-    static float eval(const float* v, int) { return std::min(std::max(v[0], v[1]), v[2]); }
+    static float eval(const float* v, int) {
+        return std::min(std::max(v[0], v[1]), v[2]);
+    }
 };
 struct FMix {
     static float eval(const float* v, int) { return v[0] * (1.0f - v[2]) + v[1] * v[2]; }
@@ -151,7 +153,8 @@ void op_filterstep(Frame& f, const BoundOp& b) {
     const bool two = b.ia != 0;
     float wscale = 1.0f;
     for_options(f, b, two ? 4 : 3, [&](const std::string& name, int k) {
-        if (name == "width" && f.slot(b, k).nf == 1) wscale = *f.ptr(b, k, f.first_active());
+        if (name == "width" && f.slot(b, k).nf == 1)
+            wscale = *f.ptr(b, k, f.first_active());
     });
     std::vector<float> width;
     if (!two) {
@@ -165,10 +168,10 @@ void op_filterstep(Frame& f, const BoundOp& b) {
         for (std::size_t i = 0; i < n; ++i) {
             const float gdu = g[G_du] >= 0 ? *f.slots[g[G_du]].at(i) : 0.0f;
             const float gdv = g[G_dv] >= 0 ? *f.slots[g[G_dv]].at(i) : 0.0f;
-            const float fdu = f.ctx->batch && f.ctx->batch->du.size() > i ? f.ctx->batch->du[i]
-                                                                           : gdu;
-            const float fdv = f.ctx->batch && f.ctx->batch->dv.size() > i ? f.ctx->batch->dv[i]
-                                                                           : gdv;
+            const float fdu =
+                f.ctx->batch && f.ctx->batch->du.size() > i ? f.ctx->batch->du[i] : gdu;
+            const float fdv =
+                f.ctx->batch && f.ctx->batch->dv.size() > i ? f.ctx->batch->dv[i] : gdv;
             width[i] = (std::fabs(du[i] * fdu) + std::fabs(dv[i] * fdv)) * wscale;
         }
     }
@@ -227,7 +230,8 @@ void op_spline(Frame& f, const BoundOp& b) {
             count = nargs - tk - 1;
             values.resize(static_cast<std::size_t>(count) * nc);
             for (int j = 0; j < count; ++j)
-                std::memcpy(values.data() + j * nc, f.ptr(b, tk + 1 + j, i), sizeof(float) * nc);
+                std::memcpy(values.data() + j * nc, f.ptr(b, tk + 1 + j, i),
+                            sizeof(float) * nc);
             vals = values.data();
         }
         if (!rsl_spline(bname, *f.ptr(b, tk, i), vals, count, nc, d.at(i)))
@@ -300,13 +304,15 @@ void op_noise(Frame& f, const BoundOp& b) {
                 vec ? (void)(v = rsl_vnoise(F(1))) : (void)(r = rsl_noise(F(1)));
                 break;
             case A_ff:
-                vec ? (void)(v = rsl_vnoise(F(1), F(2))) : (void)(r = rsl_noise(F(1), F(2)));
+                vec ? (void)(v = rsl_vnoise(F(1), F(2)))
+                    : (void)(r = rsl_noise(F(1), F(2)));
                 break;
             case A_p:
                 vec ? (void)(v = rsl_vnoise(P(1))) : (void)(r = rsl_noise(P(1)));
                 break;
             default:
-                vec ? (void)(v = rsl_vnoise(P(1), F(2))) : (void)(r = rsl_noise(P(1), F(2)));
+                vec ? (void)(v = rsl_vnoise(P(1), F(2)))
+                    : (void)(r = rsl_noise(P(1), F(2)));
             }
         } else if constexpr (Kind == NoiseCell) {
             switch (pattern) {
@@ -327,14 +333,16 @@ void op_noise(Frame& f, const BoundOp& b) {
         } else {
             switch (pattern) {
             case A_f: // (x, px)
-                vec ? (void)(v = rsl_vpnoise(F(1), F(2))) : (void)(r = rsl_pnoise(F(1), F(2)));
+                vec ? (void)(v = rsl_vpnoise(F(1), F(2)))
+                    : (void)(r = rsl_pnoise(F(1), F(2)));
                 break;
             case A_ff: // (x, y, px, py)
                 vec ? (void)(v = rsl_vpnoise(F(1), F(2), F(3), F(4)))
                     : (void)(r = rsl_pnoise(F(1), F(2), F(3), F(4)));
                 break;
             case A_p: // (p, period)
-                vec ? (void)(v = rsl_vpnoise(P(1), P(2))) : (void)(r = rsl_pnoise(P(1), P(2)));
+                vec ? (void)(v = rsl_vpnoise(P(1), P(2)))
+                    : (void)(r = rsl_pnoise(P(1), P(2)));
                 break;
             default: // (p, t, pp, pt)
                 vec ? (void)(v = rsl_vpnoise(P(1), F(2), P(3), F(4)))
@@ -365,11 +373,13 @@ bool bind_noise(const BindInfo& in, BoundOp& b, std::string&) {
     } else {
         if (n == 3 && in.is_float(1) && in.is_float(2))
             pattern = A_f;
-        else if (n == 5 && in.is_float(1) && in.is_float(2) && in.is_float(3) && in.is_float(4))
+        else if (n == 5 && in.is_float(1) && in.is_float(2) && in.is_float(3) &&
+                 in.is_float(4))
             pattern = A_ff;
         else if (n == 3 && in.is_ptype(1) && in.is_ptype(2))
             pattern = A_p;
-        else if (n == 5 && in.is_ptype(1) && in.is_float(2) && in.is_ptype(3) && in.is_float(4))
+        else if (n == 5 && in.is_ptype(1) && in.is_float(2) && in.is_ptype(3) &&
+                 in.is_float(4))
             pattern = A_pf;
     }
     if (pattern < 0) return false;
@@ -408,12 +418,14 @@ std::string format_at(Frame& f, const BoundOp& b, int pattern, std::size_t i) {
 
 void op_format(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
-    f.each(d.varying, [&](std::size_t i) { *d.at(i) = f.ctx->intern(format_at(f, b, 1, i)); });
+    f.each(d.varying,
+           [&](std::size_t i) { *d.at(i) = f.ctx->intern(format_at(f, b, 1, i)); });
 }
 
 void op_printf(Frame& f, const BoundOp& b) {
     const bool varying = any_varying(f, b, 0);
-    f.each(varying, [&](std::size_t i) { f.ctx->services.message(format_at(f, b, 0, i)); });
+    f.each(varying,
+           [&](std::size_t i) { f.ctx->services.message(format_at(f, b, 0, i)); });
 }
 
 bool bind_format(const BindInfo& in, BoundOp& b, std::string&) {

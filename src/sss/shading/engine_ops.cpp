@@ -202,9 +202,8 @@ void op_cross(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     Slot& x = f.slot(b, 1);
     Slot& y = f.slot(b, 2);
-    f.each(d.varying, [&](std::size_t i) {
-        st3(d.at(i), glm::cross(ld3(x.at(i)), ld3(y.at(i))));
-    });
+    f.each(d.varying,
+           [&](std::size_t i) { st3(d.at(i), glm::cross(ld3(x.at(i)), ld3(y.at(i)))); });
 }
 
 bool bind_dot(const BindInfo& in, BoundOp& b, std::string&) {
@@ -275,7 +274,8 @@ void op_not(Frame& f, const BoundOp& b) {
 }
 
 bool bind_eq(const BindInfo& in, BoundOp& b, std::string&) {
-    if (in.nargs() != 3 || !in.is_float(0) || in.is_array(1) || in.is_array(2)) return false;
+    if (in.nargs() != 3 || !in.is_float(0) || in.is_array(1) || in.is_array(2))
+        return false;
     const bool s1 = in.is_string(1), s2 = in.is_string(2);
     if (s1 != s2) return false;
     const int na = in.floats(1), nb = in.floats(2);
@@ -301,7 +301,8 @@ bool bind_not(const BindInfo& in, BoundOp& b, std::string&) {
 // --- arrays ---------------------------------------------------------------
 
 /// The element index at point i, checked.
-inline int element(Frame& f, const BoundOp& b, const Slot& idx, std::size_t i, int length) {
+inline int element(Frame& f, const BoundOp& b, const Slot& idx, std::size_t i,
+                   int length) {
     const float v = *idx.at(i);
     const float fl = std::floor(v);
     if (!(fl >= 0.0f) || fl >= static_cast<float>(length))
@@ -339,7 +340,8 @@ void op_aassign(Frame& f, const BoundOp& b) {
 }
 
 bool bind_aref(const BindInfo& in, BoundOp& b, std::string&) {
-    if (in.nargs() != 3 || !in.is_array(1) || !in.is_float(2) || in.is_array(0)) return false;
+    if (in.nargs() != 3 || !in.is_array(1) || !in.is_float(2) || in.is_array(0))
+        return false;
     const int ne = shading_type_floats(in.type(1));
     if (in.floats(0) != ne) return false;
     b.ia = ne;
@@ -349,7 +351,8 @@ bool bind_aref(const BindInfo& in, BoundOp& b, std::string&) {
 }
 
 bool bind_aassign(const BindInfo& in, BoundOp& b, std::string&) {
-    if (in.nargs() != 3 || !in.is_array(0) || !in.is_float(1) || in.is_array(2)) return false;
+    if (in.nargs() != 3 || !in.is_array(0) || !in.is_float(1) || in.is_array(2))
+        return false;
     const int ne = shading_type_floats(in.type(0));
     if (in.floats(2) != ne && !(in.is_float(2) && in.type(0) != ShadingType::String))
         return false;
@@ -371,7 +374,8 @@ struct SpaceConv {
     glm::dmat4 m{1.0};
 };
 
-SpaceConv space_conv(Frame& f, const BoundOp& b, ShadingType t, const std::string& space) {
+SpaceConv space_conv(Frame& f, const BoundOp& b, ShadingType t,
+                     const std::string& space) {
     SpaceConv c;
     c.name = space;
     if (t == ShadingType::Color) {
@@ -506,13 +510,15 @@ void op_cast_matrix(Frame& f, const BoundOp& b) {
     Slot& s = f.slot(b, 2);
     const bool single = s.nf == 1;
     f.each(d.varying, [&](std::size_t i) {
-        const glm::dmat4 m = single ? glm::dmat4(static_cast<double>(*s.at(i))) : ldm(s.at(i));
+        const glm::dmat4 m =
+            single ? glm::dmat4(static_cast<double>(*s.at(i))) : ldm(s.at(i));
         stm(d.at(i), matrix_in_space(f, b, f.str(b, 1, i), m));
     });
 }
 
 bool bind_cast(const BindInfo& in, BoundOp& b, std::string&) {
-    if (in.nargs() != 3 || !in.is_string(1) || in.is_array(0) || in.is_array(2)) return false;
+    if (in.nargs() != 3 || !in.is_string(1) || in.is_array(0) || in.is_array(2))
+        return false;
     if (in.is_triple_(0) && (in.is_triple_(2) || in.is_float(2))) {
         b.ib = static_cast<int>(in.type(0));
         b.fn = op_cast3;

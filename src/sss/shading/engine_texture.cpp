@@ -30,8 +30,8 @@
 #include <glm/matrix.hpp>
 
 #include "engine_internal.h"
-#include "texture_library.h"
 #include "sss/util/version.h"
+#include "texture_library.h"
 
 namespace sss::detail {
 
@@ -63,7 +63,8 @@ bool options_ok(const BindInfo& in, int first) {
 /// Values of argument k for every point (n x comps floats).
 std::vector<float> gather(Frame& f, const Slot& s, int comps) {
     std::vector<float> out(f.n * comps);
-    for (std::size_t i = 0; i < f.n; ++i) std::memcpy(&out[i * comps], s.at(i), sizeof(float) * comps);
+    for (std::size_t i = 0; i < f.n; ++i)
+        std::memcpy(&out[i * comps], s.at(i), sizeof(float) * comps);
     return out;
 }
 
@@ -89,7 +90,8 @@ void read_texture_options(Frame& f, const BoundOp& b, int first, TextureOptions&
     const std::size_t i0 = f.first_active();
     for_options(f, b, first, [&](const std::string& name, int k) {
         const Slot& s = f.slot(b, k);
-        const bool str = f.program->symbols[b.op->args[k]].type.type == ShadingType::String;
+        const bool str =
+            f.program->symbols[b.op->args[k]].type.type == ShadingType::String;
         const std::string* text = str ? &f.str(b, k, i0) : nullptr;
         if (!set_texture_option(o, name, str ? nullptr : s.at(i0), str ? 0 : s.nf, text))
             f.warn_once(b, "unknown texture option \"" + name + "\"; ignored");
@@ -131,7 +133,8 @@ void op_texture(Frame& f, const BoundOp& b) {
             st[k] = gather(f, f.slot(b, 3 + k), 1);
             ptrs[k] = st[k].data();
         }
-        ok = lib->texture_quad(file, channel, nc, o, n, ptrs, run_mask(f), out.data(), &error);
+        ok = lib->texture_quad(file, channel, nc, o, n, ptrs, run_mask(f), out.data(),
+                               &error);
     } else {
         const Slot* ss;
         const Slot* ts;
@@ -160,15 +163,18 @@ void op_texture(Frame& f, const BoundOp& b) {
                 return &tmp;
             };
             static const std::vector<float> none;
-            ss = global_slot(G_s, batch ? batch->s : none, batch ? batch->u : none, fallback_s, fs);
-            ts = global_slot(G_t, batch ? batch->t : none, batch ? batch->v : none, fallback_t, ft);
+            ss = global_slot(G_s, batch ? batch->s : none, batch ? batch->u : none,
+                             fallback_s, fs);
+            ts = global_slot(G_t, batch ? batch->t : none, batch ? batch->v : none,
+                             fallback_t, ft);
         }
         const std::vector<float> s = gather(f, *ss, 1), t = gather(f, *ts, 1);
         std::vector<float> dsdu, dsdv, dtdu, dtdv;
         differences(f, *ss, 1, sname, dsdu, dsdv);
         differences(f, *ts, 1, tname, dtdu, dtdv);
-        ok = lib->texture(file, channel, nc, o, n, s.data(), t.data(), dsdu.data(), dtdu.data(),
-                          dsdv.data(), dtdv.data(), run_mask(f), out.data(), &error);
+        ok = lib->texture(file, channel, nc, o, n, s.data(), t.data(), dsdu.data(),
+                          dtdu.data(), dsdv.data(), dtdv.data(), run_mask(f), out.data(),
+                          &error);
     }
     if (!ok) {
         f.warn_once(b, "texture \"" + file + "\": " + error);
@@ -211,10 +217,12 @@ void op_environment(Frame& f, const BoundOp& b) {
     std::vector<float> out(n * nc, 0.0f);
     std::string error;
     TextureLibrary* lib = library(f);
-    const bool ok = lib && lib->environment(file, channel, nc, o, n, dir.data(), ddu.data(),
-                                            ddv.data(), run_mask(f), out.data(), &error);
+    const bool ok =
+        lib && lib->environment(file, channel, nc, o, n, dir.data(), ddu.data(),
+                                ddv.data(), run_mask(f), out.data(), &error);
     if (!ok) {
-        f.warn_once(b, "environment \"" + file + "\": " + (lib ? error : "no texture library"));
+        f.warn_once(b, "environment \"" + file +
+                           "\": " + (lib ? error : "no texture library"));
         std::fill(out.begin(), out.end(), 0.0f);
     }
     write_result(f, d, out, nc);
@@ -248,9 +256,11 @@ bool write_query(Frame& f, const BoundOp& b, int k, const QueryValue& v) {
         return true;
     }
     if (v.is_string || static_cast<int>(v.numbers.size()) != s.nf) return false;
-    if (v.matrix != (sym.type.type == ShadingType::Matrix && !sym.type.is_array())) return false;
-    f.each(s.varying,
-           [&](std::size_t i) { std::memcpy(s.at(i), v.numbers.data(), sizeof(float) * s.nf); });
+    if (v.matrix != (sym.type.type == ShadingType::Matrix && !sym.type.is_array()))
+        return false;
+    f.each(s.varying, [&](std::size_t i) {
+        std::memcpy(s.at(i), v.numbers.data(), sizeof(float) * s.nf);
+    });
     return true;
 }
 
@@ -277,7 +287,8 @@ void op_textureinfo(Frame& f, const BoundOp& b) {
 }
 
 bool bind_textureinfo(const BindInfo& in, BoundOp& b, std::string&) {
-    if (in.nargs() != 4 || !in.is_float(0) || !in.is_string(1) || !in.is_string(2)) return false;
+    if (in.nargs() != 4 || !in.is_float(0) || !in.is_string(1) || !in.is_string(2))
+        return false;
     b.fn = op_textureinfo;
     return true;
 }
@@ -306,7 +317,8 @@ QueryValue number(double x) {
 }
 QueryValue triple(const glm::dvec3& c) {
     QueryValue v;
-    v.numbers = {static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z)};
+    v.numbers = {static_cast<float>(c.x), static_cast<float>(c.y),
+                 static_cast<float>(c.z)};
     return v;
 }
 QueryValue text(const std::string& s) {
@@ -335,7 +347,8 @@ void op_attribute(Frame& f, const BoundOp& b) {
     static const Attributes kDefault;
     if (!a) a = &kDefault;
     const ShadingBatch* batch = f.ctx->batch;
-    const bool out_string = f.program->symbols[b.op->args[2]].type.type == ShadingType::String;
+    const bool out_string =
+        f.program->symbols[b.op->args[2]].type.type == ShadingType::String;
     QueryValue v;
     bool known = true;
     if (name == "identifier:name")
@@ -356,8 +369,8 @@ void op_attribute(Frame& f, const BoundOp& b) {
     else if (name == "Ri:Transformation") {
         v.matrix = true;
         v.numbers.assign(16, 0.0f);
-        stm(v.numbers.data(), batch && batch->primitive ? batch->primitive->object_to_world
-                                                        : Matrix4(1.0));
+        stm(v.numbers.data(),
+            batch && batch->primitive ? batch->primitive->object_to_world : Matrix4(1.0));
     } else
         known = user_value(a->groups, name, v);
     set_result(f, b, known && write_query(f, b, 2, v) ? 1.0f : 0.0f);
@@ -373,7 +386,8 @@ void op_option(Frame& f, const BoundOp& b) {
         v.numbers = {static_cast<float>(cam.xres), static_cast<float>(cam.yres),
                      static_cast<float>(cam.pixel_aspect)};
     } else if (name == "Frame" || name == "Ri:Frame") {
-        const std::optional<int> frame = f.ctx->services.frame() ? f.ctx->services.frame() : o.frame;
+        const std::optional<int> frame =
+            f.ctx->services.frame() ? f.ctx->services.frame() : o.frame;
         known = frame.has_value();
         if (known) v = number(*frame);
     } else if (name == "FrameAspectRatio" || name == "Ri:FrameAspectRatio") {
@@ -451,7 +465,8 @@ void op_texture3d(Frame& f, const BoundOp& b) {
     std::vector<int> outs;
     for_options(f, b, 4, [&](const std::string& name, int k) {
         const Slot& s = f.slot(b, k);
-        const bool str = f.program->symbols[b.op->args[k]].type.type == ShadingType::String;
+        const bool str =
+            f.program->symbols[b.op->args[k]].type.type == ShadingType::String;
         if (set_texture3d_option(o, name, str ? nullptr : s.at(i0), str ? 0 : s.nf,
                                  str ? &f.str(b, k, i0) : nullptr))
             return;
@@ -476,8 +491,8 @@ void op_texture3d(Frame& f, const BoundOp& b) {
         int stride = 0;
         for (int k : outs) stride += f.slot(b, k).nf;
         out.assign(n * static_cast<std::size_t>(std::max(stride, 1)), 0.0f);
-        ok = lib->texture3d(file, channels, n, P.data(), N.data(), radius.data(), run_mask(f),
-                            floats, out.data(), found.data(), &error);
+        ok = lib->texture3d(file, channels, n, P.data(), N.data(), radius.data(),
+                            run_mask(f), floats, out.data(), found.data(), &error);
     }
     if (!ok) {
         if (lib && !channels.empty()) f.warn_once(b, "texture3d: " + error);
@@ -537,7 +552,8 @@ void op_bake3d(Frame& f, const BoundOp& b) {
     std::vector<std::pair<std::string, int>> values;
     for_options(f, b, 5, [&](const std::string& name, int k) {
         const Slot& s = f.slot(b, k);
-        const bool str = f.program->symbols[b.op->args[k]].type.type == ShadingType::String;
+        const bool str =
+            f.program->symbols[b.op->args[k]].type.type == ShadingType::String;
         if (name == "radius" || name == "radiusscale" || name == "coordsystem" ||
             name == "interpolate") {
             if (!set_bake3d_option(o, name, str ? nullptr : s.at(i0), str ? 0 : s.nf,
@@ -569,9 +585,8 @@ void op_bake3d(Frame& f, const BoundOp& b) {
     // Radii: the option, the batch's, or the micropolygon's.
     std::vector<float> area;
     const ShadingBatch* batch = f.ctx->batch;
-    const bool need_area =
-        o.radius < 0.0f && !(batch && batch->radius.size() >= n) &&
-        !(batch && batch->dicing_area.size() >= n);
+    const bool need_area = o.radius < 0.0f && !(batch && batch->radius.size() >= n) &&
+                           !(batch && batch->dicing_area.size() >= n);
     if (need_area) {
         std::vector<float> eu(n * 3), ev(n * 3);
         const Slot& p = f.slot(b, 3);
@@ -595,7 +610,8 @@ void op_bake3d(Frame& f, const BoundOp& b) {
         else {
             const float a = need_area ? area[i] : batch->dicing_area[i];
             // The micropolygon's area, in current units -> the file's space.
-            r = static_cast<float>(std::sqrt(std::max(a, 0.0f) / 3.14159265358979) * scale);
+            r = static_cast<float>(std::sqrt(std::max(a, 0.0f) / 3.14159265358979) *
+                                   scale);
         }
         rec.radius.push_back(r * o.radiusscale);
         for (std::size_t c = 0; c < chan_args.size(); ++c) {
