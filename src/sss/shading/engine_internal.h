@@ -172,7 +172,8 @@ struct Frame {
 
     // Light frames: the illuminate/solar state.
     std::vector<uint8_t> lit;
-    std::vector<glm::vec3> light_L; ///< L as illuminate / solar set it
+    std::vector<glm::vec3> light_L;  ///< L as illuminate / solar set it
+    std::vector<glm::vec3> light_Ps; ///< the surface points being lit
     bool in_illuminate = false;
     bool solar = false;
 

@@ -127,6 +127,8 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
     auto sl = [&](int id) -> const Slot* {
         return g[id] >= 0 ? &lf.slots[id >= 0 ? g[id] : 0] : nullptr;
     };
+    lf.light_Ps.resize(n);
+    for (std::size_t i = 0; i < n; ++i) lf.light_Ps[i] = Pat(i);
     if (const Slot* s = sl(G_Ps))
         for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), Pat(i));
     if (const Slot* s = sl(G_P)) {
@@ -168,7 +170,6 @@ void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
     const std::size_t n = f.n;
     const int* g = f.bound->globals;
     const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
-    const Slot* Ps = g[G_Ps] >= 0 ? &f.slots[g[G_Ps]] : nullptr;
     const int axis_k = solar ? 0 : 1;
     const int angle_k = solar ? 1 : 2;
     std::vector<uint8_t>& entry = f.push_mask();
@@ -185,8 +186,7 @@ void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
         if (solar) {
             L = angle < 0.0f ? glm::vec3(0.0f) : axis;
         } else {
-            const glm::vec3 ps = Ps ? ld3(Ps->at(i)) : glm::vec3(0.0f);
-            L = ps - ld3(f.ptr(b, 0, i));
+            L = f.light_Ps[i] - ld3(f.ptr(b, 0, i));
         }
         bool pass = true;
         if (!solar && angle >= 0.0f && angle < 3.14159265f) {
@@ -491,6 +491,12 @@ struct Tracer {
         glm::vec3 n = normal(i);
         if (glm::dot(n, dir) < 0.0f) n = -n;
         const glm::vec3 origin = from + n * offset;
+        if (!infinite) { // as the C++ lights: from the offset origin to the target
+            dir = xform_point(to_world, to_or_dir_c) - origin;
+            len = glm::length(dir);
+            if (!(len > 0.0f)) return 1.0f;
+            dir /= len;
+        }
         const float tfar = infinite ? len : len * (1.0f - 1e-4f);
         if (samples <= 1 || cone <= 0.0f) {
             ShadowRay r{origin, dir, 0.0f, tfar};

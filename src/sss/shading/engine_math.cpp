@@ -50,11 +50,11 @@ void op_elem(Frame& f, const BoundOp& b) {
     });
 }
 
-/// Arity: the exact argument count, or -2 for "two or more".
+/// Arity: the exact argument count, or -2 for "one or more".
 template <class F, int Arity>
 bool bind_elem(const BindInfo& in, BoundOp& b, std::string&) {
     const int na = in.nargs() - 1;
-    if (Arity >= 0 ? na != Arity : na < 2) return false;
+    if (Arity >= 0 ? na != Arity : na < 1) return false;
     if (in.is_array(0) || !(in.is_float(0) || in.is_triple_(0))) return false;
     const int nd = in.floats(0);
     for (int k = 1; k <= na; ++k) {
@@ -242,7 +242,7 @@ void op_spline(Frame& f, const BoundOp& b) {
 
 bool bind_spline(const BindInfo& in, BoundOp& b, std::string&) {
     const int n = in.nargs();
-    if (n < 3 || in.is_array(0) || !(in.is_float(0) || in.is_triple_(0))) return false;
+    if (n < 2 || in.is_array(0) || !(in.is_float(0) || in.is_triple_(0))) return false;
     const bool basis = in.is_string(1);
     const int tk = basis ? 2 : 1;
     if (tk >= n || !in.is_float(tk)) return false;
