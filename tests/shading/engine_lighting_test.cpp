@@ -18,9 +18,12 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/matrix.hpp>
 
+#include <fstream>
+
 #include "engine_test_util.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
+#include "test_util.h"
 
 namespace {
 
@@ -531,6 +534,36 @@ surface t(output varying float r = 0; output varying float x = 7; output varying
         EXPECT_EQ(y[i], b.u[i] > 0.5f ? 1.0f : 0.0f);
     }
     EXPECT_FALSE(e.services.warnings.empty());
+}
+
+TEST(RslEngineTextures, TextureLooksUpThePixels) {
+    sss::test::TempDir dir;
+    const std::string file = dir.file("two.ppm");
+    {
+        std::ofstream out(file);
+        out << "P3\n2 1\n255\n255 0 0  0 0 255\n";
+    }
+    Engine e;
+    ShadingBatch b = plane_grid(2, 1); // s = 0.25, 0.75
+    ShaderInstance inst = e.instance(R"(
+surface t(string map = "";) {
+    Ci = color texture(map, "width", 0);
+    Oi = float texture(map[2], s, t, "width", 0);
+}
+)",
+                                     [&] {
+                                         ParamList p;
+                                         p.set(string_param("map", file));
+                                         return p;
+                                     }());
+    e.context.execute(inst, b);
+    EXPECT_NEAR(b.Ci[0].x, 1.0f, 1e-3);
+    EXPECT_NEAR(b.Ci[0].z, 0.0f, 1e-3);
+    EXPECT_NEAR(b.Ci[1].x, 0.0f, 1e-3);
+    EXPECT_NEAR(b.Ci[1].z, 1.0f, 1e-3);
+    EXPECT_NEAR(b.Oi[0].x, 0.0f, 1e-3); // blue channel
+    EXPECT_NEAR(b.Oi[1].y, 1.0f, 1e-3);
+    EXPECT_TRUE(e.services.warnings.empty());
 }
 
 TEST(RslEngineQueries, AttributesAndOptions) {

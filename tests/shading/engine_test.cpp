@@ -459,6 +459,22 @@ surface t(output varying float r = 0;) {
     EXPECT_EQ(r[0], 1.0f);
 }
 
+TEST(RslEngineControl, EndlessLoopsAreStopped) {
+    Engine e;
+    ShadingBatch b = plane_grid(1, 1);
+    ShaderInstance inst = e.instance(R"(
+surface t() { float x = 0; while (x >= 0) { x += 1; } Ci = x; }
+)");
+    try {
+        e.context.execute(inst, b);
+        FAIL() << "no error";
+    } catch (const ShaderRuntimeError& err) {
+        EXPECT_NE(std::string(err.what()).find("loop does not end"), std::string::npos);
+        EXPECT_NE(std::string(err.what()).find("test.sl:2"), std::string::npos)
+            << err.what();
+    }
+}
+
 TEST(RslEngineControl, RandomIsDeterministic) {
     Engine e;
     ShadingBatch b = plane_grid(16, 1);

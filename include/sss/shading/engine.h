@@ -7,7 +7,26 @@
 ///
 /// Spaces: "current" is camera space (RenderMan's convention, shading.md
 /// section 4): every point, vector and normal of a batch is in camera space,
-/// and the eye E is the origin.
+/// and the eye E is the origin. Named spaces: "current"/"camera", "world",
+/// "object" (the batch's primitive; world without one), "shader" (the
+/// instance's), "screen", "raster", "NDC" (from the scene's camera) and the
+/// scene's CoordinateSystem names; an unknown name is a ShaderRuntimeError.
+///
+/// What the engine implements (details in src/sss/shading/engine*.cpp):
+///  - every op of program.h and every overload of builtins.cpp (a program
+///    using anything else is refused when its ShaderInstance is built);
+///  - structured control flow under a running mask (if, loops, break and
+///    continue n, returns from inlined functions and from the shader), with
+///    uniform stores written when any point runs;
+///  - lights run lazily per batch (illuminate/solar/ambient lights,
+///    categories, __nondiffuse/__nonspecular), ray-traced shadow() and
+///    transmission() through ShadingServices::occluders(), occlusion();
+///  - texture/environment/textureinfo/texture3d through the job's
+///    TextureLibrary, bake3d records handed to ShadingServices::bake3d;
+///  - attribute/option/rendererinfo/rayinfo queries.
+/// Not supported (they run and return 0, warned once where it matters):
+/// depth-map shadow(), trace(), indirectdiffuse(), message passing
+/// (surface(), displacement(), lightsource()); gather is not compiled.
 
 #include <cstddef>
 #include <cstdint>

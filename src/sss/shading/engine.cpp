@@ -1013,6 +1013,7 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
                          " points");
     c.batch = &batch;
     c.lights = lights;
+    c.depth = 0;
     c.reset_strings();
     c.extra_storage.clear();
     const Scene& scene = c.services.scene();
