@@ -94,6 +94,16 @@ TEST(RslNoise, NotFiniteGivesHalf) {
     EXPECT_EQ(rsl_noise(NAN), 0.5f);
     EXPECT_EQ(rsl_noise(glm::vec3(1.5f, INFINITY, 0.2f)), 0.5f);
     EXPECT_EQ(rsl_pnoise(NAN, 4.0f), 0.5f);
+    // Huge coordinates and periods stay defined (and in range).
+    for (float big : {3.0e38f, -3.0e38f, 1.0e20f, -7.5e9f})
+        for (float period : {3.0f, 7.0f, 1.0e12f, 3.0e38f, -2.0f}) {
+            const float v =
+                rsl_pnoise(glm::vec3(big, 0.5f, -big), big, glm::vec3(period), period);
+            EXPECT_GE(v, 0.0f);
+            EXPECT_LE(v, 1.0f);
+            EXPECT_GE(rsl_noise(glm::vec3(big, big, 0.5f)), 0.0f);
+            EXPECT_GE(rsl_cellnoise(big, big), 0.0f);
+        }
     EXPECT_GE(rsl_cellnoise(NAN), 0.0f);
 }
 

@@ -6,7 +6,21 @@
 /// `#undef`, `#if` / `#elif` with `defined` and integer arithmetic,
 /// `#ifdef`, `#ifndef`, `#else`, `#endif`, `#line`, `#pragma` (ignored),
 /// `#error`; `/* */` and `//` comments; line splices. Predefined: `PI` is not
-/// a macro (the language has it), `__SSS__` and `RSL` are defined as 1.
+/// a macro (the language has it), `__SSS__` and `RSL` are defined as 1;
+/// `__LINE__` and `__FILE__` work as in C, and so do variadic macros
+/// (`...`, `__VA_ARGS__`). Macros are not expanded inside string literals.
+///
+/// The output has one line per logical source line, followed by an empty
+/// line for each further physical line it spanned (multi-line comments,
+/// splices, macro arguments over several lines), so compiler messages keep
+/// their line numbers; a comment within one line becomes as many spaces, so
+/// columns after it stay right too. Directives and skipped lines become
+/// empty lines; an `#include` becomes the included file's lines.
+///
+/// Hostile input is bounded: includes nest at most 64 deep (a cycle is
+/// reported as such), the output stops at 10 million characters, a run at a
+/// million macro expansions, macro arguments and `#if` expressions nest at
+/// most 200 deep; each is a PreprocessError.
 
 #include <string>
 #include <utility>

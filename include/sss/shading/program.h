@@ -169,5 +169,7 @@ void write_program(const Program& program, std::ostream& out);
 Program read_program(std::istream& in, const std::string& path);
 /// read_program from a file.
 Program read_program_file(const std::string& path);
+/// write_program to a file, atomically (util/atomic_output.h). Throws IoError.
+void write_program_file(const Program& program, const std::string& path);
 
 } // namespace sss

@@ -80,10 +80,14 @@ struct RslFormatArg {
     const float* numbers = nullptr;
     const std::string* string = nullptr;
 };
-/// format()/printf(): %f %e %g (with width/precision), %d (float printed as
-/// integer), %s, %c (color "r g b"), %p (point/vector/normal "x y z"), %m
-/// (matrix, 16 numbers), %%; precision applies per component (%.3p). Too few
-/// or too many arguments or a wrong type for a conversion -> sss::ValueError.
+/// format()/printf(): %f %e %g (with flags, width, precision), %d / %i
+/// (the float rounded toward zero, printed as an integer), %s, %c (color
+/// "r g b"), %p (point/vector/normal "x y z"), %m (matrix, 16 numbers
+/// row by row); the components of %c %p %m are printed as %f with the
+/// conversion's flags, width and precision each (%.3p: "1.000 2.000 3.000");
+/// %% is a percent sign. Too few or too many arguments, a wrong type for a
+/// conversion, an unknown conversion or a width/precision over 4 digits ->
+/// sss::ValueError naming the pattern and the argument.
 std::string rsl_format(std::string_view pattern, std::span<const RslFormatArg> args);
 
 /// match(pattern, subject): true if the POSIX extended regular expression

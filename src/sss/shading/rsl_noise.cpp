@@ -117,8 +117,17 @@ Axis axis(double x, double period, int shift) {
     const double f = std::floor(x);
     a.frac = x - f;
     // Reducing in double keeps huge coordinates from overflowing an int.
+    // 256 divides exactly (the formula of light/noise.cpp); other periods
+    // use fmod, which is exact where f - n*floor(f/n) may round out of
+    // [0, n) for huge f.
     const double n = period >= 1.0 ? period : 256.0;
-    const double wrapped = f - n * std::floor(f / n);
+    double wrapped;
+    if (n == 256.0) {
+        wrapped = f - n * std::floor(f / n);
+    } else {
+        wrapped = std::fmod(f, n);
+        if (wrapped < 0.0) wrapped += n;
+    }
     const auto c0 = static_cast<int64_t>(wrapped);
     const auto p = static_cast<int64_t>(n);
     const int64_t c1 = c0 + 1 == p ? 0 : c0 + 1;
@@ -166,7 +175,10 @@ template <int D>
 float noise01(const double* x, const double* periods, int component) {
     for (int d = 0; d < D; ++d)
         if (!std::isfinite(x[d])) return 0.5f;
-    const double n = 0.5 + 0.5 * gradient_noise<D>(x, periods, component);
+    // 4-D gradient noise spreads wider (about 1.1x the 3-D one's standard
+    // deviation, and past +-1 now and then): 0.9 matches the 3-D spread.
+    constexpr double kScale = D == 4 ? 0.9 : 1.0;
+    const double n = 0.5 + 0.5 * kScale * gradient_noise<D>(x, periods, component);
     return static_cast<float>(n < 0.0 ? 0.0 : (n > 1.0 ? 1.0 : n));
 }
 
@@ -177,8 +189,11 @@ glm::vec3 vnoise01(const double* x, const double* periods) {
 }
 
 /// pnoise periods: rounded to integers; < 1 means not periodic.
+/// Periods of 2^30 and more (beyond float's integers anyway) are treated as
+/// not periodic, which keeps the cell arithmetic in range.
 double period_of(float p) {
-    return std::isfinite(p) ? std::round(static_cast<double>(p)) : 0.0;
+    const double r = std::isfinite(p) ? std::round(static_cast<double>(p)) : 0.0;
+    return r < 0x1.0p30 ? r : 0.0;
 }
 
 /// The integer cell of x; non-finite coordinates fall in cell 0, huge ones

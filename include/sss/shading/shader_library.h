@@ -1,0 +1,60 @@
+#pragma once
+/// \file shader_library.h
+/// Finding compiled shaders as PRMan does: `<name>.slo` along the shader
+/// search path, where a folder with only `<name>.sl` has it compiled on
+/// demand (the compiled program is cached for the job).
+///
+/// The search path is `Option "searchpath" "shader" ["a:b:..."]` of the
+/// scene: ':'-separated folders, relative ones taken from the RIB's folder;
+/// `@` stands for the standard shaders and `&` for the previous value (the
+/// default). The default is the RIB's folder, then the standard shaders.
+/// The standard shaders are the compiled `shaders/` of the toolchain: the
+/// folder named by the environment variable SSS_SHADER_DIR when set, else
+/// `../shaders` next to the running executable (the build tree's and the
+/// install's layout).
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "sss/scene/scene.h"
+#include "sss/shading/program.h"
+#include "sss/util/error.h"
+
+namespace sss {
+
+/// A shader the search path does not have, or one of the wrong kind. The
+/// message names the shader, the call's RIB location and the search path.
+class ShaderNotFoundError : public ValueError {
+public:
+    using ValueError::ValueError;
+};
+
+/// The folder of the standard shaders (see above); "" when it cannot be found.
+std::string standard_shader_dir();
+
+/// The scene's shader search path, folders in search order.
+std::vector<std::string> shader_search_path(const Scene& scene);
+
+/// Loads shaders by name along a search path; each once. Thread-safe.
+class ShaderLibrary {
+public:
+    explicit ShaderLibrary(std::vector<std::string> search_path);
+
+    /// The shader `name` of kind `kind`. `where` (e.g. "scene.rib:12:
+    /// Surface \"glass\"") prefixes errors: ShaderNotFoundError when no
+    /// folder has it or it is of another kind, ShaderCompileError /
+    /// ValueError when its file does not compile or read.
+    std::shared_ptr<const Program> load(const std::string& name, ShaderKind kind,
+                                        const std::string& where);
+    const std::vector<std::string>& search_path() const { return m_path; }
+
+private:
+    std::vector<std::string> m_path;
+    std::mutex m_mutex;
+    std::map<std::string, std::shared_ptr<const Program>> m_loaded;
+};
+
+} // namespace sss

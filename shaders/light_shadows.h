@@ -1,0 +1,27 @@
+/* Shared by the standard lights: the ray-traced shadow term.
+ * shadowname "raytrace" (or any map name: depth-map shadows are ray traced
+ * here) turns shadows on; samples > 1 with a light of non-zero size gives
+ * soft shadows over the cone the emitter subtends (half-angle cone). */
+#ifndef SSS_LIGHT_SHADOWS_H
+#define SSS_LIGHT_SHADOWS_H
+
+/* The unshadowed fraction at Ps of a light seen under the half-angle cone. */
+float light_visibility(string shadowname; point Ps; float samples, cone)
+{
+    float visible = 1;
+    if (shadowname != "")
+        visible = 1 - shadow("raytrace", Ps, "samples", samples, "samplecone", cone);
+    return visible;
+}
+
+/* Half-angle of a sphere of radius r (shader space) seen from distance d
+ * (current space). */
+float sphere_cone(float r, d)
+{
+    float rc = r * length(vtransform("shader", "current", vector(1, 0, 0)));
+    float cone = 0;
+    if (rc > 0 && d > rc)
+        cone = asin(rc / d);
+    return cone;
+}
+#endif

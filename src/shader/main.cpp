@@ -1,0 +1,143 @@
+/// \file main.cpp
+/// shader: compiles RenderMan Shading Language sources (.sl) into .slo
+/// files, as PRMan's `shader` does: the C preprocessor first (-I, -D, -U),
+/// then one `<shadername>.slo` per shader in the current folder.
+
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "sss/cli/tool.h"
+#include "sss/shading/compiler.h"
+#include "sss/shading/program.h"
+#include "sss/util/error.h"
+
+namespace {
+
+const char* const kTool = "shader";
+
+const char* const kUsage = R"(usage: shader [options] file.sl...
+
+Compiles RenderMan Shading Language files. Each shader a file defines is
+written to <shadername>.slo in the current folder (named after the shader,
+not the file). Errors are printed as file:line:column with the source line.
+
+options:
+  -o file.slo    output file (one input file defining one shader)
+  -I dir         add dir to the #include search path (also -Idir)
+  -D name[=val]  define a macro (val defaults to 1; also -Dname[=val])
+  -U name        undefine a macro (also -Uname)
+  -q             quiet: no progress lines, no warnings
+  -h, --help     this help
+  --version      version information
+
+Exit codes: 0 ok, 1 a file did not compile or could not be written,
+2 bad command line.
+)";
+
+// -X value or -Xvalue.
+std::string attached_or_next(sss::ArgScanner& scan, const std::string& opt) {
+    if (opt.size() > 1) return opt.substr(1);
+    return scan.value(opt);
+}
+
+void add_define(sss::PreprocessOptions& options, const std::string& def) {
+    const std::size_t eq = def.find('=');
+    const std::string name = def.substr(0, eq);
+    if (name.empty()) throw sss::UsageError("option -D needs a macro name");
+    options.defines.emplace_back(name,
+                                 eq == std::string::npos ? "1" : def.substr(eq + 1));
+}
+
+// Compiles one file; prints its diagnostics. Returns "" or what failed.
+std::string compile_one(const std::string& file, const sss::PreprocessOptions& options,
+                        const std::string& output, bool quiet) {
+    sss::CompileResult result;
+    try {
+        result = sss::compile_file(file, options);
+    } catch (const sss::ShaderCompileError& e) {
+        int errors = 0;
+        for (const sss::Diagnostic& d : e.diagnostics()) {
+            if (d.severity == sss::Diagnostic::Severity::Error)
+                ++errors;
+            else if (quiet)
+                continue;
+            std::cerr << d.format() << "\n";
+        }
+        return file + ": " + std::to_string(errors) +
+               (errors == 1 ? " error" : " errors");
+    } catch (const sss::PreprocessError& e) {
+        // what() is "file:line:column: message": print it as the compiler's.
+        const std::string where = e.file() + ":" + std::to_string(e.line()) + ":" +
+                                  std::to_string(e.column()) + ": ";
+        std::string message = e.what();
+        if (message.rfind(where, 0) == 0) message = message.substr(where.size());
+        std::cerr << where << "error: " << message << "\n";
+        if (!e.source_line().empty())
+            std::cerr << "  " << e.source_line() << "\n  "
+                      << std::string(e.column() > 0 ? e.column() - 1 : 0, ' ') << "^\n";
+        return file + ": preprocessing failed";
+    }
+    if (!quiet)
+        for (const sss::Diagnostic& w : result.warnings) std::cerr << w.format() << "\n";
+    if (result.shaders.empty()) return file + ": defines no shader";
+    if (!output.empty() && result.shaders.size() > 1)
+        return file + ": defines " + std::to_string(result.shaders.size()) +
+               " shaders but -o names one output";
+    for (const sss::Program& p : result.shaders) {
+        const std::string path = output.empty() ? p.name + ".slo" : output;
+        sss::write_program_file(p, path);
+        if (!quiet)
+            std::cout << file << ": " << sss::shader_kind_name(p.kind) << " " << p.name
+                      << " -> " << path << "\n";
+    }
+    return "";
+}
+
+int run(const std::vector<std::string>& args) {
+    sss::PreprocessOptions options;
+    std::string output;
+    bool quiet = false;
+    std::vector<std::string> files;
+
+    sss::ArgScanner scan(args);
+    std::string opt;
+    while (scan.next_option(opt, files)) {
+        if (sss::standard_option(kTool, opt, kUsage)) {
+            return 0;
+        } else if (opt == "o") {
+            output = scan.value(opt);
+        } else if (opt == "q") {
+            quiet = true;
+        } else if (opt[0] == 'I') {
+            options.include_dirs.push_back(attached_or_next(scan, "I" + opt.substr(1)));
+        } else if (opt[0] == 'D') {
+            add_define(options, attached_or_next(scan, "D" + opt.substr(1)));
+        } else if (opt[0] == 'U') {
+            options.undefines.push_back(attached_or_next(scan, "U" + opt.substr(1)));
+        } else {
+            throw sss::UsageError("unknown option -" + opt);
+        }
+    }
+    if (files.empty()) throw sss::UsageError("missing input file");
+    if (!output.empty() && files.size() > 1)
+        throw sss::UsageError("-o names one output: give one input file");
+
+    std::vector<std::string> failed;
+    for (const std::string& file : files) {
+        const std::string what = compile_one(file, options, output, quiet);
+        if (!what.empty()) failed.push_back(what);
+    }
+    if (!failed.empty()) {
+        std::string all;
+        for (const std::string& f : failed) all += (all.empty() ? "" : "; ") + f;
+        throw sss::ValueError(all);
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}

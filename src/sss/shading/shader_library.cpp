@@ -1,0 +1,132 @@
+/// \file shader_library.cpp
+/// The shader search path and on-demand loading (shader_library.h).
+
+#include "sss/shading/shader_library.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+#include <unistd.h>
+
+#include "sss/shading/compiler.h"
+
+namespace sss {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string executable_dir() {
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    return ec ? std::string() : exe.parent_path().string();
+}
+
+std::vector<std::string> split_path(const std::string& text) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char c : text) {
+        if (c == ':') {
+            if (!cur.empty()) out.push_back(cur);
+            cur.clear();
+        } else {
+            cur += c;
+        }
+    }
+    if (!cur.empty()) out.push_back(cur);
+    return out;
+}
+
+std::string join_path(const std::vector<std::string>& dirs) {
+    std::string out;
+    for (const std::string& d : dirs) out += (out.empty() ? "" : ":") + d;
+    return out;
+}
+
+} // namespace
+
+std::string standard_shader_dir() {
+    if (const char* env = std::getenv("SSS_SHADER_DIR"); env && *env) return env;
+    const std::string exe = executable_dir();
+    if (exe.empty()) return {};
+    std::error_code ec;
+    const fs::path dir = fs::path(exe).parent_path() / "shaders";
+    return fs::is_directory(dir, ec) ? dir.lexically_normal().string() : std::string();
+}
+
+std::vector<std::string> shader_search_path(const Scene& scene) {
+    const std::string rib_dir =
+        scene.path.empty() ? std::string(".") : fs::path(scene.path).parent_path().string();
+    const std::string base = rib_dir.empty() ? std::string(".") : rib_dir;
+    const std::string standard = standard_shader_dir();
+    std::vector<std::string> defaults = {base};
+    if (!standard.empty()) defaults.push_back(standard);
+
+    auto group = scene.options.groups.find("searchpath");
+    if (group == scene.options.groups.end() || !group->second.has("shader"))
+        return defaults;
+    const std::string text = group->second.get_string("shader", "");
+    std::vector<std::string> out;
+    for (const std::string& entry : split_path(text)) {
+        if (entry == "&") {
+            out.insert(out.end(), defaults.begin(), defaults.end());
+        } else if (entry == "@") {
+            if (!standard.empty()) out.push_back(standard);
+        } else if (fs::path(entry).is_relative()) {
+            out.push_back((fs::path(base) / entry).lexically_normal().string());
+        } else {
+            out.push_back(entry);
+        }
+    }
+    return out;
+}
+
+ShaderLibrary::ShaderLibrary(std::vector<std::string> search_path)
+    : m_path(std::move(search_path)) {}
+
+std::shared_ptr<const Program> ShaderLibrary::load(const std::string& name, ShaderKind kind,
+                                                   const std::string& where) {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    auto it = m_loaded.find(name);
+    std::shared_ptr<const Program> program;
+    if (it != m_loaded.end()) {
+        program = it->second;
+    } else {
+        std::error_code ec;
+        for (const std::string& dir : m_path) {
+            const fs::path slo = fs::path(dir) / (name + ".slo");
+            const fs::path sl = fs::path(dir) / (name + ".sl");
+            if (fs::is_regular_file(slo, ec)) {
+                program = std::make_shared<const Program>(read_program_file(slo.string()));
+                break;
+            }
+            if (fs::is_regular_file(sl, ec)) {
+                PreprocessOptions options;
+                options.include_dirs.push_back(dir);
+                if (const std::string standard = standard_shader_dir(); !standard.empty())
+                    options.include_dirs.push_back(standard);
+                CompileResult result = compile_file(sl.string(), options);
+                for (Program& p : result.shaders)
+                    if (p.name == name) program = std::make_shared<const Program>(std::move(p));
+                if (!program)
+                    throw ShaderNotFoundError(where + ": " + sl.string() +
+                                              " does not define a shader named '" + name +
+                                              "'");
+                break;
+            }
+        }
+        if (!program)
+            throw ShaderNotFoundError(where + ": shader '" + name +
+                                      "' not found (no " + name + ".slo or " + name +
+                                      ".sl in the shader search path " +
+                                      join_path(m_path) + ")");
+        m_loaded.emplace(name, program);
+    }
+    if (program->kind != kind)
+        throw ShaderNotFoundError(where + ": '" + name + "' is a " +
+                                  shader_kind_name(program->kind) + " shader, not a " +
+                                  shader_kind_name(kind) + " shader");
+    return program;
+}
+
+} // namespace sss
