@@ -7,7 +7,26 @@
 ///
 /// Spaces: "current" is camera space (RenderMan's convention, shading.md
 /// section 4): every point, vector and normal of a batch is in camera space,
-/// and the eye E is the origin.
+/// and the eye E is the origin. Named spaces: "current"/"camera", "world",
+/// "object" (the batch's primitive; world without one), "shader" (the
+/// instance's), "screen", "raster", "NDC" (from the scene's camera) and the
+/// scene's CoordinateSystem names; an unknown name is a ShaderRuntimeError.
+///
+/// What the engine implements (details in src/sss/shading/engine*.cpp):
+///  - every op of program.h and every overload of builtins.cpp (a program
+///    using anything else is refused when its ShaderInstance is built);
+///  - structured control flow under a running mask (if, loops, break and
+///    continue n, returns from inlined functions and from the shader), with
+///    uniform stores written when any point runs;
+///  - lights run lazily per batch (illuminate/solar/ambient lights,
+///    categories, __nondiffuse/__nonspecular), ray-traced shadow() and
+///    transmission() through ShadingServices::occluders(), occlusion();
+///  - texture/environment/textureinfo/texture3d through the job's
+///    TextureLibrary, bake3d records handed to ShadingServices::bake3d;
+///  - attribute/option/rendererinfo/rayinfo queries.
+/// Not supported (they run and return 0, warned once where it matters):
+/// depth-map shadow(), trace(), indirectdiffuse(), message passing
+/// (surface(), displacement(), lightsource()); gather is not compiled.
 
 #include <cstddef>
 #include <cstdint>
@@ -30,6 +49,10 @@ namespace sss {
 
 class RayTracer; // sss/light/ray_tracer.h
 
+namespace detail {
+struct BoundProgram; // engine_internal.h: a Program's ops bound to implementations
+}
+
 /// A shader failed at run time in a way it cannot recover from (array
 /// index out of range, a light shader that does not exist...). The message
 /// names the shader's file:line.
@@ -50,12 +73,26 @@ struct ShaderArgument {
 
 /// A compiled shader bound to the parameter values of one call, with the
 /// "shader" space (the CTM at the call).
+///
+/// Construction also binds every op of the program to its implementation
+/// (by op name and the types and storage of its arguments) and validates the
+/// program (symbol indices, control-flow ranges, constants): a program using
+/// a function or an overload the engine does not implement is refused here
+/// with a ValueError naming the function and the shader's file:line.
 class ShaderInstance {
 public:
     /// Binds `params` to the program's parameters. Throws ValueError naming
     /// `where` for a parameter of the wrong type or size; parameters the
     /// shader does not declare are reported through `warnings` (PRMan warns
     /// and ignores them).
+    ///
+    /// A RIB value fits a parameter when the types agree (point, vector and
+    /// normal are interchangeable; "float" numbers fit any type when their
+    /// count is right; "integer" is a float) and it has as many elements as
+    /// the parameter (1 for a non-array). Points, vectors and normals are
+    /// kept in shader space and converted to the current (camera) space when
+    /// the shader runs (points affinely, vectors without translation,
+    /// normals by the inverse transpose); colours are taken as they are.
     ShaderInstance(std::shared_ptr<const Program> program, const ParamList& params,
                    const Matrix4& shader_to_world, std::string where,
                    std::vector<std::string>* warnings = nullptr);
@@ -70,9 +107,12 @@ public:
     /// constant (for the renderer: light categories, file names...).
     std::optional<std::string> string_parameter(const std::string& name) const;
     std::optional<float> float_parameter(const std::string& name) const;
+    /// The program's ops bound to implementations (engine internal).
+    const detail::BoundProgram& bound() const { return *m_bound; }
 
 private:
     std::shared_ptr<const Program> m_program;
+    std::shared_ptr<const detail::BoundProgram> m_bound;
     Matrix4 m_shader_to_world{1.0};
     std::string m_where;
     std::vector<ShaderArgument> m_arguments;
@@ -89,11 +129,18 @@ enum class BatchLayout {
     /// The results of the two helper points are not used.
     Triplets,
     /// Unrelated points: derivatives come from dPdu*du and dPdv*dv only
-    /// (Du of anything but P, s, t, u, v is 0).
+    /// (Du(P) = dPdu, Dv(P) = dPdv, Du(u) = Dv(v) = 1; Du and Dv of anything
+    /// else are 0).
     Points
 };
 
 /// The points to shade and the global variables, in camera space.
+///
+/// Derivatives (Du, Dv, Deriv, area, calculatenormal, filterstep, implicit
+/// texture filter widths) difference their argument over the whole batch,
+/// whatever the running mask: the values of points masked off where the
+/// argument was computed are whatever those points hold (the compiler
+/// hoists such arguments out of varying conditions when it can).
 struct ShadingBatch {
     std::size_t size = 0;
     BatchLayout layout = BatchLayout::Points;
@@ -105,11 +152,28 @@ struct ShadingBatch {
     std::vector<float> u, v, du, dv, s, t;
     /// area(P, "dicing"): the micropolygon's area when the dicer knows it.
     std::vector<float> dicing_area;
+    /// bake3d's point radius when the call gives no "radius" (world units);
+    /// empty: sqrt(area / pi) of the micropolygon (dicing_area when given,
+    /// else area(P)).
+    std::vector<float> radius;
     float time = 0.0f;
+    /// Seed of random() (and of the sample patterns of shadow(),
+    /// transmission() and occlusion()): point i of the batch draws from
+    /// hash(seed, i, the call, the how-many-th call of it), so results depend
+    /// on the batch's seed and point order only, never on the thread count.
+    /// Renderers set it from the grid or the batch index.
+    uint64_t seed = 0;
+    /// Shadow and occlusion rays start this far (world units) off the surface,
+    /// along the batch's N (or Ng) turned towards the ray, as the C++ lights'
+    /// ray_offset; a call's "bias" overrides it.
+    float ray_offset = 0.0f;
 
     /// The primitive being shaded (object space, attributes, RIB location).
     const Primitive* primitive = nullptr;
-    /// Primitive variables bound to shader parameters of the same name.
+    /// Primitive variables bound to shader parameters of the same name
+    /// (type checked as RIB values; uniform or one value per point). Points,
+    /// vectors and normals are in object space (the primitive's, world space
+    /// without a primitive) and converted to the current space.
     std::vector<ShaderArgument> primvars;
 
     /// Outputs: Ci and Oi after a surface shader, P and N after a
@@ -142,6 +206,10 @@ public:
     virtual void bake3d(Bake3dRecord&& record) { (void)record; }
     /// printf output (one message per call).
     virtual void message(const std::string& text) = 0;
+    /// A run-time warning of a shader ("file:line: shadow maps are not
+    /// supported..."). The engine gives each text once per ShadingResources.
+    /// By default: message("warning: " + text).
+    virtual void warning(const std::string& text) { message("warning: " + text); }
     /// Frame number for patterns in file names (texture3d, bake3d).
     virtual std::optional<int> frame() const { return std::nullopt; }
 };
@@ -179,9 +247,26 @@ public:
     /// and Oi in the batch; displacement shaders leave the new P and N in
     /// batch.P and batch.N. `lights` are run lazily by illuminance loops,
     /// ambient(), diffuse()... and cached for the batch. Throws
-    /// ShaderRuntimeError for errors a shader cannot recover from.
+    /// ShaderRuntimeError for errors a shader cannot recover from, including
+    /// a loop that runs more than kMaxLoopIterations times in one batch
+    /// ("loop does not end").
+    ///
+    /// Before the body: Ci = 0, Oi = Os; uninitialised locals are 0 (strings
+    /// ""). After it, non-finite values of Ci, Oi, P, N and the output
+    /// parameters are replaced by 0; nonfinite_points() counts the points.
     void execute(const ShaderInstance& shader, ShadingBatch& batch,
                  LightList lights = {});
+
+    /// Points of the last execute() whose results held NaN or infinity (and
+    /// were written as 0).
+    std::size_t nonfinite_points() const;
+    /// "N points of shader X at file:line gave NaN or infinity; written as 0"
+    /// for the last execute(), or "" when there were none.
+    std::string nonfinite_message() const;
+
+    /// Iterations of one loop (or illuminance loop) in one batch after which
+    /// the engine gives up: a guard against shaders that never end.
+    static constexpr long kMaxLoopIterations = 10'000'000;
 
     /// After execute: the values of the shader's symbol `name` (an output
     /// parameter or global, for AOVs) at every point, as floats

@@ -1,0 +1,347 @@
+#pragma once
+// Internal to the shading module: the data structures of the execution
+// engine (engine.h) shared by its implementation files.
+//
+//  - BoundProgram: a Program's ops, each bound at ShaderInstance
+//    construction to a function chosen by op name and argument types
+//    (engine_bind.cpp, and the register_* tables of the engine_*.cpp files).
+//  - Frame: one shader's storage over a batch (SoA per symbol: a uniform
+//    symbol holds one value, a varying one a value per point, values stored
+//    point after point), its running mask and per-point stop codes
+//    (break / continue / return), engine.cpp.
+//  - ShadingContext::Impl: one thread's state: the string table, the frames
+//    of the surface and of each light, the light caches.
+//
+// Values: floats; a string is an index into the context's string table
+// (stored as a float); a matrix is 16 floats in RenderMan's row-major order,
+// which is glm's column-major order of our column-vector matrices (scene.h):
+// the RSL product A*B is glm B*A.
+
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "sss/shading/engine.h"
+#include "sss/shading/program.h"
+
+namespace sss::detail {
+
+class TextureLibrary;
+
+/// The global variables the engine binds by name.
+enum Global : int {
+    G_P,
+    G_N,
+    G_Ng,
+    G_I,
+    G_E,
+    G_dPdu,
+    G_dPdv,
+    G_Cs,
+    G_Os,
+    G_u,
+    G_v,
+    G_du,
+    G_dv,
+    G_s,
+    G_t,
+    G_Ci,
+    G_Oi,
+    G_L,
+    G_Cl,
+    G_Ol,
+    G_Ps,
+    G_ncomps,
+    G_time,
+    G_dtime,
+    G_dPdtime,
+    G_alpha,
+    G_count
+};
+/// RSL name of a global.
+const char* global_name(int g);
+
+struct Frame;
+struct BoundOp;
+using OpFn = void (*)(Frame&, const BoundOp&);
+
+/// One op bound to its implementation, with what the binder chose.
+struct BoundOp {
+    OpFn fn = nullptr;
+    const Op* op = nullptr;             ///< in the Program (kept alive by BoundProgram)
+    int index = 0;                      ///< op index
+    int ia = 0, ib = 0, ic = 0, id = 0; ///< variant data of the binder
+};
+
+/// A Program with every op bound.
+struct BoundProgram {
+    std::shared_ptr<const Program> program;
+    std::vector<BoundOp> ops;
+    int globals[G_count];        ///< symbol index of each global, or -1
+    bool has_illuminate = false; ///< a light with illuminate or solar
+    std::vector<int> params;     ///< parameter symbols, in declaration order
+
+    /// "file:line" of op `index` (or the program's source path).
+    std::string where(int index) const;
+    /// "shader 'name' (file:line)" for messages about op `index`.
+    std::string describe(int index) const;
+};
+
+/// Binds and validates; throws ValueError.
+std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> program);
+
+/// What a binder sees of an op.
+struct BindInfo {
+    const Program& program;
+    const Op& op;
+    int nargs() const { return static_cast<int>(op.args.size()); }
+    const Symbol& sym(int k) const { return program.symbols[op.args[k]]; }
+    ShadingType type(int k) const { return sym(k).type.type; }
+    bool is_array(int k) const { return sym(k).type.is_array(); }
+    int floats(int k) const { return sym(k).type.floats(); }
+    bool varying(int k) const { return sym(k).varying; }
+    bool is(int k, ShadingType t) const { return !is_array(k) && type(k) == t; }
+    bool is_float(int k) const { return is(k, ShadingType::Float); }
+    bool is_string(int k) const { return is(k, ShadingType::String); }
+    bool is_color(int k) const { return is(k, ShadingType::Color); }
+    bool is_matrix(int k) const { return is(k, ShadingType::Matrix); }
+    bool is_ptype(int k) const { return !is_array(k) && is_point_like(type(k)); }
+    bool is_triple_(int k) const { return !is_array(k) && is_triple(type(k)); }
+    /// A scalar float or a triple (1 or 3 floats, not an array).
+    bool is_f_or_triple(int k) const { return is_float(k) || is_triple_(k); }
+    bool writes(int k) const { return (op.writes >> k) & 1u; }
+};
+/// Chooses the implementation: returns false (with `why` when the reason is
+/// more than "no overload") if the op's arguments fit none.
+using Binder = bool (*)(const BindInfo&, BoundOp&, std::string& why);
+using BinderTable = std::unordered_map<std::string, Binder>;
+
+void register_core_ops(BinderTable& t); // engine_ops.cpp
+void register_math(BinderTable& t);     // engine_math.cpp
+void register_geometry(BinderTable& t); // engine_geometry.cpp
+void register_lighting(BinderTable& t); // engine_lighting.cpp
+void register_texture(BinderTable& t);  // engine_texture.cpp
+
+/// One symbol's storage in a frame.
+struct Slot {
+    float* p = nullptr;
+    int nf = 0;     ///< floats per value (elements included)
+    int stride = 0; ///< nf when varying, 0 when uniform
+    bool varying = false;
+    float* at(std::size_t i) const { return p + i * static_cast<std::size_t>(stride); }
+};
+
+/// Per-point stop codes (why a point stopped running): 0 runs; otherwise the
+/// low two bits give the kind and the rest the depth of the construct.
+enum StopKind : uint32_t { StopReturn = 1, StopBreak = 2, StopContinue = 3 };
+/// Depth 0 of StopReturn = the shader's own return.
+
+/// One shader's execution over a batch.
+struct Frame {
+    ShadingContext::Impl* ctx = nullptr;
+    const ShaderInstance* instance = nullptr;
+    const BoundProgram* bound = nullptr;
+    const Program* program = nullptr;
+    std::size_t n = 0;
+    bool is_light = false;
+
+    std::vector<float> arena;
+    std::vector<Slot> slots;
+
+    // Running mask.
+    std::vector<uint8_t> mask;
+    std::size_t active = 0;
+    std::vector<uint32_t> stop;
+    int loop_depth = 0;                         ///< enclosing loops (illuminance is none)
+    int block_depth = 0;                        ///< enclosing blocks
+    std::deque<std::vector<uint8_t>> mask_pool; ///< stable references
+    int mask_depth = 0;
+    std::vector<uint32_t> calls; ///< per op: how many times it ran (random)
+
+    // Spaces of this frame.
+    glm::dmat4 shader_to_current{1.0};
+
+    // Light frames: the illuminate/solar state.
+    std::vector<uint8_t> lit;
+    std::vector<glm::vec3> light_L;  ///< L as illuminate / solar set it
+    std::vector<glm::vec3> light_Ps; ///< the surface points being lit
+    bool in_illuminate = false;
+    bool solar = false;
+
+    // Surface frames: the light of the running illuminance iteration.
+    int current_light = -1;
+
+    Slot& slot(const BoundOp& b, int k) { return slots[b.op->args[k]]; }
+    float* ptr(const BoundOp& b, int k, std::size_t i) { return slot(b, k).at(i); }
+    /// The string value of (uniform) argument k at point i.
+    const std::string& str(const BoundOp& b, int k, std::size_t i = 0);
+    /// Index of the first running point, or n.
+    std::size_t first_active() const;
+    void recount();
+    bool all_on() const { return active == n; }
+    /// Runs fn(i) for every running point when `varying`, else once for the
+    /// first running point (uniform results: written if any point runs).
+    template <class F>
+    void each(bool varying, F&& fn) {
+        if (active == 0) return;
+        if (!varying) {
+            fn(first_active());
+            return;
+        }
+        if (active == n) {
+            for (std::size_t i = 0; i < n; ++i) fn(i);
+        } else {
+            for (std::size_t i = 0; i < n; ++i)
+                if (mask[i]) fn(i);
+        }
+    }
+    /// Runs ops [begin, end) under the running mask.
+    void run(int begin, int end);
+    std::vector<uint8_t>& push_mask();
+    void pop_mask() { --mask_depth; }
+    /// Whether op `b`'s results vary (any written argument, or the result).
+    bool writes_varying(const BoundOp& b) const;
+
+    std::string where(const BoundOp& b) const { return bound->where(b.index); }
+    [[noreturn]] void fail(const BoundOp& b, const std::string& what) const;
+    /// A warning given once per job.
+    void warn_once(const BoundOp& b, const std::string& what) const;
+};
+
+/// Cached results of one light for a batch.
+struct LightState {
+    const ShaderInstance* instance = nullptr;
+    std::unique_ptr<Frame> frame;
+    bool valid = false;
+    std::vector<uint8_t> computed;
+    std::vector<glm::vec3> Ps, L, Cl, Ol;
+    std::vector<uint8_t> lit;
+    bool ambient = false;
+    bool nondiffuse = false, nonspecular = false;
+    std::vector<std::string> categories;
+    bool described = false;
+};
+
+} // namespace sss::detail
+
+namespace sss {
+
+struct ShadingResources::Impl {
+    Impl();
+    ~Impl();
+    std::unique_ptr<detail::TextureLibrary> textures;
+    mutable std::mutex warned_mutex;
+    mutable std::set<std::string> warned;
+    /// True the first time `text` is seen.
+    bool first_time(const std::string& text) const;
+};
+
+struct ShadingContext::Impl {
+    Impl(const ShadingResources& r, ShadingServices& s) : resources(r), services(s) {}
+    const ShadingResources& resources;
+    ShadingServices& services;
+
+    // String table: index 0 is "".
+    std::vector<std::string> strings;
+    std::unordered_map<std::string, int> string_index;
+    float intern(const std::string& s);
+    void reset_strings();
+
+    ShadingBatch* batch = nullptr;
+    LightList lights;
+    detail::Frame main;
+    std::vector<detail::LightState> light_states;
+    int depth = 0; ///< nested executions (lights inside a surface)
+    /// Storage of parameters a varying primitive variable made varying.
+    std::vector<std::vector<float>> extra_storage;
+
+    // Spaces (per batch).
+    glm::dmat4 world_to_camera{1.0}, camera_to_world{1.0};
+    glm::dmat4 object_to_current{1.0};
+
+    // Results of the last execute.
+    std::size_t nonfinite = 0;
+    std::string last_shader, last_where;
+
+    /// Prepares `frame` for `instance` over n points (storage, constants,
+    /// globals from `batch` for surfaces; lights leave globals to the caller
+    /// then call init_params).
+    void setup_frame(detail::Frame& frame, const ShaderInstance& instance, std::size_t n);
+    void load_surface_globals(detail::Frame& frame);
+    void init_params(detail::Frame& frame, bool primvars);
+    /// Runs the body over the running mask already set.
+    void run_body(detail::Frame& frame);
+
+    /// The light results for point positions P (stride 0 or 3) under `mask`
+    /// (null: all points): runs the light if the cache does not cover them.
+    detail::LightState& light(int index, const float* P, int P_stride,
+                              const std::vector<uint8_t>& mask, std::size_t active);
+    /// Space name -> matrix to the current space (points), false if unknown.
+    bool space_to_current(const std::string& space, const detail::Frame& f,
+                          glm::dmat4& m) const;
+};
+
+} // namespace sss
+
+namespace sss::detail {
+
+inline const std::string& Frame::str(const BoundOp& b, int k, std::size_t i) {
+    const float v = *ptr(b, k, i);
+    const std::size_t idx = v >= 0.0f ? static_cast<std::size_t>(v) : 0u;
+    return idx < ctx->strings.size() ? ctx->strings[idx] : ctx->strings[0];
+}
+
+// --- small vector helpers over float storage ----------------------------
+inline glm::vec3 ld3(const float* p) {
+    return glm::vec3(p[0], p[1], p[2]);
+}
+inline void st3(float* p, const glm::vec3& v) {
+    p[0] = v.x;
+    p[1] = v.y;
+    p[2] = v.z;
+}
+inline glm::dmat4 ldm(const float* p) {
+    glm::dmat4 m;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) m[c][r] = p[c * 4 + r];
+    return m;
+}
+inline void stm(float* p, const glm::dmat4& m) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) p[c * 4 + r] = static_cast<float>(m[c][r]);
+}
+/// Points through a projective matrix (divided by w when w != 1).
+glm::vec3 xform_point(const glm::dmat4& m, const glm::vec3& p);
+glm::vec3 xform_vector(const glm::dmat4& m, const glm::vec3& v);
+/// Normals: the inverse transpose of m's 3x3 part.
+glm::vec3 xform_normal(const glm::dmat4& m, const glm::vec3& n);
+/// Converts a value of type t (point/vector/normal) by m (space -> current).
+glm::vec3 xform_typed(ShadingType t, const glm::dmat4& m, const glm::vec3& v);
+
+/// Derivative of argument k of `b` along u (dir 0) or v (dir 1), in units of
+/// the parameter (divided by du / dv), for `comps` floats per point, into out
+/// (n * comps floats). `name` is the symbol's name (Points layout).
+void derivative(Frame& f, const Slot& x, int comps, int dir, const std::string& name,
+                float* out);
+
+/// A token-value option list starting at argument `first`: calls
+/// fn(name, slot k) for each pair.
+template <class F>
+void for_options(Frame& f, const BoundOp& b, int first, F&& fn) {
+    const int n = static_cast<int>(b.op->args.size());
+    for (int k = first; k + 1 < n; k += 2) fn(f.str(b, k), k + 1);
+}
+
+/// Hash for per-point random numbers.
+uint64_t point_hash(uint64_t seed, std::size_t point, int op, uint32_t call);
+
+} // namespace sss::detail

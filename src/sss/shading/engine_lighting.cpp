@@ -1,0 +1,705 @@
+/// \file engine_lighting.cpp
+/// Lights and local illumination (RISpec 15.5, shading.md 4 and 5.5):
+///
+///  - Light shaders run lazily, once per batch per light (re-run when the
+///    surface asks for points or positions the cache does not hold). Their
+///    globals: Ps = the surface point, P = the origin of the light's shader
+///    space in the current space, N = 0, E = 0; L, Cl, Ol start at 0.
+///  - `illuminate(P, axis, angle)` sets L = Ps - P (light to surface) and runs
+///    its body where the angle between L and axis is at most angle (no axis:
+///    everywhere); `solar(axis, angle)` sets L = axis (the direction the light
+///    travels; no axis: L = 0) for every point. Points an illuminate or solar
+///    body ran for are "lit"; a light shader with neither is an ambient
+///    light: it contributes to ambient() only, and illuminance loops skip it.
+///  - `illuminance(cat, P, axis, angle)`: a loop over the lights whose body runs, per
+///  light, for the
+///    points the light lit within the angle of the axis, with L = -L of the
+///    light (towards the light), Cl and Ol. It is not a loop level for
+///    break and continue (as the compiler counts them). Categories: the light's uniform
+///    string parameter `__category` (comma separated); the loop's category
+///    is a comma-separated list of names, each required (any of them) or,
+///    with a leading '-', excluded.
+///  - ambient(), diffuse(N), specular(N, V, roughness), phong(N, V, size) as
+///    RISpec's definitions over illuminance(P, N, PI/2), with unit N and L,
+///    roughness clamped to >= 1e-4 and N.H to >= 0 (the C++ shaders'
+///    formulas). Lights whose `__nondiffuse` / `__nonspecular` parameter is
+///    non-zero are skipped by diffuse / by specular and phong.
+///  - shadow("raytrace", P) and transmission(Psrc, Pdst) trace rays through
+///    ShadingServices::occluders() in world space (no occluders: nothing is
+///    shadowed). shadow() inside a light goes from P towards the light (P - L
+///    for illuminate, along -L for solar), inside an illuminance body towards
+///    P + L. Ray origins are offset along the batch's N (or Ng), turned to
+///    the ray, by "bias" or ShadingBatch::ray_offset. "samples" n > 1 with
+///    transmission's "samplecone" a (full apex angle, radians) > 0 traces n
+///    stratified directions in the cone, deterministic per point
+///    (ShadingBatch::seed). Depth-map shadows are not supported: a map name
+///    warns once and gives 0 (unshadowed).
+///  - occlusion(P, N, samples, "maxdist", d, "coneangle", a, "bias", b):
+///    the occluded fraction of cosine-weighted rays in the cone (default the
+///    hemisphere). trace() and indirectdiffuse() return 0 (warned once).
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+
+#include "engine_internal.h"
+#include "sss/light/ray_tracer.h"
+#include "sss/util/hash.h"
+
+namespace sss {
+
+using namespace detail;
+
+namespace {
+
+std::vector<std::string> split_list(const std::string& s) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char c : s) {
+        if (c == ',' || c == ' ' || c == '\t') {
+            if (!cur.empty()) out.push_back(cur);
+            cur.clear();
+        } else {
+            cur += c;
+        }
+    }
+    if (!cur.empty()) out.push_back(cur);
+    return out;
+}
+
+bool category_matches(const std::string& cat, const std::vector<std::string>& light) {
+    if (cat.empty()) return true;
+    bool any_positive = false, positive_hit = false;
+    for (const std::string& term : split_list(cat)) {
+        const bool exclude = term[0] == '-';
+        const std::string name = exclude ? term.substr(1) : term;
+        const bool has = std::find(light.begin(), light.end(), name) != light.end();
+        if (exclude) {
+            if (has) return false;
+        } else {
+            any_positive = true;
+            positive_hit = positive_hit || has;
+        }
+    }
+    return !any_positive || positive_hit;
+}
+
+void store3(const Slot* s, std::size_t i, const glm::vec3& v) {
+    if (s) st3(s->at(i), v);
+}
+
+} // namespace
+
+LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
+                                        const std::vector<uint8_t>& mask,
+                                        std::size_t active) {
+    LightState& ls = light_states[index];
+    const std::size_t n = batch->size;
+    const ShaderInstance& inst = *ls.instance;
+    if (!ls.described) {
+        ls.described = true;
+        ls.ambient = !inst.bound().has_illuminate;
+        ls.categories = split_list(inst.string_parameter("__category").value_or(""));
+        ls.nondiffuse = inst.float_parameter("__nondiffuse").value_or(0.0f) != 0.0f;
+        ls.nonspecular = inst.float_parameter("__nonspecular").value_or(0.0f) != 0.0f;
+        ls.frame = std::make_unique<Frame>();
+    }
+    auto Pat = [&](std::size_t i) { return ld3(P + i * P_stride); };
+    if (ls.valid) {
+        bool ok = true;
+        for (std::size_t i = 0; i < n && ok; ++i)
+            if (mask[i] && (!ls.computed[i] || ls.Ps[i] != Pat(i))) ok = false;
+        if (ok) return ls;
+    }
+    if (depth > 4)
+        throw ShaderRuntimeError(inst.bound().describe(-1) + ": lights nest too deep");
+    ++depth;
+    Frame& lf = *ls.frame;
+    setup_frame(lf, inst, n);
+    lf.is_light = true;
+    const int* g = lf.bound->globals;
+    auto sl = [&](int id) -> const Slot* {
+        return g[id] >= 0 ? &lf.slots[id >= 0 ? g[id] : 0] : nullptr;
+    };
+    lf.light_Ps.resize(n);
+    for (std::size_t i = 0; i < n; ++i) lf.light_Ps[i] = Pat(i);
+    if (const Slot* s = sl(G_Ps))
+        for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), Pat(i));
+    if (const Slot* s = sl(G_P)) {
+        const glm::vec3 origin = xform_point(lf.shader_to_current, glm::vec3(0.0f));
+        for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), origin);
+    }
+    if (const Slot* s = sl(G_ncomps)) *s->p = 3.0f;
+    if (const Slot* s = sl(G_time))
+        for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) *s->at(i) = batch->time;
+    init_params(lf, false);
+    lf.mask = mask;
+    lf.active = active;
+    if (active > 0) run_body(lf);
+
+    ls.Ps.resize(n);
+    for (std::size_t i = 0; i < n; ++i) ls.Ps[i] = mask[i] ? Pat(i) : glm::vec3(0.0f);
+    ls.computed = mask;
+    auto collect = [&](int id, std::vector<glm::vec3>& out) {
+        out.assign(n, glm::vec3(0.0f));
+        if (const Slot* s = sl(id))
+            for (std::size_t i = 0; i < n; ++i) out[i] = ld3(s->at(i));
+    };
+    collect(G_Cl, ls.Cl);
+    collect(G_Ol, ls.Ol);
+    if (g[G_L] >= 0)
+        collect(G_L, ls.L);
+    else
+        ls.L = lf.light_L;
+    ls.lit = ls.ambient ? mask : lf.lit;
+    ls.valid = true;
+    --depth;
+    return ls;
+}
+
+namespace detail {
+
+void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
+                    bool solar) {
+    const std::size_t n = f.n;
+    const int* g = f.bound->globals;
+    const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
+    const int axis_k = solar ? 0 : 1;
+    const int angle_k = solar ? 1 : 2;
+    std::vector<uint8_t>& entry = f.push_mask();
+    entry = f.mask;
+    std::size_t cnt = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!entry[i]) {
+            f.mask[i] = 0;
+            continue;
+        }
+        const float angle = *f.ptr(b, angle_k, i);
+        const glm::vec3 axis = ld3(f.ptr(b, axis_k, i));
+        glm::vec3 L;
+        if (solar) {
+            L = angle < 0.0f ? glm::vec3(0.0f) : axis;
+        } else {
+            L = f.light_Ps[i] - ld3(f.ptr(b, 0, i));
+        }
+        bool pass = true;
+        if (!solar && angle >= 0.0f && angle < 3.14159265f) {
+            const float la = glm::length(L) * glm::length(axis);
+            if (la > 0.0f) pass = glm::dot(L, axis) / la >= std::cos(angle);
+        }
+        f.mask[i] = pass;
+        if (pass) {
+            f.light_L[i] = L;
+            if (Ls && Ls->varying) st3(Ls->at(i), L);
+            f.lit[i] = 1;
+            ++cnt;
+        }
+    }
+    f.active = cnt;
+    if (Ls && !Ls->varying && cnt > 0) st3(Ls->p, f.light_L[f.first_active()]);
+    (void)b;
+    const bool was = f.in_illuminate;
+    f.in_illuminate = true;
+    f.solar = solar;
+    if (cnt > 0) f.run(body_begin, body_end);
+    f.in_illuminate = was;
+    // restore
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        f.mask[i] = entry[i] && f.stop[i] == 0;
+        c += f.mask[i];
+    }
+    f.active = c;
+    f.pop_mask();
+}
+
+namespace {
+
+/// The surface P of a frame for lights: its global P, or the batch's.
+struct PSource {
+    const float* p = nullptr;
+    int stride = 0;
+    std::vector<float> own;
+};
+
+PSource surface_P(Frame& f) {
+    PSource s;
+    const int gp = f.bound->globals[G_P];
+    if (gp >= 0) {
+        s.p = f.slots[gp].p;
+        s.stride = f.slots[gp].stride;
+        return s;
+    }
+    const ShadingBatch& b = *f.ctx->batch;
+    s.own.assign(f.n * 3, 0.0f);
+    for (std::size_t i = 0; i < f.n && i < b.P.size(); ++i) st3(&s.own[i * 3], b.P[i]);
+    s.p = s.own.data();
+    s.stride = 3;
+    return s;
+}
+
+/// Whether direction L is within `angle` of `axis` (axis 0 or angle >= PI:
+/// everything).
+inline bool in_cone(const glm::vec3& L, const glm::vec3& axis, float angle) {
+    if (angle >= 3.14159265f) return true;
+    const float la = glm::length(L) * glm::length(axis);
+    if (!(la > 0.0f)) return true;
+    return glm::dot(L, axis) / la >= std::cos(angle);
+}
+
+} // namespace
+
+void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
+    ShadingContext::Impl& ctx = *f.ctx;
+    const std::size_t n = f.n;
+    const int* g = f.bound->globals;
+    const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
+    const Slot* Cls = g[G_Cl] >= 0 ? &f.slots[g[G_Cl]] : nullptr;
+    const Slot* Ols = g[G_Ol] >= 0 ? &f.slots[g[G_Ol]] : nullptr;
+    const std::string cat = f.str(b, 0, f.first_active());
+    const Slot& P = f.slot(b, 1);
+    std::vector<uint8_t>& entry = f.push_mask();
+    entry = f.mask;
+    std::vector<uint8_t>& base = f.push_mask();
+    for (std::size_t li = 0; li < ctx.lights.size(); ++li) {
+        std::size_t cnt = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            base[i] = entry[i] && f.stop[i] == 0;
+            cnt += base[i];
+        }
+        if (cnt == 0) break;
+        LightState& ls = ctx.light(static_cast<int>(li), P.p, P.stride, base, cnt);
+        if (ls.ambient || !category_matches(cat, ls.categories)) continue;
+        std::size_t on = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            bool run = base[i] && ls.lit[i];
+            if (run) run = in_cone(-ls.L[i], ld3(f.ptr(b, 2, i)), *f.ptr(b, 3, i));
+            f.mask[i] = run;
+            on += run;
+        }
+        f.active = on;
+        if (on == 0) continue;
+        f.each(true, [&](std::size_t i) {
+            store3(Ls, i, -ls.L[i]);
+            store3(Cls, i, ls.Cl[i]);
+            store3(Ols, i, ls.Ol[i]);
+        });
+        f.current_light = static_cast<int>(li);
+        f.run(body_begin, body_end);
+    }
+    f.current_light = -1;
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        f.mask[i] = entry[i] && f.stop[i] == 0;
+        c += f.mask[i];
+    }
+    f.active = c;
+    f.pop_mask();
+    f.pop_mask();
+}
+
+namespace {
+
+// --- ambient / diffuse / specular / phong ------------------------------------
+
+enum Model { M_Ambient, M_Diffuse, M_Specular, M_Phong };
+
+template <int M>
+void op_lighting(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    const std::size_t n = f.n;
+    std::vector<glm::vec3> sum(n, glm::vec3(0.0f));
+    ShadingContext::Impl& ctx = *f.ctx;
+    if (!f.is_light && ctx.batch && f.active > 0) {
+        PSource P = surface_P(f);
+        // The light cache is filled for the running points.
+        std::vector<uint8_t>& run = f.push_mask();
+        run = f.mask;
+        const std::size_t active = f.active;
+        for (std::size_t li = 0; li < ctx.lights.size(); ++li) {
+            LightState& ls = ctx.light(static_cast<int>(li), P.p, P.stride, run, active);
+            if (M == M_Ambient) {
+                if (!ls.ambient) continue;
+                for (std::size_t i = 0; i < n; ++i)
+                    if (run[i]) sum[i] += ls.Cl[i];
+                continue;
+            }
+            if (ls.ambient) continue;
+            if (M == M_Diffuse && ls.nondiffuse) continue;
+            if ((M == M_Specular || M == M_Phong) && ls.nonspecular) continue;
+            for (std::size_t i = 0; i < n; ++i) {
+                if (!run[i] || !ls.lit[i]) continue;
+                const glm::vec3 N0 = ld3(f.ptr(b, 1, i));
+                const float nl = glm::length(N0);
+                const glm::vec3 N = nl > 0.0f ? N0 / nl : N0;
+                const glm::vec3 L0 = -ls.L[i];
+                const float ll = glm::length(L0);
+                const glm::vec3 L = ll > 0.0f ? L0 / ll : L0;
+                if (!in_cone(L, N, 1.5707964f)) continue;
+                if (M == M_Diffuse) {
+                    sum[i] += ls.Cl[i] * glm::dot(L, N);
+                } else if (M == M_Specular) {
+                    const glm::vec3 V = ld3(f.ptr(b, 2, i));
+                    const float r = std::max(*f.ptr(b, 3, i), 1e-4f);
+                    const glm::vec3 h = L + V;
+                    const float hl = glm::length(h);
+                    if (!(hl > 0.0f)) continue;
+                    const float c = std::max(0.0f, glm::dot(N, h / hl));
+                    sum[i] += ls.Cl[i] * std::pow(c, 1.0f / r);
+                } else {
+                    const glm::vec3 V0 = ld3(f.ptr(b, 2, i));
+                    const float vl = glm::length(V0);
+                    const glm::vec3 V = vl > 0.0f ? V0 / vl : V0;
+                    const glm::vec3 R = -V - 2.0f * glm::dot(-V, N) * N;
+                    const float c = std::max(0.0f, glm::dot(R, L));
+                    sum[i] += ls.Cl[i] * std::pow(c, *f.ptr(b, 3, i));
+                }
+            }
+        }
+        f.pop_mask();
+    }
+    f.each(d.varying, [&](std::size_t i) { st3(d.at(i), sum[i]); });
+}
+
+bool bind_ambient(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 1 || !in.is_color(0)) return false;
+    b.fn = op_lighting<M_Ambient>;
+    return true;
+}
+bool bind_diffuse(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 2 || !in.is_color(0) || !in.is_ptype(1)) return false;
+    b.fn = op_lighting<M_Diffuse>;
+    return true;
+}
+bool bind_specular(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 4 || !in.is_color(0) || !in.is_ptype(1) || !in.is_ptype(2) ||
+        !in.is_float(3))
+        return false;
+    b.fn = in.op.name == "phong" ? op_lighting<M_Phong> : op_lighting<M_Specular>;
+    return true;
+}
+
+void op_specularbrdf(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    f.each(d.varying, [&](std::size_t i) {
+        const glm::vec3 L0 = ld3(f.ptr(b, 1, i));
+        const glm::vec3 N = ld3(f.ptr(b, 2, i));
+        const glm::vec3 V = ld3(f.ptr(b, 3, i));
+        const float r = std::max(*f.ptr(b, 4, i), 1e-4f);
+        const float ll = glm::length(L0);
+        const glm::vec3 h = (ll > 0.0f ? L0 / ll : L0) + V;
+        const float hl = glm::length(h);
+        const float c = hl > 0.0f ? std::max(0.0f, glm::dot(N, h / hl)) : 0.0f;
+        st3(d.at(i), glm::vec3(std::pow(c, 1.0f / r)));
+    });
+}
+
+bool bind_specularbrdf(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 5 || !in.is_color(0) || !in.is_ptype(1) || !in.is_ptype(2) ||
+        !in.is_ptype(3) || !in.is_float(4))
+        return false;
+    b.fn = op_specularbrdf;
+    return true;
+}
+
+// --- ray-traced shadows -------------------------------------------------------
+
+struct RayOptions {
+    int samples = 1;
+    float cone = 0.0f; ///< full apex angle
+    float bias = -1.0f;
+    float maxdist = 0.0f;
+    float coneangle = 1.5707963f;
+};
+
+RayOptions ray_options(Frame& f, const BoundOp& b, int first) {
+    RayOptions o;
+    const std::size_t i0 = f.first_active();
+    for_options(f, b, first, [&](const std::string& name, int k) {
+        if (f.slot(b, k).nf != 1 ||
+            f.program->symbols[b.op->args[k]].type.type == ShadingType::String)
+            return;
+        const float v = *f.ptr(b, k, i0);
+        if (name == "samples")
+            o.samples = std::clamp(static_cast<int>(v), 1, 4096);
+        else if (name == "samplecone")
+            o.cone = std::max(0.0f, v);
+        else if (name == "bias")
+            o.bias = v;
+        else if (name == "maxdist")
+            o.maxdist = v;
+        else if (name == "coneangle")
+            o.coneangle = std::clamp(v, 0.0f, 1.5707963f);
+    });
+    return o;
+}
+
+/// Ray tracing helper for one frame.
+struct Tracer {
+    Frame& f;
+    const RayTracer* rt;
+    glm::dmat4 to_world;
+    float offset;
+    uint64_t seed;
+    int op;
+    uint32_t call;
+
+    Tracer(Frame& fr, const BoundOp& b, const RayOptions& o)
+        : f(fr), rt(fr.ctx->services.occluders()), to_world(fr.ctx->camera_to_world),
+          offset(o.bias >= 0.0f ? o.bias
+                                : (fr.ctx->batch ? fr.ctx->batch->ray_offset : 0.0f)),
+          seed(fr.ctx->batch ? fr.ctx->batch->seed : 0), op(b.index),
+          call(fr.calls[b.index]++) {}
+
+    /// The surface normal at point i (world space, unit), or 0.
+    glm::vec3 normal(std::size_t i) const {
+        const ShadingBatch* batch = f.ctx->batch;
+        glm::vec3 n(0.0f);
+        if (batch && batch->N.size() > i)
+            n = batch->N[i];
+        else if (batch && batch->Ng.size() > i)
+            n = batch->Ng[i];
+        n = xform_normal(to_world, n);
+        const float l = glm::length(n);
+        return l > 0.0f ? n / l : glm::vec3(0.0f);
+    }
+
+    /// Fraction of `samples` rays from `from` (camera space) that reach
+    /// `to` (or go to infinity along `dir` when `infinite`) unoccluded.
+    float visible(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
+                  bool infinite, int samples, float cone) const {
+        if (!rt) return 1.0f;
+        const glm::vec3 from = xform_point(to_world, from_c);
+        glm::vec3 dir;
+        float len;
+        if (infinite) {
+            dir = xform_vector(to_world, to_or_dir_c);
+            len = std::numeric_limits<float>::infinity();
+        } else {
+            dir = xform_point(to_world, to_or_dir_c) - from;
+            len = glm::length(dir);
+        }
+        const float dl = glm::length(dir);
+        if (!(dl > 0.0f)) return 1.0f;
+        dir /= dl;
+        glm::vec3 n = normal(i);
+        if (glm::dot(n, dir) < 0.0f) n = -n;
+        const glm::vec3 origin = from + n * offset;
+        if (!infinite) { // as the C++ lights: from the offset origin to the target
+            dir = xform_point(to_world, to_or_dir_c) - origin;
+            len = glm::length(dir);
+            if (!(len > 0.0f)) return 1.0f;
+            dir /= len;
+        }
+        const float tfar = infinite ? len : len * (1.0f - 1e-4f);
+        if (samples <= 1 || cone <= 0.0f) {
+            ShadowRay r{origin, dir, 0.0f, tfar};
+            return rt->occluded(r) ? 0.0f : 1.0f;
+        }
+        // Stratified directions in the cone: equal-area rings, golden-angle turns.
+        glm::vec3 t1, t2;
+        {
+            const float sign = std::copysign(1.0f, dir.z);
+            const float a = -1.0f / (sign + dir.z);
+            const float bb = dir.x * dir.y * a;
+            t1 = glm::vec3(1.0f + sign * dir.x * dir.x * a, sign * bb, -sign * dir.x);
+            t2 = glm::vec3(bb, sign + dir.y * dir.y * a, -dir.y);
+        }
+        const uint64_t h = point_hash(seed, i, op, call);
+        const double rotation = unit_double(h);
+        const double cos_max = std::cos(0.5 * cone);
+        std::vector<ShadowRay> rays(samples);
+        std::vector<uint8_t> hits(samples);
+        for (int k = 0; k < samples; ++k) {
+            const double u = (k + unit_double(splitmix64(h + 1 + k))) / samples;
+            const double c = 1.0 - (1.0 - cos_max) * u;
+            const double s = std::sqrt(std::max(0.0, 1.0 - c * c));
+            double turn = rotation + k * 0.6180339887498949;
+            turn -= std::floor(turn);
+            const double phi = 2.0 * 3.14159265358979323846 * turn;
+            const glm::vec3 d =
+                glm::normalize(glm::vec3(static_cast<float>(s * std::cos(phi))) * t1 +
+                               glm::vec3(static_cast<float>(s * std::sin(phi))) * t2 +
+                               glm::vec3(static_cast<float>(c)) * dir);
+            rays[k] = ShadowRay{origin, d, 0.0f, tfar};
+        }
+        rt->occluded(rays.data(), rays.size(), hits.data());
+        int open = 0;
+        for (uint8_t hit : hits) open += hit ? 0 : 1;
+        return static_cast<float>(open) / samples;
+    }
+};
+
+/// shadow(name, channel, P, options)
+void op_shadow(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    const std::string& name = f.str(b, 1, f.first_active());
+    const int nc = d.nf;
+    if (name != "raytrace") {
+        if (!name.empty())
+            f.warn_once(b, "shadow(\"" + name +
+                               "\"): depth-map shadows are not supported; unshadowed");
+        f.each(d.varying, [&](std::size_t i) { std::fill(d.at(i), d.at(i) + nc, 0.0f); });
+        return;
+    }
+    const RayOptions o = ray_options(f, b, 4);
+    Tracer t(f, b, o);
+    const int* g = f.bound->globals;
+    const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
+    f.each(d.varying, [&](std::size_t i) {
+        float occluded = 0.0f;
+        const glm::vec3 p = ld3(f.ptr(b, 3, i));
+        if (f.is_light) {
+            const glm::vec3 L = Ls ? ld3(Ls->at(i)) : f.light_L[i];
+            if (f.solar)
+                occluded = 1.0f - t.visible(i, p, -L, true, o.samples, o.cone);
+            else
+                occluded = 1.0f - t.visible(i, p, p - L, false, o.samples, o.cone);
+        } else if (f.current_light >= 0 && Ls) {
+            occluded =
+                1.0f - t.visible(i, p, p + ld3(Ls->at(i)), false, o.samples, o.cone);
+        }
+        std::fill(d.at(i), d.at(i) + nc, occluded);
+    });
+}
+
+bool bind_shadow(const BindInfo& in, BoundOp& b, std::string&) {
+    const int n = in.nargs();
+    if (n < 4 || (n - 4) % 2 != 0 || !(in.is_float(0) || in.is_color(0)) ||
+        !in.is_string(1) || !in.is_float(2) || !in.is_ptype(3))
+        return false;
+    b.fn = op_shadow;
+    return true;
+}
+
+/// transmission(Psrc, Pdst, options)
+void op_transmission(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    const RayOptions o = ray_options(f, b, 3);
+    Tracer t(f, b, o);
+    f.each(d.varying, [&](std::size_t i) {
+        const float v = t.visible(i, ld3(f.ptr(b, 1, i)), ld3(f.ptr(b, 2, i)), false,
+                                  o.samples, o.cone);
+        st3(d.at(i), glm::vec3(v));
+    });
+}
+
+bool bind_transmission(const BindInfo& in, BoundOp& b, std::string&) {
+    const int n = in.nargs();
+    if (n < 3 || (n - 3) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2))
+        return false;
+    b.fn = op_transmission;
+    return true;
+}
+
+/// occlusion(P, N, samples, options): occluded fraction.
+void op_occlusion(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    RayOptions o = ray_options(f, b, 4);
+    Tracer t(f, b, o);
+    const RayTracer* rt = t.rt;
+    f.each(d.varying, [&](std::size_t i) {
+        if (!rt) {
+            *d.at(i) = 0.0f;
+            return;
+        }
+        const int samples = std::clamp(static_cast<int>(*f.ptr(b, 3, i)), 1, 4096);
+        const glm::vec3 p = xform_point(t.to_world, ld3(f.ptr(b, 1, i)));
+        glm::vec3 w = xform_normal(t.to_world, ld3(f.ptr(b, 2, i)));
+        const float wl = glm::length(w);
+        if (!(wl > 0.0f)) {
+            *d.at(i) = 0.0f;
+            return;
+        }
+        w /= wl;
+        const float sign = std::copysign(1.0f, w.z);
+        const float a = -1.0f / (sign + w.z);
+        const float bb = w.x * w.y * a;
+        const glm::vec3 t1(1.0f + sign * w.x * w.x * a, sign * bb, -sign * w.x);
+        const glm::vec3 t2(bb, sign + w.y * w.y * a, -w.y);
+        const uint64_t h = point_hash(t.seed, i, t.op, t.call);
+        const double rotation = unit_double(h);
+        const double smax = std::sin(o.coneangle);
+        const float tfar =
+            o.maxdist > 0.0f ? o.maxdist : std::numeric_limits<float>::infinity();
+        const glm::vec3 origin = p + w * t.offset;
+        std::vector<ShadowRay> rays(samples);
+        std::vector<uint8_t> hits(samples);
+        for (int k = 0; k < samples; ++k) {
+            const double r2 =
+                (k + unit_double(splitmix64(h + 1 + static_cast<uint64_t>(k)))) /
+                samples * smax * smax;
+            double turn = rotation + k * 0.6180339887498949;
+            turn -= std::floor(turn);
+            const double phi = 2.0 * 3.14159265358979323846 * turn;
+            const double r = std::sqrt(r2);
+            const double z = std::sqrt(std::max(0.0, 1.0 - r2));
+            const glm::vec3 dir =
+                glm::normalize(float(r * std::cos(phi)) * t1 +
+                               float(r * std::sin(phi)) * t2 + float(z) * w);
+            rays[k] = ShadowRay{origin, dir, 0.0f, tfar};
+        }
+        rt->occluded(rays.data(), rays.size(), hits.data());
+        int blocked = 0;
+        for (uint8_t hit : hits) blocked += hit ? 1 : 0;
+        *d.at(i) = static_cast<float>(blocked) / samples;
+    });
+}
+
+bool bind_occlusion(const BindInfo& in, BoundOp& b, std::string&) {
+    const int n = in.nargs();
+    if (n < 4 || (n - 4) % 2 != 0 || !in.is_float(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2) || !in.is_float(3))
+        return false;
+    b.fn = op_occlusion;
+    return true;
+}
+
+void op_unsupported_zero(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    f.warn_once(b, b.op->name + "() is not supported; it returns 0");
+    f.each(d.varying, [&](std::size_t i) { std::fill(d.at(i), d.at(i) + d.nf, 0.0f); });
+}
+
+bool bind_trace(const BindInfo& in, BoundOp& b, std::string&) {
+    const int n = in.nargs();
+    if (n < 3 || (n - 3) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2))
+        return false;
+    b.fn = op_unsupported_zero;
+    return true;
+}
+
+bool bind_indirectdiffuse(const BindInfo& in, BoundOp& b, std::string&) {
+    const int n = in.nargs();
+    if (n < 4 || (n - 4) % 2 != 0 || !in.is_color(0) || !in.is_ptype(1) ||
+        !in.is_ptype(2) || !in.is_float(3))
+        return false;
+    b.fn = op_unsupported_zero;
+    return true;
+}
+
+} // namespace
+
+void register_lighting(BinderTable& t) {
+    t["ambient"] = bind_ambient;
+    t["diffuse"] = bind_diffuse;
+    t["specular"] = bind_specular;
+    t["phong"] = bind_specular;
+    t["specularbrdf"] = bind_specularbrdf;
+    t["shadow"] = bind_shadow;
+    t["transmission"] = bind_transmission;
+    t["occlusion"] = bind_occlusion;
+    t["trace"] = bind_trace;
+    t["indirectdiffuse"] = bind_indirectdiffuse;
+}
+
+} // namespace detail
+} // namespace sss
