@@ -5,23 +5,20 @@
 #ifndef SSS_LIGHT_SHADOWS_H
 #define SSS_LIGHT_SHADOWS_H
 
-/* The unshadowed fraction at Ps of a light seen under the half-angle cone. */
-float light_visibility(string shadowname; point Ps; float samples, cone)
-{
+/* The unshadowed fraction at Ps of a light seen under the cone (apex angle). */
+float light_visibility(string shadowname; point Ps; float samples, cone) {
     float visible = 1;
     if (shadowname != "")
         visible = 1 - shadow("raytrace", Ps, "samples", samples, "samplecone", cone);
     return visible;
 }
 
-/* Half-angle of a sphere of radius r (shader space) seen from distance d
- * (current space). */
-float sphere_cone(float r, d)
-{
+/* Apex angle of the cone a sphere of radius r (shader space) fills seen
+ * from distance d (current space). */
+float sphere_cone(float r, d) {
     float rc = r * length(vtransform("shader", "current", vector(1, 0, 0)));
     float cone = 0;
-    if (rc > 0 && d > rc)
-        cone = asin(rc / d);
+    if (rc > 0 && d > rc) cone = 2 * asin(rc / d);
     return cone;
 }
 #endif

@@ -28,6 +28,7 @@
 #include "sss/render/image_io.h"
 #include "sss/render/render.h"
 #include "sss/scene/rib.h"
+#include "sss/shading/shader_library.h"
 #include "sss/util/error.h"
 #include "sss/util/threads.h"
 #include "sss/util/version.h"
@@ -394,22 +395,30 @@ TEST(RenderErrors, MissingDiffusionFileNamesTheShaderAndTheFile) {
         EXPECT_NE(what.find("read_ssdiffusion"), std::string::npos) << what;
         EXPECT_NE(what.find("/nonexistent/x.bkm"), std::string::npos) << what;
     }
-    // No filename at all.
-    EXPECT_THROW(render(scene_of("Surface \"read_ssdiffusion\"\nSphere 1 -1 1 360\n")),
+    // No filename at all: read_ssdiffusion (as the application note's) then
+    // has no subsurface term.
+    EXPECT_NO_THROW(
+        render(scene_of("Surface \"read_ssdiffusion\"\nSphere 1 -1 1 360\n")));
+    // A parameter of the wrong type.
+    EXPECT_THROW(render(scene_of("Surface \"plastic\" \"string roughness\" [\"x\"]\n"
+                                 "Sphere 1 -1 1 360\n")),
                  sss::ValueError);
-    // Bad parameters.
-    EXPECT_THROW(
-        render(scene_of("Surface \"plastic\" \"roughness\" [0]\nSphere 1 -1 1 360\n")),
-        sss::ValueError);
 }
 
-TEST(RenderErrors, UnknownShadersWarnAndRenderWithDefaultSurface) {
-    sss::RenderReport report;
-    const sss::Image img =
-        render(scene_of("Surface \"wood\"\nSphere 1 -1 1 360\n"), &report);
-    ASSERT_EQ(report.warnings.size(), 1u);
-    EXPECT_NE(report.warnings[0].find("wood"), std::string::npos);
-    // defaultsurface: Ka 0.2 + Kd 0.8 |N.I|, 1 at the centre.
+TEST(RenderErrors, UnknownShadersAreErrorsNamingTheSearchPath) {
+    // A shader the search path does not have stops the render (it used to
+    // render a grey headlight with exit 0).
+    try {
+        render(scene_of("Surface \"wood\"\nSphere 1 -1 1 360\n"));
+        FAIL() << "no error";
+    } catch (const sss::ShaderNotFoundError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("test.rib:"), std::string::npos) << what;
+        EXPECT_NE(what.find("'wood'"), std::string::npos) << what;
+        EXPECT_NE(what.find("search path"), std::string::npos) << what;
+    }
+    // No Surface at all: defaultsurface, Ka 0.2 + Kd 0.8 |N.I|, 1 at the centre.
+    const sss::Image img = render(scene_of("Sphere 1 -1 1 360\n"));
     EXPECT_NEAR(centre(img, "R"), 1.0, 0.01);
 }
 

@@ -189,6 +189,10 @@ struct Bake3dRecord {
     std::vector<int> channel_floats;   ///< floats per point of each channel
     std::vector<glm::vec3> P, N;       ///< world space
     std::vector<float> radius;
+    /// The micropolygon's area per point (ShadingBatch::dicing_area, else
+    /// area(P); 0 when the call gave "radius" and the batch no area): the
+    /// `_area` a baker writes when the shader bakes none.
+    std::vector<float> area;
     std::vector<float> values; ///< per point: all channels' floats in order
 };
 

@@ -3,7 +3,7 @@
 /// The shaders of a scene bound for one job (ptbake or render): every
 /// distinct Surface call and every light source as a ShaderInstance, loaded
 /// along the scene's shader search path (shader_library.h). Frame patterns
-/// ("%04d", "####") in string parameters are expanded with the job's frame,
+/// ("%04d", "####", "$F4") in string parameters are expanded with the job's frame,
 /// so `"string filename" ["orbit_ssd.%04d.bkm"]` reads the frame's file.
 
 #include <memory>
@@ -43,9 +43,11 @@ bool program_uses(const Program& program, std::string_view op);
 /// ShaderCompileError, ValueError (parameters of the wrong type).
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
 
-/// String parameter values of the bound shaders that name existing files
-/// (textures, brick maps, point clouds a shader reads), each once: the
-/// inputs of `-newer 1`.
+/// String parameter values of the bound shaders that name existing files, or
+/// files by their extension (.bkm .ptc .ply .tx .tex .exr .png .tif .tiff
+/// .jpg .hdr): the textures, brick maps and point clouds the shaders read,
+/// each once, the inputs of `-newer 1`. A bake shader's output "filename"
+/// is among them too; callers drop their own outputs.
 std::vector<std::string> shader_input_files(const SceneShaders& shaders);
 
 } // namespace sss

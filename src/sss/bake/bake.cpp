@@ -27,9 +27,9 @@
 #include <tbb/parallel_for.h>
 
 #include "sss/dice/dice.h"
+#include "sss/light/ray_tracer.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
-#include "sss/light/ray_tracer.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/progress.h"
@@ -426,6 +426,7 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
     }
     ShadingResources resources;
     BakeServices services(scene, tracer, frame, options.output);
+    const double extent = tracer ? tracer->scene_extent() : 0.0;
     const Camera& camera = scene.options.camera;
     const glm::dmat4& to_camera = camera.world_to_camera;
     const glm::dmat3 normal_to_camera =
@@ -454,18 +455,20 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         batch.Os.assign(n, glm::vec3(attr.opacity));
         batch.dicing_area.resize(n);
         batch.radius.resize(n);
-        batch.seeds.resize(n);
+        batch.seed = first_point[ch.job] + ch.begin;
+        batch.ray_offset =
+            static_cast<float>(shadow_ray_offset(d, ch.begin, ch.end, extent));
         for (std::size_t k = 0; k < n; ++k) {
             const std::size_t i = ch.begin + k;
             const glm::dvec3 pc =
                 glm::dvec3(to_camera * glm::dvec4(glm::dvec3(d.centers[i]), 1.0));
             batch.P[k] = glm::vec3(pc);
             batch.I[k] = camera.perspective ? glm::vec3(pc) : glm::vec3(0.0f, 0.0f, 1.0f);
-            batch.N[k] = glm::vec3(glm::normalize(normal_to_camera * glm::dvec3(d.normals[i])));
+            batch.N[k] =
+                glm::vec3(glm::normalize(normal_to_camera * glm::dvec3(d.normals[i])));
             batch.Cs[k] = d.colors.empty() ? glm::vec3(attr.color) : d.colors[i];
             batch.dicing_area[k] = d.areas[i];
             batch.radius[k] = d.radii[i];
-            batch.seeds[k] = first_point[ch.job] + i;
         }
         batch.Ng = batch.N;
         BakeServices::set_sink(&records[c]);
@@ -477,7 +480,7 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
             throw;
         }
         BakeServices::set_sink(nullptr);
-        nonfinite += context.nonfinite_count();
+        nonfinite += context.nonfinite_points();
         if (options.progress) options.progress->update(done += n, total_points);
     });
     if (nonfinite.load() > 0)
@@ -521,9 +524,10 @@ gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
     for (const auto& chunk : records)
         for (const Bake3dRecord& r : chunk) {
             if (r.file.empty())
-                throw MissingBakeFileError(scene.path + ": bake3d was called without a file "
-                                                        "name (give the shader a "
-                                                        "\"filename\" or ptbake -o)");
+                throw MissingBakeFileError(scene.path +
+                                           ": bake3d was called without a file "
+                                           "name (give the shader a "
+                                           "\"filename\" or ptbake -o)");
             auto [it, inserted] = index.emplace(r.file, files.size());
             if (inserted) {
                 FilePlan f;
@@ -584,7 +588,8 @@ gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
             int area_offset = -1;
             int offset = 0;
             for (std::size_t k = 0; k < r.channels.size(); ++k) {
-                if (r.channels[k] == "_area" && r.channel_floats[k] == 1) area_offset = offset;
+                if (r.channels[k] == "_area" && r.channel_floats[k] == 1)
+                    area_offset = offset;
                 offset += r.channel_floats[k];
             }
             const int stride = offset;
@@ -619,8 +624,8 @@ gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
             report.files[it->second].objects.push_back(scene.primitives[job.prim].source);
     for (std::size_t f = 0; f < out.size(); ++f)
         for (const Channel& c : out[f].second.channels)
-            report.files[f].channels.push_back(std::string(channel_type_name(c.type)) + " " +
-                                               c.name);
+            report.files[f].channels.push_back(std::string(channel_type_name(c.type)) +
+                                               " " + c.name);
     return out;
 }
 
@@ -642,7 +647,8 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
     for (const std::string& w : shaders.warnings) report.warnings.push_back(w);
     bool any_shadows = false;
-    for (const char* op : {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
+    for (const char* op :
+         {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
         any_shadows = any_shadows || shaders.uses(op);
     for (const auto& light : shaders.lights)
         if (program_uses(light->program(), "shadow") ||
@@ -660,8 +666,8 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         build_occluders(scene, plan, diced, any_shadows, report);
     report.trace_build_seconds = watch.seconds() - report.dice_seconds;
 
-    std::vector<std::vector<Bake3dRecord>> records =
-        shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(), frame, report);
+    std::vector<std::vector<Bake3dRecord>> records = shade_points(
+        scene, options, shaders, plan.jobs, diced, tracer.get(), frame, report);
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 

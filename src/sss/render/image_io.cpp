@@ -235,8 +235,9 @@ DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
     if (exr && primary) {
         // The primary EXR holds everything: full layer names, and every AOV.
         target.names = target.channels;
+        static const std::vector<std::string> beauty = {"R", "G", "B", "A", "Z"};
         for (const auto& c : image.channels)
-            if (c.find('.') != std::string::npos && !contains(target.channels, c)) {
+            if (!contains(beauty, c) && !contains(target.channels, c)) {
                 target.channels.push_back(c);
                 target.names.push_back(c);
             }

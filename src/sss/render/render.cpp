@@ -2,9 +2,9 @@
 /// The final renderer (docs/render.md): every primitive is diced into
 /// triangles with vertex normals and ray traced with Embree; camera samples
 /// are stratified and jittered per pixel by a hash, shaded by the scene's RSL
-/// shaders (sss/shading) in batches of hits, composited front to back through semi-transparent
-/// surfaces and reconstructed with RenderMan's 2 x 2 Gaussian filter. The
-/// image holds the beauty, Z and the AOVs; render_scene writes the Displays.
+/// shaders (sss/shading) in batches of hits, composited front to back through
+/// semi-transparent surfaces and reconstructed with RenderMan's 2 x 2 Gaussian filter.
+/// The image holds the beauty, Z and the AOVs; render_scene writes the Displays.
 /// render_image runs its phases in order (camera, lights and shaders,
 /// surfaces, dicing, ray tracers, tiles, pixels), each a function below.
 ///
@@ -37,9 +37,9 @@
 #include <tbb/task_arena.h>
 
 #include "sss/dice/dice.h"
+#include "sss/light/ray_tracer.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
-#include "sss/light/ray_tracer.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/hash.h"
@@ -67,7 +67,6 @@ constexpr int kMaxHits = 32;
 constexpr double kOpaque = 1e-4;
 /// The reconstruction filter: RenderMan's gaussian 2 x 2 (radius 1 pixel).
 constexpr double kFilterRadius = 1.0;
-
 
 /// Whether `Attribute "visibility" name` leaves the primitive visible.
 bool visible_to(const Primitive& prim, const char* name) {
@@ -216,12 +215,12 @@ std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
 
 /// An AOV of the image: an output variable of the surface shaders.
 struct Aov {
-    std::string variable; ///< the shaders' output variable ("_diffuse", "Csss")
-    std::string layer;    ///< image layer ("diffuse") or channel name
-    int floats = 3;       ///< 1 (float) or 3 (colour, point, vector, normal)
-    bool as_rgb = false;  ///< a float written as layer.R/G/B (occlusion)
+    std::string variable;  ///< the shaders' output variable ("_diffuse", "Csss")
+    std::string layer;     ///< image layer ("diffuse") or channel name
+    int floats = 3;        ///< 1 (float) or 3 (colour, point, vector, normal)
+    bool as_rgb = false;   ///< a float written as layer.R/G/B (occlusion)
     float fallback = 0.0f; ///< value where a shader has no such variable
-    int offset = 0;       ///< first value in a sample
+    int offset = 0;        ///< first value in a sample
 };
 
 /// Writes shader printf output, one message at a time.
@@ -378,8 +377,9 @@ void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
         h.n = n;
         h.ng = ng;
         h.dir = dir;
-        h.cs = surf.triangle_colors.empty() ? attr.color
-                                            : glm::dvec3(surf.triangle_colors[hit.triangle]);
+        h.cs = surf.triangle_colors.empty()
+                   ? attr.color
+                   : glm::dvec3(surf.triangle_colors[hit.triangle]);
         h.os = os;
         const double depth = hit.t / cs.units;
         h.depth = static_cast<float>(depth);
@@ -442,12 +442,16 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         batch.dv.assign(n, 1.0f);
         batch.dicing_area.resize(n);
         batch.radius.resize(n);
-        batch.seeds.resize(n);
+        // Point i of the batch draws its samples from hash(seed, i): the
+        // first hit's key fixes them for the batch (tiles are split into
+        // batches the same way for any thread count).
+        batch.seed = hits[begin].seed;
+        batch.ray_offset = static_cast<float>(1e-5 * job.extent);
         for (std::size_t k = 0; k < n; ++k) {
             const SurfaceHit& h = hits[begin + k];
             const glm::dvec3 pc = glm::dvec3(to_camera * glm::dvec4(h.p, 1.0));
-            const glm::dvec3 oc =
-                glm::dvec3(to_camera * glm::dvec4(glm::dvec3(samples[h.sample].ray.origin), 1.0));
+            const glm::dvec3 oc = glm::dvec3(
+                to_camera * glm::dvec4(glm::dvec3(samples[h.sample].ray.origin), 1.0));
             batch.P[k] = glm::vec3(pc);
             batch.I[k] = glm::vec3(pc - oc);
             batch.N[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.n));
@@ -456,15 +460,14 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             batch.dPdv[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdy);
             batch.Cs[k] = glm::vec3(h.cs);
             batch.Os[k] = glm::vec3(h.os);
-            batch.dicing_area[k] = static_cast<float>(glm::length(glm::cross(
-                glm::dvec3(batch.dPdu[k]), glm::dvec3(batch.dPdv[k]))));
+            batch.dicing_area[k] = static_cast<float>(glm::length(
+                glm::cross(glm::dvec3(batch.dPdu[k]), glm::dvec3(batch.dPdv[k]))));
             batch.radius[k] = static_cast<float>(h.radius);
-            batch.seeds[k] = h.seed;
         }
         const ShaderInstance& shader = *job.shaders.surface_of[prim_index];
         const auto& lights = job.shaders.lights_of[prim_index];
         context.execute(shader, batch, LightList(lights.data(), lights.size()));
-        job.nan_points += context.nonfinite_count();
+        job.nan_points += context.nonfinite_points();
 
         // AOVs this shader has.
         std::vector<std::vector<float>> aov_values(job.aovs.size());
@@ -472,7 +475,8 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         for (std::size_t a = 0; a < job.aovs.size(); ++a) {
             TypeSpec type;
             if (context.output(job.aovs[a].variable, type, aov_values[a]) &&
-                !type.is_array() && shading_type_floats(type.type) == job.aovs[a].floats &&
+                !type.is_array() &&
+                shading_type_floats(type.type) == job.aovs[a].floats &&
                 type.type != ShadingType::String)
                 has[a] = 1;
         }
@@ -503,7 +507,8 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             }
             cs.trans *= 1.0 - oi;
             ++cs.layers;
-            if (std::max({cs.trans.x, cs.trans.y, cs.trans.z}) < kOpaque) cs.active = false;
+            if (std::max({cs.trans.x, cs.trans.y, cs.trans.z}) < kOpaque)
+                cs.active = false;
         }
         begin = end;
     }
@@ -616,20 +621,23 @@ std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
         a.fallback = s.fallback;
         aovs.push_back(a);
     }
-    static const char* const reserved[] = {"rgba", "rgb", "a", "z", "Ci", "Oi", "Z",
-                                           "rgbz", "rgbaz"};
+    static const char* const reserved[] = {"rgba", "rgb", "a",    "z",    "Ci",
+                                           "Oi",   "Z",   "rgbz", "rgbaz"};
     for (const std::string& name : requested_outputs(scene)) {
-        if (std::find(std::begin(reserved), std::end(reserved), name) != std::end(reserved))
+        if (std::find(std::begin(reserved), std::end(reserved), name) !=
+            std::end(reserved))
             continue;
-        if (std::any_of(aovs.begin(), aovs.end(),
-                        [&](const Aov& a) { return a.layer == name || a.variable == name; }))
+        if (std::any_of(aovs.begin(), aovs.end(), [&](const Aov& a) {
+                return a.layer == name || a.variable == name;
+            }))
             continue;
         for (const auto& shader : shaders.surfaces) {
             const Program& program = shader->program();
             const int index = program.find(name);
             if (index < 0) continue;
             const Symbol& symbol = program.symbols[static_cast<std::size_t>(index)];
-            if (symbol.kind != SymbolKind::OutputParam || symbol.type.is_array()) continue;
+            if (symbol.kind != SymbolKind::OutputParam || symbol.type.is_array())
+                continue;
             const int floats = shading_type_floats(symbol.type.type);
             if (floats != 1 && floats != 3) continue;
             if (symbol.type.type == ShadingType::String) continue;
@@ -662,7 +670,8 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     job.values = 4;
     for (const Aov& a : job.aovs) job.values += a.as_rgb ? 3 : a.floats;
     bool any_shadows = false;
-    for (const char* op : {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
+    for (const char* op :
+         {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
         any_shadows = any_shadows || job.shaders.uses(op);
     return any_shadows;
 }
@@ -779,9 +788,8 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
     const int slots = job.values + 1; // + weight
     std::vector<std::vector<float>> tile_sums(tiles);
     std::atomic<std::size_t> tiles_done{0};
-    tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts([&] {
-        return std::make_unique<ShadingContext>(*job.resources, *job.services);
-    });
+    tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
+        [&] { return std::make_unique<ShadingContext>(*job.resources, *job.services); });
     tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
         ShadingContext& context = *contexts.local();
         const int x0 = grid.x0(t);
@@ -801,13 +809,13 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                 for (int j = 0; j < job.ny; ++j) {
                     for (int i = 0; i < job.nx; ++i) {
                         CameraSample cs;
-                        cs.key = detail::splitmix64(
-                            pixel_key +
-                            uint64_t(j * job.nx + i) * detail::kSplitMixIncrement);
+                        cs.key = detail::splitmix64(pixel_key +
+                                                    uint64_t(j * job.nx + i) *
+                                                        detail::kSplitMixIncrement);
                         cs.sx = px + (i + detail::unit_double(cs.key)) / job.nx;
-                        cs.sy = py +
-                                (j + detail::unit_double(detail::splitmix64(cs.key))) /
-                                    job.ny;
+                        cs.sy =
+                            py + (j + detail::unit_double(detail::splitmix64(cs.key))) /
+                                     job.ny;
                         cs.ray = job.rays->ray(cs.sx, cs.sy, &cs.units);
                         samples.push_back(cs);
                     }
@@ -818,8 +826,9 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
         std::vector<SurfaceHit> hits;
         while (true) {
             trace_pass(job, samples, hits, camera_count);
-            if (hits.empty() && std::none_of(samples.begin(), samples.end(),
-                                             [](const CameraSample& c) { return c.active; }))
+            if (hits.empty() &&
+                std::none_of(samples.begin(), samples.end(),
+                             [](const CameraSample& c) { return c.active; }))
                 break;
             shade_pass(job, context, hits, samples, values);
         }
@@ -856,7 +865,8 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                     const float w = static_cast<float>(wx[kx] * wy[ky]);
                     // Buffer cell of pixel (px - 1 + kx, py - 1 + ky).
                     float* acc =
-                        &sums[(std::size_t(py - y0 + ky) * kSpan + (px - x0 + kx)) * slots];
+                        &sums[(std::size_t(py - y0 + ky) * kSpan + (px - x0 + kx)) *
+                              slots];
                     for (int c = 0; c < job.values; ++c) acc[c] += w * v[c];
                     acc[job.values] += w;
                 }
@@ -923,8 +933,9 @@ void report_rays(const Renderer& job, RenderReport& report) {
         report.warnings.push_back(std::to_string(job.bad_samples.load()) +
                                   " samples had non-finite values and were left black");
     if (job.nan_points.load() > 0)
-        report.warnings.push_back(std::to_string(job.nan_points.load()) +
-                                  " shading points gave NaN or infinite values, written as 0");
+        report.warnings.push_back(
+            std::to_string(job.nan_points.load()) +
+            " shading points gave NaN or infinite values, written as 0");
 }
 
 } // namespace

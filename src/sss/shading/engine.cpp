@@ -636,6 +636,12 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
             }
             const ShadingType given = rib_shading_type(param.type);
             const bool loose_floats = given == ShadingType::Float;
+            // One float for a colour, point, vector or normal is replicated,
+            // so RIBs written for shaders that took a float ("Kdt" [1])
+            // still bind (documented in docs/shading.md).
+            if (loose_floats && numbers.size() == 1 && !sym.type.is_array() &&
+                is_triple(sym.type.type))
+                numbers.assign(3, numbers[0]);
             if (static_cast<int>(numbers.size()) != sym.type.floats()) mismatch();
             if (!loose_floats && !same_class(given, sym.type.type)) mismatch();
             arg.numbers = std::move(numbers);
@@ -1033,8 +1039,14 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
     Frame& f = c.main;
     c.setup_frame(f, shader, n);
     c.load_surface_globals(f);
-    c.init_params(f, true);
-    if (n > 0) c.run_body(f);
+    try {
+        c.init_params(f, true);
+        if (n > 0) c.run_body(f);
+    } catch (const ShaderRuntimeError& e) {
+        // Name the RIB call too: "scene.rib:12: Surface "x": file.sl:7: ..."
+        if (shader.where().empty()) throw;
+        throw ShaderRuntimeError(shader.where() + ": " + e.what());
+    }
 
     // NaN / infinity: written as 0, counted.
     const Program& p = shader.program();

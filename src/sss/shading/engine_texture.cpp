@@ -177,8 +177,9 @@ void op_texture(Frame& f, const BoundOp& b) {
                           &error);
     }
     if (!ok) {
-        f.warn_once(b, "texture \"" + file + "\": " + error);
-        std::fill(out.begin(), out.end(), 0.0f);
+        // A map that cannot be read stops the job: a frame rendered without
+        // its textures must not pass for a finished one.
+        f.fail(b, "texture \"" + file + "\": " + error);
     }
     write_result(f, d, out, nc);
 }
@@ -221,9 +222,8 @@ void op_environment(Frame& f, const BoundOp& b) {
         lib && lib->environment(file, channel, nc, o, n, dir.data(), ddu.data(),
                                 ddv.data(), run_mask(f), out.data(), &error);
     if (!ok) {
-        f.warn_once(b, "environment \"" + file +
-                           "\": " + (lib ? error : "no texture library"));
-        std::fill(out.begin(), out.end(), 0.0f);
+        f.fail(b,
+               "environment \"" + file + "\": " + (lib ? error : "no texture library"));
     }
     write_result(f, d, out, nc);
 }
@@ -475,8 +475,14 @@ void op_texture3d(Frame& f, const BoundOp& b) {
     });
     const glm::dmat4 m = current_to(f, b, o.coordsystem);
     std::vector<glm::vec3> P(n), N(n);
-    std::vector<float> radius(n, o.filterradius * o.filterscale);
+    // Without "filterradius", the shading point's own filter radius (the
+    // renderer's pixel footprint, the baker's micropolygon), else 0.
+    const ShadingBatch* shading = f.ctx->batch;
+    const bool own_radius = o.filterradius < 0.0f;
+    std::vector<float> radius(n, std::max(o.filterradius, 0.0f) * o.filterscale);
     for (std::size_t i = 0; i < n; ++i) {
+        if (own_radius && shading && shading->radius.size() >= n)
+            radius[i] = shading->radius[i] * o.filterscale;
         P[i] = xform_point(m, ld3(f.ptr(b, 2, i)));
         N[i] = xform_normal(m, ld3(f.ptr(b, 3, i)));
     }
@@ -495,11 +501,11 @@ void op_texture3d(Frame& f, const BoundOp& b) {
                             run_mask(f), floats, out.data(), found.data(), &error);
     }
     if (!ok) {
-        if (lib && !channels.empty()) f.warn_once(b, "texture3d: " + error);
+        if (lib && !channels.empty()) f.fail(b, "texture3d: " + error);
         set_result(f, b, 0.0f);
         return;
     }
-    if (!error.empty()) f.warn_once(b, "texture3d: " + error);
+    if (!error.empty()) f.fail(b, "texture3d: " + error);
     int stride = 0;
     for (int c : floats) stride += c;
     f.each(d.varying, [&](std::size_t i) {
@@ -569,9 +575,8 @@ void op_bake3d(Frame& f, const BoundOp& b) {
         for (const auto& [name, k] : values)
             if (name == c) arg = k;
         if (arg < 0) {
-            f.warn_once(b, "bake3d \"" + rec.file + "\": channel \"" + c +
-                               "\" has no value; not baked");
-            continue;
+            f.fail(b, "bake3d \"" + rec.file + "\": channel \"" + c +
+                          "\" is listed but the call gives it no value");
         }
         if (f.program->symbols[b.op->args[arg]].type.type == ShadingType::String) {
             f.warn_once(b, "bake3d: channel \"" + c + "\" is a string; not baked");
@@ -614,6 +619,9 @@ void op_bake3d(Frame& f, const BoundOp& b) {
                                    scale);
         }
         rec.radius.push_back(r * o.radiusscale);
+        rec.area.push_back(batch && batch->dicing_area.size() >= n ? batch->dicing_area[i]
+                           : need_area                             ? area[i]
+                                                                   : 0.0f);
         for (std::size_t c = 0; c < chan_args.size(); ++c) {
             const float* v = f.ptr(b, chan_args[c], i);
             rec.values.insert(rec.values.end(), v, v + rec.channel_floats[c]);

@@ -5,6 +5,7 @@
 #include "sss/shading/scene_shaders.h"
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <map>
 #include <system_error>
@@ -23,8 +24,7 @@ ParamList expand_strings(const ParamList& params, std::optional<int> frame,
     for (Param& p : out.items) {
         if (p.type != ParamType::String) continue;
         for (std::string& s : p.strings) {
-            if (s.find('%') == std::string::npos && s.find('#') == std::string::npos)
-                continue;
+            if (s.find_first_of("%#$") == std::string::npos) continue;
             try {
                 s = expand_frame_pattern(s, frame, where + " \"" + p.name + "\"");
             } catch (const MissingFrameError&) {
@@ -35,6 +35,19 @@ ParamList expand_strings(const ParamList& params, std::optional<int> frame,
         }
     }
     return out;
+}
+
+/// A name with the extension of a file shaders read (maps, clouds, images).
+bool looks_like_file(const std::string& v) {
+    static const char* const extensions[] = {".bkm",  ".ptc", ".ply", ".tx",
+                                             ".tex",  ".exr", ".png", ".tif",
+                                             ".tiff", ".jpg", ".hdr", ".slo"};
+    std::string ext = std::filesystem::path(v).extension().string();
+    for (char& c : ext)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    for (const char* e : extensions)
+        if (ext == e) return true;
+    return false;
 }
 
 std::string call_where(const ShaderRef& ref, const char* request) {
@@ -113,7 +126,9 @@ std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
         for (const ShaderArgument& a : s.arguments())
             for (const std::string& v : a.strings) {
                 std::error_code ec;
-                if (v.empty() || !std::filesystem::is_regular_file(v, ec)) continue;
+                if (v.empty()) continue;
+                if (!std::filesystem::is_regular_file(v, ec) && !looks_like_file(v))
+                    continue;
                 if (std::find(files.begin(), files.end(), v) == files.end())
                     files.push_back(v);
             }

@@ -41,9 +41,10 @@ bool set_texture_option(TextureOptions& options, std::string_view name,
 /// the per-point world-space P, N and filter radius texture3d() takes.
 struct Texture3dOptions {
     std::string coordsystem = "world"; // space of the file's data
-    float filterradius = 0;            // 0: the finest data (nearest points)
-    float filterscale = 1;             // multiplies filterradius
-    int maxdepth = -1;                 // brick maps: accepted, not used (-1: all)
+    float filterradius =
+        -1; // < 0: not given (the shading point's own radius); 0: the finest data
+    float filterscale = 1; // multiplies filterradius
+    int maxdepth = -1;     // brick maps: accepted, not used (-1: all)
 };
 
 /// Sets a texture3d option ("coordsystem", "filterradius", "filterscale",
