@@ -713,3 +713,70 @@ TEST(DiceParametricErrors, NameTheSource) {
 }
 
 } // namespace
+
+// ---------------------------------------------------------------------------
+// Grids and displacement
+
+TEST(DiceParametricGrids, GridsCoverTheCentresWithTheirParameters) {
+    sss::DiceControl c = spacing(0.05);
+    c.grids = true;
+    auto prim = make_prim(PrimitiveKind::Sphere, {2, -2, 2, 360});
+    set_param(prim, "s", sss::ParamType::Float, sss::ParamClass::Varying, {0, 4, 0, 4});
+    const auto d = sss::dice_primitive(prim, c);
+    ASSERT_GT(d.size(), 1000u);
+    ASSERT_EQ(d.u.size(), d.size());
+    std::size_t next = 0;
+    for (const sss::DicedGrid& g : d.grids) {
+        EXPECT_EQ(g.first, next); // a sphere has no dropped cells
+        next = g.first + g.size();
+        for (std::size_t k = g.first; k < next; ++k) {
+            EXPECT_GE(d.u[k], 0.0f);
+            EXPECT_LE(d.u[k], 1.0f);
+            EXPECT_NEAR(d.s[k], 4.0f * d.u[k], 1e-5f); // "s" varying, t defaults to v
+            EXPECT_EQ(d.t[k], d.v[k]);
+            // The tangents give the normal, and match the grid's steps.
+            const glm::vec3 n = glm::cross(d.dPdu[k], d.dPdv[k]);
+            EXPECT_GT(glm::dot(glm::normalize(n), d.normals[k]), 0.999f);
+            if (k + 1 < next && (k + 1 - g.first) % g.nu != 0) {
+                const glm::vec3 step = d.centers[k + 1] - d.centers[k];
+                EXPECT_NEAR(glm::length(step), glm::length(d.dPdu[k]) * d.du[k],
+                            0.02 * glm::length(step));
+            }
+        }
+    }
+    EXPECT_EQ(next, d.size());
+}
+
+TEST(DiceParametricGrids, DisplacementMovesVerticesAndCentresWithoutCracks) {
+    // ShadingRate dicing close to the eye, so that sub-patches of different
+    // grids are stitched: the stitched vertices are displaced too.
+    sss::Camera cam;
+    cam.perspective = true;
+    cam.fov = 60;
+    cam.xres = 40;
+    cam.yres = 40;
+    sss::DiceControl c;
+    c.camera = &cam;
+    c.grids = true;
+    std::size_t calls = 0, points = 0;
+    c.displace = [&](sss::DisplaceGrid& g) {
+        ++calls;
+        for (std::size_t k = 0; k < g.size(); ++k) {
+            g.P[k] += 0.1f * g.N[k];
+            ++points;
+        }
+        if (!g.grid) EXPECT_EQ(g.nv, 1);
+    };
+    auto close = make_prim(PrimitiveKind::Sphere, {1, -1, 1, 360});
+    close.object_to_world = glm::translate(sss::Matrix4(1.0), glm::dvec3(0.3, 0, 1.3));
+    const auto d = sss::dice_primitive(close, c);
+    ASSERT_GT(d.size(), 5000u);
+    EXPECT_GT(calls, 2 * d.grids.size());
+    EXPECT_EQ(open_edges(d), 0u);
+    const glm::vec3 centre(0.3f, 0.0f, 1.3f);
+    for (const glm::vec3& v : d.vertices)
+        EXPECT_NEAR(glm::length(v - centre), 1.1f, 1e-5f);
+    for (const glm::vec3& p : d.centers)
+        EXPECT_NEAR(glm::length(p - centre), 1.1f, 1e-5f);
+    EXPECT_NEAR(total_area(d), 4 * kPi * 1.21, 4e-3 * kPi * 1.21);
+}

@@ -23,6 +23,36 @@
 
 namespace sss {
 
+/// A grid of points handed to DiceControl::displace, in world space: a
+/// diced grid's vertices or its micropolygon centres (nu x nv points, u
+/// fastest), or unrelated points (`grid` false: vertices the dicer adds
+/// between grids, whose neighbours are not known).
+struct DisplaceGrid {
+    const Primitive* primitive = nullptr;
+    bool grid = true;
+    int nu = 0, nv = 0;    ///< grid: size() == nu * nv; points: nu == size(), nv == 1
+    uint64_t sequence = 0; ///< running number of the call for this primitive (seeds)
+    // In: the undisplaced surface. The hook writes the displaced P and N.
+    std::vector<glm::vec3> P;
+    std::vector<glm::vec3> N;  ///< unit shading normal (orientation applied)
+    std::vector<glm::vec3> Ng; ///< unit geometric normal (orientation applied)
+    // In only, per point: parametric coordinates of the primitive, the
+    // grid's parameter steps, the undisplaced tangents and the texture
+    // coordinates.
+    std::vector<float> u, v, du, dv, s, t;
+    std::vector<glm::vec3> dPdu, dPdv;
+
+    std::size_t size() const { return P.size(); }
+    /// Sizes every array for n points.
+    void resize(std::size_t n) {
+        for (auto* a : {&P, &N, &Ng, &dPdu, &dPdv}) a->resize(n);
+        for (auto* a : {&u, &v, &du, &dv, &s, &t}) a->resize(n);
+    }
+};
+
+/// Moves the points of a grid (a displacement shader); see DiceControl::displace.
+using DisplaceHook = std::function<void(DisplaceGrid& grid)>;
+
 /// How fine to dice.
 struct DiceControl {
     /// > 0: micropolygon edge length in world units. 0: from ShadingRate and the camera.
@@ -35,12 +65,31 @@ struct DiceControl {
     /// Safety cap: no primitive is diced into more than this many micropolygons
     /// (a ValueError names the primitive instead).
     std::size_t max_micropolygons = 200'000'000;
+    /// Fill DicedSurface::grids and the per-micropolygon parametric data
+    /// (u, v, du, dv, s, t, dPdu, dPdv) for shading grids.
+    bool grids = false;
+    /// Displacement, when set: called on every diced grid of vertices (the
+    /// triangles' vertices, so that ray tracing sees the displaced surface)
+    /// and of micropolygon centres, and on the points the dicer adds
+    /// between grids. The hook writes new positions and shading normals
+    /// (world space); the dicer then recomputes the micropolygons' areas and
+    /// radii from the displaced vertices. Called from the dicing thread.
+    DisplaceHook displace;
 
     /// Micropolygon edge length wanted at world point p for a primitive with
     /// the given shading rate: `spacing`, or sqrt(shading_rate) pixels of the
     /// camera at p's distance from the eye (never below the near clip); times
     /// `coarsening`.
     double edge_length_at(const glm::dvec3& world_p, double shading_rate) const;
+};
+
+/// A grid of micropolygon centres of a DicedSurface: centres first ..
+/// first + nu * nv - 1, u fastest (REYES grids: a face or sub-patch diced
+/// into nu x nv micropolygons).
+struct DicedGrid {
+    std::size_t first = 0;
+    int nu = 0, nv = 0;
+    std::size_t size() const { return static_cast<std::size_t>(nu) * nv; }
 };
 
 /// A diced primitive, in world space.
@@ -55,8 +104,26 @@ struct DicedSurface {
     std::vector<glm::vec3> vertices;
     std::vector<glm::vec3> vertex_normals; ///< same size as vertices
     std::vector<uint32_t> triangles;       ///< 3 vertex indices per triangle
+    // With DiceControl::grids only (else empty):
+    /// The grids the centres form, in centre order; centres in no grid
+    /// (triangulated polygons, cells of a grid that had to be dropped) are
+    /// shaded as unrelated points.
+    std::vector<DicedGrid> grids;
+    /// Per micropolygon: the primitive's parametric coordinates of the
+    /// centre, the parameter steps of its grid, texture coordinates ("st",
+    /// "s", "t" when given, else u and v) and the undisplaced world tangents.
+    /// Centres the dicer has no parametrisation for have zeros.
+    std::vector<float> u, v, du, dv, s, t;
+    std::vector<glm::vec3> dPdu, dPdv;
 
     std::size_t size() const { return centers.size(); }
+    bool has_parametric() const { return !u.empty(); }
+    /// Sizes the parametric arrays for every micropolygon (zeros).
+    void resize_parametric(std::size_t micropolygons) {
+        for (auto* a : {&u, &v, &du, &dv, &s, &t}) a->resize(micropolygons);
+        dPdu.resize(micropolygons);
+        dPdv.resize(micropolygons);
+    }
     /// Sizes every array: `micropolygons` entries (colours only when
     /// with_colors), `vertices` vertices and `triangles` triangles.
     void resize(std::size_t micropolygons, std::size_t vertex_count,

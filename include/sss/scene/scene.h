@@ -119,8 +119,9 @@ struct Attributes {
     bool orientation_inside = false; ///< Orientation "inside" (after ReverseOrientation)
     double shading_rate = 1.0;
     std::string shading_interpolation = "constant";
-    std::optional<ShaderRef> surface; ///< Surface
-    std::vector<int> lights_on;       ///< indices into Scene::lights, ascending
+    std::optional<ShaderRef> surface;      ///< Surface
+    std::optional<ShaderRef> displacement; ///< Displacement
+    std::vector<int> lights_on;            ///< indices into Scene::lights, ascending
     /// Every `Attribute "group" params`, by group ("cull", "dice", "identifier"...).
     std::map<std::string, ParamList> groups;
     Basis u_basis = *named_basis("bezier");

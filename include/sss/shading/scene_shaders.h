@@ -1,7 +1,8 @@
 #pragma once
 /// \file scene_shaders.h
 /// The shaders of a scene bound for one job (ptbake or render): every
-/// distinct Surface call and every light source as a ShaderInstance, loaded
+/// distinct Surface and Displacement call and every light source as a
+/// ShaderInstance, loaded
 /// along the scene's shader search path (shader_library.h). Frame patterns
 /// ("%04d", "####", "$F4") in string parameters are expanded with the job's frame,
 /// so `"string filename" ["orbit_ssd.%04d.bkm"]` reads the frame's file.
@@ -24,6 +25,10 @@ struct SceneShaders {
     std::vector<std::unique_ptr<ShaderInstance>> surfaces;
     /// Per primitive: its surface shader (defaultsurface without a Surface).
     std::vector<const ShaderInstance*> surface_of;
+    /// Distinct displacement instances (one per Displacement call).
+    std::vector<std::unique_ptr<ShaderInstance>> displacements;
+    /// Per primitive: its displacement shader, or null without a Displacement.
+    std::vector<const ShaderInstance*> displacement_of;
     /// Per scene light (Scene::lights order).
     std::vector<std::unique_ptr<ShaderInstance>> lights;
     /// Per primitive: the lights that are on for it, in Scene::lights order.
@@ -38,9 +43,9 @@ struct SceneShaders {
 /// Whether `program` has an op named `op`.
 bool program_uses(const Program& program, std::string_view op);
 
-/// Loads and binds the scene's shaders. Throws ShaderNotFoundError (a shader
-/// the search path does not have, naming the call and the path),
-/// ShaderCompileError, ValueError (parameters of the wrong type).
+/// Loads and binds the scene's shaders (surface, displacement, light). Throws
+/// ShaderNotFoundError (a shader the search path does not have, naming the call and the
+/// path), ShaderCompileError, ValueError (parameters of the wrong type).
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
 
 /// String parameter values of the bound shaders that name existing files, or

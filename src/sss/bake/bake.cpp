@@ -28,6 +28,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
 #include "sss/util/error.h"
@@ -293,7 +294,8 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
 
 /// Dices what is baked or casts shadows; the rest is not needed.
 std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& options,
-                                     const BakePlan& plan, double spacing) {
+                                     const BakePlan& plan, double spacing,
+                                     Displacer& displacer) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
@@ -301,6 +303,8 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
     DiceControl occluder_control = control;
     occluder_control.coarsening = kOccluderCoarsening;
     std::vector<DiceRequest> requests;
+    // Baked surfaces are shaded grid by grid.
+    control.grids = true;
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const int job = plan.job_of[i];
         if (job < 0 && !plan.occluder[i]) continue;
@@ -310,6 +314,7 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
         } else if (options.spacing_from_material && !options.material) {
             request.control.spacing = *plan.job_mfp[job] * options.mfp_fraction;
         }
+        request.control.displace = displacer.hook(i);
         requests.push_back(request);
     }
     return dice_all(scene, requests);
@@ -368,6 +373,29 @@ std::unique_ptr<RayTracer> build_occluders(const Scene& scene, const BakePlan& p
     return tracer;
 }
 
+/// The parametric globals of a batch of micropolygons begin.. of a diced
+/// surface: u, v, du, dv, s, t, and dPdu, dPdv in camera space.
+void fill_parametric(const DicedSurface& d, std::size_t begin,
+                     const glm::dmat3& world_to_camera, ShadingBatch& batch) {
+    const std::size_t n = batch.size;
+    const auto range = [&](const std::vector<float>& from, std::vector<float>& to) {
+        to.assign(from.begin() + static_cast<std::ptrdiff_t>(begin),
+                  from.begin() + static_cast<std::ptrdiff_t>(begin + n));
+    };
+    range(d.u, batch.u);
+    range(d.v, batch.v);
+    range(d.du, batch.du);
+    range(d.dv, batch.dv);
+    range(d.s, batch.s);
+    range(d.t, batch.t);
+    batch.dPdu.resize(n);
+    batch.dPdv.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        batch.dPdu[k] = glm::vec3(world_to_camera * glm::dvec3(d.dPdu[begin + k]));
+        batch.dPdv[k] = glm::vec3(world_to_camera * glm::dvec3(d.dPdv[begin + k]));
+    }
+}
+
 /// What bake3d calls hand over while a chunk is shaded: collected per chunk
 /// (through a thread-local sink), so the clouds come out in point order for
 /// any number of threads.
@@ -402,29 +430,42 @@ private:
 };
 thread_local std::vector<Bake3dRecord>* BakeServices::s_sink = nullptr;
 
-/// Runs every job's surface shader over its micropolygons (a batch per
-/// chunk of kChunk points, micropolygon centres as bake3d's "interpolate"
-/// mode bakes them) and returns the bake3d records of each chunk in order.
-/// Point seeds are global point indices, so the result does not depend on
-/// how the work is split between threads.
+/// Runs every job's surface shader over its micropolygons (a Grid batch per
+/// diced grid, a Points batch per chunk of kChunk other points; micropolygon
+/// centres as bake3d's "interpolate" mode bakes them) and returns the bake3d records of
+/// each chunk in order. Point seeds are global point indices, so the result does not
+/// depend on how the work is split between threads.
 std::vector<std::vector<Bake3dRecord>>
 shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders& shaders,
              const std::vector<BakeJob>& jobs, const std::vector<DicedSurface>& diced,
-             const RayTracer* tracer, std::optional<int> frame, BakeReport& report) {
+             const RayTracer* tracer, std::optional<int> frame,
+             const ShadingResources& resources, BakeReport& report) {
     std::size_t total_points = 0;
     std::vector<std::size_t> first_point(jobs.size());
     struct Chunk {
         std::size_t job, begin, end;
+        const DicedGrid* grid; ///< null: unrelated points
     };
     std::vector<Chunk> chunks;
     for (std::size_t j = 0; j < jobs.size(); ++j) {
         first_point[j] = total_points;
-        const std::size_t n = diced[jobs[j].prim].size();
+        const DicedSurface& d = diced[jobs[j].prim];
+        const std::size_t n = d.size();
         total_points += n;
-        for (std::size_t b = 0; b < n; b += kChunk)
-            chunks.push_back({j, b, std::min(n, b + kChunk)});
+        // Each grid is one batch (exact derivatives); the points between
+        // grids go in chunks.
+        std::size_t at = 0;
+        const auto points_up_to = [&](std::size_t end) {
+            for (std::size_t b = at; b < end; b += kChunk)
+                chunks.push_back({j, b, std::min(end, b + kChunk), nullptr});
+        };
+        for (const DicedGrid& g : d.grids) {
+            points_up_to(g.first);
+            chunks.push_back({j, g.first, g.first + g.size(), &g});
+            at = g.first + g.size();
+        }
+        points_up_to(n);
     }
-    ShadingResources resources;
     BakeServices services(scene, tracer, frame, options.output);
     const double extent = tracer ? tracer->scene_extent() : 0.0;
     const Camera& camera = scene.options.camera;
@@ -447,6 +488,12 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         ShadingBatch batch;
         batch.size = n;
         batch.layout = BatchLayout::Points;
+        if (ch.grid) {
+            batch.layout = BatchLayout::Grid;
+            batch.nu = ch.grid->nu;
+            batch.nv = ch.grid->nv;
+            fill_parametric(d, ch.begin, glm::dmat3(to_camera), batch);
+        }
         batch.primitive = &prim;
         batch.P.resize(n);
         batch.N.resize(n);
@@ -657,8 +704,14 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     BakePlan plan = plan_jobs(scene, shaders, options, any_shadows, report);
     job_mean_free_paths(scene, options, spacing.material_mfp, plan);
 
+    // Displacement shaders run while dicing, before the occluders are built:
+    // shadows see the displaced surfaces.
+    ShadingResources resources;
+    BakeServices dice_services(scene, nullptr, frame, options.output);
+    Displacer displacer(scene, shaders, resources, dice_services);
     const std::vector<DicedSurface> diced =
-        dice_scene(scene, options, plan, spacing.spacing);
+        dice_scene(scene, options, plan, spacing.spacing, displacer);
+    for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
     report.dice_seconds = watch.seconds();
 
     check_spacing(scene, plan, diced, report);
@@ -666,8 +719,9 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         build_occluders(scene, plan, diced, any_shadows, report);
     report.trace_build_seconds = watch.seconds() - report.dice_seconds;
 
-    std::vector<std::vector<Bake3dRecord>> records = shade_points(
-        scene, options, shaders, plan.jobs, diced, tracer.get(), frame, report);
+    std::vector<std::vector<Bake3dRecord>> records =
+        shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(), frame,
+                     resources, report);
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 

@@ -33,26 +33,49 @@ namespace sss::detail {
 // ---------------------------------------------------------------------------
 // Primitive variables (Cs, N) over one face
 
-PrimVar::PrimVar(const Primitive& prim, const char* name, const ClassCounts& counts) {
+PrimVar::PrimVar(const Primitive& prim, const char* name, const ClassCounts& counts,
+                 int width) {
     param = prim.params.find(name);
     if (!param) return;
-    if (param->element_size() != 3)
-        fail(prim, std::string("\"") + name + "\" must have 3 numbers per value, not " +
+    if (param->type == ParamType::String || param->element_size() != width)
+        fail(prim, std::string("\"") + name + "\" must have " + std::to_string(width) +
+                       " numbers per value, not " +
                        std::to_string(param->element_size()));
     // Patches: facevarying values per patch corner (4 per patch),
     // facevertex values per patch control point (4 or 16 per patch).
     const std::size_t want = counts.of(param->storage);
-    if (param->numbers.size() != 3 * want)
+    const auto w = static_cast<std::size_t>(width);
+    if (param->numbers.size() != w * want)
         fail(prim, std::string("\"") + name + "\" has " +
                        std::to_string(param->numbers.size()) + " numbers, expected " +
-                       std::to_string(3 * want));
+                       std::to_string(w * want));
     values.resize(want);
     for (std::size_t k = 0; k < want; ++k) {
-        values[k] = dvec3(param->numbers[3 * k], param->numbers[3 * k + 1],
-                          param->numbers[3 * k + 2]);
+        dvec3 value(0.0);
+        for (std::size_t c = 0; c < w; ++c) value[c] = param->numbers[w * k + c];
+        values[k] = value;
         if (!finite(values[k]))
             fail(prim, std::string("\"") + name + "\" has a NaN or infinite value");
     }
+}
+
+PrimVar PrimVar::component(int c) const {
+    PrimVar out;
+    out.param = param;
+    out.values.reserve(values.size());
+    for (const dvec3& v : values) out.values.emplace_back(v[c], 0.0, 0.0);
+    return out;
+}
+
+TexCoordVars::TexCoordVars(const Primitive& prim, const ClassCounts& counts) {
+    const PrimVar st(prim, "st", counts, 2);
+    if (st.param) {
+        s = st.component(0);
+        t = st.component(1);
+        return;
+    }
+    s = PrimVar(prim, "s", counts, 1);
+    t = PrimVar(prim, "t", counts, 1);
 }
 
 FaceValues PrimVar::face(const FaceIndex& at, const glm::dmat4& u_basis,
@@ -146,6 +169,7 @@ public:
         m_translation = dvec3(m[3]);
         m_affine = m[0][3] == 0.0 && m[1][3] == 0.0 && m[2][3] == 0.0 && m[3][3] == 1.0;
         m_cofactor = cofactor(m_linear);
+        m_grids = control.grids;
         const double det = glm::determinant(m);
         // dPw/du x dPw/dv equals cof(A) (dPdu x dPdv) = det(A) A^-T n: the RI
         // normal (A^-T n, see detail::world_normal) up to the sign of det.
@@ -432,6 +456,10 @@ private:
 
     /// Dices a leaf into nu x nv micropolygons and its grid into triangles.
     void emit(const Leaf& leaf) {
+        if (m_control.displace) {
+            emit_displaced(leaf);
+            return;
+        }
         const double u0 = leaf.u0;
         const double u1 = leaf.u1;
         const double v0 = leaf.v0;
@@ -507,6 +535,8 @@ private:
         }
         m_cell_normal.assign(cells, std::nullopt);
         ensure_size(m_cell_p, cells);
+        const std::size_t first = m_out.centers.size();
+        if (m_grids) evaluate_texture_coordinates(m_cu, m_cv);
         for (int j = 0; j < nv; ++j)
             for (int i = 0; i < nu; ++i) {
                 const std::size_t c = static_cast<std::size_t>(j) * nu + i;
@@ -536,9 +566,71 @@ private:
                 m_out.areas.push_back(static_cast<float>(area));
                 m_out.radii.push_back(static_cast<float>(radius));
                 if (has_color) m_out.colors.emplace_back(m_values[c]);
+                if (m_grids)
+                    push_parametric(m_eval[c], m_cu[i], m_cv[j], du, dv, m_st[c]);
             }
+        // A grid for the shaders only when no cell was dropped.
+        if (m_grids && m_out.centers.size() - first == cells)
+            m_out.grids.push_back(DicedGrid{first, nu, nv});
 
         emit_triangles(leaf);
+    }
+
+    /// s and t of the face at every (us[i], vs[j]) into m_st: the texture
+    /// coordinate variables, else the primitive's u and v.
+    void evaluate_texture_coordinates(std::span<const double> us,
+                                      std::span<const double> vs) {
+        const std::size_t n = us.size() * vs.size();
+        ensure_size(m_st, n);
+        ensure_size(m_values_s, n);
+        ensure_size(m_values_t, n);
+        if (m_face->s.present()) m_face->s.evaluate(us, vs, m_values_s.data());
+        if (m_face->t.present()) m_face->t.evaluate(us, vs, m_values_t.data());
+        for (std::size_t j = 0; j < vs.size(); ++j)
+            for (std::size_t i = 0; i < us.size(); ++i) {
+                const std::size_t k = j * us.size() + i;
+                m_st[k] =
+                    glm::dvec2(m_face->s.present() ? m_values_s[k].x : prim_u(us[i]),
+                               m_face->t.present() ? m_values_t[k].x : prim_v(vs[j]));
+            }
+    }
+
+    double prim_u(double u) const { return m_face->u_offset + m_face->u_scale * u; }
+    double prim_v(double v) const { return m_face->v_offset + m_face->v_scale * v; }
+
+    /// World dP/du and dP/dv of an object-space sample, in the primitive's
+    /// parametrisation.
+    void world_tangents(const SurfacePoint& s, dvec3& dpdu, dvec3& dpdv) const {
+        if (m_affine) {
+            dpdu = m_linear * s.dpdu;
+            dpdv = m_linear * s.dpdv;
+        } else {
+            const dvec4 h = m_matrix * dvec4(s.p, 1.0);
+            const dvec4 hu = m_matrix * dvec4(s.dpdu, 0.0);
+            const dvec4 hv = m_matrix * dvec4(s.dpdv, 0.0);
+            const dvec3 p = dvec3(h) / h.w;
+            dpdu = (dvec3(hu) - p * hu.w) / h.w;
+            dpdv = (dvec3(hv) - p * hv.w) / h.w;
+        }
+        dpdu /= m_face->u_scale;
+        dpdv /= m_face->v_scale;
+    }
+
+    /// Appends one micropolygon's parametric data (face coordinates u, v
+    /// and steps du, dv).
+    void push_parametric(const SurfacePoint& sp, double u, double v, double du, double dv,
+                         const glm::dvec2& st) {
+        dvec3 dpdu;
+        dvec3 dpdv;
+        world_tangents(sp, dpdu, dpdv);
+        m_out.u.push_back(static_cast<float>(prim_u(u)));
+        m_out.v.push_back(static_cast<float>(prim_v(v)));
+        m_out.du.push_back(static_cast<float>(du * m_face->u_scale));
+        m_out.dv.push_back(static_cast<float>(dv * m_face->v_scale));
+        m_out.s.push_back(static_cast<float>(st.x));
+        m_out.t.push_back(static_cast<float>(st.y));
+        m_out.dPdu.emplace_back(dpdu);
+        m_out.dPdv.emplace_back(dpdv);
     }
 
     /// Normal of a grid or side vertex: user N, else dPw/du x dPw/dv, else
@@ -574,7 +666,7 @@ private:
         const std::size_t base = m_out.vertices.size();
         if (base + nu1 * nv1 + extras + cells > std::numeric_limits<uint32_t>::max())
             fail(m_prim, "too many triangle vertices for 32-bit indices");
-        const bool has_normal = m_face->normal.present();
+        const bool has_normal = m_face->normal.present() && !m_displacing;
         if (has_normal) {
             ensure_size(m_user_n, nu1 * nv1);
             m_face->normal.evaluate(m_vu, m_vv, m_user_n.data());
@@ -591,9 +683,12 @@ private:
                 const std::size_t cell = std::min<std::size_t>(j, nv - 1) * nu +
                                          std::min<std::size_t>(i, nu - 1);
                 m_out.vertices.emplace_back(m_vert_p[k]);
-                m_out.vertex_normals.emplace_back(
-                    vertex_normal(m_vert_cross[k], has_normal ? &m_user_n[k] : nullptr,
-                                  un, vn, threshold, cell));
+                if (m_displacing)
+                    m_out.vertex_normals.emplace_back(m_vert_n[k]);
+                else
+                    m_out.vertex_normals.emplace_back(vertex_normal(
+                        m_vert_cross[k], has_normal ? &m_user_n[k] : nullptr, un, vn,
+                        threshold, cell));
             }
 
         bool stitched = false;
@@ -674,7 +769,260 @@ private:
                 vertex_normal(cross, has_normal ? &m_user_n[k] : nullptr, un, vn,
                               leaf.threshold, cell));
         }
+        if (m_displacing) displace_side_vertices(leaf, s, us, vs);
         return true;
+    }
+
+    /// Displaces the vertices a neighbour put on side s (just added, in
+    /// m_side_vertex[s], at parameters m_side_x): as unrelated points, so
+    /// that they land where the neighbour's grid put the same points (for
+    /// shaders that move a point by its own P, N, u, v, s and t); their
+    /// normals interpolate the displaced normals of the side's grid vertices.
+    void displace_side_vertices(const Leaf& leaf, int s, std::span<const double> us,
+                                std::span<const double> vs) {
+        const std::size_t kept = m_side_x.size();
+        const std::vector<uint32_t>& index = m_side_vertex[s];
+        ensure_size(m_tmp_p, kept);
+        ensure_size(m_tmp_n, kept);
+        for (std::size_t k = 0; k < kept; ++k) {
+            m_tmp_p[k] = dvec3(m_out.vertices[index[k]]);
+            m_tmp_n[k] = dvec3(m_out.vertex_normals[index[k]]);
+        }
+        const double du = (leaf.u1 - leaf.u0) / leaf.nu;
+        const double dv = (leaf.v1 - leaf.v0) / leaf.nv;
+        run_hook(us, vs, m_eval.data(), m_tmp_p.data(), m_tmp_n.data(), du, dv, false);
+        const std::size_t nu1 = static_cast<std::size_t>(leaf.nu) + 1;
+        const bool along_u = s == 0 || s == 2;
+        for (std::size_t k = 0; k < kept; ++k) {
+            const std::size_t t = static_cast<std::size_t>(m_side_cell[s][k]);
+            // The side's grid vertices around the point, and its place between them.
+            std::size_t a = 0;
+            std::size_t b = 0;
+            double w = 0.0;
+            if (along_u) {
+                const std::size_t row = s == 0 ? 0 : static_cast<std::size_t>(leaf.nv);
+                a = row * nu1 + t;
+                b = a + 1;
+                w = (m_side_x[k] - m_vu[t]) / (m_vu[t + 1] - m_vu[t]);
+            } else {
+                const std::size_t col = s == 3 ? 0 : static_cast<std::size_t>(leaf.nu);
+                a = t * nu1 + col;
+                b = a + nu1;
+                w = (m_side_x[k] - m_vv[t]) / (m_vv[t + 1] - m_vv[t]);
+            }
+            dvec3 n = (1.0 - w) * m_vert_n[a] + w * m_vert_n[b];
+            const double len = glm::length(n);
+            n = len > 0.0 && std::isfinite(len) ? n / len : dvec3(m_disp.N[k]);
+            dvec3 p(m_disp.P[k]);
+            dvec3 undisplaced;
+            dvec3 cross;
+            to_world(m_eval[k], undisplaced, cross);
+            if (!orient(cross, leaf.threshold)) weld(m_tmp_p[k], p, n);
+            m_out.vertices[index[k]] = glm::vec3(p);
+            m_out.vertex_normals[index[k]] = glm::vec3(n);
+        }
+    }
+
+    /// Degenerate points (poles, apexes, collapsed patch edges), which many
+    /// grid vertices share, take the displacement of the first of them:
+    /// their normals are nudged into each grid, and would otherwise move
+    /// them apart, opening tiny holes.
+    void weld(const dvec3& undisplaced, dvec3& p, dvec3& n) {
+        for (const Weld& w : m_welds)
+            if (w.undisplaced == undisplaced) {
+                p = w.p;
+                n = w.n;
+                return;
+            }
+        m_welds.push_back({undisplaced, p, n});
+    }
+
+    /// Hands n points (tensor grid us x vs, or unrelated points along one
+    /// line when !grid) to the displacement hook: positions p and normals n
+    /// in, m_disp.P and m_disp.N out (normals replaced by `n` where the
+    /// shader left none).
+    void run_hook(std::span<const double> us, std::span<const double> vs,
+                  const SurfacePoint* sp, const dvec3* p, const dvec3* n, double du,
+                  double dv, bool grid) {
+        const std::size_t count = us.size() * vs.size();
+        evaluate_texture_coordinates(us, vs);
+        DisplaceGrid& g = m_disp;
+        g.primitive = &m_prim;
+        g.grid = grid;
+        g.nu = grid ? static_cast<int>(us.size()) : static_cast<int>(count);
+        g.nv = grid ? static_cast<int>(vs.size()) : 1;
+        g.sequence = m_sequence++;
+        g.resize(count);
+        for (std::size_t j = 0; j < vs.size(); ++j)
+            for (std::size_t i = 0; i < us.size(); ++i) {
+                const std::size_t k = j * us.size() + i;
+                dvec3 dpdu;
+                dvec3 dpdv;
+                world_tangents(sp[k], dpdu, dpdv);
+                g.P[k] = glm::vec3(p[k]);
+                g.N[k] = glm::vec3(n[k]);
+                g.Ng[k] = g.N[k];
+                g.u[k] = static_cast<float>(prim_u(us[i]));
+                g.v[k] = static_cast<float>(prim_v(vs[j]));
+                g.du[k] = static_cast<float>(du * m_face->u_scale);
+                g.dv[k] = static_cast<float>(dv * m_face->v_scale);
+                g.s[k] = static_cast<float>(m_st[k].x);
+                g.t[k] = static_cast<float>(m_st[k].y);
+                g.dPdu[k] = glm::vec3(dpdu);
+                g.dPdv[k] = glm::vec3(dpdv);
+            }
+        m_control.displace(g);
+        if (g.P.size() != count || g.N.size() != count)
+            fail(m_prim, "displacement returned a wrong number of points");
+        for (std::size_t k = 0; k < count; ++k) {
+            const double len = glm::length(glm::dvec3(g.N[k]));
+            if (!(len > 0.0) || !std::isfinite(len))
+                g.N[k] = glm::vec3(n[k]);
+            else
+                g.N[k] = glm::vec3(glm::dvec3(g.N[k]) / len);
+            if (!finite(glm::dvec3(g.P[k]))) g.P[k] = glm::vec3(p[k]);
+        }
+    }
+
+    /// emit() with displacement: the grid's vertices and its micropolygon
+    /// centres are displaced (two hook calls); areas and radii come from the
+    /// displaced vertices (the two triangles of each cell), normals from the
+    /// shader.
+    void emit_displaced(const Leaf& leaf) {
+        m_displacing = true;
+        const int nu = leaf.nu;
+        const int nv = leaf.nv;
+        const double threshold = leaf.threshold;
+        const std::size_t nu1 = static_cast<std::size_t>(nu) + 1;
+        const std::size_t nv1 = static_cast<std::size_t>(nv) + 1;
+        const std::size_t cells =
+            static_cast<std::size_t>(nu) * static_cast<std::size_t>(nv);
+        const double du = (leaf.u1 - leaf.u0) / nu;
+        const double dv = (leaf.v1 - leaf.v0) / nv;
+
+        // Undisplaced centres and their normals (as emit()).
+        m_cu.resize(static_cast<std::size_t>(nu));
+        m_cv.resize(static_cast<std::size_t>(nv));
+        for (int i = 0; i < nu; ++i) m_cu[i] = leaf.u0 + (i + 0.5) * du;
+        for (int j = 0; j < nv; ++j) m_cv[j] = leaf.v0 + (j + 0.5) * dv;
+        ensure_size(m_cell_eval, cells);
+        m_face->geometry->evaluate(m_cu, m_cv, m_cell_eval.data());
+        spread(leaf.u0, leaf.u1, nu, m_vu);
+        spread(leaf.v0, leaf.v1, nv, m_vv);
+        ensure_size(m_vert_eval, nu1 * nv1);
+        m_face->geometry->evaluate(m_vu, m_vv, m_vert_eval.data());
+        ensure_size(m_vert_p, nu1 * nv1);
+        ensure_size(m_vert_cross, nu1 * nv1);
+        for (std::size_t k = 0; k < nu1 * nv1; ++k)
+            to_world(m_vert_eval[k], m_vert_p[k], m_vert_cross[k]);
+        const bool has_normal = m_face->normal.present();
+        if (has_normal) {
+            ensure_size(m_user_n, cells);
+            m_face->normal.evaluate(m_cu, m_cv, m_user_n.data());
+        }
+        m_cell_normal.assign(cells, std::nullopt);
+        ensure_size(m_cell_p, cells);
+        ensure_size(m_tmp_n, std::max(cells, nu1 * nv1));
+        for (int j = 0; j < nv; ++j)
+            for (int i = 0; i < nu; ++i) {
+                const std::size_t c = static_cast<std::size_t>(j) * nu + i;
+                dvec3 cross;
+                to_world(m_cell_eval[c], m_cell_p[c], cross);
+                std::optional<dvec3> n = orient(cross, threshold);
+                const dvec3& p00 = m_vert_p[j * nu1 + i];
+                const dvec3& p10 = m_vert_p[j * nu1 + i + 1];
+                const dvec3& p01 = m_vert_p[(j + 1) * nu1 + i];
+                const dvec3& p11 = m_vert_p[(j + 1) * nu1 + i + 1];
+                if (!n) n = orient(glm::cross(p11 - p00, p01 - p10), 0.0);
+                if (n && has_normal) {
+                    if (auto un = user_normal(m_user_n[c])) n = un;
+                }
+                m_cell_normal[c] = n;
+                m_tmp_n[c] = n.value_or(dvec3(0.0, 0.0, 1.0));
+            }
+
+        // Displaced centres.
+        run_hook(m_cu, m_cv, m_cell_eval.data(), m_cell_p.data(), m_tmp_n.data(), du, dv,
+                 true);
+        ensure_size(m_cell_dp, cells);
+        ensure_size(m_cell_dn, cells);
+        for (std::size_t c = 0; c < cells; ++c) {
+            m_cell_dp[c] = dvec3(m_disp.P[c]);
+            m_cell_dn[c] = dvec3(m_disp.N[c]);
+        }
+
+        // Undisplaced vertex normals (as emit_triangles()), then displaced vertices.
+        if (has_normal) {
+            ensure_size(m_user_n, nu1 * nv1);
+            m_face->normal.evaluate(m_vu, m_vv, m_user_n.data());
+        }
+        ensure_size(m_vert_n, nu1 * nv1);
+        for (std::size_t j = 0; j < nv1; ++j)
+            for (std::size_t i = 0; i < nu1; ++i) {
+                const std::size_t k = j * nu1 + i;
+                const double un =
+                    m_vu[i] + (i < nu1 - 1 ? kNudgeCells : -kNudgeCells) * du;
+                const double vn =
+                    m_vv[j] + (j < nv1 - 1 ? kNudgeCells : -kNudgeCells) * dv;
+                const std::size_t cell = std::min<std::size_t>(j, nv - 1) * nu +
+                                         std::min<std::size_t>(i, nu - 1);
+                m_vert_n[k] =
+                    vertex_normal(m_vert_cross[k], has_normal ? &m_user_n[k] : nullptr,
+                                  un, vn, threshold, cell);
+            }
+        run_hook(m_vu, m_vv, m_vert_eval.data(), m_vert_p.data(), m_vert_n.data(), du, dv,
+                 true);
+        for (std::size_t k = 0; k < nu1 * nv1; ++k) {
+            dvec3 p(m_disp.P[k]);
+            dvec3 n(m_disp.N[k]);
+            if (!orient(m_vert_cross[k], threshold)) weld(m_vert_p[k], p, n);
+            m_vert_p[k] = p;
+            m_vert_n[k] = n;
+        }
+
+        // Micropolygons of the displaced grid.
+        const bool has_color = m_face->color.present();
+        if (has_color) {
+            ensure_size(m_values, cells);
+            m_face->color.evaluate(m_cu, m_cv, m_values.data());
+        }
+        const std::size_t first = m_out.centers.size();
+        if (m_grids) evaluate_texture_coordinates(m_cu, m_cv);
+        for (int j = 0; j < nv; ++j)
+            for (int i = 0; i < nu; ++i) {
+                const std::size_t c = static_cast<std::size_t>(j) * nu + i;
+                const dvec3& p00 = m_vert_p[j * nu1 + i];
+                const dvec3& p10 = m_vert_p[j * nu1 + i + 1];
+                const dvec3& p01 = m_vert_p[(j + 1) * nu1 + i];
+                const dvec3& p11 = m_vert_p[(j + 1) * nu1 + i + 1];
+                const dvec3& p = m_cell_dp[c];
+                // The cell's two triangles, as emit_triangles() cuts it.
+                const double area = 0.5 * (glm::length(glm::cross(p10 - p00, p11 - p00)) +
+                                           glm::length(glm::cross(p11 - p00, p01 - p00)));
+                const bool keep = m_cell_normal[c] && area > 0.0 && std::isfinite(area);
+                m_cell_p[c] = p;
+                if (!keep) {
+                    m_cell_normal[c] = std::nullopt;
+                    continue;
+                }
+                const dvec3 n = m_cell_dn[c];
+                m_cell_normal[c] = n;
+                const double radius = std::sqrt(std::max(
+                    std::max(glm::dot(p00 - p, p00 - p), glm::dot(p10 - p, p10 - p)),
+                    std::max(glm::dot(p01 - p, p01 - p), glm::dot(p11 - p, p11 - p))));
+                m_out.centers.emplace_back(p);
+                m_out.normals.emplace_back(n);
+                m_out.areas.push_back(static_cast<float>(area));
+                m_out.radii.push_back(static_cast<float>(radius));
+                if (has_color) m_out.colors.emplace_back(m_values[c]);
+                if (m_grids)
+                    push_parametric(m_cell_eval[c], m_cu[i], m_cv[j], du, dv, m_st[c]);
+            }
+        if (m_grids && m_out.centers.size() - first == cells)
+            m_out.grids.push_back(DicedGrid{first, nu, nv});
+
+        emit_triangles(leaf);
+        m_displacing = false;
     }
 
     /// Triangulates cell (i, j) as a fan around its centre if one of its
@@ -746,7 +1094,19 @@ private:
     glm::dmat3 m_cofactor{1.0};
     glm::dmat3 m_user_normal_matrix{1.0};
     double m_normal_sign = 1.0;
+    bool m_grids = false;      ///< fill grids and parametric data
+    bool m_displacing = false; ///< emit_displaced() at work
+    uint64_t m_sequence = 0;   ///< displacement hook calls so far
+    DisplaceGrid m_disp;
+    struct Weld {
+        dvec3 undisplaced, p, n;
+    };
+    std::vector<Weld> m_welds; ///< displaced degenerate points of the primitive
+    std::vector<SurfacePoint> m_cell_eval, m_vert_eval;
+    std::vector<dvec3> m_vert_n, m_cell_dp, m_cell_dn, m_tmp_p, m_tmp_n;
     // Scratch, reused from grid to grid.
+    std::vector<glm::dvec2> m_st;
+    std::vector<dvec3> m_values_s, m_values_t;
     std::vector<double> m_su, m_sv, m_vu, m_vv, m_gu, m_gv, m_cu, m_cv;
     std::vector<SurfacePoint> m_eval;
     std::vector<dvec3> m_wp, m_vert_p, m_vert_cross, m_cell_vector, m_values, m_user_n;

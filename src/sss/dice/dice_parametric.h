@@ -16,6 +16,7 @@
 
 #include <glm/common.hpp>
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -131,12 +132,25 @@ struct PrimVar {
     const Param* param = nullptr;
     std::vector<dvec3> values;
 
-    /// Reads `name` (3 numbers per value) and checks its count for its class.
-    PrimVar(const Primitive& prim, const char* name, const ClassCounts& counts);
+    PrimVar() = default;
+    /// Reads `name` (`width` numbers per value, 1 to 3, kept in the first
+    /// components) and checks its count for its class.
+    PrimVar(const Primitive& prim, const char* name, const ClassCounts& counts,
+            int width = 3);
+
+    /// Component c of every value, in the first component.
+    PrimVar component(int c) const;
 
     /// The values over one face.
     FaceValues face(const FaceIndex& at, const glm::dmat4& u_basis,
                     const glm::dmat4& v_basis) const;
+};
+
+/// Texture coordinates of a primitive: "st" (two numbers per value), else
+/// "s" and "t" (one each); absent ones are the face's u and v.
+struct TexCoordVars {
+    PrimVar s, t;
+    TexCoordVars(const Primitive& prim, const ClassCounts& counts);
 };
 
 /// One parametric face to dice.
@@ -144,6 +158,11 @@ struct Face {
     const Surface* geometry = nullptr;
     FaceValues color;  ///< Cs
     FaceValues normal; ///< N, object space, used as given
+    FaceValues s, t;   ///< texture coordinates (first component); absent: u, v
+    /// The primitive's parametric coordinates of face point (u, v):
+    /// (u_offset + u_scale * u, v_offset + v_scale * v) (patch meshes: the
+    /// whole mesh spans [0, 1]^2).
+    double u_offset = 0.0, u_scale = 1.0, v_offset = 0.0, v_scale = 1.0;
 };
 
 // ---------------------------------------------------------------------------

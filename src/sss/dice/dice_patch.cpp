@@ -178,6 +178,9 @@ DicedSurface dice_patch(const Primitive& prim, const DiceControl& control) {
     }
     face.color = cs.face(at, ub, vb);
     face.normal = n.face(at, ub, vb);
+    const TexCoordVars st(prim, counts);
+    face.s = st.s.face(at, ub, vb);
+    face.t = st.t.face(at, ub, vb);
     DicedSurface out;
     ParametricDicer(prim, control, out).dice(face);
     return out;
@@ -207,6 +210,7 @@ DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control) 
     const glm::dmat4 ub = resolve_basis(attr.u_basis);
     const glm::dmat4 vb = resolve_basis(attr.v_basis);
     const int order = bicubic ? 4 : 2;
+    const TexCoordVars st(prim, counts);
 
     DicedSurface out;
     ParametricDicer dicer(prim, control, out);
@@ -241,6 +245,13 @@ DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control) 
             }
             face.color = cs.face(at, ub, vb);
             face.normal = n.face(at, ub, vb);
+            face.s = st.s.face(at, ub, vb);
+            face.t = st.t.face(at, ub, vb);
+            // u and v span the whole mesh.
+            face.u_offset = static_cast<double>(i) / pu;
+            face.u_scale = 1.0 / pu;
+            face.v_offset = static_cast<double>(j) / pv;
+            face.v_scale = 1.0 / pv;
             dicer.dice(face);
         }
     return out;

@@ -400,6 +400,10 @@ void plane_basis(const glm::dvec3& n, glm::dvec3& u, glm::dvec3& v) {
     v = glm::cross(n, u);
 }
 
+/// The u and v of a quad's corners, in winding order.
+constexpr std::array<glm::dvec2, 4> kQuadUV{glm::dvec2(0, 0), glm::dvec2(1, 0),
+                                            glm::dvec2(1, 1), glm::dvec2(0, 1)};
+
 } // namespace
 
 DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
@@ -410,6 +414,7 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
     const std::size_t ncorners = topo.corner_point.size();
     const CornerVec3 cs(prim, "Cs", nfaces, topo.points_referenced, ncorners);
     const CornerVec3 user_n(prim, "N", nfaces, topo.points_referenced, ncorners);
+    const CornerTexCoords st(prim, nfaces, topo.points_referenced, ncorners);
     const NormalTransform normals(prim);
     const Matrix4& m = prim.object_to_world;
 
@@ -539,7 +544,8 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
 
     DicedSurface out;
     allocate(prim, out, total_mp, total_vertices, total_triangles, cs.present());
-    SurfaceWriter writer{out, cs.present()};
+    SurfaceWriter writer{out, cs.present(), control.grids};
+    if (control.grids) out.resize_parametric(total_mp);
     TriangleCorners tri;
     QuadCorners quad;
     QuadDicer quad_dicer;
@@ -557,6 +563,7 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
                 quad.p[k] = world[p];
                 quad.normal[k] = un;
                 quad.color[k] = col;
+                if (st.present()) quad.st[k] = st.at(job.face, p, c, kQuadUV[k]);
             } else {
                 tri.p[k] = world[p];
                 tri.user_normal[k] = un;

@@ -314,6 +314,9 @@ DicedSurface dice_quadric(const Primitive& prim, const DiceControl& control) {
     face.geometry = &surface;
     face.color = cs.face(at, Matrix4(1.0), Matrix4(1.0));
     face.normal = n.face(at, Matrix4(1.0), Matrix4(1.0));
+    const TexCoordVars st(prim, counts);
+    face.s = st.s.face(at, Matrix4(1.0), Matrix4(1.0));
+    face.t = st.t.face(at, Matrix4(1.0), Matrix4(1.0));
     DicedSurface out;
     ParametricDicer(prim, control, out).dice(face);
     return out;

@@ -92,7 +92,8 @@ DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control)
     const bool with_colors = !mesh.corner_colors.empty();
     DicedSurface out;
     allocate(prim, out, total_mp, total_vertices, 2 * total_mp, with_colors);
-    SurfaceWriter writer{out, with_colors};
+    SurfaceWriter writer{out, with_colors, control.grids};
+    if (control.grids) out.resize_parametric(total_mp);
     QuadDicer dicer;
     QuadCorners q;
     for (int f = 0; f < nf; ++f) {

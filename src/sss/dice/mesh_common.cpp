@@ -78,6 +78,36 @@ CornerVec3::CornerVec3(const Primitive& prim, std::string_view name, std::size_t
     m_class = p->storage;
 }
 
+CornerTexCoords::CornerTexCoords(const Primitive& prim, std::size_t faces,
+                                 std::size_t points, std::size_t corners) {
+    const std::size_t needed_by_class[] = {1, faces, points, points, corners, corners};
+    const auto read = [&](const char* name, int width, Channel& channel) {
+        const Param* p = prim.params.find(name);
+        if (!p) return false;
+        const std::string quoted = std::string("\"") + name + "\"";
+        if (p->type == ParamType::String || p->element_size() != width)
+            fail(prim,
+                 quoted + " must have " + std::to_string(width) + " numbers per value");
+        const std::size_t needed = needed_by_class[static_cast<int>(p->storage)];
+        if (p->element_count() < needed)
+            fail(prim, quoted + " (" + param_class_name(p->storage) + ") has " +
+                           std::to_string(p->element_count()) + " values, " +
+                           std::to_string(needed) + " needed");
+        for (std::size_t i = 0; i < width * needed; ++i)
+            if (!std::isfinite(p->numbers[i]))
+                fail(prim, quoted + " has a value that is not finite");
+        channel = {p->numbers.data(), width, p->storage};
+        return true;
+    };
+    if (read("st", 2, m_s)) {
+        m_t = m_s;
+        ++m_t.data;
+        return;
+    }
+    read("s", 1, m_s);
+    read("t", 1, m_t);
+}
+
 /// Micropolygon edge length at a world point, checked.
 double edge_length(const Primitive& prim, const DiceControl& control, const glm::dvec3& p,
                    double shading_rate) {
@@ -134,6 +164,8 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
         return glm::dot(n, n) > 0.0 ? n : q.fallback_normal;
     };
     const std::size_t base = w.vertex;
+    const std::size_t first = w.mp;
+    std::size_t emitted = 0;
     for (std::size_t j = 0; j <= nv; ++j)
         for (std::size_t i = 0; i <= nu; ++i) {
             const double u = double(i) / du, v = double(j) / dv;
@@ -176,7 +208,18 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
             const glm::dvec3 col =
                 w.with_colors ? bilinear(q.color, u, v) : glm::dvec3(0.0);
             w.micropolygon(centre, normal_at(u, v), area, radius, col);
+            if (w.with_parametric) {
+                ++emitted;
+                const std::array<glm::dvec3, 4> st3{
+                    glm::dvec3(q.st[0], 0.0), glm::dvec3(q.st[1], 0.0),
+                    glm::dvec3(q.st[2], 0.0), glm::dvec3(q.st[3], 0.0)};
+                w.parametric(u, v, 1.0 / du, 1.0 / dv, glm::dvec2(bilinear(st3, u, v)),
+                             bilinear_dpdu(q.p, v), bilinear_dpdv(q.p, u));
+            }
         }
+    // A shading grid when no sub-quad collapsed.
+    if (w.with_parametric && emitted == nu * nv)
+        w.out.grids.push_back({first, int(nu), int(nv)});
 }
 
 } // namespace sss::detail

@@ -15,6 +15,7 @@
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -69,6 +70,50 @@ public:
 private:
     const double* m_data = nullptr;
     ParamClass m_class = ParamClass::Constant;
+};
+
+/// Texture coordinates per face corner: "st" (two numbers per value), else
+/// "s" and "t" (one each), looked up like CornerVec3; present() is false
+/// when neither is given, has_s() / has_t() tell which are.
+class CornerTexCoords {
+public:
+    CornerTexCoords(const Primitive& prim, std::size_t faces, std::size_t points,
+                    std::size_t corners);
+
+    bool present() const { return m_s.data || m_t.data; }
+    /// (s, t) at a corner; a missing coordinate is `fallback`'s.
+    glm::dvec2 at(std::size_t face, std::size_t point, std::size_t corner,
+                  const glm::dvec2& fallback) const {
+        return {m_s.data ? m_s.at(face, point, corner) : fallback.x,
+                m_t.data ? m_t.at(face, point, corner) : fallback.y};
+    }
+
+private:
+    struct Channel {
+        const double* data = nullptr;
+        int stride = 1;
+        ParamClass storage = ParamClass::Constant;
+        double at(std::size_t face, std::size_t point, std::size_t corner) const {
+            std::size_t i = 0;
+            switch (storage) {
+            case ParamClass::Constant:
+                break;
+            case ParamClass::Uniform:
+                i = face;
+                break;
+            case ParamClass::Varying:
+            case ParamClass::Vertex:
+                i = point;
+                break;
+            case ParamClass::FaceVarying:
+            case ParamClass::FaceVertex:
+                i = corner;
+                break;
+            }
+            return data[stride * i];
+        }
+    };
+    Channel m_s, m_t;
 };
 
 // ---------------------------------------------------------------------------
@@ -137,10 +182,12 @@ inline glm::vec3 to_float(const glm::dvec3& v) {
     return glm::vec3(v);
 }
 
-/// Fills a DicedSurface whose arrays were sized beforehand.
+/// Fills a DicedSurface whose arrays were sized beforehand (the parametric
+/// ones too when `with_parametric`).
 struct SurfaceWriter {
     DicedSurface& out;
     bool with_colors;
+    bool with_parametric = false;
     std::size_t mp = 0;
     std::size_t vertex = 0;
     std::size_t triangle = 0;
@@ -172,7 +219,23 @@ struct SurfaceWriter {
     [[noreturn]] static void overflow() {
         throw std::logic_error("dice_mesh: more micropolygons than counted");
     }
-    void finish() { out.resize(mp, vertex, triangle, with_colors); }
+    /// Parametric data of the last micropolygon.
+    void parametric(double u, double v, double du, double dv, const glm::dvec2& st,
+                    const glm::dvec3& dpdu, const glm::dvec3& dpdv) {
+        const std::size_t k = mp - 1;
+        out.u[k] = static_cast<float>(u);
+        out.v[k] = static_cast<float>(v);
+        out.du[k] = static_cast<float>(du);
+        out.dv[k] = static_cast<float>(dv);
+        out.s[k] = static_cast<float>(st.x);
+        out.t[k] = static_cast<float>(st.y);
+        out.dPdu[k] = to_float(dpdu);
+        out.dPdv[k] = to_float(dpdv);
+    }
+    void finish() {
+        out.resize(mp, vertex, triangle, with_colors);
+        if (with_parametric) out.resize_parametric(mp);
+    }
 };
 
 /// Sizes `out`; ValueError when its vertices cannot be addressed by 32-bit indices.
@@ -181,6 +244,14 @@ void allocate(const Primitive& prim, DicedSurface& out, std::size_t micropolygon
 
 inline glm::dvec3 bilinear(const std::array<glm::dvec3, 4>& c, double u, double v) {
     return (c[0] * (1.0 - u) + c[1] * u) * (1.0 - v) + (c[3] * (1.0 - u) + c[2] * u) * v;
+}
+
+/// d bilinear / du and d bilinear / dv (corners as bilinear()).
+inline glm::dvec3 bilinear_dpdu(const std::array<glm::dvec3, 4>& c, double v) {
+    return (c[1] - c[0]) * (1.0 - v) + (c[2] - c[3]) * v;
+}
+inline glm::dvec3 bilinear_dpdv(const std::array<glm::dvec3, 4>& c, double u) {
+    return (c[3] * (1.0 - u) + c[2] * u) - (c[0] * (1.0 - u) + c[1] * u);
 }
 
 constexpr std::array<glm::dvec3, 4> kZero4{glm::dvec3(0.0), glm::dvec3(0.0),
@@ -192,6 +263,9 @@ struct QuadCorners {
     std::array<glm::dvec3, 4> normal = kZero4; ///< interpolated, then normalised
     std::array<glm::dvec3, 4> color = kZero4;  ///< used when the writer has colours
     glm::dvec3 fallback_normal{0.0};           ///< where the interpolation vanishes
+    /// Texture coordinates at the corners (used with parametric data).
+    std::array<glm::dvec2, 4> st{glm::dvec2(0, 0), glm::dvec2(1, 0), glm::dvec2(1, 1),
+                                 glm::dvec2(0, 1)};
 };
 
 /// Dices a quad as a bilinear patch of nu x nv sub-quads (nu along corners

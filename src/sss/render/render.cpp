@@ -38,6 +38,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
 #include "sss/util/error.h"
@@ -698,8 +699,12 @@ std::vector<std::size_t> plan_surfaces(Renderer& job, bool any_shadows,
 
 /// Dices the primitives `to_dice` into triangles of about kEdgePixels, with
 /// unit vertex normals and per-triangle colours.
-void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice) {
+void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
+                   RenderReport& report) {
     const Scene& scene = *job.scene;
+    // Displacement shaders run while dicing, before the ray tracers are
+    // built: camera and shadow rays see the displaced surfaces.
+    Displacer displacer(scene, job.shaders, *job.resources, *job.services);
     // Edges of kEdgePixels whatever the ShadingRate: coarser than its
     // micropolygons through the coarsening, finer through a camera with
     // proportionally more pixels over the same screen window.
@@ -720,6 +725,7 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice) {
             dice_camera.xres = static_cast<int>(
                 std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
         }
+        control.displace = displacer.hook(to_dice[k]);
         requests[k] = {to_dice[k], control};
     }
     std::vector<DicedSurface> diced =
@@ -731,6 +737,7 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice) {
             job.surfaces[i].triangle_colors = triangle_colors(d);
         });
     for (std::size_t i : to_dice) job.surfaces[i].diced = std::move(diced[i]);
+    for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
 }
 
 /// The ray tracers: one when the camera and shadows see the same surfaces,
@@ -953,7 +960,7 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     bool separate_shadows = false;
     const std::vector<std::size_t> to_dice =
         plan_surfaces(job, any_shadows, &separate_shadows);
-    dice_surfaces(job, to_dice);
+    dice_surfaces(job, to_dice, report);
     build_tracers(job, to_dice, any_shadows, separate_shadows, report);
     job.services->set_occluders(job.occluders);
     report.setup_seconds = watch.seconds();

@@ -42,7 +42,7 @@ bool ignored(std::string_view name) {
 /// Requests understood but not supported: one warning each.
 bool unsupported(std::string_view name) {
     static const NameSet names = name_set(
-        "Displacement Atmosphere Interior Exterior Deformation Detail DetailRange "
+        "Atmosphere Interior Exterior Deformation Detail DetailRange "
         "Points Curves Blobby NuPatch TrimCurve HierarchicalSubdivisionMesh "
         "ClippingPlane IfBegin ElseIf Else IfEnd MakeTexture MakeShadow MakeBump "
         "MakeLatLongEnvironment MakeCubeFaceEnvironment MakeBrickMap System Resource "
@@ -165,6 +165,7 @@ const Reader::HandlerTable& Reader::handlers() {
         {"ShadingRate", &Reader::do_shading_rate},
         {"ShadingInterpolation", &Reader::do_shading_interpolation},
         {"Surface", &Reader::do_surface},
+        {"Displacement", &Reader::do_displacement},
         {"LightSource", &Reader::do_light_source},
         {"AreaLightSource", &Reader::do_light_source},
         {"Illuminate", &Reader::do_illuminate},

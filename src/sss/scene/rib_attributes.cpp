@@ -125,6 +125,13 @@ void Reader::do_surface(const Statement& s) {
     attrs_mut().surface = make_shader(s, name, std::move(params));
 }
 
+void Reader::do_displacement(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "shader name");
+    ParamList params = take_params(s, i, true);
+    attrs_mut().displacement = make_shader(s, name, std::move(params));
+}
+
 void Reader::do_light_source(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "shader name");

@@ -161,6 +161,7 @@ private:
     void do_shading_rate(const Statement& s);
     void do_shading_interpolation(const Statement& s);
     void do_surface(const Statement& s);
+    void do_displacement(const Statement& s);
     void do_light_source(const Statement& s);
     void do_illuminate(const Statement& s);
     void do_basis(const Statement& s);

@@ -65,6 +65,8 @@ bool program_uses(const Program& program, std::string_view op) {
 bool SceneShaders::uses(std::string_view op) const {
     for (const auto& s : surfaces)
         if (program_uses(s->program(), op)) return true;
+    for (const auto& s : displacements)
+        if (program_uses(s->program(), op)) return true;
     for (const auto& l : lights)
         if (program_uses(l->program(), op)) return true;
     return false;
@@ -85,9 +87,11 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
     }
 
     std::map<const ShaderRef*, const ShaderInstance*> by_ref;
+    std::map<const ShaderRef*, const ShaderInstance*> displacement_by_ref;
     std::map<const Attributes*, std::size_t> lights_by_attributes;
     const ShaderInstance* fallback = nullptr;
     out.surface_of.resize(scene.primitives.size(), nullptr);
+    out.displacement_of.resize(scene.primitives.size(), nullptr);
     out.lights_of.resize(scene.primitives.size());
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const Primitive& prim = scene.primitives[i];
@@ -113,6 +117,20 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
             out.surface_of[i] = out.surfaces.back().get();
             by_ref.emplace(ref, out.surface_of[i]);
         }
+        if (attr.displacement) {
+            const ShaderRef* d = &*attr.displacement;
+            if (auto it = displacement_by_ref.find(d); it != displacement_by_ref.end()) {
+                out.displacement_of[i] = it->second;
+            } else {
+                const std::string where = call_where(*d, "Displacement");
+                auto program = library.load(d->name, ShaderKind::Displacement, where);
+                out.displacements.push_back(std::make_unique<ShaderInstance>(
+                    program, expand_strings(d->params, frame, where), d->shader_to_world,
+                    where, &out.warnings));
+                out.displacement_of[i] = out.displacements.back().get();
+                displacement_by_ref.emplace(d, out.displacement_of[i]);
+            }
+        }
         for (int l : attr.lights_on)
             if (l >= 0 && static_cast<std::size_t>(l) < out.lights.size())
                 out.lights_of[i].push_back(out.lights[static_cast<std::size_t>(l)].get());
@@ -134,6 +152,7 @@ std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
             }
     };
     for (const auto& s : shaders.surfaces) add(*s);
+    for (const auto& s : shaders.displacements) add(*s);
     for (const auto& l : shaders.lights) add(*l);
     return files;
 }
