@@ -762,3 +762,70 @@ TEST(DiceMeshSubdivision, MalformedMeshesThrowNamingTheSource) {
 }
 
 } // namespace
+
+// ---------------------------------------------------------------------------
+// Grids and displacement
+
+TEST(DiceMeshGrids, QuadsAreGridsTrianglesAreNot) {
+    sss::DiceControl c = spacing(0.1);
+    c.grids = true;
+    // A quad and a triangle in one mesh.
+    auto prim = make_prim(sss::PrimitiveKind::PointsPolygons,
+                          {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}});
+    prim.nverts = {4, 3};
+    prim.verts = {0, 1, 2, 3, 1, 4, 2};
+    prim.params.items.push_back(make_param("st", {0, 0, 2, 0, 2, 2, 0, 2, 4, 0},
+                                           sss::ParamType::Float,
+                                           sss::ParamClass::Vertex));
+    prim.params.items.back().array_size = 2;
+    const auto d = sss::dice_primitive(prim, c);
+    expect_well_formed(d);
+    ASSERT_EQ(d.grids.size(), 1u);
+    const sss::DicedGrid& g = d.grids[0];
+    EXPECT_EQ(g.first, 0u);
+    EXPECT_EQ(g.nu, 10);
+    EXPECT_EQ(g.nv, 10);
+    ASSERT_EQ(d.u.size(), d.size());
+    for (std::size_t k = 0; k < g.size(); ++k) {
+        EXPECT_NEAR(d.s[k], 2.0f * d.u[k], 1e-5f);
+        EXPECT_NEAR(d.t[k], 2.0f * d.v[k], 1e-5f);
+        EXPECT_NEAR(d.du[k], 0.1f, 1e-6f);
+        EXPECT_NEAR(d.dPdu[k].x, 1.0f, 1e-6f);
+        EXPECT_NEAR(d.dPdv[k].y, 1.0f, 1e-6f);
+    }
+    EXPECT_GT(d.size(), g.size()); // the triangle's points are in no grid
+}
+
+TEST(DiceMeshGrids, DisplacementMovesQuadsTrianglesAndSubdivisionSurfaces) {
+    sss::DiceControl c = spacing(0.1);
+    c.displace = [](sss::DisplaceGrid& g) {
+        for (std::size_t k = 0; k < g.size(); ++k) g.P[k] += 0.25f * g.N[k];
+    };
+    auto prim = make_prim(sss::PrimitiveKind::PointsPolygons,
+                          {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}});
+    prim.nverts = {4, 3};
+    prim.verts = {0, 1, 2, 3, 1, 4, 2};
+    const auto d = sss::dice_primitive(prim, c);
+    expect_well_formed(d);
+    for (const glm::vec3& v : d.vertices) EXPECT_NEAR(v.z, 0.25f, 1e-6f);
+    for (const glm::vec3& p : d.centers) EXPECT_NEAR(p.z, 0.25f, 1e-6f);
+    for (const glm::vec3& n : d.normals) EXPECT_NEAR(n.z, 1.0f, 1e-6f);
+    EXPECT_NEAR(total_area(d), 1.5, 1e-5);
+
+    // A cube's limit surface grows: more area.
+    auto cube = make_prim(sss::PrimitiveKind::SubdivisionMesh, {{-1, -1, 1},
+                                                                {1, -1, 1},
+                                                                {-1, 1, 1},
+                                                                {1, 1, 1},
+                                                                {-1, 1, -1},
+                                                                {1, 1, -1},
+                                                                {-1, -1, -1},
+                                                                {1, -1, -1}});
+    cube.type = "catmull-clark";
+    cube.nverts = {4, 4, 4, 4, 4, 4};
+    cube.verts = {0, 1, 3, 2, 2, 3, 5, 4, 4, 5, 7, 6, 6, 7, 1, 0, 1, 7, 5, 3, 6, 0, 2, 4};
+    const double plain = total_area(sss::dice_primitive(cube, spacing(0.1)));
+    const auto grown = sss::dice_primitive(cube, c);
+    expect_well_formed(grown);
+    EXPECT_GT(total_area(grown), 1.2 * plain);
+}

@@ -488,3 +488,36 @@ TEST(RenderOutput, FilesReadAndWrittenAreKnownBeforeRendering) {
     EXPECT_EQ(sss::render_files(scene_of(""), {}).outputs,
               std::vector<std::string>{"test.exr"});
 }
+
+TEST(RenderDisplacement, DisplacedSphereHasALargerSilhouette) {
+    sss::test::TempDir dir;
+    sss::test::write_text(dir.file("grow.sl"), "displacement grow(float amount = 0.1) {\n"
+                                               "    P += amount * normalize(N);\n"
+                                               "    N = calculatenormal(P);\n}\n");
+    const auto covered = [&](const std::string& displacement) {
+        const std::string path = dir.file("scene.rib");
+        const std::string text =
+            rib_of(kFrontLight + displacement + "Surface \"matte\"\nSphere 1 -1 1 360\n");
+        sss::test::write_text(path, text);
+        sss::RenderReport report;
+        const sss::Image img = render(sss::parse_rib(text, path), &report);
+        for (const std::string& w : report.warnings) ADD_FAILURE() << w;
+        int n = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) n += channel(img, x, y, "A") > 0.5f;
+        return n;
+    };
+    // The silhouette of a sphere of radius r, 5 units away, in pixels
+    // (fov 30 across the 48 pixels of the image's height).
+    const auto disc = [](double r) {
+        const double half =
+            std::tan(std::asin(r / 5.0)) / std::tan(15.0 * M_PI / 180.0) * 24;
+        return M_PI * half * half;
+    };
+    const int plain = covered("");
+    const int grown = covered("Attribute \"displacementbound\" \"sphere\" [0.1]\n"
+                              "Displacement \"grow\"\n");
+    EXPECT_NEAR(plain, disc(1.0), 0.03 * disc(1.0));
+    EXPECT_NEAR(grown, disc(1.1), 0.03 * disc(1.1));
+    EXPECT_GT(grown, plain + 100);
+}

@@ -545,6 +545,10 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
     DicedSurface out;
     allocate(prim, out, total_mp, total_vertices, total_triangles, cs.present());
     SurfaceWriter writer{out, cs.present(), control.grids};
+    if (control.displace) {
+        writer.displace = &control.displace;
+        writer.prim = &prim;
+    }
     if (control.grids) out.resize_parametric(total_mp);
     TriangleCorners tri;
     QuadCorners quad;
@@ -570,6 +574,8 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
                 tri.color[k] = col;
             }
         }
+        const std::size_t vertex0 = writer.vertex, mp0 = writer.mp,
+                          triangle0 = writer.triangle;
         if (job.corners == 4) {
             quad.fallback_normal = n;
             quad_dicer.dice(quad, job.pieces[0], job.pieces[1], writer);
@@ -582,6 +588,8 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
         } else {
             dice_triangle(tri, job.pieces[0], n, user_n.present(), writer);
         }
+        if (writer.displace && job.corners != 4)
+            displace_triangles(writer, vertex0, mp0, triangle0);
     }
     writer.finish();
     return out;

@@ -93,6 +93,10 @@ DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control)
     DicedSurface out;
     allocate(prim, out, total_mp, total_vertices, 2 * total_mp, with_colors);
     SurfaceWriter writer{out, with_colors, control.grids};
+    if (control.displace) {
+        writer.displace = &control.displace;
+        writer.prim = &prim;
+    }
     if (control.grids) out.resize_parametric(total_mp);
     QuadDicer dicer;
     QuadCorners q;

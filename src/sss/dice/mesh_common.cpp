@@ -166,6 +166,7 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
     const std::size_t base = w.vertex;
     const std::size_t first = w.mp;
     std::size_t emitted = 0;
+    m_cells.clear();
     for (std::size_t j = 0; j <= nv; ++j)
         for (std::size_t i = 0; i <= nu; ++i) {
             const double u = double(i) / du, v = double(j) / dv;
@@ -208,6 +209,7 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
             const glm::dvec3 col =
                 w.with_colors ? bilinear(q.color, u, v) : glm::dvec3(0.0);
             w.micropolygon(centre, normal_at(u, v), area, radius, col);
+            if (w.displace) m_cells.push_back(j * nu + i);
             if (w.with_parametric) {
                 ++emitted;
                 const std::array<glm::dvec3, 4> st3{
@@ -220,6 +222,145 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
     // A shading grid when no sub-quad collapsed.
     if (w.with_parametric && emitted == nu * nv)
         w.out.grids.push_back({first, int(nu), int(nv)});
+    if (w.displace) displace(q, nu, nv, base, first, w);
+}
+
+void call_displace(SurfaceWriter& w, DisplaceGrid& g) {
+    const std::size_t n = g.size();
+    thread_local std::vector<glm::vec3> given_p, given_n;
+    given_p = g.P;
+    given_n = g.N;
+    g.primitive = w.prim;
+    g.sequence = w.sequence++;
+    (*w.displace)(g);
+    if (g.P.size() != n || g.N.size() != n)
+        fail(*w.prim, "displacement returned a wrong number of points");
+    for (std::size_t k = 0; k < n; ++k) {
+        const glm::dvec3 p(g.P[k]);
+        if (!finite(p)) g.P[k] = given_p[k];
+        const glm::dvec3 nn(g.N[k]);
+        const double len = glm::length(nn);
+        g.N[k] = len > 0.0 && std::isfinite(len) ? glm::vec3(nn / len) : given_n[k];
+    }
+}
+
+void QuadDicer::displace(const QuadCorners& q, std::size_t nu, std::size_t nv,
+                         std::size_t base, std::size_t first, SurfaceWriter& w) {
+    const double fu = static_cast<double>(nu), fv = static_cast<double>(nv);
+    const std::array<glm::dvec3, 4> st3{
+        glm::dvec3(q.st[0], 0.0), glm::dvec3(q.st[1], 0.0), glm::dvec3(q.st[2], 0.0),
+        glm::dvec3(q.st[3], 0.0)};
+    // One grid: point (i, j) at (u, v) = ((i + offset) / fu, (j + offset) / fv).
+    const auto fill = [&](std::size_t gu, std::size_t gv, double offset) {
+        m_disp.resize(gu * gv);
+        m_disp.grid = true;
+        m_disp.nu = static_cast<int>(gu);
+        m_disp.nv = static_cast<int>(gv);
+        for (std::size_t j = 0; j < gv; ++j)
+            for (std::size_t i = 0; i < gu; ++i) {
+                const std::size_t k = j * gu + i;
+                const double u = (double(i) + offset) / fu, v = (double(j) + offset) / fv;
+                m_disp.u[k] = static_cast<float>(u);
+                m_disp.v[k] = static_cast<float>(v);
+                m_disp.du[k] = static_cast<float>(1.0 / fu);
+                m_disp.dv[k] = static_cast<float>(1.0 / fv);
+                const glm::dvec3 st = bilinear(st3, u, v);
+                m_disp.s[k] = static_cast<float>(st.x);
+                m_disp.t[k] = static_cast<float>(st.y);
+                m_disp.dPdu[k] = to_float(bilinear_dpdu(q.p, v));
+                m_disp.dPdv[k] = to_float(bilinear_dpdv(q.p, u));
+            }
+    };
+    // The vertices (as written), displaced.
+    fill(nu + 1, nv + 1, 0.0);
+    for (std::size_t k = 0; k < (nu + 1) * (nv + 1); ++k) {
+        m_disp.P[k] = w.out.vertices[base + k];
+        m_disp.N[k] = w.out.vertex_normals[base + k];
+        m_disp.Ng[k] = m_disp.N[k];
+    }
+    call_displace(w, m_disp);
+    for (std::size_t k = 0; k < (nu + 1) * (nv + 1); ++k) {
+        w.out.vertices[base + k] = m_disp.P[k];
+        w.out.vertex_normals[base + k] = m_disp.N[k];
+        m_grid[k] = glm::dvec3(m_disp.P[k]);
+    }
+    // The cell centres, displaced: the micropolygons' centres and normals.
+    fill(nu, nv, 0.5);
+    for (std::size_t j = 0; j < nv; ++j)
+        for (std::size_t i = 0; i < nu; ++i) {
+            const std::size_t k = j * nu + i;
+            const double u = (double(i) + 0.5) / fu, v = (double(j) + 0.5) / fv;
+            m_disp.P[k] = to_float(bilinear(q.p, u, v));
+            // The undisplaced normal: the interpolated one, else the cell's.
+            glm::dvec3 n = NormalTransform::safe_normalize(bilinear(q.normal, u, v));
+            if (!(glm::dot(n, n) > 0.0)) n = q.fallback_normal;
+            m_disp.N[k] = to_float(n);
+            m_disp.Ng[k] = m_disp.N[k];
+        }
+    call_displace(w, m_disp);
+    for (std::size_t m = first; m < w.mp; ++m) {
+        const std::size_t c = m_cells[m - first];
+        const std::size_t i = c % nu, j = c / nu;
+        const std::size_t k00 = j * (nu + 1) + i, k10 = k00 + 1;
+        const std::size_t k01 = k00 + nu + 1, k11 = k01 + 1;
+        const glm::dvec3 &p00 = m_grid[k00], &p10 = m_grid[k10];
+        const glm::dvec3 &p11 = m_grid[k11], &p01 = m_grid[k01];
+        const glm::dvec3 centre(m_disp.P[c]);
+        const double area = 0.5 * glm::length(glm::cross(p10 - p00, p11 - p00)) +
+                            0.5 * glm::length(glm::cross(p11 - p00, p01 - p00));
+        w.out.centers[m] = m_disp.P[c];
+        w.out.normals[m] = m_disp.N[c];
+        w.out.areas[m] = static_cast<float>(area);
+        w.out.radii[m] = static_cast<float>(std::sqrt(std::max(
+            {glm::dot(p00 - centre, p00 - centre), glm::dot(p10 - centre, p10 - centre),
+             glm::dot(p11 - centre, p11 - centre),
+             glm::dot(p01 - centre, p01 - centre)})));
+    }
+}
+
+void displace_triangles(SurfaceWriter& w, std::size_t vertex0, std::size_t mp0,
+                        std::size_t triangle0) {
+    DicedSurface& out = w.out;
+    const std::size_t n = w.vertex - vertex0;
+    if (n == 0) return;
+    thread_local DisplaceGrid g;
+    g.resize(n);
+    g.grid = false;
+    g.nu = static_cast<int>(n);
+    g.nv = 1;
+    for (std::size_t k = 0; k < n; ++k) {
+        g.P[k] = out.vertices[vertex0 + k];
+        g.N[k] = out.vertex_normals[vertex0 + k];
+        g.Ng[k] = g.N[k];
+        g.u[k] = g.v[k] = g.du[k] = g.dv[k] = g.s[k] = g.t[k] = 0.0f;
+        g.dPdu[k] = g.dPdv[k] = glm::vec3(0.0f);
+    }
+    call_displace(w, g);
+    thread_local std::vector<glm::dvec3> normal_sum;
+    normal_sum.assign(n, glm::dvec3(0.0));
+    for (std::size_t k = 0; k < n; ++k) out.vertices[vertex0 + k] = g.P[k];
+    for (std::size_t t = triangle0; t < w.triangle; ++t) {
+        const uint32_t* v = &out.triangles[3 * t];
+        const glm::dvec3 a(out.vertices[v[0]]), b(out.vertices[v[1]]),
+            c(out.vertices[v[2]]);
+        // Oriented like the undisplaced normal of the triangle's micropolygon.
+        glm::dvec3 cross = glm::cross(b - a, c - a);
+        const std::size_t m = mp0 + (t - triangle0);
+        if (glm::dot(cross, glm::dvec3(out.normals[m])) < 0.0) cross = -cross;
+        for (int k = 0; k < 3; ++k) normal_sum[v[k] - vertex0] += cross;
+        const glm::dvec3 centre = (a + b + c) * (1.0 / 3.0);
+        const double len = glm::length(cross);
+        out.centers[m] = to_float(centre);
+        if (len > 0.0 && std::isfinite(len)) out.normals[m] = to_float(cross / len);
+        out.areas[m] = static_cast<float>(0.5 * len);
+        out.radii[m] = static_cast<float>(std::sqrt(
+            std::max({glm::dot(a - centre, a - centre), glm::dot(b - centre, b - centre),
+                      glm::dot(c - centre, c - centre)})));
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        const glm::dvec3 s = NormalTransform::safe_normalize(normal_sum[k]);
+        if (glm::dot(s, s) > 0.0) out.vertex_normals[vertex0 + k] = to_float(s);
+    }
 }
 
 } // namespace sss::detail

@@ -188,6 +188,10 @@ struct SurfaceWriter {
     DicedSurface& out;
     bool with_colors;
     bool with_parametric = false;
+    /// Displacement (DiceControl::displace), when set, of `prim`.
+    const DisplaceHook* displace = nullptr;
+    const Primitive* prim = nullptr;
+    uint64_t sequence = 0; ///< hook calls so far
     std::size_t mp = 0;
     std::size_t vertex = 0;
     std::size_t triangle = 0;
@@ -276,7 +280,26 @@ public:
     void dice(const QuadCorners& q, std::size_t nu, std::size_t nv, SurfaceWriter& w);
 
 private:
+    /// With displacement: moves the grid just written (vertices from
+    /// `base`, micropolygons from `first`, cell of each in m_cells).
+    void displace(const QuadCorners& q, std::size_t nu, std::size_t nv, std::size_t base,
+                  std::size_t first, SurfaceWriter& w);
+
     std::vector<glm::dvec3> m_grid;
+    std::vector<std::size_t> m_cells;
+    DisplaceGrid m_disp;
 };
+
+/// Calls the writer's displacement hook on g; normals come back unit (the
+/// ones given where the shader left none), positions finite.
+void call_displace(SurfaceWriter& w, DisplaceGrid& g);
+
+/// With displacement: moves the vertices written from `vertex0` on as
+/// unrelated points (triangulated faces have no grid), then gives the
+/// micropolygons from `mp0` on (one per triangle from `triangle0` on) the
+/// centroid, area, radius and normal of their displaced triangle, and the
+/// vertices the area-weighted normals of their displaced triangles.
+void displace_triangles(SurfaceWriter& w, std::size_t vertex0, std::size_t mp0,
+                        std::size_t triangle0);
 
 } // namespace sss::detail
