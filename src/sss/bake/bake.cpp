@@ -489,9 +489,13 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         batch.size = n;
         batch.layout = BatchLayout::Points;
         if (ch.grid) {
-            batch.layout = BatchLayout::Grid;
-            batch.nu = ch.grid->nu;
-            batch.nv = ch.grid->nv;
+            // A grid one micropolygon wide has no differences across it: as
+            // unrelated points, Du(P) and Dv(P) are dPdu and dPdv instead of 0.
+            if (ch.grid->nu > 1 && ch.grid->nv > 1) {
+                batch.layout = BatchLayout::Grid;
+                batch.nu = ch.grid->nu;
+                batch.nv = ch.grid->nv;
+            }
             fill_parametric(d, ch.begin, glm::dmat3(to_camera), batch);
         }
         batch.primitive = &prim;

@@ -80,8 +80,10 @@ void Displacer::displace(std::size_t primitive, DisplaceGrid& grid) {
 
     ShadingBatch batch;
     batch.size = n;
+    // A grid one point wide has no differences across it: as unrelated
+    // points its derivatives come from dPdu and dPdv instead of being 0.
     batch.layout =
-        grid.grid && grid.nu > 0 && grid.nv > 0 ? BatchLayout::Grid : BatchLayout::Points;
+        grid.grid && grid.nu > 1 && grid.nv > 1 ? BatchLayout::Grid : BatchLayout::Points;
     batch.nu = grid.nu;
     batch.nv = grid.nv;
     batch.primitive = &prim;
