@@ -549,39 +549,18 @@ struct Tracer {
         return true;
     }
 
-    /// Fraction of `samples` rays from `from` (camera space) that reach
-    /// `to` (or go to infinity along `dir` when `infinite`) unoccluded.
-    float visible(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
-                  bool infinite, int samples, float cone) const {
-        if (!rt) return 1.0f;
-        const glm::vec3 from = xform_point(to_world, from_c);
-        glm::vec3 dir;
-        float len;
-        if (infinite) {
-            dir = xform_vector(to_world, to_or_dir_c);
-            len = std::numeric_limits<float>::infinity();
-        } else {
-            dir = xform_point(to_world, to_or_dir_c) - from;
-            len = glm::length(dir);
-        }
-        const float dl = glm::length(dir);
-        if (!(dl > 0.0f)) return 1.0f;
-        dir /= dl;
-        glm::vec3 n = normal(i);
-        if (glm::dot(n, dir) < 0.0f) n = -n;
-        const glm::vec3 origin = from + n * offset;
-        if (!infinite) { // as the C++ lights: from the offset origin to the target
-            dir = xform_point(to_world, to_or_dir_c) - origin;
-            len = glm::length(dir);
-            if (!(len > 0.0f)) return 1.0f;
-            dir /= len;
-        }
-        const float tfar = infinite ? len : len * (1.0f - 1e-4f);
+    /// Appends the rays that visible() traces for point i to `out` (none
+    /// when nothing needs tracing: then the point is visible).
+    void rays(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
+              bool infinite, int samples, float cone, std::vector<ShadowRay>& out) const {
+        ShadowRay centre;
+        if (!single_ray(i, from_c, to_or_dir_c, infinite, centre)) return;
         if (samples <= 1 || cone <= 0.0f) {
-            ShadowRay r{origin, dir, 0.0f, tfar};
-            return rt->occluded(r) ? 0.0f : 1.0f;
+            out.push_back(centre);
+            return;
         }
         // Stratified directions in the cone: equal-area rings, golden-angle turns.
+        const glm::vec3 dir = centre.direction;
         glm::vec3 t1, t2;
         {
             const float sign = std::copysign(1.0f, dir.z);
@@ -593,8 +572,6 @@ struct Tracer {
         const uint64_t h = point_hash(seed, i, op, call);
         const double rotation = unit_double(h);
         const double cos_max = std::cos(0.5 * cone);
-        std::vector<ShadowRay> rays(samples);
-        std::vector<uint8_t> hits(samples);
         for (int k = 0; k < samples; ++k) {
             const double u = (k + unit_double(splitmix64(h + 1 + k))) / samples;
             const double c = 1.0 - (1.0 - cos_max) * u;
@@ -606,12 +583,22 @@ struct Tracer {
                 glm::normalize(glm::vec3(static_cast<float>(s * std::cos(phi))) * t1 +
                                glm::vec3(static_cast<float>(s * std::sin(phi))) * t2 +
                                glm::vec3(static_cast<float>(c)) * dir);
-            rays[k] = ShadowRay{origin, d, 0.0f, tfar};
+            out.push_back(ShadowRay{centre.origin, d, 0.0f, centre.tfar});
         }
-        rt->occluded(rays.data(), rays.size(), hits.data());
+    }
+
+    /// Fraction of `samples` rays from `from` (camera space) that reach
+    /// `to` (or go to infinity along `dir` when `infinite`) unoccluded.
+    float visible(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
+                  bool infinite, int samples, float cone) const {
+        std::vector<ShadowRay> list;
+        rays(i, from_c, to_or_dir_c, infinite, samples, cone, list);
+        if (list.empty()) return 1.0f;
+        std::vector<uint8_t> hits(list.size());
+        rt->occluded(list.data(), list.size(), hits.data());
         int open = 0;
         for (uint8_t hit : hits) open += hit ? 0 : 1;
-        return static_cast<float>(open) / samples;
+        return static_cast<float>(open) / static_cast<float>(list.size());
     }
 };
 
@@ -631,35 +618,41 @@ void op_shadow(Frame& f, const BoundOp& b) {
     Tracer t(f, b, o);
     const int* g = f.bound->globals;
     const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
-    if (d.varying && (o.samples <= 1 || o.cone <= 0.0f) &&
-        (f.is_light || f.current_light >= 0)) {
-        // One ray per point: all the batch's rays in one stream (Embree
-        // packets), as the baker's C++ lights traced them.
-        std::vector<ShadowRay> rays;
-        std::vector<std::size_t> index;
-        rays.reserve(f.active);
-        index.reserve(f.active);
+    if (d.varying && (f.is_light || f.current_light >= 0)) {
+        // Every point's rays in one stream (Embree packets), as the baker's
+        // C++ lights traced them.
+        std::vector<ShadowRay> list;
+        std::vector<std::size_t> first(f.n + 1, 0);
+        list.reserve(f.active * static_cast<std::size_t>(std::max(o.samples, 1)));
+        std::vector<std::size_t> points;
+        points.reserve(f.active);
         f.each(true, [&](std::size_t i) {
-            std::fill(d.at(i), d.at(i) + nc, 0.0f);
             const glm::vec3 p = ld3(f.ptr(b, 3, i));
-            ShadowRay r;
-            bool traced = false;
+            const std::size_t before = list.size();
             if (f.is_light) {
                 const glm::vec3 L = Ls ? ld3(Ls->at(i)) : f.light_L[i];
-                traced = f.solar ? t.single_ray(i, p, -L, true, r)
-                                 : t.single_ray(i, p, p - L, false, r);
+                if (f.solar)
+                    t.rays(i, p, -L, true, o.samples, o.cone, list);
+                else
+                    t.rays(i, p, p - L, false, o.samples, o.cone, list);
             } else if (Ls) {
-                traced = t.single_ray(i, p, p + ld3(Ls->at(i)), false, r);
+                t.rays(i, p, p + ld3(Ls->at(i)), false, o.samples, o.cone, list);
             }
-            if (traced) {
-                rays.push_back(r);
-                index.push_back(i);
-            }
+            first[i] = before;
+            first[i + 1] = list.size();
+            points.push_back(i);
         });
-        std::vector<uint8_t> hits(rays.size());
-        if (!rays.empty()) t.rt->occluded(rays.data(), rays.size(), hits.data());
-        for (std::size_t k = 0; k < rays.size(); ++k)
-            if (hits[k]) std::fill(d.at(index[k]), d.at(index[k]) + nc, 1.0f);
+        std::vector<uint8_t> hits(list.size());
+        if (!list.empty()) t.rt->occluded(list.data(), list.size(), hits.data());
+        for (std::size_t i : points) {
+            const std::size_t count = first[i + 1] - first[i];
+            std::size_t blocked = 0;
+            for (std::size_t k = first[i]; k < first[i + 1]; ++k) blocked += hits[k];
+            const float occluded =
+                count > 0 ? static_cast<float>(blocked) / static_cast<float>(count)
+                          : 0.0f;
+            std::fill(d.at(i), d.at(i) + nc, occluded);
+        }
         return;
     }
     f.each(d.varying, [&](std::size_t i) {
