@@ -263,6 +263,8 @@ public:
 
     /// Points of the last execute() whose results held NaN or infinity (and
     /// were written as 0).
+    /// Shadow and occlusion rays this context has traced (all batches).
+    uint64_t rays_traced() const;
     std::size_t nonfinite_points() const;
     /// "N points of shader X at file:line gave NaN or infinity; written as 0"
     /// for the last execute(), or "" when there were none.

@@ -38,6 +38,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/shading/bake3d_file.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
 #include "sss/util/error.h"
@@ -238,13 +239,21 @@ public:
     }
     std::optional<int> frame() const override { return m_frame; }
     void set_occluders(const RayTracer* tracer) { m_occluders = tracer; }
+    /// bake3d in a render (a bake RIB rendered): the records go to the
+    /// current tile's list, so the files come out in tile order.
+    void bake3d(Bake3dRecord&& record) override {
+        if (s_sink) s_sink->push_back(std::move(record));
+    }
+    static void set_sink(std::vector<Bake3dRecord>* sink) { s_sink = sink; }
 
 private:
     const Scene& m_scene;
     std::optional<int> m_frame;
     const RayTracer* m_occluders = nullptr;
     std::mutex m_mutex;
+    static thread_local std::vector<Bake3dRecord>* s_sink;
 };
+thread_local std::vector<Bake3dRecord>* RenderServices::s_sink = nullptr;
 
 /// Everything the pixel loop reads (immutable once built).
 struct Renderer {
@@ -269,8 +278,10 @@ struct Renderer {
     glm::dmat3 normal_to_camera{1.0}; ///< inverse transpose of world->camera
     glm::dvec3 camera_x{1, 0, 0}, camera_y{0, 1, 0}; ///< camera axes in world space
     std::atomic<uint64_t> camera_rays{0};
+    std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
     std::atomic<uint64_t> nan_points{0};
+    std::vector<std::vector<Bake3dRecord>> tile_bakes; ///< bake3d records per tile
 };
 
 /// One camera sample of a tile, while its ray goes through the layers.
@@ -790,8 +801,11 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
     std::atomic<std::size_t> tiles_done{0};
     tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
         [&] { return std::make_unique<ShadingContext>(*job.resources, *job.services); });
+    job.tile_bakes.assign(tiles, {});
     tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
         ShadingContext& context = *contexts.local();
+        const uint64_t rays_before = context.rays_traced();
+        RenderServices::set_sink(&job.tile_bakes[t]);
         const int x0 = grid.x0(t);
         const int y0 = grid.y0(t);
         const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
@@ -872,6 +886,8 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                 }
             }
         }
+        RenderServices::set_sink(nullptr);
+        job.shadow_rays += context.rays_traced() - rays_before;
         job.camera_rays += camera_count;
         job.bad_samples += bad_count;
         if (options.progress) options.progress->update(++tiles_done, tiles);
@@ -929,6 +945,7 @@ Image resolve_pixels(const Renderer& job, const TileGrid& grid,
 /// The ray counts, and warnings about samples that went wrong numerically.
 void report_rays(const Renderer& job, RenderReport& report) {
     report.camera_rays = job.camera_rays.load();
+    report.shadow_rays = job.shadow_rays.load();
     if (job.bad_samples.load() > 0)
         report.warnings.push_back(std::to_string(job.bad_samples.load()) +
                                   " samples had non-finite values and were left black");
@@ -936,6 +953,21 @@ void report_rays(const Renderer& job, RenderReport& report) {
         report.warnings.push_back(
             std::to_string(job.nan_points.load()) +
             " shading points gave NaN or infinite values, written as 0");
+}
+
+/// The point clouds bake3d calls made during the render (a bake RIB
+/// rendered bakes as in PRMan: the shaded hit points), in tile order.
+void write_render_bakes(Renderer& job, const Scene& scene, RenderReport& report) {
+    std::vector<Bake3dRecord> records;
+    for (auto& tile : job.tile_bakes)
+        for (Bake3dRecord& r : tile) records.push_back(std::move(r));
+    job.tile_bakes.clear();
+    if (records.empty()) return;
+    for (const Bake3dRecord& r : records)
+        if (r.file.empty())
+            throw ValueError(scene.path + ": bake3d was called without a file name");
+    report.baked_files =
+        write_bake3d_files(records, scene.options.display_channels, {}, &job.camera);
 }
 
 } // namespace
@@ -967,6 +999,7 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
+    write_render_bakes(job, scene, report);
     return image;
 }
 

@@ -1086,6 +1086,10 @@ std::size_t ShadingContext::nonfinite_points() const {
     return m_impl->nonfinite;
 }
 
+uint64_t ShadingContext::rays_traced() const {
+    return m_impl->rays;
+}
+
 std::string ShadingContext::nonfinite_message() const {
     if (m_impl->nonfinite == 0) return "";
     return std::to_string(m_impl->nonfinite) + " points of shader '" +

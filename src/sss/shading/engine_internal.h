@@ -281,6 +281,8 @@ struct ShadingContext::Impl {
 
     // Results of the last execute.
     std::size_t nonfinite = 0;
+    /// Shadow and occlusion rays traced, over every execute (never reset).
+    mutable uint64_t rays = 0;
     std::string last_shader, last_where;
 
     /// Prepares `frame` for `instance` over n points (storage, constants,

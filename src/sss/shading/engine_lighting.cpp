@@ -596,6 +596,7 @@ struct Tracer {
         if (list.empty()) return 1.0f;
         std::vector<uint8_t> hits(list.size());
         rt->occluded(list.data(), list.size(), hits.data());
+        f.ctx->rays += list.size();
         int open = 0;
         for (uint8_t hit : hits) open += hit ? 0 : 1;
         return static_cast<float>(open) / static_cast<float>(list.size());
@@ -644,6 +645,7 @@ void op_shadow(Frame& f, const BoundOp& b) {
         });
         std::vector<uint8_t> hits(list.size());
         if (!list.empty()) t.rt->occluded(list.data(), list.size(), hits.data());
+        f.ctx->rays += list.size();
         for (std::size_t i : points) {
             const std::size_t count = first[i + 1] - first[i];
             std::size_t blocked = 0;
@@ -750,6 +752,7 @@ void op_occlusion(Frame& f, const BoundOp& b) {
             rays[k] = ShadowRay{origin, dir, 0.0f, tfar};
         }
         rt->occluded(rays.data(), rays.size(), hits.data());
+        f.ctx->rays += rays.size();
         int blocked = 0;
         for (uint8_t hit : hits) blocked += hit ? 1 : 0;
         *d.at(i) = static_cast<float>(blocked) / samples;
