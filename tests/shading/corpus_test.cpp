@@ -1,0 +1,199 @@
+/// \file corpus_test.cpp
+/// The RSL acceptance corpus (tests/shading/corpus/*.sl, docs/shading.md
+/// "Test corpus"): every construct and built-in of the language, each
+/// checked by the shader itself against a value computed by hand or in
+/// closed form. Each corpus shader declares `output varying float
+/// check_<name>` parameters (corpus.h): 0 passes; anything else (the error,
+/// or -1 when the shader never wrote it) fails, and this file reports the
+/// file, the check and the first failing point. Some checks need the whole
+/// batch (area summed over a sphere): those shaders write `value_<name>`
+/// outputs that the C++ test aggregates.
+///
+/// Also here: the coverage test (every built-in of builtins.cpp is called by
+/// some corpus file), the table of shaders that must not compile (message
+/// and file:line:column), and run-time failures (division by zero, NaN,
+/// array index out of range).
+///
+/// Suite names start with "RslCorpus".
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "../../src/sss/shading/builtins.h"
+#include "engine_test_util.h"
+#include "test_util.h"
+
+namespace {
+
+using namespace sss;
+using namespace sss::test;
+
+constexpr double kPi = std::numbers::pi;
+
+/// The corpus folder (tests/shading/corpus).
+std::filesystem::path corpus_dir() {
+    return std::filesystem::path(SSS_TEST_DATA_DIR).parent_path() / "shading" / "corpus";
+}
+
+PreprocessOptions corpus_options() {
+    PreprocessOptions o;
+    o.include_dirs = {corpus_dir().string(), (corpus_dir() / "include").string()};
+    return o;
+}
+
+/// Every shader of a corpus file, compiled from disk (the test fails on errors).
+std::vector<std::shared_ptr<const Program>> compile_corpus(const std::string& file) {
+    std::vector<std::shared_ptr<const Program>> out;
+    try {
+        CompileResult r = compile_file((corpus_dir() / file).string(), corpus_options());
+        for (const Diagnostic& w : r.warnings) ADD_FAILURE() << file << ": " << w.format();
+        for (Program& p : r.shaders) out.push_back(std::make_shared<Program>(std::move(p)));
+    } catch (const ShaderCompileError& e) {
+        std::string all;
+        for (const Diagnostic& d : e.diagnostics()) all += d.format() + "\n";
+        ADD_FAILURE() << file << " does not compile:\n" << all;
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << file << ": " << e.what();
+    }
+    return out;
+}
+
+/// The shader named `name` of a corpus file.
+std::shared_ptr<const Program> corpus_shader(const std::string& file,
+                                             const std::string& name) {
+    for (auto& p : compile_corpus(file))
+        if (p->name == name) return p;
+    ADD_FAILURE() << file << " has no shader " << name;
+    return std::make_shared<Program>();
+}
+
+/// Asserts every check_* output of the last execute() is 0 at every point;
+/// returns the number of checks.
+int expect_checks(const ShadingContext& ctx, const Program& prog, const std::string& what,
+                  std::size_t points, bool allow_nonfinite = false) {
+    int checks = 0;
+    for (int index : prog.parameters()) {
+        const std::string& name = prog.symbols[index].name;
+        if (name.rfind("check_", 0) != 0) continue;
+        ++checks;
+        TypeSpec type;
+        std::vector<float> values;
+        if (!ctx.output(name, type, values)) {
+            ADD_FAILURE() << what << ": no output " << name;
+            continue;
+        }
+        std::size_t bad = 0, first = 0;
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            if (values[i] != 0.0f && bad++ == 0) first = i;
+        }
+        EXPECT_EQ(values.size() == 1 ? points : values.size(), points) << what << " " << name;
+        EXPECT_EQ(bad, 0u) << what << ": " << name.substr(6) << " fails at " << bad << " of "
+                           << values.size() << " points (first: point " << first
+                           << ", value " << values[first]
+                           << (values[first] == -1.0f ? ": never written" : "") << ")";
+    }
+    EXPECT_GT(checks, 0) << what << " has no checks";
+    if (!allow_nonfinite)
+        EXPECT_EQ(ctx.nonfinite_points(), 0u) << what << ": " << ctx.nonfinite_message();
+    return checks;
+}
+
+/// One float output per point.
+std::vector<float> output_of(const ShadingContext& ctx, const std::string& name) {
+    TypeSpec type;
+    std::vector<float> values;
+    EXPECT_TRUE(ctx.output(name, type, values)) << name;
+    return values;
+}
+
+/// A sphere of radius r as a grid at cell centres (u around z, v pole to
+/// pole), with exact N, dPdu, dPdv, s = u, t = v.
+ShadingBatch sphere_grid(int nu, int nv, double r) {
+    ShadingBatch b;
+    b.layout = BatchLayout::Grid;
+    b.nu = nu;
+    b.nv = nv;
+    b.size = static_cast<std::size_t>(nu) * nv;
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i) {
+            const double u = (i + 0.5) / nu, v = (j + 0.5) / nv;
+            const double th = 2 * kPi * u, ph = -kPi / 2 + kPi * v;
+            const glm::dvec3 n(std::cos(ph) * std::cos(th), std::cos(ph) * std::sin(th),
+                               std::sin(ph));
+            b.P.push_back(glm::vec3(r * n));
+            b.N.push_back(glm::vec3(n));
+            b.dPdu.push_back(glm::vec3(2 * kPi * r * std::cos(ph) *
+                                       glm::dvec3(-std::sin(th), std::cos(th), 0)));
+            b.dPdv.push_back(glm::vec3(kPi * r *
+                                       glm::dvec3(-std::sin(ph) * std::cos(th),
+                                                  -std::sin(ph) * std::sin(th), std::cos(ph))));
+            b.u.push_back(static_cast<float>(u));
+            b.v.push_back(static_cast<float>(v));
+            b.du.push_back(1.0f / nu);
+            b.dv.push_back(1.0f / nv);
+        }
+    b.Ng = b.N;
+    b.s = b.u;
+    b.t = b.v;
+    b.I = b.P;
+    return b;
+}
+
+/// Runs the only surface shader of `file` over `batch` and checks it.
+int run_corpus(const std::string& file, ShadingBatch batch, const ParamList& params = {},
+               Engine* engine = nullptr, LightList lights = {}) {
+    Engine local;
+    Engine& e = engine ? *engine : local;
+    std::shared_ptr<const Program> prog;
+    for (auto& p : compile_corpus(file))
+        if (p->kind == ShaderKind::Surface) prog = p;
+    if (!prog) {
+        ADD_FAILURE() << file << ": no surface shader";
+        return 0;
+    }
+    try {
+        ShaderInstance inst(prog, params, Matrix4(1.0), file);
+        e.context.execute(inst, batch, lights);
+    } catch (const std::exception& ex) {
+        ADD_FAILURE() << file << ": " << ex.what();
+        return 0;
+    }
+    return expect_checks(e.context, *prog, file, batch.size);
+}
+
+TEST(RslCorpus, OperatorsAndTypes) {
+    run_corpus("operators_and_types.sl", plane_grid(8, 4));
+}
+
+TEST(RslCorpus, ControlFlow) {
+    run_corpus("control_flow.sl", plane_grid(8, 4));
+}
+
+TEST(RslCorpus, Functions) {
+    run_corpus("functions.sl", plane_grid(8, 2));
+}
+
+TEST(RslCorpus, Math) {
+    run_corpus("math.sl", plane_grid(8, 2));
+}
+
+TEST(RslCorpus, Noise) {
+    run_corpus("noise.sl", plane_grid(16, 8));
+}
+
+} // namespace
