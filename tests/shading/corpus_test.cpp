@@ -196,4 +196,11 @@ TEST(RslCorpus, Noise) {
     run_corpus("noise.sl", plane_grid(16, 8));
 }
 
+TEST(RslCorpus, Geometry) {
+    Engine e;
+    e.services.scene_.options.camera.near_clip = 1;
+    e.services.scene_.options.camera.far_clip = 11;
+    run_corpus("geometry.sl", plane_grid(4, 2), {}, &e);
+}
+
 } // namespace
