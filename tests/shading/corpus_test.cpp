@@ -61,8 +61,10 @@ std::vector<std::shared_ptr<const Program>> compile_corpus(const std::string& fi
     std::vector<std::shared_ptr<const Program>> out;
     try {
         CompileResult r = compile_file((corpus_dir() / file).string(), corpus_options());
-        for (const Diagnostic& w : r.warnings) ADD_FAILURE() << file << ": " << w.format();
-        for (Program& p : r.shaders) out.push_back(std::make_shared<Program>(std::move(p)));
+        for (const Diagnostic& w : r.warnings)
+            ADD_FAILURE() << file << ": " << w.format();
+        for (Program& p : r.shaders)
+            out.push_back(std::make_shared<Program>(std::move(p)));
     } catch (const ShaderCompileError& e) {
         std::string all;
         for (const Diagnostic& d : e.diagnostics()) all += d.format() + "\n";
@@ -101,9 +103,10 @@ int expect_checks(const ShadingContext& ctx, const Program& prog, const std::str
         for (std::size_t i = 0; i < values.size(); ++i) {
             if (values[i] != 0.0f && bad++ == 0) first = i;
         }
-        EXPECT_EQ(values.size() == 1 ? points : values.size(), points) << what << " " << name;
-        EXPECT_EQ(bad, 0u) << what << ": " << name.substr(6) << " fails at " << bad << " of "
-                           << values.size() << " points (first: point " << first
+        EXPECT_EQ(values.size() == 1 ? points : values.size(), points)
+            << what << " " << name;
+        EXPECT_EQ(bad, 0u) << what << ": " << name.substr(6) << " fails at " << bad
+                           << " of " << values.size() << " points (first: point " << first
                            << ", value " << values[first]
                            << (values[first] == -1.0f ? ": never written" : "") << ")";
     }
@@ -139,9 +142,10 @@ ShadingBatch sphere_grid(int nu, int nv, double r) {
             b.N.push_back(glm::vec3(n));
             b.dPdu.push_back(glm::vec3(2 * kPi * r * std::cos(ph) *
                                        glm::dvec3(-std::sin(th), std::cos(th), 0)));
-            b.dPdv.push_back(glm::vec3(kPi * r *
-                                       glm::dvec3(-std::sin(ph) * std::cos(th),
-                                                  -std::sin(ph) * std::sin(th), std::cos(ph))));
+            b.dPdv.push_back(
+                glm::vec3(kPi * r *
+                          glm::dvec3(-std::sin(ph) * std::cos(th),
+                                     -std::sin(ph) * std::sin(th), std::cos(ph))));
             b.u.push_back(static_cast<float>(u));
             b.v.push_back(static_cast<float>(v));
             b.du.push_back(1.0f / nu);
@@ -154,26 +158,35 @@ ShadingBatch sphere_grid(int nu, int nv, double r) {
     return b;
 }
 
-/// Runs the only surface shader of `file` over `batch` and checks it.
-int run_corpus(const std::string& file, ShadingBatch batch, const ParamList& params = {},
-               Engine* engine = nullptr, LightList lights = {}) {
+/// Runs shader `name` of `file` (by default the file's first surface shader)
+/// over `batch` and checks it.
+int run_corpus(const std::string& file, ShadingBatch& batch, const ParamList& params = {},
+               Engine* engine = nullptr, LightList lights = {},
+               const std::string& name = "") {
     Engine local;
     Engine& e = engine ? *engine : local;
     std::shared_ptr<const Program> prog;
     for (auto& p : compile_corpus(file))
-        if (p->kind == ShaderKind::Surface) prog = p;
+        if (!prog && (name.empty() ? p->kind == ShaderKind::Surface : p->name == name))
+            prog = p;
     if (!prog) {
-        ADD_FAILURE() << file << ": no surface shader";
+        ADD_FAILURE() << file << ": no shader " << name;
         return 0;
     }
+    const std::string what = file + (name.empty() ? "" : " (" + name + ")");
     try {
         ShaderInstance inst(prog, params, Matrix4(1.0), file);
         e.context.execute(inst, batch, lights);
     } catch (const std::exception& ex) {
-        ADD_FAILURE() << file << ": " << ex.what();
+        ADD_FAILURE() << what << ": " << ex.what();
         return 0;
     }
-    return expect_checks(e.context, *prog, file, batch.size);
+    return expect_checks(e.context, *prog, what, batch.size);
+}
+int run_corpus(const std::string& file, ShadingBatch&& batch,
+               const ParamList& params = {}, Engine* engine = nullptr,
+               LightList lights = {}, const std::string& name = "") {
+    return run_corpus(file, batch, params, engine, lights, name);
 }
 
 TEST(RslCorpus, OperatorsAndTypes) {
@@ -201,6 +214,49 @@ TEST(RslCorpus, Geometry) {
     e.services.scene_.options.camera.near_clip = 1;
     e.services.scene_.options.camera.far_clip = 11;
     run_corpus("geometry.sl", plane_grid(4, 2), {}, &e);
+}
+
+TEST(RslCorpus, Derivatives) {
+    run_corpus("derivatives.sl", plane_grid(16, 8), {}, nullptr, {}, "derivatives");
+}
+
+TEST(RslCorpus, AreaSummedOverASphereIs4PiR2) {
+    Engine e;
+    const double r = 1.5;
+    ShadingBatch b = sphere_grid(128, 128, r);
+    run_corpus("derivatives.sl", b, {}, &e, {}, "sphere_area");
+    double total = 0.0;
+    for (float a : output_of(e.context, "value_area")) total += a;
+    EXPECT_NEAR(total / (4 * kPi * r * r), 1.0, 1e-3);
+}
+
+TEST(RslCorpus, CalculatenormalOfADisplacedSphere) {
+    Engine e;
+    ShadingBatch b = sphere_grid(96, 96, 1.5);
+    const std::vector<glm::vec3> before = b.P;
+    run_corpus("derivatives.sl", b, {}, &e, {}, "bumpy");
+    // The displacement's P and N are written back into the batch.
+    EXPECT_NE(b.P[100], before[100]);
+    EXPECT_NEAR(glm::length(b.N[100]), 1.0f, 1e-5f);
+}
+
+// --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
+
+// ShadingContext::output() read the program through a raw pointer: after the
+// ShaderInstance (the only owner of its Program) was destroyed it read freed
+// memory. The context now keeps the last program alive.
+TEST(RslCorpusFixes, OutputsOutliveTheShaderInstance) {
+    Engine e;
+    ShadingBatch b = plane_grid(3, 1);
+    {
+        ShaderInstance inst = e.instance(R"(
+surface t(output varying float r = 0;) { r = u * 2; }
+)");
+        e.context.execute(inst, b);
+    }
+    const std::vector<float> r = output_of(e.context, "r");
+    ASSERT_EQ(r.size(), 3u);
+    for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(r[i], 2 * b.u[i]);
 }
 
 } // namespace

@@ -269,6 +269,9 @@ struct ShadingContext::Impl {
     glm::dmat4 object_to_current{1.0};
 
     // Results of the last execute.
+    /// Keeps the last program alive for output() after its ShaderInstance
+    /// is gone (main.program points into it).
+    std::shared_ptr<const Program> last_program;
     std::size_t nonfinite = 0;
     std::string last_shader, last_where;
 
