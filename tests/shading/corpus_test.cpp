@@ -162,7 +162,7 @@ ShadingBatch sphere_grid(int nu, int nv, double r) {
 /// over `batch` and checks it.
 int run_corpus(const std::string& file, ShadingBatch& batch, const ParamList& params = {},
                Engine* engine = nullptr, LightList lights = {},
-               const std::string& name = "") {
+               const std::string& name = "", const Matrix4& shader_to_world = Matrix4(1.0)) {
     Engine local;
     Engine& e = engine ? *engine : local;
     std::shared_ptr<const Program> prog;
@@ -175,7 +175,7 @@ int run_corpus(const std::string& file, ShadingBatch& batch, const ParamList& pa
     }
     const std::string what = file + (name.empty() ? "" : " (" + name + ")");
     try {
-        ShaderInstance inst(prog, params, Matrix4(1.0), file);
+        ShaderInstance inst(prog, params, shader_to_world, file);
         e.context.execute(inst, batch, lights);
     } catch (const std::exception& ex) {
         ADD_FAILURE() << what << ": " << ex.what();
@@ -238,6 +238,30 @@ TEST(RslCorpus, CalculatenormalOfADisplacedSphere) {
     // The displacement's P and N are written back into the batch.
     EXPECT_NE(b.P[100], before[100]);
     EXPECT_NEAR(glm::length(b.N[100]), 1.0f, 1e-5f);
+}
+
+TEST(RslCorpus, Spaces) {
+    Engine e;
+    Camera& cam = e.services.scene_.options.camera;
+    cam.world_to_camera = glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 5));
+    cam.perspective = true;
+    cam.fov = 90;
+    cam.xres = 200;
+    cam.yres = 100;
+    // Screen-space z is f/(f-n) - f n / ((f-n) z): finite clipping planes
+    // keep it well conditioned in float for the round trips.
+    cam.near_clip = 0.5;
+    cam.far_clip = 100;
+    e.services.scene_.coordinate_systems["lamp"] =
+        glm::rotate(glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 1)), kPi / 2,
+                    glm::dvec3(0, 0, 1));
+    Primitive prim;
+    prim.object_to_world = glm::scale(glm::translate(Matrix4(1.0), glm::dvec3(0, 3, 0)),
+                                      glm::dvec3(2, 1, 1));
+    ShadingBatch b = plane_grid(4, 2);
+    b.primitive = &prim;
+    run_corpus("spaces.sl", b, {}, &e, {}, "",
+               glm::translate(Matrix4(1.0), glm::dvec3(1, 0, 0)));
 }
 
 // --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
