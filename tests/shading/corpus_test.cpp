@@ -264,6 +264,21 @@ TEST(RslCorpus, Spaces) {
                glm::translate(Matrix4(1.0), glm::dvec3(1, 0, 0)));
 }
 
+TEST(RslCorpus, Color) {
+    run_corpus("color.sl", plane_grid(4, 2));
+}
+
+TEST(RslCorpus, Matrix) {
+    run_corpus("matrix.sl", plane_grid(4, 2));
+}
+
+TEST(RslCorpus, Strings) {
+    Engine e;
+    run_corpus("strings.sl", plane_grid(2, 1), {}, &e);
+    // A varying printf prints once per running point.
+    EXPECT_EQ(e.services.messages, (std::vector<std::string>{"skin 0.25\n", "skin 0.75\n"}));
+}
+
 // --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
 
 // ShadingContext::output() read the program through a raw pointer: after the
