@@ -279,6 +279,47 @@ TEST(RslCorpus, Strings) {
     EXPECT_EQ(e.services.messages, (std::vector<std::string>{"skin 0.25\n", "skin 0.75\n"}));
 }
 
+TEST(RslCorpus, Lighting) {
+    Engine e;
+    const auto shaders = compile_corpus("lighting.sl");
+    auto light = [&](const std::string& name, ParamList params) {
+        for (auto& p : shaders)
+            if (p->name == name) return ShaderInstance(p, params, Matrix4(1.0), name);
+        ADD_FAILURE() << "no light " << name;
+        return ShaderInstance(std::make_shared<Program>(), {}, Matrix4(1.0), name);
+    };
+    std::vector<ShaderInstance> lights;
+    lights.push_back(light("keylight", [] {
+        ParamList p;
+        p.set(float_param("intensity", 2));
+        return p;
+    }()));
+    lights.push_back(light("filllight", [] {
+        ParamList p;
+        p.set(float_param("intensity", 0.5));
+        return p;
+    }()));
+    lights.push_back(light("amblight", [] {
+        ParamList p;
+        p.set(float_param("intensity", 0.25));
+        return p;
+    }()));
+    lights.push_back(light("spotlight", {}));
+    lights.push_back(light("skylight", [] {
+        ParamList p;
+        p.set(float_param("intensity", 0.1));
+        return p;
+    }()));
+    std::vector<const ShaderInstance*> list;
+    for (const ShaderInstance& l : lights) list.push_back(&l);
+    run_corpus("lighting.sl", plane_grid(8, 8), {}, &e, list);
+    // The unsupported calls warned.
+    std::string all;
+    for (const std::string& w : e.services.warnings) all += w + "\n";
+    for (const char* name : {"trace()", "indirectdiffuse()", "depth-map shadows"})
+        EXPECT_NE(all.find(name), std::string::npos) << name << " in:\n" << all;
+}
+
 // --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
 
 // ShadingContext::output() read the program through a raw pointer: after the
