@@ -34,8 +34,13 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <OpenImageIO/imagebuf.h>
+
 #include "../../src/sss/shading/builtins.h"
 #include "engine_test_util.h"
+#include "sss/brick/brickmap.h"
+#include "sss/cloud/point_cloud.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "test_util.h"
 
 namespace {
@@ -318,6 +323,112 @@ TEST(RslCorpus, Lighting) {
     for (const std::string& w : e.services.warnings) all += w + "\n";
     for (const char* name : {"trace()", "indirectdiffuse()", "depth-map shadows"})
         EXPECT_NE(all.find(name), std::string::npos) << name << " in:\n" << all;
+}
+
+/// Writes a float image of `channels` channels with value(x, y, c).
+template <class F>
+std::string write_image(const std::string& path, int w, int h, int channels, F value) {
+    OIIO::ImageBuf buf(OIIO::ImageSpec(w, h, channels, OIIO::TypeDesc::FLOAT));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float v[4];
+            for (int c = 0; c < channels; ++c) v[c] = value(x, y, c);
+            buf.setpixel(x, y, v, channels);
+        }
+    EXPECT_TRUE(buf.write(path)) << buf.geterror();
+    return path;
+}
+
+TEST(RslCorpus, Textures) {
+    TempDir dir;
+    const std::string map =
+        write_image(dir.file("map.exr"), 4, 2, 3, [](int x, int y, int c) {
+            return c == 0 ? (x + 0.5f) / 4 : c == 1 ? (y + 0.5f) / 2 : 0.25f + 0.1f * x;
+        });
+    const std::string env = write_image(dir.file("env.exr"), 8, 4, 3, [](int, int, int c) {
+        return 0.2f * (c + 1);
+    });
+    Engine e;
+    ParamList params;
+    params.set(string_param("map", map));
+    params.set(string_param("env", env));
+    run_corpus("textures.sl", plane_grid(4, 2), params, &e);
+    EXPECT_TRUE(e.services.warnings.empty()) << e.services.warnings[0];
+}
+
+TEST(RslCorpus, Bake3dAndTexture3d) {
+    TempDir dir;
+    // A 1 x 1 square on world z = 0, normals -z (towards the camera below).
+    PointCloud cloud;
+    const int n = 32;
+    cloud.resize(std::size_t(n) * n);
+    Channel& v = cloud.add_channel("v", ChannelType::Float);
+    Channel& c = cloud.add_channel("c", ChannelType::Color);
+    Channel& x = cloud.add_channel("x", ChannelType::Float);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const std::size_t k = std::size_t(j) * n + i;
+            cloud.positions[k] = {(i + 0.5f) / n - 0.5f, (j + 0.5f) / n - 0.5f, 0.0f};
+            cloud.normals[k] = {0.0f, 0.0f, -1.0f};
+            cloud.radii[k] = 0.5f / n;
+            v.data[k] = 0.25f;
+            c.data[3 * k] = 0.1f;
+            c.data[3 * k + 1] = 0.2f;
+            c.data[3 * k + 2] = 0.3f;
+            x.data[k] = cloud.positions[k].x;
+        }
+    const std::string ptc = dir.file("square.ptc"), bkm = dir.file("square.bkm");
+    write_point_cloud(cloud, ptc);
+    build_brick_map({cloud}, BrickMapBuildOptions{}, bkm);
+
+    Engine e;
+    e.services.scene_.options.camera.world_to_camera =
+        glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 1));
+    ShadingBatch b = plane_grid(6, 6);
+    b.Cs.assign(b.size, glm::vec3(0.5f, 0.25f, 1.0f));
+    ParamList params;
+    params.set(string_param("cloud", ptc));
+    params.set(string_param("bkm", bkm));
+    params.set(string_param("out", "baked.ptc"));
+    run_corpus("bake3d_texture3d.sl", b, params, &e);
+    // What bake3d sent: world-space points on z = 0, the channels per point.
+    ASSERT_EQ(e.services.bakes.size(), 1u);
+    const Bake3dRecord& rec = e.services.bakes[0];
+    EXPECT_EQ(rec.file, "baked.ptc");
+    EXPECT_EQ(rec.channels, (std::vector<std::string>{"a", "col"}));
+    EXPECT_EQ(rec.channel_floats, (std::vector<int>{1, 3}));
+    ASSERT_EQ(rec.P.size(), b.size);
+    ASSERT_EQ(rec.values.size(), 4 * b.size);
+    for (std::size_t i = 0; i < b.size; ++i) {
+        EXPECT_NEAR(rec.P[i].x, b.P[i].x, 1e-6);
+        EXPECT_NEAR(rec.P[i].z, 0.0f, 1e-6);
+        EXPECT_NEAR(rec.N[i].z, -1.0f, 1e-6);
+        EXPECT_EQ(rec.radius[i], 0.05f);
+        EXPECT_NEAR(rec.values[4 * i], b.u[i], 1e-6);
+        EXPECT_NEAR(rec.values[4 * i + 1], 0.5f, 1e-6);
+        EXPECT_NEAR(rec.values[4 * i + 3], 1.0f, 1e-6);
+    }
+}
+
+TEST(RslCorpus, Queries) {
+    Engine e;
+    Camera& cam = e.services.scene_.options.camera;
+    cam.xres = 320;
+    cam.yres = 240;
+    cam.near_clip = 0.5;
+    cam.far_clip = 100;
+    e.services.scene_.options.hider = "raytrace";
+    e.services.scene_.options.groups["render"].set(float_param("bucket", 16));
+    auto attr = std::make_shared<Attributes>();
+    attr->groups["identifier"].set(string_param("name", "ball"));
+    attr->groups["user"].set(float_param("k", 4));
+    attr->shading_rate = 2;
+    attr->color = {1, 0.5, 0.25};
+    Primitive prim;
+    prim.attributes = attr;
+    ShadingBatch b = plane_grid(2, 1);
+    b.primitive = &prim;
+    run_corpus("queries.sl", b, {}, &e);
 }
 
 // --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
