@@ -58,6 +58,7 @@ std::filesystem::path corpus_dir() {
 PreprocessOptions corpus_options() {
     PreprocessOptions o;
     o.include_dirs = {corpus_dir().string(), (corpus_dir() / "include").string()};
+    o.defines = {{"CORPUS_LEVEL", "3"}}; // preprocessor.sl checks it
     return o;
 }
 
@@ -429,6 +430,10 @@ TEST(RslCorpus, Queries) {
     ShadingBatch b = plane_grid(2, 1);
     b.primitive = &prim;
     run_corpus("queries.sl", b, {}, &e);
+}
+
+TEST(RslCorpus, Preprocessor) {
+    run_corpus("preprocessor.sl", plane_grid(4, 1));
 }
 
 // --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
