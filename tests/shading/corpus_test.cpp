@@ -168,7 +168,8 @@ ShadingBatch sphere_grid(int nu, int nv, double r) {
 /// over `batch` and checks it.
 int run_corpus(const std::string& file, ShadingBatch& batch, const ParamList& params = {},
                Engine* engine = nullptr, LightList lights = {},
-               const std::string& name = "", const Matrix4& shader_to_world = Matrix4(1.0)) {
+               const std::string& name = "",
+               const Matrix4& shader_to_world = Matrix4(1.0)) {
     Engine local;
     Engine& e = engine ? *engine : local;
     std::shared_ptr<const Program> prog;
@@ -258,9 +259,8 @@ TEST(RslCorpus, Spaces) {
     // keep it well conditioned in float for the round trips.
     cam.near_clip = 0.5;
     cam.far_clip = 100;
-    e.services.scene_.coordinate_systems["lamp"] =
-        glm::rotate(glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 1)), kPi / 2,
-                    glm::dvec3(0, 0, 1));
+    e.services.scene_.coordinate_systems["lamp"] = glm::rotate(
+        glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 1)), kPi / 2, glm::dvec3(0, 0, 1));
     Primitive prim;
     prim.object_to_world = glm::scale(glm::translate(Matrix4(1.0), glm::dvec3(0, 3, 0)),
                                       glm::dvec3(2, 1, 1));
@@ -282,7 +282,8 @@ TEST(RslCorpus, Strings) {
     Engine e;
     run_corpus("strings.sl", plane_grid(2, 1), {}, &e);
     // A varying printf prints once per running point.
-    EXPECT_EQ(e.services.messages, (std::vector<std::string>{"skin 0.25\n", "skin 0.75\n"}));
+    EXPECT_EQ(e.services.messages,
+              (std::vector<std::string>{"skin 0.25\n", "skin 0.75\n"}));
 }
 
 TEST(RslCorpus, Lighting) {
@@ -346,9 +347,8 @@ TEST(RslCorpus, Textures) {
         write_image(dir.file("map.exr"), 4, 2, 3, [](int x, int y, int c) {
             return c == 0 ? (x + 0.5f) / 4 : c == 1 ? (y + 0.5f) / 2 : 0.25f + 0.1f * x;
         });
-    const std::string env = write_image(dir.file("env.exr"), 8, 4, 3, [](int, int, int c) {
-        return 0.2f * (c + 1);
-    });
+    const std::string env = write_image(dir.file("env.exr"), 8, 4, 3,
+                                        [](int, int, int c) { return 0.2f * (c + 1); });
     Engine e;
     ParamList params;
     params.set(string_param("map", map));
@@ -464,10 +464,223 @@ TEST(RslCorpus, EveryBuiltinIsExercised) {
             missing.insert(sig.name);
     std::string list;
     for (const std::string& name : missing) list += " " + name;
-    EXPECT_TRUE(missing.empty()) << "built-ins no file of " << corpus_dir().string()
-                                 << " calls:" << list;
+    EXPECT_TRUE(missing.empty())
+        << "built-ins no file of " << corpus_dir().string() << " calls:" << list;
     for (const std::string& name : kNotInCorpus)
-        EXPECT_TRUE(detail::is_builtin(name)) << name << " in the allow-list is no built-in";
+        EXPECT_TRUE(detail::is_builtin(name))
+            << name << " in the allow-list is no built-in";
+}
+
+// --- bad shaders --------------------------------------------------------------------
+
+/// A shader that must not compile: the first error's message (a part of it)
+/// and where it points.
+struct BadShader {
+    const char* what;
+    const char* source;
+    const char* message;
+    int line, column;
+};
+
+const BadShader kBadShaders[] = {
+    {"missing semicolon", "surface t() {\n    float x = 1\n    float y = 2;\n}\n",
+     "expected ';' after the declaration, got 'float'", 3, 5},
+    {"missing brace", "surface t() {\n    if (u > 0) {\n        Ci = 1;\n}\n",
+     "missing '}' at the end of the file", 5, 1},
+    {"incomplete expression", "surface t() {\n    float x = 1 / ;\n}\n",
+     "unexpected ';' in an expression", 2, 19},
+    {"unterminated string", "surface t() {\n    string s = \"abc;\n}\n",
+     "unterminated string", 2, 16},
+    {"triple to float", "surface t() {\n    float x = color(1, 2, 3);\n}\n",
+     "cannot convert color to float", 2, 15},
+    {"point to colour", "surface t() {\n    color c = point(1, 2, 3);\n}\n",
+     "cannot convert point to color (points and colors do not mix)", 2, 15},
+    {"colour plus point", "surface t() {\n    Ci = Cs + P;\n}\n",
+     "operator '+' cannot combine color and point", 2, 13},
+    {"point dot colour", "surface t() {\n    float x = P . Cs;\n}\n",
+     "operator '.' cannot combine point and color", 2, 17},
+    {"string arithmetic", "surface t() {\n    float x = \"a\" + 1;\n}\n",
+     "operator '+' cannot combine string and float", 2, 19},
+    {"unknown function", "surface t() {\n    float x = frobnicate(1);\n}\n",
+     "unknown function 'frobnicate'", 2, 15},
+    {"unknown variable", "surface t() {\n    Ci = nosuchvar;\n}\n",
+     "unknown variable 'nosuchvar'", 2, 10},
+    {"too many arguments", "surface t() {\n    float x = sin(1, 2);\n}\n",
+     "no version of 'sin' takes (float, float)", 2, 15},
+    {"too few arguments", "surface t() {\n    float x = sin();\n}\n",
+     "no version of 'sin' takes ()", 2, 15},
+    {"wrong argument type", "surface t() {\n    float x = sin(\"a\");\n}\n",
+     "no version of 'sin' takes (string)", 2, 15},
+    {"recursion",
+     "float f(float x) {\n    return f(x) + 1;\n}\nsurface t() {\n    Ci = f(u);\n}\n",
+     "recursive call of 'f' (RSL functions cannot recurse)", 2, 12},
+    {"varying to uniform", "surface t() {\n    uniform float k = u;\n}\n",
+     "cannot assign a varying value to uniform 'k'", 2, 23},
+    {"read-only parameter", "surface t(float Kd = 1;) {\n    Kd = 2;\n}\n",
+     "cannot assign to shader parameter 'Kd': it is read-only", 2, 5},
+    {"read-only global", "surface t() {\n    u = 2;\n}\n",
+     "cannot assign to global variable 'u': it is read-only in a surface shader", 2, 5},
+    {"read-only global as an output argument",
+     "surface t() {\n    float kr, kt;\n    fresnel(I, N, 1.5, u, kt);\n}\n",
+     "cannot assign to global variable 'u'", 3, 24},
+    {"read-only function parameter",
+     "float f(float x) {\n    x = 1;\n    return x;\n}\nsurface t() {\n    Ci = "
+     "f(u);\n}\n",
+     "cannot assign to function parameter 'x'", 2, 5},
+    {"constant to an output parameter",
+     "void g(output float a) { a = 1; }\nsurface t() {\n    g(3);\n}\n",
+     "argument 1 of 'g' must be a variable (the parameter is output)", 3, 7},
+    {"L outside illuminance", "surface t() {\n    L = vector(1, 0, 0);\n}\n",
+     "'L' exists only inside an illuminance statement", 2, 5},
+    {"whole-array assignment",
+     "surface t() {\n    float a[2] = {1, 2}, b[2] = {3, 4};\n    a = b;\n}\n",
+     "cannot assign a whole array ('a')", 3, 5},
+    {"array initialiser size", "surface t() {\n    float a[3] = {1, 2};\n}\n",
+     "'a' has 3 elements but 2 values are given", 2, 11},
+    {"redeclaration", "surface t() {\n    float x = 1;\n    float x = 2;\n}\n",
+     "'x' is already declared in this scope", 3, 11},
+    {"break outside a loop", "surface t() {\n    break;\n}\n", "break outside a loop", 2,
+     5},
+    {"gather (not supported)",
+     "surface t() {\n    gather(\"\", P, N, 1, 4) { Ci = 1; }\n}\n",
+     "gather is not supported yet", 2, 5},
+};
+
+TEST(RslCorpusErrors, BadShadersGiveClearMessages) {
+    for (const BadShader& bad : kBadShaders) {
+        SCOPED_TRACE(bad.what);
+        try {
+            compile_text(bad.source, "bad.sl");
+            ADD_FAILURE() << "compiled:\n" << bad.source;
+        } catch (const ShaderCompileError& e) {
+            ASSERT_FALSE(e.diagnostics().empty());
+            const Diagnostic& d = e.diagnostics()[0];
+            EXPECT_EQ(d.severity, Diagnostic::Severity::Error);
+            EXPECT_NE(d.message.find(bad.message), std::string::npos) << d.format();
+            EXPECT_EQ(d.file, "bad.sl");
+            EXPECT_EQ(d.line, bad.line) << d.format();
+            EXPECT_EQ(d.column, bad.column) << d.format();
+            // what() is the first error on one line, "file:line:column: ...".
+            const std::string where = "bad.sl:" + std::to_string(bad.line) + ":" +
+                                      std::to_string(bad.column) + ":";
+            EXPECT_EQ(std::string(e.what()).rfind(where, 0), 0u) << e.what();
+        }
+    }
+}
+
+TEST(RslCorpusErrors, PreprocessorErrorsNameTheLine) {
+    const struct {
+        const char* source;
+        const char* message;
+        int line;
+    } cases[] = {
+        {"#include \"nosuchheader.h\"\nsurface t() {}\n", "cannot find include file", 1},
+        {"\n#error stop here\nsurface t() {}\n", "stop here", 2},
+        {"#if 1\nsurface t() {}\n", "unterminated #if", 1},
+    };
+    for (const auto& c : cases) {
+        try {
+            compile_text(c.source, "bad.sl", corpus_options());
+            ADD_FAILURE() << "compiled:\n" << c.source;
+        } catch (const PreprocessError& e) {
+            EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos)
+                << e.what();
+            EXPECT_EQ(e.file(), "bad.sl");
+            EXPECT_EQ(e.line(), c.line) << e.what();
+        }
+    }
+}
+
+/// Runs `source` over a 4 x 1 plane grid and returns the ShaderRuntimeError's
+/// message ("" when it ran).
+std::string runtime_error(const std::string& source) {
+    Engine e;
+    ShadingBatch b = plane_grid(4, 1);
+    ShaderInstance inst(
+        std::make_shared<Program>(compile_text(source, "bad.sl").shaders.at(0)), {},
+        Matrix4(1.0), "scene.rib:7");
+    try {
+        e.context.execute(inst, b);
+    } catch (const ShaderRuntimeError& err) {
+        return err.what();
+    }
+    return "";
+}
+
+TEST(RslCorpusRuntime, ErrorsNameTheRibCallAndTheShaderLine) {
+    const struct {
+        const char* source;
+        const char* message;
+        int line;
+    } cases[] = {
+        {"surface t() {\n    float a[3] = {1, 2, 3};\n    Ci = a[u * 4];\n}\n",
+         "array index 3.500000 out of range [0, 3)", 3},
+        {"surface t() {\n    float a[3] = {1, 2, 3};\n    Ci = a[-0.5];\n}\n",
+         "array index -0.500000 out of range [0, 3)", 3},
+        {"surface t() {\n    float a[3] = {1, 2, 3};\n    a[3] = 1;\n}\n",
+         "array index 3.000000 out of range [0, 3)", 3},
+        {"surface t() {\n    Ci = comp(Cs, 3);\n}\n",
+         "component index 3.000000 out of range", 2},
+        {"surface t() {\n    matrix m = 1;\n    Ci = comp(m, 4, 0);\n}\n",
+         "component index 4.000000 out of range [0, 4)", 3},
+        {"surface t() {\n    Ci = color \"nosuchspace\" (1, 2, 3);\n}\n",
+         "unknown colour space \"nosuchspace\"", 2},
+        {"surface t() {\n    Ci = xcomp(transform(\"nowhere\", P));\n}\n",
+         "unknown coordinate system \"nowhere\"", 2},
+        {"surface t() {\n    Ci = texture(\"nosuch.tx\");\n}\n", "nosuch.tx", 2},
+        {"surface t() {\n    float x;\n    Oi = texture3d(\"nosuch.ptc\", P, N, \"v\", "
+         "x);\n}\n",
+         "nosuch.ptc", 3},
+        {"surface t() {\n    Ci = spline(\"nosuchbasis\", u, 0, 1, 2, 3);\n}\n",
+         "unknown basis \"nosuchbasis\"", 2},
+        {"surface t() {\n    printf(\"%d %d\\n\", 1);\n}\n", "format \"%d %d", 2},
+    };
+    for (const auto& c : cases) {
+        const std::string what = runtime_error(c.source);
+        EXPECT_NE(what.find(c.message), std::string::npos) << c.source << "\n-> " << what;
+        // The RIB call, then the shader's file:line.
+        const std::string where = "scene.rib:7: bad.sl:" + std::to_string(c.line) + ":";
+        EXPECT_EQ(what.rfind(where, 0), 0u) << what;
+    }
+}
+
+// Documented (engine.h, docs/shading.md): division by zero and NaN are IEEE
+// inside a shader; results that are not finite are written as 0 and counted.
+TEST(RslCorpusRuntime, DivisionByZeroAndNaNGiveFiniteResults) {
+    Engine e;
+    ShadingBatch b = plane_grid(4, 1);
+    ShaderInstance inst(std::make_shared<Program>(compile_text(R"(
+surface t(output varying float inf = 1; output varying float nan = 1;
+          output varying color c = 1; output varying float fine = 0;
+          output varying float guarded = 0;) {
+    inf = 1 / (u - u);
+    nan = sqrt(-u) + log(0) * 0;
+    c = color(acos(2), 0 / (u - u), pow(0, -1));
+    Ci = Cs / 0;
+    Oi = 1;
+    fine = u;
+    /* a shader can test for NaN: it is not equal to itself */
+    float x = 0 / (u - u);
+    guarded = x != x ? 7 : x;
+}
+)",
+                                                               "bad.sl")
+                                                      .shaders.at(0)),
+                        {}, Matrix4(1.0), "scene.rib:3");
+    e.context.execute(inst, b);
+    EXPECT_EQ(e.context.nonfinite_points(), 4u);
+    EXPECT_NE(e.context.nonfinite_message().find("4 points"), std::string::npos)
+        << e.context.nonfinite_message();
+    for (const char* name : {"inf", "nan", "c"})
+        for (float v : output_of(e.context, name)) EXPECT_EQ(v, 0.0f) << name;
+    const std::vector<float> fine = output_of(e.context, "fine");
+    const std::vector<float> guarded = output_of(e.context, "guarded");
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_EQ(b.Ci[i], glm::vec3(0.0f));
+        EXPECT_EQ(b.Oi[i], glm::vec3(1.0f));
+        EXPECT_FLOAT_EQ(fine[i], b.u[i]);
+        EXPECT_EQ(guarded[i], 7.0f);
+    }
 }
 
 // --- bugs the corpus found (each fixed in src/sss/shading/) ----------------------
