@@ -81,15 +81,6 @@ std::vector<std::shared_ptr<const Program>> compile_corpus(const std::string& fi
     return out;
 }
 
-/// The shader named `name` of a corpus file.
-std::shared_ptr<const Program> corpus_shader(const std::string& file,
-                                             const std::string& name) {
-    for (auto& p : compile_corpus(file))
-        if (p->name == name) return p;
-    ADD_FAILURE() << file << " has no shader " << name;
-    return std::make_shared<Program>();
-}
-
 /// Asserts every check_* output of the last execute() is 0 at every point;
 /// returns the number of checks.
 int expect_checks(const ShadingContext& ctx, const Program& prog, const std::string& what,
@@ -117,8 +108,9 @@ int expect_checks(const ShadingContext& ctx, const Program& prog, const std::str
                            << (values[first] == -1.0f ? ": never written" : "") << ")";
     }
     EXPECT_GT(checks, 0) << what << " has no checks";
-    if (!allow_nonfinite)
+    if (!allow_nonfinite) {
         EXPECT_EQ(ctx.nonfinite_points(), 0u) << what << ": " << ctx.nonfinite_message();
+    }
     return checks;
 }
 
