@@ -34,7 +34,9 @@ surface math(
     check_sign = near(sign(-3), -1, 0) + near(sign(0), 0, 0) + near(sign(2), 1, 0);
     check_floor_ceil_round = near(floor(-1.5), -2, 0) + near(ceil(-1.5), -1, 0)
         + near(floor(2.7), 2, 0) + near(ceil(2.2), 3, 0) + near(round(2.4), 2, 0)
-        + near(round(2.6), 3, 0) + near(round(-2.6), -3, 0);
+        + near(round(2.6), 3, 0) + near(round(-2.6), -3, 0)
+        /* halves away from zero */
+        + near(round(2.5), 3, 0) + near(round(-2.5), -3, 0);
     check_floor_ceil_round_triples =
         cnear(floor(color(1.5, -1.5, 2)), color(1, -2, 2), 0)
         + cnear(ceil(color(1.5, -1.5, 2)), color(2, -1, 2), 0)
