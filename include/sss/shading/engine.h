@@ -277,6 +277,7 @@ public:
     /// After execute: the values of the shader's symbol `name` (an output
     /// parameter or global, for AOVs) at every point, as floats
     /// (type.floats() per point). False when the shader has no such symbol.
+    /// Valid until the next execute(), even when the ShaderInstance is gone.
     bool output(const std::string& name, TypeSpec& type,
                 std::vector<float>& values) const;
 

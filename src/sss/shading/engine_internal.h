@@ -280,6 +280,9 @@ struct ShadingContext::Impl {
     glm::dmat4 object_to_current{1.0};
 
     // Results of the last execute.
+    /// Keeps the last program alive for output() after its ShaderInstance
+    /// is gone (main.program points into it).
+    std::shared_ptr<const Program> last_program;
     std::size_t nonfinite = 0;
     /// Shadow and occlusion rays traced, over every execute (never reset).
     mutable uint64_t rays = 0;
