@@ -476,7 +476,14 @@ TEST(RenderOutput, FilesReadAndWrittenAreKnownBeforeRendering) {
     sss::RenderJobOptions opt;
     opt.frame = 5;
     sss::RenderFiles files = sss::render_files(scene, opt);
-    EXPECT_EQ(files.inputs, (std::vector<std::string>{"m.0005.bkm", "n.ptc"}));
+    // The maps the shaders read, then the shaders themselves.
+    ASSERT_GE(files.inputs.size(), 4u);
+    EXPECT_EQ(std::vector<std::string>(files.inputs.begin(), files.inputs.begin() + 2),
+              (std::vector<std::string>{"m.0005.bkm", "n.ptc"}));
+    for (const char* shader : {"read_ssdiffusion.slo", "skin.slo", "matte.slo"})
+        EXPECT_TRUE(std::any_of(files.inputs.begin(), files.inputs.end(),
+                                [&](const std::string& f) { return f.ends_with(shader); }))
+            << shader;
     EXPECT_EQ(files.outputs,
               (std::vector<std::string>{"img.0005.exr", "sss.png", "view.exr"}));
     // -o replaces the primary Display's file.

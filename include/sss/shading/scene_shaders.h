@@ -46,7 +46,8 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
 /// String parameter values of the bound shaders that name existing files, or
 /// files by their extension (.bkm .ptc .ply .tx .tex .exr .png .tif .tiff
 /// .jpg .hdr): the textures, brick maps and point clouds the shaders read,
-/// each once, the inputs of `-newer 1`. A bake shader's output "filename"
+/// then the shader files (.slo, .sl) loaded, each once: the inputs of
+/// `-newer 1`. A bake shader's output "filename"
 /// is among them too; callers drop their own outputs.
 std::vector<std::string> shader_input_files(const SceneShaders& shaders);
 

@@ -571,6 +571,19 @@ std::vector<std::string> bake_output_files(const Scene& scene,
     return files;
 }
 
+std::vector<std::string> bake_input_files(const Scene& scene,
+                                          const BakeOptions& options) {
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    const SceneShaders shaders = bind_scene_shaders(scene, frame);
+    const std::vector<std::string> outputs = bake_output_files(scene, options);
+    std::vector<std::string> files = scene.sources;
+    for (const std::string& f : shader_input_files(shaders))
+        if (std::find(files.begin(), files.end(), f) == files.end() &&
+            std::find(outputs.begin(), outputs.end(), f) == outputs.end())
+            files.push_back(f);
+    return files;
+}
+
 BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
     BakeReport report;
     Stopwatch watch;

@@ -135,6 +135,10 @@ std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
     };
     for (const auto& s : shaders.surfaces) add(*s);
     for (const auto& l : shaders.lights) add(*l);
+    if (shaders.library)
+        for (const std::string& f : shaders.library->files())
+            if (std::find(files.begin(), files.end(), f) == files.end())
+                files.push_back(f);
     return files;
 }
 
