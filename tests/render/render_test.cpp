@@ -481,8 +481,9 @@ TEST(RenderOutput, FilesReadAndWrittenAreKnownBeforeRendering) {
     EXPECT_EQ(std::vector<std::string>(files.inputs.begin(), files.inputs.begin() + 2),
               (std::vector<std::string>{"m.0005.bkm", "n.ptc"}));
     for (const char* shader : {"read_ssdiffusion.slo", "skin.slo", "matte.slo"})
-        EXPECT_TRUE(std::any_of(files.inputs.begin(), files.inputs.end(),
-                                [&](const std::string& f) { return f.ends_with(shader); }))
+        EXPECT_TRUE(
+            std::any_of(files.inputs.begin(), files.inputs.end(),
+                        [&](const std::string& f) { return f.ends_with(shader); }))
             << shader;
     EXPECT_EQ(files.outputs,
               (std::vector<std::string>{"img.0005.exr", "sss.png", "view.exr"}));
