@@ -561,7 +561,8 @@ surface t(string cloud = "";
         e.context.execute(inst, b);
         FAIL() << "no error for a cloud named \"\"";
     } catch (const ShaderRuntimeError& err) {
-        EXPECT_NE(std::string(err.what()).find("texture3d"), std::string::npos) << err.what();
+        EXPECT_NE(std::string(err.what()).find("texture3d"), std::string::npos)
+            << err.what();
     }
 }
 
