@@ -38,6 +38,12 @@ struct SceneShaders {
 /// Whether `program` has an op named `op`.
 bool program_uses(const Program& program, std::string_view op);
 
+/// Whether `program` differentiates values over the batch (Du, Dv, Deriv,
+/// calculatenormal, area, filterstep, filtered texture and environment
+/// lookups): then a renderer shades ray hits with their neighbours
+/// (BatchLayout::Triplets) instead of alone.
+bool program_uses_derivatives(const Program& program);
+
 /// Loads and binds the scene's shaders. Throws ShaderNotFoundError (a shader
 /// the search path does not have, naming the call and the path),
 /// ShaderCompileError, ValueError (parameters of the wrong type).

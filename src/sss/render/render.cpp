@@ -265,6 +265,7 @@ struct Renderer {
     std::unique_ptr<ShadingResources> resources;
     std::unique_ptr<RenderServices> services;
     std::vector<Aov> aovs;
+    std::vector<char> derivatives;          ///< per primitive: its shader differentiates
     int values = 4;                         ///< per sample: RGBA, then the AOVs
     std::vector<Surface> surfaces;          ///< by primitive
     std::vector<uint32_t> camera_primitive; ///< camera mesh -> primitive
@@ -437,22 +438,29 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             ++end;
         const std::size_t n = end - begin;
         const Primitive& prim = job.scene->primitives[prim_index];
+        const ShaderInstance& shader = *job.shaders.surface_of[prim_index];
+        // A shader that differentiates gets each hit with two neighbours, one
+        // pixel step along the camera's x and y on the tangent plane (ray
+        // differentials), and forward differences between them.
+        const bool triplets = job.derivatives[prim_index] != 0;
+        const std::size_t r = triplets ? 3 : 1;
+        const std::size_t m = n * r;
         batch = ShadingBatch{};
-        batch.size = n;
-        batch.layout = BatchLayout::Points;
+        batch.size = m;
+        batch.layout = triplets ? BatchLayout::Triplets : BatchLayout::Points;
         batch.primitive = &prim;
-        batch.P.resize(n);
-        batch.N.resize(n);
-        batch.Ng.resize(n);
-        batch.I.resize(n);
-        batch.dPdu.resize(n);
-        batch.dPdv.resize(n);
-        batch.Cs.resize(n);
-        batch.Os.resize(n);
-        batch.du.assign(n, 1.0f);
-        batch.dv.assign(n, 1.0f);
-        batch.dicing_area.resize(n);
-        batch.radius.resize(n);
+        batch.P.resize(m);
+        batch.N.resize(m);
+        batch.Ng.resize(m);
+        batch.I.resize(m);
+        batch.dPdu.resize(m);
+        batch.dPdv.resize(m);
+        batch.Cs.resize(m);
+        batch.Os.resize(m);
+        batch.du.assign(m, 1.0f);
+        batch.dv.assign(m, 1.0f);
+        batch.dicing_area.resize(m);
+        batch.radius.resize(m);
         // Point i of the batch draws its samples from hash(seed, i): the
         // first hit's key fixes them for the batch (tiles are split into
         // batches the same way for any thread count).
@@ -463,19 +471,26 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             const glm::dvec3 pc = glm::dvec3(to_camera * glm::dvec4(h.p, 1.0));
             const glm::dvec3 oc = glm::dvec3(
                 to_camera * glm::dvec4(glm::dvec3(samples[h.sample].ray.origin), 1.0));
-            batch.P[k] = glm::vec3(pc);
-            batch.I[k] = glm::vec3(pc - oc);
-            batch.N[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.n));
-            batch.Ng[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.ng));
-            batch.dPdu[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdx);
-            batch.dPdv[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdy);
-            batch.Cs[k] = glm::vec3(h.cs);
-            batch.Os[k] = glm::vec3(h.os);
-            batch.dicing_area[k] = static_cast<float>(glm::length(
-                glm::cross(glm::dvec3(batch.dPdu[k]), glm::dvec3(batch.dPdv[k]))));
-            batch.radius[k] = static_cast<float>(h.radius);
+            const glm::vec3 du_c(glm::dmat3(to_camera) * h.dpdx);
+            const glm::vec3 dv_c(glm::dmat3(to_camera) * h.dpdy);
+            const glm::vec3 n_c(glm::normalize(job.normal_to_camera * h.n));
+            const glm::vec3 ng_c(glm::normalize(job.normal_to_camera * h.ng));
+            const float area = glm::length(glm::cross(du_c, dv_c));
+            for (std::size_t q = 0; q < r; ++q) {
+                const std::size_t i = k * r + q;
+                const glm::vec3 offset = q == 1 ? du_c : q == 2 ? dv_c : glm::vec3(0.0f);
+                batch.P[i] = glm::vec3(pc) + offset;
+                batch.I[i] = glm::vec3(pc - oc) + offset;
+                batch.N[i] = n_c;
+                batch.Ng[i] = ng_c;
+                batch.dPdu[i] = du_c;
+                batch.dPdv[i] = dv_c;
+                batch.Cs[i] = glm::vec3(h.cs);
+                batch.Os[i] = glm::vec3(h.os);
+                batch.dicing_area[i] = area;
+                batch.radius[i] = static_cast<float>(h.radius);
+            }
         }
-        const ShaderInstance& shader = *job.shaders.surface_of[prim_index];
         const auto& lights = job.shaders.lights_of[prim_index];
         context.execute(shader, batch, LightList(lights.data(), lights.size()));
         job.nan_points += context.nonfinite_points();
@@ -495,8 +510,8 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             const SurfaceHit& h = hits[begin + k];
             CameraSample& cs = samples[h.sample];
             float* v = &values[std::size_t(h.sample) * job.values];
-            const glm::dvec3 ci(batch.Ci[k]);
-            const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k]), 0.0, 1.0);
+            const glm::dvec3 ci(batch.Ci[k * r]);
+            const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k * r]), 0.0, 1.0);
             if (cs.layers == 0) cs.depth = h.depth;
             const glm::dvec3 w = cs.trans;
             for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(w[c] * ci[c]);
@@ -506,11 +521,12 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
                 float* dst = v + aov.offset;
                 if (aov.floats == 3) {
                     for (int c = 0; c < 3; ++c) {
-                        const double x = has[a] ? aov_values[a][k * 3 + c] : aov.fallback;
+                        const double x =
+                            has[a] ? aov_values[a][k * r * 3 + c] : aov.fallback;
                         dst[c] += static_cast<float>(w[c] * x);
                     }
                 } else {
-                    const double x = has[a] ? aov_values[a][k] : aov.fallback;
+                    const double x = has[a] ? aov_values[a][k * r] : aov.fallback;
                     const float add = static_cast<float>(coverage * x);
                     dst[0] += add;
                     if (aov.as_rgb) dst[1] += add, dst[2] += add;
@@ -678,6 +694,10 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     job.resources = std::make_unique<ShadingResources>();
     job.services = std::make_unique<RenderServices>(scene, frame);
     job.aovs = plan_aovs(scene, job.shaders);
+    job.derivatives.resize(scene.primitives.size());
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i)
+        job.derivatives[i] =
+            program_uses_derivatives(job.shaders.surface_of[i]->program());
     job.values = 4;
     for (const Aov& a : job.aovs) job.values += a.as_rgb ? 3 : a.floats;
     bool any_shadows = false;
