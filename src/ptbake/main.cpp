@@ -47,7 +47,8 @@ std::string usage() {
         "  -compress 0|1          gzip the .ptc (default 0)\n"
         "  -ptcversion 0|1|2      .ptc version written (default 0)\n"
         "  -newer 0|1             1: do nothing when every cloud the scene bakes is\n"
-        "                         newer than the RIB and every archive it reads\n"
+        "                         newer than the RIB, every archive, texture and\n"
+        "                         shader it reads\n"
         "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
         "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
         "  -h, --help             this help\n"
@@ -114,7 +115,8 @@ int run_job(const std::vector<std::string>& argv) {
     sss::Scene scene = sss::read_rib(rib, ropt);
     for (const std::string& w : scene.warnings) sss::warn(kTool, w);
     const double read_s = job.seconds();
-    if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt), scene.sources))
+    if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt),
+                                      sss::bake_input_files(scene, opt)))
         return 0;
 
     sss::BakeReport report = sss::bake_scene(scene, opt);

@@ -105,6 +105,8 @@ int run(const std::vector<std::string>& argv) {
                     report.camera_rays, report.shadow_rays);
         for (const std::string& f : report.files)
             std::printf("render: wrote %s\n", f.c_str());
+        for (const std::string& f : report.baked_files)
+            std::printf("render: baked %s\n", f.c_str());
         std::printf("render: read %.3f s, setup %.3f s, render %.3f s, write %.3f s, "
                     "total %.3f s, threads %d\n",
                     read_s, report.setup_seconds, report.render_seconds,

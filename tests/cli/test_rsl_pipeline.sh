@@ -58,6 +58,15 @@ if expect_rc 0 "ptbake with a user bake shader"; then
         fail "_irr is not 1.5 everywhere: $stats"
 fi
 
+# render on the bake RIB bakes too (bake3d runs in render, as in PRMan).
+rm -f mine.ptc
+run "$render" -progress 1 -res 32 24 bake.rib
+if expect_rc 0 "render of a bake RIB"; then
+    [[ -s mine.ptc ]] || fail "render of a bake RIB wrote no mine.ptc"
+    grep -q "baked mine.ptc" <<<"$out" || fail "render does not report the baked file: $out"
+    has_channel mine.ptc "color _irr" || fail "render's mine.ptc has no color _irr"
+fi
+
 # A surface shader with output variables, written as AOVs by Display modes.
 cat > glow.sl <<'SL'
 surface glow(color tint = 1;

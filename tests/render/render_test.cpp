@@ -476,7 +476,15 @@ TEST(RenderOutput, FilesReadAndWrittenAreKnownBeforeRendering) {
     sss::RenderJobOptions opt;
     opt.frame = 5;
     sss::RenderFiles files = sss::render_files(scene, opt);
-    EXPECT_EQ(files.inputs, (std::vector<std::string>{"m.0005.bkm", "n.ptc"}));
+    // The maps the shaders read, then the shaders themselves.
+    ASSERT_GE(files.inputs.size(), 4u);
+    EXPECT_EQ(std::vector<std::string>(files.inputs.begin(), files.inputs.begin() + 2),
+              (std::vector<std::string>{"m.0005.bkm", "n.ptc"}));
+    for (const char* shader : {"read_ssdiffusion.slo", "skin.slo", "matte.slo"})
+        EXPECT_TRUE(
+            std::any_of(files.inputs.begin(), files.inputs.end(),
+                        [&](const std::string& f) { return f.ends_with(shader); }))
+            << shader;
     EXPECT_EQ(files.outputs,
               (std::vector<std::string>{"img.0005.exr", "sss.png", "view.exr"}));
     // -o replaces the primary Display's file.
@@ -487,6 +495,32 @@ TEST(RenderOutput, FilesReadAndWrittenAreKnownBeforeRendering) {
     // Without Displays: "<scene>.exr".
     EXPECT_EQ(sss::render_files(scene_of(""), {}).outputs,
               std::vector<std::string>{"test.exr"});
+}
+
+TEST(RenderShading, DerivativesAtHitsComeFromThePixelFootprint) {
+    // An orthographic view of a plane facing the camera, 20 x 20 pixels over
+    // a 2 x 2 screen window: one pixel is 0.1 x 0.1 on the plane. A shader
+    // that differentiates is shaded with its hits' neighbours, so Du(P),
+    // area(P) and the derivative of a function of P are the pixel's.
+    sss::test::TempDir dir("sss_render_deriv");
+    sss::test::write_text(dir.file("footprint.sl"), R"(
+surface footprint() {
+    float a = area(P);
+    float du = length(Du(P));
+    float dx = Du(xcomp(P) * xcomp(P));
+    Ci = color(a * 100, du * 10, 0);
+    Oi = 1;
+}
+)");
+    const std::string rib =
+        "Format 20 20 1\nPixelSamples 1 1\nProjection \"orthographic\"\n"
+        "ScreenWindow -1 1 -1 1\nTranslate 0 0 5\nWorldBegin\n"
+        "Surface \"footprint\"\n"
+        "Polygon \"P\" [-3 -3 0  -3 3 0  3 3 0  3 -3 0]\nWorldEnd\n";
+    const sss::Scene scene = sss::parse_rib(rib, dir.file("scene.rib"));
+    const sss::Image img = render(scene);
+    EXPECT_NEAR(centre(img, "R"), 1.0, 1e-3); // area = 0.01
+    EXPECT_NEAR(centre(img, "G"), 1.0, 1e-3); // |Du(P)| = 0.1
 }
 
 TEST(RenderDisplacement, DisplacedSphereHasALargerSilhouette) {

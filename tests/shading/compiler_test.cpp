@@ -587,8 +587,10 @@ TEST(RslErrors, VaryingToUniform) {
 TEST(RslErrors, ReadOnly) {
     auto ds = compile_errors("surface s(float Kd = 1) { Kd = 2; }");
     EXPECT_TRUE(has_error(ds, "cannot assign to shader parameter 'Kd'"));
-    ds = compile_errors("surface s() { P = P + 1; }");
-    EXPECT_TRUE(has_error(ds, "cannot assign to global variable 'P'"));
+    // P and N are results of surface shaders too (RISpec 12.1); u is not.
+    EXPECT_NO_THROW(compile_text("surface s() { P = P + 1; N = -N; }"));
+    ds = compile_errors("surface s() { u = 1; }");
+    EXPECT_TRUE(has_error(ds, "cannot assign to global variable 'u'"));
     ds = compile_errors("displacement d() { Ci = 1; }");
     EXPECT_TRUE(has_error(ds, "'Ci' is not available in a displacement shader"));
     ds = compile_errors("light l() { Ci = 1; }");

@@ -21,6 +21,7 @@
 #include <fstream>
 
 #include "engine_test_util.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
 #include "test_util.h"
@@ -499,19 +500,40 @@ surface t(output varying float r[12] = {0,0,0,0,0,0,0,0,0,0,0,0};) {
 // --- 3-D textures -----------------------------------------------------------------
 
 TEST(RslEngineTextures, Bake3dRecordsAndTexture3dMisses) {
+    // A cloud whose only point is far from the plane: every lookup misses.
+    sss::test::TempDir dir;
+    const std::string cloud_file = dir.file("far.ptc");
+    {
+        PointCloud cloud;
+        cloud.resize(1);
+        cloud.add_channel("a", ChannelType::Float);
+        cloud.positions[0] = glm::vec3(100.0f, 100.0f, 100.0f);
+        cloud.normals[0] = glm::vec3(0.0f, 0.0f, 1.0f);
+        cloud.radii[0] = 0.01f;
+        cloud.find_channel("a")->data[0] = 3.0f;
+        write_point_cloud(cloud, cloud_file, {});
+    }
     Engine e;
     e.services.scene_.options.camera.world_to_camera =
         glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 2));
     ShadingBatch b = plane_grid(4, 2);
     b.Cs.assign(b.size, glm::vec3(0.5f, 0.25f, 1.0f));
     ShaderInstance inst = e.instance(R"(
-surface t(output varying float r = 0; output varying float x = 7; output varying float y = 0;) {
+surface t(string cloud = "";
+          output varying float r = 0; output varying float x = 7; output varying float y = 0;) {
     if (u > 0.5)
         y = bake3d("out.ptc", "a, col", P, N, "a", u, "col", Cs, "radius", 0.25, "interpolate", 1);
-    r = texture3d("does-not-exist.ptc", P, N, "a", x);
+    r = texture3d(cloud, P, N, "a", x);
 }
 )");
-    e.context.execute(inst, b);
+    ParamList params;
+    Param file;
+    file.name = "cloud";
+    file.type = ParamType::String;
+    file.strings = {cloud_file};
+    params.set(file);
+    ShaderInstance with_cloud(inst.program_ptr(), params, Matrix4(1.0), "test.rib:1");
+    e.context.execute(with_cloud, b);
     ASSERT_EQ(e.services.bakes.size(), 1u);
     const Bake3dRecord& rec = e.services.bakes[0];
     EXPECT_EQ(rec.file, "out.ptc");
@@ -533,7 +555,15 @@ surface t(output varying float r = 0; output varying float x = 7; output varying
         EXPECT_EQ(x[i], 7.0f);
         EXPECT_EQ(y[i], b.u[i] > 0.5f ? 1.0f : 0.0f);
     }
-    EXPECT_FALSE(e.services.warnings.empty());
+
+    // A file that cannot be read stops the shader with an error naming it.
+    try {
+        e.context.execute(inst, b);
+        FAIL() << "no error for a cloud named \"\"";
+    } catch (const ShaderRuntimeError& err) {
+        EXPECT_NE(std::string(err.what()).find("texture3d"), std::string::npos)
+            << err.what();
+    }
 }
 
 TEST(RslEngineTextures, TextureLooksUpThePixels) {

@@ -113,6 +113,11 @@ BakeReport bake_scene(const Scene& scene, const BakeOptions& options);
 std::vector<std::string> bake_output_files(const Scene& scene,
                                            const BakeOptions& options);
 
+/// The files a bake reads (for -newer 1): the scene's sources, then the
+/// files its shaders read and the shaders themselves (shader_input_files),
+/// without the bake's own outputs.
+std::vector<std::string> bake_input_files(const Scene& scene, const BakeOptions& options);
+
 /// Bakes without writing: the clouds by output path, in first-use order.
 std::vector<std::pair<std::string, PointCloud>>
 bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report);

@@ -36,6 +36,9 @@ struct RenderJobOptions {
 /// What happened.
 struct RenderReport {
     std::vector<std::string> files; ///< images written
+    /// Point clouds the shaders' bake3d calls wrote (a bake RIB rendered:
+    /// the shaded hit points, written at the end of render_image).
+    std::vector<std::string> baked_files;
     std::vector<std::string> warnings;
     std::size_t triangles = 0;
     std::size_t camera_rays = 0;

@@ -29,12 +29,21 @@ using ChannelDeclarations = std::vector<std::pair<std::string, std::string>>;
 PointCloud bake3d_point_cloud(std::span<const Bake3dRecord> records,
                               const ChannelDeclarations& declared = {});
 
-/// Groups records by file, merges each group (bake3d_point_cloud) and writes
-/// it atomically (write_point_cloud: .ply by extension, else .ptc). Returns
-/// the files written, in the order of their first record. Throws ValueError
-/// naming the file, and IoError.
+/// The point clouds of bake3d records, one per file in the order of the
+/// files' first records: each file's records merged (bake3d_point_cloud)
+/// with a float `_area` channel first (the records' own "_area" values, else
+/// Bake3dRecord::area), and, given a camera, its world-to-eye and
+/// world-to-NDC matrices and image format. Throws ValueError naming the file.
+std::vector<std::pair<std::string, PointCloud>>
+bake3d_clouds(std::span<const Bake3dRecord> records,
+              const ChannelDeclarations& declared = {}, const Camera* camera = nullptr);
+
+/// bake3d_clouds, each cloud written atomically (write_point_cloud: .ply by
+/// extension, else .ptc). Returns the files written, in the order of their
+/// first record. Throws ValueError naming the file, and IoError.
 std::vector<std::string> write_bake3d_files(std::span<const Bake3dRecord> records,
                                             const ChannelDeclarations& declared = {},
-                                            const PointCloudWriteOptions& options = {});
+                                            const PointCloudWriteOptions& options = {},
+                                            const Camera* camera = nullptr);
 
 } // namespace sss

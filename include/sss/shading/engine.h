@@ -263,6 +263,8 @@ public:
 
     /// Points of the last execute() whose results held NaN or infinity (and
     /// were written as 0).
+    /// Shadow and occlusion rays this context has traced (all batches).
+    uint64_t rays_traced() const;
     std::size_t nonfinite_points() const;
     /// "N points of shader X at file:line gave NaN or infinity; written as 0"
     /// for the last execute(), or "" when there were none.
@@ -275,6 +277,7 @@ public:
     /// After execute: the values of the shader's symbol `name` (an output
     /// parameter or global, for AOVs) at every point, as floats
     /// (type.floats() per point). False when the shader has no such symbol.
+    /// Valid until the next execute(), even when the ShaderInstance is gone.
     bool output(const std::string& name, TypeSpec& type,
                 std::vector<float>& values) const;
 

@@ -43,15 +43,22 @@ struct SceneShaders {
 /// Whether `program` has an op named `op`.
 bool program_uses(const Program& program, std::string_view op);
 
-/// Loads and binds the scene's shaders (surface, displacement, light). Throws
-/// ShaderNotFoundError (a shader the search path does not have, naming the call and the
-/// path), ShaderCompileError, ValueError (parameters of the wrong type).
+/// Whether `program` differentiates values over the batch (Du, Dv, Deriv,
+/// calculatenormal, area, filterstep, filtered texture and environment
+/// lookups): then a renderer shades ray hits with their neighbours
+/// (BatchLayout::Triplets) instead of alone.
+bool program_uses_derivatives(const Program& program);
+
+/// Loads and binds the scene's shaders (surface, displacement, light). Throws ShaderNotFoundError (a shader
+/// the search path does not have, naming the call and the path),
+/// ShaderCompileError, ValueError (parameters of the wrong type).
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
 
 /// String parameter values of the bound shaders that name existing files, or
 /// files by their extension (.bkm .ptc .ply .tx .tex .exr .png .tif .tiff
 /// .jpg .hdr): the textures, brick maps and point clouds the shaders read,
-/// each once, the inputs of `-newer 1`. A bake shader's output "filename"
+/// then the shader files (.slo, .sl) loaded, each once: the inputs of
+/// `-newer 1`. A bake shader's output "filename"
 /// is among them too; callers drop their own outputs.
 std::vector<std::string> shader_input_files(const SceneShaders& shaders);
 

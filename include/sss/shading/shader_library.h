@@ -50,11 +50,14 @@ public:
     std::shared_ptr<const Program> load(const std::string& name, ShaderKind kind,
                                         const std::string& where);
     const std::vector<std::string>& search_path() const { return m_path; }
+    /// The .slo / .sl files loaded so far, in load order (inputs of -newer).
+    std::vector<std::string> files() const;
 
 private:
     std::vector<std::string> m_path;
-    std::mutex m_mutex;
+    mutable std::mutex m_mutex;
     std::map<std::string, std::shared_ptr<const Program>> m_loaded;
+    std::vector<std::string> m_files;
 };
 
 } // namespace sss

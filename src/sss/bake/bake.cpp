@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,6 +29,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/shading/bake3d_file.h"
 #include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
@@ -54,26 +56,6 @@ struct BakeJob {
     bool has_material = false;
     glm::dvec3 albedo{0.0}, albedo2{0.0}, dmfp{0.0}, dmfp2{0.0};
 };
-
-// The DisplayChannel declaration of a channel, if any, must agree with what
-// the bake shaders produce (colours; _area is a float).
-void check_declared_type(const Scene& scene, const std::string& channel,
-                         ChannelType produced, const std::string& where) {
-    for (const auto& [name, type] : scene.options.display_channels) {
-        if (name != channel) continue;
-        std::string last = type;
-        auto sp = last.find_last_of(" \t");
-        if (sp != std::string::npos) last = last.substr(sp + 1);
-        auto t = parse_channel_type(last);
-        if (!t ||
-            (*t != produced && !(produced == ChannelType::Color &&
-                                 (*t == ChannelType::Point || *t == ChannelType::Vector ||
-                                  *t == ChannelType::Normal))))
-            throw ValueError(where + ": DisplayChannel declares " + channel + " as '" +
-                             type + "' but the bake shader writes a " +
-                             channel_type_name(produced));
-    }
-}
 
 /// A colour parameter of a bound shader: the RIB's value, else the
 /// shader's constant default, else `fallback`.
@@ -113,7 +95,6 @@ BakeJob make_job(const Scene& scene, std::size_t index, const ShaderInstance& sh
     job.prim = index;
     job.shader = &shader;
     job.file = bake_file(prim, shader, options);
-    check_declared_type(scene, "_area", ChannelType::Float, where);
 
     // A shader with a material (bake_sss_params and shaders like it): the
     // range its points take, for the spacing checks.
@@ -168,11 +149,6 @@ double mfp_mm(const MaterialSpec& m, const glm::dvec3* albedo, const glm::dvec3*
         if (st > 0.0) best = std::min(best, 1.0 / st);
     }
     return best;
-}
-
-void store_matrix(const Matrix4& m, std::array<float, 16>& out) {
-    const double* p = glm::value_ptr(m);
-    for (int i = 0; i < 16; ++i) out[i] = static_cast<float>(p[i]);
 }
 
 // How far off the surface shadow rays start, for points [begin, end) of a
@@ -541,142 +517,48 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
     return records;
 }
 
-/// The channel type of a value bake3d wrote with `floats` floats: a
-/// DisplayChannel declaration decides between the triples.
-ChannelType baked_channel_type(const Scene& scene, const std::string& name, int floats) {
-    if (floats == 1) return ChannelType::Float;
-    if (floats == 16) return ChannelType::Matrix;
-    for (const auto& [declared, type] : scene.options.display_channels) {
-        if (declared != name) continue;
-        std::string last = type;
-        const auto sp = last.find_last_of(" \t");
-        if (sp != std::string::npos) last = last.substr(sp + 1);
-        const auto t = parse_channel_type(last);
-        if (t && channel_type_size(*t) == 3) return *t;
-    }
-    return ChannelType::Color;
-}
-
 /// The point clouds by output file, in first-use order, from the bake3d
-/// records in chunk order: every file gets the union of the channels baked
-/// into it (points that did not bake a channel get 0, with a warning), and
-/// `_area` always.
+/// records in chunk order (bake3d_clouds: `_area` always, the camera's
+/// matrices), with the report's per-file figures.
 std::vector<std::pair<std::string, PointCloud>>
 gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
               std::vector<std::vector<Bake3dRecord>>& records, BakeReport& report) {
-    struct FilePlan {
-        std::string path;
-        std::vector<std::pair<std::string, ChannelType>> channels;
-        std::size_t points = 0;
-        bool mixed = false;
-    };
-    std::vector<FilePlan> files;
-    std::map<std::string, std::size_t> index;
-    for (const auto& chunk : records)
-        for (const Bake3dRecord& r : chunk) {
+    std::vector<Bake3dRecord> all;
+    std::map<std::string, std::vector<std::string>> first_channels;
+    std::set<std::string> mixed;
+    for (auto& chunk : records)
+        for (Bake3dRecord& r : chunk) {
             if (r.file.empty())
-                throw MissingBakeFileError(scene.path +
-                                           ": bake3d was called without a file "
-                                           "name (give the shader a "
-                                           "\"filename\" or ptbake -o)");
-            auto [it, inserted] = index.emplace(r.file, files.size());
-            if (inserted) {
-                FilePlan f;
-                f.path = r.file;
-                f.channels.emplace_back("_area", ChannelType::Float);
-                files.push_back(f);
-            }
-            FilePlan& f = files[it->second];
-            f.points += r.P.size();
-            for (std::size_t c = 0; c < r.channels.size(); ++c) {
-                const std::string& name = r.channels[c];
-                const ChannelType type =
-                    baked_channel_type(scene, name, r.channel_floats[c]);
-                auto found = std::find_if(f.channels.begin(), f.channels.end(),
-                                          [&](const auto& e) { return e.first == name; });
-                if (found == f.channels.end()) {
-                    if (!inserted || f.points != r.P.size()) f.mixed = true;
-                    f.channels.emplace_back(name, type);
-                } else if (channel_type_size(found->second) != r.channel_floats[c]) {
-                    throw ValueError(r.file + ": channel " + name +
-                                     " is baked with different types");
-                }
-                check_declared_type(scene, name, type, r.file);
-            }
+                throw MissingBakeFileError(
+                    scene.path + ": bake3d was called without a file name (give "
+                                 "the shader a \"filename\" or ptbake -o)");
+            auto [it, added] = first_channels.try_emplace(r.file, r.channels);
+            if (!added && it->second != r.channels) mixed.insert(r.file);
+            all.push_back(std::move(r));
         }
-    for (const BakeJob& job : jobs)
-        if (!job.file.empty() && !index.count(job.file))
-            report.warnings.push_back(scene.primitives[job.prim].source +
-                                      ": the shader baked no point into " + job.file);
-
-    const Camera& cam = scene.options.camera;
-    std::vector<std::pair<std::string, PointCloud>> out;
-    for (FilePlan& f : files) {
-        PointCloud cloud;
-        cloud.resize(f.points);
-        for (const auto& [name, type] : f.channels) cloud.add_channel(name, type);
-        store_matrix(cam.world_to_camera, cloud.world_to_eye);
-        store_matrix(cam.world_to_ndc(), cloud.world_to_ndc);
-        cloud.format = {float(cam.xres), float(cam.yres), float(cam.pixel_aspect)};
-        if (f.mixed)
-            report.warnings.push_back(f.path +
+    records.clear();
+    std::vector<std::pair<std::string, PointCloud>> out =
+        bake3d_clouds(all, scene.options.display_channels, &scene.options.camera);
+    for (const auto& [path, cloud] : out) {
+        BakeFileReport fr;
+        fr.path = path;
+        fr.points = cloud.size();
+        if (const Channel* area = cloud.find_channel("_area"))
+            for (float a : area->data) fr.area += a;
+        for (const Channel& c : cloud.channels)
+            fr.channels.push_back(std::string(channel_type_name(c.type)) + " " + c.name);
+        for (const BakeJob& job : jobs)
+            if (job.file == path) fr.objects.push_back(scene.primitives[job.prim].source);
+        if (mixed.count(path))
+            report.warnings.push_back(path +
                                       ": objects bake different channels into this file; "
                                       "missing channels are filled with 0");
-        out.emplace_back(f.path, std::move(cloud));
-        BakeFileReport fr;
-        fr.path = f.path;
-        report.files.push_back(fr);
-    }
-    std::vector<std::size_t> fill(files.size(), 0);
-    for (std::size_t c = 0; c < records.size(); ++c) {
-        for (Bake3dRecord& r : records[c]) {
-            const std::size_t fi = index.at(r.file);
-            PointCloud& cloud = out[fi].second;
-            BakeFileReport& fr = report.files[fi];
-            const std::size_t base = fill[fi];
-            const std::size_t n = r.P.size();
-            Channel* area = cloud.find_channel("_area");
-            int area_offset = -1;
-            int offset = 0;
-            for (std::size_t k = 0; k < r.channels.size(); ++k) {
-                if (r.channels[k] == "_area" && r.channel_floats[k] == 1)
-                    area_offset = offset;
-                offset += r.channel_floats[k];
-            }
-            const int stride = offset;
-            for (std::size_t i = 0; i < n; ++i) {
-                cloud.positions[base + i] = r.P[i];
-                cloud.normals[base + i] = r.N[i];
-                cloud.radii[base + i] = r.radius[i];
-                const float a = area_offset >= 0 ? r.values[i * stride + area_offset]
-                                                 : (r.area.empty() ? 0.0f : r.area[i]);
-                area->data[base + i] = a;
-                fr.area += a;
-            }
-            offset = 0;
-            for (std::size_t k = 0; k < r.channels.size(); ++k) {
-                const int floats = r.channel_floats[k];
-                if (r.channels[k] != "_area") {
-                    Channel* ch = cloud.find_channel(r.channels[k]);
-                    for (std::size_t i = 0; i < n; ++i)
-                        for (int q = 0; q < floats; ++q)
-                            ch->data[(base + i) * floats + q] =
-                                r.values[i * stride + offset + q];
-                }
-                offset += floats;
-            }
-            fr.points += n;
-            fill[fi] += n;
-            r = Bake3dRecord{}; // frees the record's memory as the cloud fills
-        }
+        report.files.push_back(std::move(fr));
     }
     for (const BakeJob& job : jobs)
-        if (auto it = index.find(job.file); it != index.end())
-            report.files[it->second].objects.push_back(scene.primitives[job.prim].source);
-    for (std::size_t f = 0; f < out.size(); ++f)
-        for (const Channel& c : out[f].second.channels)
-            report.files[f].channels.push_back(std::string(channel_type_name(c.type)) +
-                                               " " + c.name);
+        if (!job.file.empty() && !first_channels.count(job.file))
+            report.warnings.push_back(scene.primitives[job.prim].source +
+                                      ": the shader baked no point into " + job.file);
     return out;
 }
 
@@ -744,6 +626,19 @@ std::vector<std::string> bake_output_files(const Scene& scene,
         if (!file.empty() && std::find(files.begin(), files.end(), file) == files.end())
             files.push_back(std::move(file));
     }
+    return files;
+}
+
+std::vector<std::string> bake_input_files(const Scene& scene,
+                                          const BakeOptions& options) {
+    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    const SceneShaders shaders = bind_scene_shaders(scene, frame);
+    const std::vector<std::string> outputs = bake_output_files(scene, options);
+    std::vector<std::string> files = scene.sources;
+    for (const std::string& f : shader_input_files(shaders))
+        if (std::find(files.begin(), files.end(), f) == files.end() &&
+            std::find(outputs.begin(), outputs.end(), f) == outputs.end())
+            files.push_back(f);
     return files;
 }
 

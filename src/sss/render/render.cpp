@@ -38,6 +38,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/shading/bake3d_file.h"
 #include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_shaders.h"
@@ -239,13 +240,21 @@ public:
     }
     std::optional<int> frame() const override { return m_frame; }
     void set_occluders(const RayTracer* tracer) { m_occluders = tracer; }
+    /// bake3d in a render (a bake RIB rendered): the records go to the
+    /// current tile's list, so the files come out in tile order.
+    void bake3d(Bake3dRecord&& record) override {
+        if (s_sink) s_sink->push_back(std::move(record));
+    }
+    static void set_sink(std::vector<Bake3dRecord>* sink) { s_sink = sink; }
 
 private:
     const Scene& m_scene;
     std::optional<int> m_frame;
     const RayTracer* m_occluders = nullptr;
     std::mutex m_mutex;
+    static thread_local std::vector<Bake3dRecord>* s_sink;
 };
+thread_local std::vector<Bake3dRecord>* RenderServices::s_sink = nullptr;
 
 /// Everything the pixel loop reads (immutable once built).
 struct Renderer {
@@ -257,6 +266,7 @@ struct Renderer {
     std::unique_ptr<ShadingResources> resources;
     std::unique_ptr<RenderServices> services;
     std::vector<Aov> aovs;
+    std::vector<char> derivatives;          ///< per primitive: its shader differentiates
     int values = 4;                         ///< per sample: RGBA, then the AOVs
     std::vector<Surface> surfaces;          ///< by primitive
     std::vector<uint32_t> camera_primitive; ///< camera mesh -> primitive
@@ -270,8 +280,10 @@ struct Renderer {
     glm::dmat3 normal_to_camera{1.0}; ///< inverse transpose of world->camera
     glm::dvec3 camera_x{1, 0, 0}, camera_y{0, 1, 0}; ///< camera axes in world space
     std::atomic<uint64_t> camera_rays{0};
+    std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
     std::atomic<uint64_t> nan_points{0};
+    std::vector<std::vector<Bake3dRecord>> tile_bakes; ///< bake3d records per tile
 };
 
 /// One camera sample of a tile, while its ray goes through the layers.
@@ -427,22 +439,29 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             ++end;
         const std::size_t n = end - begin;
         const Primitive& prim = job.scene->primitives[prim_index];
+        const ShaderInstance& shader = *job.shaders.surface_of[prim_index];
+        // A shader that differentiates gets each hit with two neighbours, one
+        // pixel step along the camera's x and y on the tangent plane (ray
+        // differentials), and forward differences between them.
+        const bool triplets = job.derivatives[prim_index] != 0;
+        const std::size_t r = triplets ? 3 : 1;
+        const std::size_t m = n * r;
         batch = ShadingBatch{};
-        batch.size = n;
-        batch.layout = BatchLayout::Points;
+        batch.size = m;
+        batch.layout = triplets ? BatchLayout::Triplets : BatchLayout::Points;
         batch.primitive = &prim;
-        batch.P.resize(n);
-        batch.N.resize(n);
-        batch.Ng.resize(n);
-        batch.I.resize(n);
-        batch.dPdu.resize(n);
-        batch.dPdv.resize(n);
-        batch.Cs.resize(n);
-        batch.Os.resize(n);
-        batch.du.assign(n, 1.0f);
-        batch.dv.assign(n, 1.0f);
-        batch.dicing_area.resize(n);
-        batch.radius.resize(n);
+        batch.P.resize(m);
+        batch.N.resize(m);
+        batch.Ng.resize(m);
+        batch.I.resize(m);
+        batch.dPdu.resize(m);
+        batch.dPdv.resize(m);
+        batch.Cs.resize(m);
+        batch.Os.resize(m);
+        batch.du.assign(m, 1.0f);
+        batch.dv.assign(m, 1.0f);
+        batch.dicing_area.resize(m);
+        batch.radius.resize(m);
         // Point i of the batch draws its samples from hash(seed, i): the
         // first hit's key fixes them for the batch (tiles are split into
         // batches the same way for any thread count).
@@ -453,19 +472,26 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             const glm::dvec3 pc = glm::dvec3(to_camera * glm::dvec4(h.p, 1.0));
             const glm::dvec3 oc = glm::dvec3(
                 to_camera * glm::dvec4(glm::dvec3(samples[h.sample].ray.origin), 1.0));
-            batch.P[k] = glm::vec3(pc);
-            batch.I[k] = glm::vec3(pc - oc);
-            batch.N[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.n));
-            batch.Ng[k] = glm::vec3(glm::normalize(job.normal_to_camera * h.ng));
-            batch.dPdu[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdx);
-            batch.dPdv[k] = glm::vec3(glm::dmat3(to_camera) * h.dpdy);
-            batch.Cs[k] = glm::vec3(h.cs);
-            batch.Os[k] = glm::vec3(h.os);
-            batch.dicing_area[k] = static_cast<float>(glm::length(
-                glm::cross(glm::dvec3(batch.dPdu[k]), glm::dvec3(batch.dPdv[k]))));
-            batch.radius[k] = static_cast<float>(h.radius);
+            const glm::vec3 du_c(glm::dmat3(to_camera) * h.dpdx);
+            const glm::vec3 dv_c(glm::dmat3(to_camera) * h.dpdy);
+            const glm::vec3 n_c(glm::normalize(job.normal_to_camera * h.n));
+            const glm::vec3 ng_c(glm::normalize(job.normal_to_camera * h.ng));
+            const float area = glm::length(glm::cross(du_c, dv_c));
+            for (std::size_t q = 0; q < r; ++q) {
+                const std::size_t i = k * r + q;
+                const glm::vec3 offset = q == 1 ? du_c : q == 2 ? dv_c : glm::vec3(0.0f);
+                batch.P[i] = glm::vec3(pc) + offset;
+                batch.I[i] = glm::vec3(pc - oc) + offset;
+                batch.N[i] = n_c;
+                batch.Ng[i] = ng_c;
+                batch.dPdu[i] = du_c;
+                batch.dPdv[i] = dv_c;
+                batch.Cs[i] = glm::vec3(h.cs);
+                batch.Os[i] = glm::vec3(h.os);
+                batch.dicing_area[i] = area;
+                batch.radius[i] = static_cast<float>(h.radius);
+            }
         }
-        const ShaderInstance& shader = *job.shaders.surface_of[prim_index];
         const auto& lights = job.shaders.lights_of[prim_index];
         context.execute(shader, batch, LightList(lights.data(), lights.size()));
         job.nan_points += context.nonfinite_points();
@@ -485,8 +511,8 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             const SurfaceHit& h = hits[begin + k];
             CameraSample& cs = samples[h.sample];
             float* v = &values[std::size_t(h.sample) * job.values];
-            const glm::dvec3 ci(batch.Ci[k]);
-            const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k]), 0.0, 1.0);
+            const glm::dvec3 ci(batch.Ci[k * r]);
+            const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k * r]), 0.0, 1.0);
             if (cs.layers == 0) cs.depth = h.depth;
             const glm::dvec3 w = cs.trans;
             for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(w[c] * ci[c]);
@@ -496,11 +522,12 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
                 float* dst = v + aov.offset;
                 if (aov.floats == 3) {
                     for (int c = 0; c < 3; ++c) {
-                        const double x = has[a] ? aov_values[a][k * 3 + c] : aov.fallback;
+                        const double x =
+                            has[a] ? aov_values[a][k * r * 3 + c] : aov.fallback;
                         dst[c] += static_cast<float>(w[c] * x);
                     }
                 } else {
-                    const double x = has[a] ? aov_values[a][k] : aov.fallback;
+                    const double x = has[a] ? aov_values[a][k * r] : aov.fallback;
                     const float add = static_cast<float>(coverage * x);
                     dst[0] += add;
                     if (aov.as_rgb) dst[1] += add, dst[2] += add;
@@ -668,6 +695,10 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     job.resources = std::make_unique<ShadingResources>();
     job.services = std::make_unique<RenderServices>(scene, frame);
     job.aovs = plan_aovs(scene, job.shaders);
+    job.derivatives.resize(scene.primitives.size());
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i)
+        job.derivatives[i] =
+            program_uses_derivatives(job.shaders.surface_of[i]->program());
     job.values = 4;
     for (const Aov& a : job.aovs) job.values += a.as_rgb ? 3 : a.floats;
     bool any_shadows = false;
@@ -797,8 +828,11 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
     std::atomic<std::size_t> tiles_done{0};
     tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
         [&] { return std::make_unique<ShadingContext>(*job.resources, *job.services); });
+    job.tile_bakes.assign(tiles, {});
     tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
         ShadingContext& context = *contexts.local();
+        const uint64_t rays_before = context.rays_traced();
+        RenderServices::set_sink(&job.tile_bakes[t]);
         const int x0 = grid.x0(t);
         const int y0 = grid.y0(t);
         const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
@@ -879,6 +913,8 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                 }
             }
         }
+        RenderServices::set_sink(nullptr);
+        job.shadow_rays += context.rays_traced() - rays_before;
         job.camera_rays += camera_count;
         job.bad_samples += bad_count;
         if (options.progress) options.progress->update(++tiles_done, tiles);
@@ -936,6 +972,7 @@ Image resolve_pixels(const Renderer& job, const TileGrid& grid,
 /// The ray counts, and warnings about samples that went wrong numerically.
 void report_rays(const Renderer& job, RenderReport& report) {
     report.camera_rays = job.camera_rays.load();
+    report.shadow_rays = job.shadow_rays.load();
     if (job.bad_samples.load() > 0)
         report.warnings.push_back(std::to_string(job.bad_samples.load()) +
                                   " samples had non-finite values and were left black");
@@ -943,6 +980,21 @@ void report_rays(const Renderer& job, RenderReport& report) {
         report.warnings.push_back(
             std::to_string(job.nan_points.load()) +
             " shading points gave NaN or infinite values, written as 0");
+}
+
+/// The point clouds bake3d calls made during the render (a bake RIB
+/// rendered bakes as in PRMan: the shaded hit points), in tile order.
+void write_render_bakes(Renderer& job, const Scene& scene, RenderReport& report) {
+    std::vector<Bake3dRecord> records;
+    for (auto& tile : job.tile_bakes)
+        for (Bake3dRecord& r : tile) records.push_back(std::move(r));
+    job.tile_bakes.clear();
+    if (records.empty()) return;
+    for (const Bake3dRecord& r : records)
+        if (r.file.empty())
+            throw ValueError(scene.path + ": bake3d was called without a file name");
+    report.baked_files =
+        write_bake3d_files(records, scene.options.display_channels, {}, &job.camera);
 }
 
 } // namespace
@@ -974,6 +1026,7 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
+    write_render_bakes(job, scene, report);
     return image;
 }
 

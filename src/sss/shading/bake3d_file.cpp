@@ -2,6 +2,8 @@
 
 #include "sss/shading/bake3d_file.h"
 
+#include <array>
+
 #include <algorithm>
 #include <map>
 
@@ -108,31 +110,85 @@ PointCloud bake3d_point_cloud(std::span<const Bake3dRecord> records,
     return cloud;
 }
 
-std::vector<std::string> write_bake3d_files(std::span<const Bake3dRecord> records,
-                                            const ChannelDeclarations& declared,
-                                            const PointCloudWriteOptions& options) {
-    std::vector<std::string> files;
-    std::map<std::string, std::vector<std::size_t>> by_file; // record indices
-    for (std::size_t i = 0; i < records.size(); ++i) {
-        auto [it, added] = by_file.try_emplace(records[i].file);
-        if (added) files.push_back(records[i].file);
-        it->second.push_back(i);
+namespace {
+
+/// `r` with a float "_area" channel first (its own, else its areas).
+Bake3dRecord with_area_first(const Bake3dRecord& r) {
+    int offset = 0, at = -1;
+    for (std::size_t k = 0; k < r.channels.size(); ++k) {
+        if (r.channels[k] == "_area" && r.channel_floats[k] == 1) at = offset;
+        offset += r.channel_floats[k];
     }
+    const std::size_t stride = static_cast<std::size_t>(offset);
+    const std::size_t n = r.P.size();
+    Bake3dRecord out = r;
+    out.channels.assign(1, "_area");
+    out.channel_floats.assign(1, 1);
+    for (std::size_t k = 0; k < r.channels.size(); ++k)
+        if (!(r.channels[k] == "_area" && r.channel_floats[k] == 1)) {
+            out.channels.push_back(r.channels[k]);
+            out.channel_floats.push_back(r.channel_floats[k]);
+        }
+    out.values.clear();
+    out.values.reserve(n * (stride + (at < 0 ? 1 : 0)));
+    for (std::size_t i = 0; i < n; ++i) {
+        const float* v = r.values.data() + i * stride;
+        out.values.push_back(at >= 0 ? v[at] : (i < r.area.size() ? r.area[i] : 0.0f));
+        int o = 0;
+        for (std::size_t k = 0; k < r.channels.size(); ++k) {
+            if (o != at)
+                out.values.insert(out.values.end(), v + o, v + o + r.channel_floats[k]);
+            o += r.channel_floats[k];
+        }
+    }
+    return out;
+}
+
+void store_matrix(const glm::dmat4& m, std::array<float, 16>& out) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) out[c * 4 + r] = static_cast<float>(m[c][r]);
+}
+
+} // namespace
+
+std::vector<std::pair<std::string, PointCloud>>
+bake3d_clouds(std::span<const Bake3dRecord> records, const ChannelDeclarations& declared,
+              const Camera* camera) {
+    std::vector<std::string> files;
+    std::map<std::string, std::vector<Bake3dRecord>> by_file;
+    for (const Bake3dRecord& r : records) {
+        auto [it, added] = by_file.try_emplace(r.file);
+        if (added) files.push_back(r.file);
+        it->second.push_back(with_area_first(r));
+    }
+    std::vector<std::pair<std::string, PointCloud>> out;
     for (const std::string& file : files) {
         PointCloud cloud;
         try {
-            if (files.size() == 1) {
-                cloud = bake3d_point_cloud(records, declared);
-            } else {
-                // Records of several files: this file's, copied together.
-                std::vector<Bake3dRecord> mine;
-                for (std::size_t i : by_file[file]) mine.push_back(records[i]);
-                cloud = bake3d_point_cloud(mine, declared);
-            }
+            cloud = bake3d_point_cloud(by_file[file], declared);
         } catch (const ValueError& e) {
             throw ValueError(file + ": " + e.what());
         }
+        by_file[file].clear();
+        if (camera) {
+            store_matrix(camera->world_to_camera, cloud.world_to_eye);
+            store_matrix(camera->world_to_ndc(), cloud.world_to_ndc);
+            cloud.format = {float(camera->xres), float(camera->yres),
+                            float(camera->pixel_aspect)};
+        }
+        out.emplace_back(file, std::move(cloud));
+    }
+    return out;
+}
+
+std::vector<std::string> write_bake3d_files(std::span<const Bake3dRecord> records,
+                                            const ChannelDeclarations& declared,
+                                            const PointCloudWriteOptions& options,
+                                            const Camera* camera) {
+    std::vector<std::string> files;
+    for (auto& [file, cloud] : bake3d_clouds(records, declared, camera)) {
         write_point_cloud(cloud, file, options);
+        files.push_back(file);
     }
     return files;
 }

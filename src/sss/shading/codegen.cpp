@@ -52,7 +52,7 @@ constexpr ShadingType F = ShadingType::Float, C = ShadingType::Color,
 // clang-format off
 constexpr GlobalDef kGlobals[] = {
     {"Cs", C, true, kS, kS, 0}, {"Os", C, true, kS, kS, 0},
-    {"P", Pt, true, kS | kD | kL, kD, 0},
+    {"P", Pt, true, kS | kD | kL, kS | kD, 0},
     {"dPdu", Ve, true, kS | kD | kL, 0, 0}, {"dPdv", Ve, true, kS | kD | kL, 0, 0},
     {"N", No, true, kS | kD | kL, kS | kD | kL, 0}, {"Ng", No, true, kS | kD | kL, 0, 0},
     {"u", F, true, kS | kD | kL, 0, 0}, {"v", F, true, kS | kD | kL, 0, 0},

@@ -1034,6 +1034,7 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
         c.light_states[k].instance = lights[k];
     c.nonfinite = 0;
     c.last_shader = shader.program().name;
+    c.last_program = shader.program_ptr();
     c.last_where = shader.where().empty() ? shader.bound().where(-1) : shader.where();
 
     Frame& f = c.main;
@@ -1084,6 +1085,10 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
 
 std::size_t ShadingContext::nonfinite_points() const {
     return m_impl->nonfinite;
+}
+
+uint64_t ShadingContext::rays_traced() const {
+    return m_impl->rays;
 }
 
 std::string ShadingContext::nonfinite_message() const {

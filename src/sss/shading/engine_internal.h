@@ -174,6 +174,13 @@ struct Frame {
     std::vector<uint8_t> lit;
     std::vector<glm::vec3> light_L;  ///< L as illuminate / solar set it
     std::vector<glm::vec3> light_Ps; ///< the surface points being lit
+    /// The cone the surface asked about (illuminance's axis and angle, or N
+    /// and PI/2 for diffuse()...): illuminate/solar skip points whose light
+    /// falls outside it, since the surface would not use them (and their
+    /// shadow rays are the bulk of the work). Null axis: every direction.
+    const float* request_axis = nullptr;
+    int request_axis_stride = 0;
+    float request_angle = 4.0f;
     bool in_illuminate = false;
     bool solar = false;
 
@@ -225,6 +232,10 @@ struct LightState {
     std::vector<uint8_t> computed;
     std::vector<glm::vec3> Ps, L, Cl, Ol;
     std::vector<uint8_t> lit;
+    /// The request cone the cache was computed for (see Frame::request_axis).
+    std::vector<glm::vec3> request_axis;
+    float request_angle = 4.0f;
+    bool request_all = true;
     bool ambient = false;
     bool nondiffuse = false, nonspecular = false;
     std::vector<std::string> categories;
@@ -269,7 +280,12 @@ struct ShadingContext::Impl {
     glm::dmat4 object_to_current{1.0};
 
     // Results of the last execute.
+    /// Keeps the last program alive for output() after its ShaderInstance
+    /// is gone (main.program points into it).
+    std::shared_ptr<const Program> last_program;
     std::size_t nonfinite = 0;
+    /// Shadow and occlusion rays traced, over every execute (never reset).
+    mutable uint64_t rays = 0;
     std::string last_shader, last_where;
 
     /// Prepares `frame` for `instance` over n points (storage, constants,
@@ -283,8 +299,15 @@ struct ShadingContext::Impl {
 
     /// The light results for point positions P (stride 0 or 3) under `mask`
     /// (null: all points): runs the light if the cache does not cover them.
+    /// Light `index`'s description (ambient, categories, flags), filled once.
+    detail::LightState& describe_light(int index);
+    /// Light `index` evaluated for the points of `mask` at surface P, for a
+    /// surface that uses only light arriving within `angle` of `axis` (per
+    /// point, stride floats apart; null axis: from everywhere). Cached.
     detail::LightState& light(int index, const float* P, int P_stride,
-                              const std::vector<uint8_t>& mask, std::size_t active);
+                              const std::vector<uint8_t>& mask, std::size_t active,
+                              const float* axis = nullptr, int axis_stride = 0,
+                              float angle = 4.0f);
     /// Space name -> matrix to the current space (points), false if unknown.
     bool space_to_current(const std::string& space, const detail::Frame& f,
                           glm::dmat4& m) const;

@@ -96,13 +96,10 @@ void store3(const Slot* s, std::size_t i, const glm::vec3& v) {
 
 } // namespace
 
-LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
-                                        const std::vector<uint8_t>& mask,
-                                        std::size_t active) {
+LightState& ShadingContext::Impl::describe_light(int index) {
     LightState& ls = light_states[index];
-    const std::size_t n = batch->size;
-    const ShaderInstance& inst = *ls.instance;
     if (!ls.described) {
+        const ShaderInstance& inst = *ls.instance;
         ls.described = true;
         ls.ambient = !inst.bound().has_illuminate;
         ls.categories = split_list(inst.string_parameter("__category").value_or(""));
@@ -110,11 +107,29 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
         ls.nonspecular = inst.float_parameter("__nonspecular").value_or(0.0f) != 0.0f;
         ls.frame = std::make_unique<Frame>();
     }
+    return ls;
+}
+
+LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
+                                        const std::vector<uint8_t>& mask,
+                                        std::size_t active, const float* axis,
+                                        int axis_stride, float angle) {
+    LightState& ls = describe_light(index);
+    const std::size_t n = batch->size;
+    const ShaderInstance& inst = *ls.instance;
     auto Pat = [&](std::size_t i) { return ld3(P + i * P_stride); };
+    const bool all = axis == nullptr || angle >= 3.14159265f;
+    auto Aat = [&](std::size_t i) {
+        return all ? glm::vec3(0.0f) : ld3(axis + i * axis_stride);
+    };
     if (ls.valid) {
-        bool ok = true;
+        // Valid for points computed at the same P, under a cone that held
+        // this request's (everything, or the same axis and angle).
+        bool ok = ls.request_all || (!all && angle == ls.request_angle);
         for (std::size_t i = 0; i < n && ok; ++i)
-            if (mask[i] && (!ls.computed[i] || ls.Ps[i] != Pat(i))) ok = false;
+            if (mask[i] && (!ls.computed[i] || ls.Ps[i] != Pat(i) ||
+                            (!ls.request_all && ls.request_axis[i] != Aat(i))))
+                ok = false;
         if (ok) return ls;
     }
     if (depth > 4)
@@ -141,7 +156,16 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
     init_params(lf, false);
     lf.mask = mask;
     lf.active = active;
+    lf.request_axis = all ? nullptr : axis;
+    lf.request_axis_stride = axis_stride;
+    lf.request_angle = angle;
     if (active > 0) run_body(lf);
+    ls.request_all = all;
+    ls.request_angle = angle;
+    ls.request_axis.resize(all ? 0 : n);
+    if (!all)
+        for (std::size_t i = 0; i < n; ++i)
+            ls.request_axis[i] = mask[i] ? Aat(i) : glm::vec3(0.0f);
 
     ls.Ps.resize(n);
     for (std::size_t i = 0; i < n; ++i) ls.Ps[i] = mask[i] ? Pat(i) : glm::vec3(0.0f);
@@ -164,6 +188,17 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
 }
 
 namespace detail {
+
+namespace {
+/// Whether direction L is within `angle` of `axis`, with a little slack so
+/// that rounding never drops a light the surface's own test keeps.
+bool in_request_cone(const glm::vec3& L, const glm::vec3& axis, float angle) {
+    if (angle >= 3.14159265f) return true;
+    const float la = glm::length(L) * glm::length(axis);
+    if (!(la > 0.0f)) return true;
+    return glm::dot(L, axis) / la >= std::cos(angle) - 1e-4f;
+}
+} // namespace
 
 void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
                     bool solar) {
@@ -193,6 +228,11 @@ void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
             const float la = glm::length(L) * glm::length(axis);
             if (la > 0.0f) pass = glm::dot(L, axis) / la >= std::cos(angle);
         }
+        // The surface uses light from within its cone only: -L must lie in it.
+        if (pass && f.request_axis &&
+            !in_request_cone(-L, ld3(f.request_axis + i * f.request_axis_stride),
+                             f.request_angle))
+            pass = false;
         f.mask[i] = pass;
         if (pass) {
             f.light_L[i] = L;
@@ -274,7 +314,12 @@ void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
             cnt += base[i];
         }
         if (cnt == 0) break;
-        LightState& ls = ctx.light(static_cast<int>(li), P.p, P.stride, base, cnt);
+        const Slot& axis = f.slot(b, 2);
+        const float angle = *f.ptr(b, 3, f.first_active());
+        const bool uniform_cone = !f.slot(b, 3).varying;
+        LightState& ls = ctx.light(static_cast<int>(li), P.p, P.stride, base, cnt,
+                                   uniform_cone ? axis.p : nullptr, axis.stride,
+                                   uniform_cone ? angle : 4.0f);
         if (ls.ambient || !category_matches(cat, ls.categories)) continue;
         std::size_t on = 0;
         for (std::size_t i = 0; i < n; ++i) {
@@ -323,7 +368,15 @@ void op_lighting(Frame& f, const BoundOp& b) {
         run = f.mask;
         const std::size_t active = f.active;
         for (std::size_t li = 0; li < ctx.lights.size(); ++li) {
-            LightState& ls = ctx.light(static_cast<int>(li), P.p, P.stride, run, active);
+            // ambient() runs only the ambient lights; diffuse/specular/phong
+            // only the others, for light from the hemisphere about N.
+            const bool ambient_light = ctx.describe_light(static_cast<int>(li)).ambient;
+            if ((M == M_Ambient) != ambient_light) continue;
+            const Slot* axis = M == M_Ambient ? nullptr : &f.slot(b, 1);
+            LightState& ls =
+                axis ? ctx.light(static_cast<int>(li), P.p, P.stride, run, active,
+                                 axis->p, axis->stride, 1.5707964f)
+                     : ctx.light(static_cast<int>(li), P.p, P.stride, run, active);
             if (M == M_Ambient) {
                 if (!ls.ambient) continue;
                 for (std::size_t i = 0; i < n; ++i)
@@ -470,39 +523,44 @@ struct Tracer {
         return l > 0.0f ? n / l : glm::vec3(0.0f);
     }
 
-    /// Fraction of `samples` rays from `from` (camera space) that reach
-    /// `to` (or go to infinity along `dir` when `infinite`) unoccluded.
-    float visible(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
-                  bool infinite, int samples, float cone) const {
-        if (!rt) return 1.0f;
+    /// The single shadow ray visible() would trace for point i with one
+    /// sample (world space); false when nothing needs tracing (no tracer, no
+    /// direction: visible).
+    bool single_ray(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
+                    bool infinite, ShadowRay& out) const {
+        if (!rt) return false;
         const glm::vec3 from = xform_point(to_world, from_c);
-        glm::vec3 dir;
-        float len;
-        if (infinite) {
-            dir = xform_vector(to_world, to_or_dir_c);
-            len = std::numeric_limits<float>::infinity();
-        } else {
-            dir = xform_point(to_world, to_or_dir_c) - from;
-            len = glm::length(dir);
-        }
+        glm::vec3 dir = infinite ? xform_vector(to_world, to_or_dir_c)
+                                 : xform_point(to_world, to_or_dir_c) - from;
         const float dl = glm::length(dir);
-        if (!(dl > 0.0f)) return 1.0f;
+        if (!(dl > 0.0f)) return false;
         dir /= dl;
         glm::vec3 n = normal(i);
         if (glm::dot(n, dir) < 0.0f) n = -n;
         const glm::vec3 origin = from + n * offset;
-        if (!infinite) { // as the C++ lights: from the offset origin to the target
+        float len = std::numeric_limits<float>::infinity();
+        if (!infinite) {
             dir = xform_point(to_world, to_or_dir_c) - origin;
             len = glm::length(dir);
-            if (!(len > 0.0f)) return 1.0f;
+            if (!(len > 0.0f)) return false;
             dir /= len;
         }
-        const float tfar = infinite ? len : len * (1.0f - 1e-4f);
+        out = ShadowRay{origin, dir, 0.0f, infinite ? len : len * (1.0f - 1e-4f)};
+        return true;
+    }
+
+    /// Appends the rays that visible() traces for point i to `out` (none
+    /// when nothing needs tracing: then the point is visible).
+    void rays(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
+              bool infinite, int samples, float cone, std::vector<ShadowRay>& out) const {
+        ShadowRay centre;
+        if (!single_ray(i, from_c, to_or_dir_c, infinite, centre)) return;
         if (samples <= 1 || cone <= 0.0f) {
-            ShadowRay r{origin, dir, 0.0f, tfar};
-            return rt->occluded(r) ? 0.0f : 1.0f;
+            out.push_back(centre);
+            return;
         }
         // Stratified directions in the cone: equal-area rings, golden-angle turns.
+        const glm::vec3 dir = centre.direction;
         glm::vec3 t1, t2;
         {
             const float sign = std::copysign(1.0f, dir.z);
@@ -514,8 +572,6 @@ struct Tracer {
         const uint64_t h = point_hash(seed, i, op, call);
         const double rotation = unit_double(h);
         const double cos_max = std::cos(0.5 * cone);
-        std::vector<ShadowRay> rays(samples);
-        std::vector<uint8_t> hits(samples);
         for (int k = 0; k < samples; ++k) {
             const double u = (k + unit_double(splitmix64(h + 1 + k))) / samples;
             const double c = 1.0 - (1.0 - cos_max) * u;
@@ -527,12 +583,23 @@ struct Tracer {
                 glm::normalize(glm::vec3(static_cast<float>(s * std::cos(phi))) * t1 +
                                glm::vec3(static_cast<float>(s * std::sin(phi))) * t2 +
                                glm::vec3(static_cast<float>(c)) * dir);
-            rays[k] = ShadowRay{origin, d, 0.0f, tfar};
+            out.push_back(ShadowRay{centre.origin, d, 0.0f, centre.tfar});
         }
-        rt->occluded(rays.data(), rays.size(), hits.data());
+    }
+
+    /// Fraction of `samples` rays from `from` (camera space) that reach
+    /// `to` (or go to infinity along `dir` when `infinite`) unoccluded.
+    float visible(std::size_t i, const glm::vec3& from_c, const glm::vec3& to_or_dir_c,
+                  bool infinite, int samples, float cone) const {
+        std::vector<ShadowRay> list;
+        rays(i, from_c, to_or_dir_c, infinite, samples, cone, list);
+        if (list.empty()) return 1.0f;
+        std::vector<uint8_t> hits(list.size());
+        rt->occluded(list.data(), list.size(), hits.data());
+        f.ctx->rays += list.size();
         int open = 0;
         for (uint8_t hit : hits) open += hit ? 0 : 1;
-        return static_cast<float>(open) / samples;
+        return static_cast<float>(open) / static_cast<float>(list.size());
     }
 };
 
@@ -552,6 +619,44 @@ void op_shadow(Frame& f, const BoundOp& b) {
     Tracer t(f, b, o);
     const int* g = f.bound->globals;
     const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
+    if (d.varying && (f.is_light || f.current_light >= 0)) {
+        // Every point's rays in one stream (Embree packets), as the baker's
+        // C++ lights traced them.
+        std::vector<ShadowRay> list;
+        std::vector<std::size_t> first(f.n + 1, 0);
+        list.reserve(f.active * static_cast<std::size_t>(std::max(o.samples, 1)));
+        std::vector<std::size_t> points;
+        points.reserve(f.active);
+        f.each(true, [&](std::size_t i) {
+            const glm::vec3 p = ld3(f.ptr(b, 3, i));
+            const std::size_t before = list.size();
+            if (f.is_light) {
+                const glm::vec3 L = Ls ? ld3(Ls->at(i)) : f.light_L[i];
+                if (f.solar)
+                    t.rays(i, p, -L, true, o.samples, o.cone, list);
+                else
+                    t.rays(i, p, p - L, false, o.samples, o.cone, list);
+            } else if (Ls) {
+                t.rays(i, p, p + ld3(Ls->at(i)), false, o.samples, o.cone, list);
+            }
+            first[i] = before;
+            first[i + 1] = list.size();
+            points.push_back(i);
+        });
+        std::vector<uint8_t> hits(list.size());
+        if (!list.empty()) t.rt->occluded(list.data(), list.size(), hits.data());
+        f.ctx->rays += list.size();
+        for (std::size_t i : points) {
+            const std::size_t count = first[i + 1] - first[i];
+            std::size_t blocked = 0;
+            for (std::size_t k = first[i]; k < first[i + 1]; ++k) blocked += hits[k];
+            const float occluded =
+                count > 0 ? static_cast<float>(blocked) / static_cast<float>(count)
+                          : 0.0f;
+            std::fill(d.at(i), d.at(i) + nc, occluded);
+        }
+        return;
+    }
     f.each(d.varying, [&](std::size_t i) {
         float occluded = 0.0f;
         const glm::vec3 p = ld3(f.ptr(b, 3, i));
@@ -647,6 +752,7 @@ void op_occlusion(Frame& f, const BoundOp& b) {
             rays[k] = ShadowRay{origin, dir, 0.0f, tfar};
         }
         rt->occluded(rays.data(), rays.size(), hits.data());
+        f.ctx->rays += rays.size();
         int blocked = 0;
         for (uint8_t hit : hits) blocked += hit ? 1 : 0;
         *d.at(i) = static_cast<float>(blocked) / samples;

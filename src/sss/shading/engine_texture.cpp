@@ -7,8 +7,8 @@
 ///
 ///  - texture(file[ch], [s, t | s1,t1..s4,t4], options): without
 ///    coordinates the globals s, t; the filter footprint is the differences
-///    of s and t to the neighbour points (Du(s) du...). An unreadable file
-///    warns once and gives 0.
+///    of s and t to the neighbour points (Du(s) du...). A file that cannot
+///    be read is a ShaderRuntimeError (texture3d too).
 ///  - environment(file[ch], dir): dir converted to world space.
 ///  - texture3d(file, P, N, "channel", out...): P and N converted to the
 ///    option "coordsystem" (default world); outputs written only where the

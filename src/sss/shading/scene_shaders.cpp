@@ -10,6 +10,7 @@
 #include <map>
 #include <system_error>
 
+#include "builtins.h"
 #include "sss/util/frame_pattern.h"
 
 namespace sss {
@@ -60,6 +61,13 @@ std::string call_where(const ShaderRef& ref, const char* request) {
 bool program_uses(const Program& program, std::string_view op) {
     return std::any_of(program.ops.begin(), program.ops.end(),
                        [&](const Op& o) { return o.name == op; });
+}
+
+bool program_uses_derivatives(const Program& program) {
+    for (const Op& o : program.ops)
+        for (const detail::BuiltinSignature& sig : detail::builtin_signatures())
+            if (sig.derivatives && o.name == sig.name) return true;
+    return false;
 }
 
 bool SceneShaders::uses(std::string_view op) const {
@@ -154,6 +162,10 @@ std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
     for (const auto& s : shaders.surfaces) add(*s);
     for (const auto& s : shaders.displacements) add(*s);
     for (const auto& l : shaders.lights) add(*l);
+    if (shaders.library)
+        for (const std::string& f : shaders.library->files())
+            if (std::find(files.begin(), files.end(), f) == files.end())
+                files.push_back(f);
     return files;
 }
 

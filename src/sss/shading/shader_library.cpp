@@ -100,6 +100,7 @@ ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string&
             if (fs::is_regular_file(slo, ec)) {
                 program =
                     std::make_shared<const Program>(read_program_file(slo.string()));
+                m_files.push_back(slo.string());
                 break;
             }
             if (fs::is_regular_file(sl, ec)) {
@@ -111,6 +112,7 @@ ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string&
                 for (Program& p : result.shaders)
                     if (p.name == name)
                         program = std::make_shared<const Program>(std::move(p));
+                m_files.push_back(sl.string());
                 if (!program)
                     throw ShaderNotFoundError(where + ": " + sl.string() +
                                               " does not define a shader named '" + name +
@@ -129,6 +131,11 @@ ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string&
                                   shader_kind_name(program->kind) + " shader, not a " +
                                   shader_kind_name(kind) + " shader");
     return program;
+}
+
+std::vector<std::string> ShaderLibrary::files() const {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    return m_files;
 }
 
 } // namespace sss
