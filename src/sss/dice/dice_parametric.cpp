@@ -817,7 +817,7 @@ private:
             dvec3 undisplaced;
             dvec3 cross;
             to_world(m_eval[k], undisplaced, cross);
-            if (!orient(cross, leaf.threshold)) weld(m_tmp_p[k], p, n);
+            if (!orient(cross, leaf.threshold)) weld(undisplaced, p, n);
             m_out.vertices[index[k]] = glm::vec3(p);
             m_out.vertex_normals[index[k]] = glm::vec3(n);
         }
