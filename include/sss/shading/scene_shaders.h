@@ -49,9 +49,9 @@ bool program_uses(const Program& program, std::string_view op);
 /// (BatchLayout::Triplets) instead of alone.
 bool program_uses_derivatives(const Program& program);
 
-/// Loads and binds the scene's shaders (surface, displacement, light). Throws ShaderNotFoundError (a shader
-/// the search path does not have, naming the call and the path),
-/// ShaderCompileError, ValueError (parameters of the wrong type).
+/// Loads and binds the scene's shaders (surface, displacement, light). Throws
+/// ShaderNotFoundError (a shader the search path does not have, naming the call and the
+/// path), ShaderCompileError, ValueError (parameters of the wrong type).
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
 
 /// String parameter values of the bound shaders that name existing files, or
