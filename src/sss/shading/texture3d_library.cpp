@@ -212,7 +212,7 @@ void TextureLibrary::invalidate(const std::string& file) {
         m_impl->files.erase(file);
         m_impl->files3d.erase(file);
     }
-    m_impl->ts->invalidate(OIIO::ustring(file), true);
+    m_impl->system()->invalidate(OIIO::ustring(file), true);
 }
 
 } // namespace sss::detail

@@ -144,11 +144,18 @@ bool set_bake3d_option(Bake3dOptions& options, std::string_view name,
 // ---------------------------------------------------------------------------
 // TextureLibrary
 
-TextureLibrary::Impl::Impl() {
+TextureLibrary::Impl::Impl() = default;
+
+OIIO::TextureSystem* TextureLibrary::Impl::system() {
+    std::call_once(ts_once, [this] { ts = make_texture_system(); });
+    return ts;
+}
+
+OIIO::TextureSystem* TextureLibrary::Impl::make_texture_system() {
     // A private texture system (not OIIO's process-wide shared one): one per
     // job, freed with it. It adds no threads of its own; lookups run on the
     // callers' threads.
-    ts = OIIO::TextureSystem::create(false);
+    OIIO::TextureSystem* ts = OIIO::TextureSystem::create(false);
     ts->attribute("max_memory_MB", kCacheMegabytes);
     // Scanline images (PNG, JPEG, untiled TIFF/EXR): MIP-mapped on the fly,
     // read in tiles, so blurred lookups filter and large files stay cheap.
@@ -160,9 +167,11 @@ TextureLibrary::Impl::Impl() {
     ts->attribute("latlong_up", "y");
     // The library replicates grey itself (texture()), only for channel 0.
     ts->attribute("gray_to_rgb", 0);
+    return ts;
 }
 
 TextureLibrary::Impl::~Impl() {
+    if (!ts) return;
     // Leave no pending error behind (OIIO prints those at exit).
     (void)ts->geterror(true);
     OIIO::TextureSystem::destroy(ts);
@@ -186,6 +195,7 @@ std::shared_ptr<TextureFile> TextureLibrary::Impl::open(const std::string& file)
                                                    : "no such file or directory");
             return;
         }
+        OIIO::TextureSystem* ts = system();
         OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
         entry->handle = ts->get_texture_handle(OIIO::ustring(file), pt);
         OIIO::ImageSpec spec;
@@ -217,7 +227,7 @@ bool TextureLibrary::texture(const std::string& file, int channel, int nchannels
         if (error) *error = tex->error;
         return false;
     }
-    OIIO::TextureSystem* ts = m_impl->ts;
+    OIIO::TextureSystem* ts = m_impl->system();
     OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
     OIIO::TextureOpt opt = oiio_options(options, channel);
     // A grey map read as colour gives grey (RenderMan); other channels past
@@ -288,7 +298,7 @@ bool TextureLibrary::environment(const std::string& file, int channel, int nchan
         if (error) *error = tex->error;
         return false;
     }
-    OIIO::TextureSystem* ts = m_impl->ts;
+    OIIO::TextureSystem* ts = m_impl->system();
     OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
     OIIO::TextureOpt opt = oiio_options(options, channel);
     const bool replicate = tex->nchannels == 1 && channel == 0 && nchannels == 3;
@@ -352,7 +362,7 @@ bool TextureLibrary::texture_info(const std::string& file, const std::string& ke
     }
     if (key == "viewingmatrix" || key == "projectionmatrix") {
         if (expected_floats != 16) return false;
-        OIIO::TextureSystem* ts = m_impl->ts;
+        OIIO::TextureSystem* ts = m_impl->system();
         const char* name = key == "viewingmatrix" ? "worldtocamera" : "worldtoscreen";
         float m[16];
         if (!ts->get_texture_info(tex->handle, ts->get_perthread_info(), 0,

@@ -65,7 +65,12 @@ struct Texture3dFile {
 struct TextureLibrary::Impl {
     Impl();
     ~Impl();
+    /// The texture system, created on first use (jobs without 2-D textures
+    /// never load OpenImageIO's texture machinery).
+    OIIO::TextureSystem* system();
+    static OIIO::TextureSystem* make_texture_system();
     OIIO::TextureSystem* ts = nullptr;
+    std::once_flag ts_once;
     std::mutex mutex; ///< guards the two maps (not the files' contents)
     std::unordered_map<std::string, std::shared_ptr<TextureFile>> files;
     std::unordered_map<std::string, std::shared_ptr<Texture3dFile>> files3d;
