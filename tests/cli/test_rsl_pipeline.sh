@@ -2,7 +2,8 @@
 # CLI test of RSL shaders in the pipeline: a user's own bake shader (any
 # name, compiled on demand from the RIB's folder), a surface shader whose
 # output variables become AOVs, a compiled .slo found through
-# Option "searchpath", the standard shaders, and missing shaders as errors.
+# Option "searchpath", the standard shaders (paintedplastic with a texture
+# map, pixel for texel), and missing shaders as errors.
 # Needs SSS_BIN_DIR.
 set -euo pipefail
 
@@ -111,6 +112,37 @@ if expect_rc 0 "render with a user surface shader and AOVs"; then
     read -r r g b _ <<<"$px"
     awk -v r="$r" -v g="$g" -v b="$b" 'BEGIN { exit !(r > 0.45 && r < 0.52 && g > 0.9 && g < 1.02 && b > 0.2 && b < 0.27) }' ||
         fail "centre Cdif is not the tint: $px"
+fi
+
+# A texture on a square that fills the screen, pixel for texel: paintedplastic
+# lit by an ambient light of intensity 1 (Ka 1 only) shows the map's colours.
+oiiotool --pattern checker:width=16:height=16:color1=1,0.2,0:color2=0,0.4,1 32x32 3 \
+    -d float -o checker.exr
+cat > textured.rib <<'RIB'
+Format 32 32 1
+PixelSamples 2 2
+Projection "orthographic"
+ScreenWindow -1 1 -1 1
+Display "textured.exr" "openexr" "rgba"
+Translate 0 0 5
+WorldBegin
+  LightSource "ambientlight" 1 "intensity" [1]
+  Surface "paintedplastic" "float Ka" [1] "float Kd" [0] "float Ks" [0]
+      "string texturename" ["checker.exr"]
+  Polygon "P" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] "st" [0 1  1 1  1 0  0 0]
+WorldEnd
+RIB
+run "$render" textured.rib
+if expect_rc 0 "render with a texture map"; then
+    pixel() { oiiotool "$1" --ch R,G,B --cut "1x1+$2+$3" --printstats 2>/dev/null |
+        sed -n 's/.*Stats Avg: *//p' | head -1; }
+    for xy in "8 8" "24 8" "8 24" "24 24"; do
+        read -r x y <<<"$xy"
+        want="$(pixel checker.exr "$x" "$y")" got="$(pixel textured.exr "$x" "$y")"
+        awk -v w="$want" -v g="$got" 'BEGIN { n = split(w, a, " "); split(g, b, " ");
+            if (n < 3) exit 1; for (i = 1; i <= 3; ++i) if ((a[i] - b[i])^2 > 1e-4) exit 1 }' ||
+            fail "textured pixel ($x, $y) is $got, the map's texel is $want"
+    done
 fi
 
 # A shader nobody has: an error naming the shader and the search path.

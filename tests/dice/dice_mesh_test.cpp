@@ -794,6 +794,20 @@ TEST(DiceMeshGrids, QuadsAreGridsTrianglesAreNot) {
         EXPECT_NEAR(d.dPdv[k].y, 1.0f, 1e-6f);
     }
     EXPECT_GT(d.size(), g.size()); // the triangle's points are in no grid
+
+    // Vertices: the quad's grid first ((u, v) = (x, y)), then the
+    // triangle's, which has no (u, v) but has "st"; st doubles x and y.
+    ASSERT_EQ(d.vertex_uvst.size(), d.vertices.size());
+    for (std::size_t k = 0; k < d.vertices.size(); ++k) {
+        const glm::vec3& p = d.vertices[k];
+        const glm::vec4& a = d.vertex_uvst[k];
+        EXPECT_NEAR(a.x, k < 121 ? p.x : 0.0f, 1e-6f);
+        EXPECT_NEAR(a.y, k < 121 ? p.y : 0.0f, 1e-6f);
+        EXPECT_NEAR(a.z, 2.0f * p.x, 1e-5f);
+        EXPECT_NEAR(a.w, 2.0f * p.y, 1e-5f);
+    }
+    // Without grids: none.
+    EXPECT_TRUE(sss::dice_primitive(prim, spacing(0.1)).vertex_uvst.empty());
 }
 
 TEST(DiceMeshGrids, DisplacementMovesQuadsTrianglesAndSubdivisionSurfaces) {
@@ -828,4 +842,20 @@ TEST(DiceMeshGrids, DisplacementMovesQuadsTrianglesAndSubdivisionSurfaces) {
     const auto grown = sss::dice_primitive(cube, c);
     expect_well_formed(grown);
     EXPECT_GT(total_area(grown), 1.2 * plain);
+    EXPECT_TRUE(grown.vertex_uvst.empty());
+
+    // With grids, every vertex has the (u, v) of its refined face, and s, t
+    // the same.
+    c.grids = true;
+    const auto gridded = sss::dice_primitive(cube, c);
+    EXPECT_EQ(gridded.vertices, grown.vertices);
+    ASSERT_EQ(gridded.vertex_uvst.size(), gridded.vertices.size());
+    for (const glm::vec4& a : gridded.vertex_uvst) {
+        EXPECT_GE(a.x, 0.0f);
+        EXPECT_LE(a.x, 1.0f);
+        EXPECT_GE(a.y, 0.0f);
+        EXPECT_LE(a.y, 1.0f);
+        EXPECT_EQ(a.z, a.x);
+        EXPECT_EQ(a.w, a.y);
+    }
 }

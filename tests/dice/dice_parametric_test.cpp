@@ -780,3 +780,44 @@ TEST(DiceParametricGrids, DisplacementMovesVerticesAndCentresWithoutCracks) {
         EXPECT_NEAR(glm::length(p - centre), 1.1f, 1e-5f);
     EXPECT_NEAR(total_area(d), 4 * kPi * 1.21, 4e-3 * kPi * 1.21);
 }
+
+TEST(DiceParametricGrids, VerticesCarryTheirParametersStitchedOnesToo) {
+    // ShadingRate dicing close to the eye: sub-patches of different grids
+    // are stitched with side vertices and fan centres, which get the (u, v,
+    // s, t) of their own parameters. A sphere's are known from the position.
+    sss::Camera cam;
+    cam.perspective = true;
+    cam.fov = 60;
+    cam.xres = 40;
+    cam.yres = 40;
+    sss::DiceControl c;
+    c.camera = &cam;
+    auto close = make_prim(PrimitiveKind::Sphere, {1, -1, 1, 360});
+    set_param(close, "s", sss::ParamType::Float, sss::ParamClass::Varying, {0, 4, 0, 4});
+    close.object_to_world = glm::translate(sss::Matrix4(1.0), glm::dvec3(0.3, 0, 1.3));
+    const auto plain = sss::dice_primitive(close, c);
+    EXPECT_TRUE(plain.vertex_uvst.empty());
+    c.grids = true;
+    const auto d = sss::dice_primitive(close, c);
+    EXPECT_EQ(d.vertices, plain.vertices); // the same triangles
+    EXPECT_EQ(d.triangles, plain.triangles);
+    ASSERT_EQ(d.vertex_uvst.size(), d.vertices.size());
+    std::size_t grid_vertices = 0;
+    for (const sss::DicedGrid& g : d.grids)
+        grid_vertices += std::size_t(g.nu + 1) * std::size_t(g.nv + 1);
+    EXPECT_GT(d.vertices.size(), grid_vertices); // some were stitched
+    const glm::dvec3 centre(0.3, 0.0, 1.3);
+    for (std::size_t k = 0; k < d.vertices.size(); ++k) {
+        const glm::dvec3 p = glm::dvec3(d.vertices[k]) - centre;
+        const glm::vec4& a = d.vertex_uvst[k];
+        EXPECT_NEAR(a.y, (std::atan2(p.z, std::hypot(p.x, p.y)) + kPi / 2) / kPi, 1e-4)
+            << k;
+        EXPECT_NEAR(a.z, 4.0f * a.x, 1e-5f) << k;
+        EXPECT_EQ(a.w, a.y) << k;
+        if (std::hypot(p.x, p.y) < 1e-3) continue; // a pole: any u
+        double u = std::atan2(p.y, p.x) / (2 * kPi);
+        if (u < 0.0) u += 1.0;
+        if (a.x > 0.99f && u < 0.01) u += 1.0; // the seam: u = 1 is u = 0
+        EXPECT_NEAR(a.x, u, 1e-4) << k;
+    }
+}

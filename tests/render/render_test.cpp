@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/imagebuf.h>
 #include <glm/geometric.hpp>
 
 #include "sss/bake/bake.h"
@@ -554,4 +555,82 @@ TEST(RenderDisplacement, DisplacedSphereHasALargerSilhouette) {
     EXPECT_NEAR(plain, disc(1.0), 0.03 * disc(1.0));
     EXPECT_NEAR(grown, disc(1.1), 0.03 * disc(1.1));
     EXPECT_GT(grown, plain + 100);
+}
+
+TEST(RenderShading, TextureCoordinatesAtHitsFollowTheSurface) {
+    // An orthographic view of a square that fills the screen window, 40 x 40
+    // pixels: its s and t (and u and v) at a pixel are the pixel's place on
+    // the square, and Du(s) du is s's change over one pixel.
+    sss::test::TempDir dir("sss_render_st");
+    sss::test::write_text(dir.file("st.sl"), R"(
+surface st() {
+    Ci = color(s, t, Du(s) * du * 20);
+    Oi = 1;
+}
+)");
+    sss::test::write_text(dir.file("uv.sl"), R"(
+surface uv() {
+    Ci = color(u, v, Dv(v) * dv * 40);
+    Oi = 1;
+}
+)");
+    const auto image = [&](const std::string& surface, const std::string& st) {
+        const std::string rib =
+            "Format 40 40 1\nPixelSamples 4 4\nProjection \"orthographic\"\n"
+            "ScreenWindow -1 1 -1 1\nTranslate 0 0 5\nWorldBegin\n"
+            "Surface \"" +
+            surface + "\"\nPolygon \"P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]" + st +
+            "\nWorldEnd\n";
+        return render(sss::parse_rib(rib, dir.file("scene.rib")));
+    };
+    // "st" doubles s; the image's y runs down, t up.
+    const sss::Image st = image("st", " \"st\" [0 0  2 0  2 1  0 1]");
+    const sss::Image uv = image("uv", "");
+    for (int y : {3, 11, 20, 27, 36})
+        for (int x : {2, 9, 19, 30, 37}) {
+            const float fx = (x + 0.5f) / 40.0f, fy = 1.0f - (y + 0.5f) / 40.0f;
+            EXPECT_NEAR(channel(st, x, y, "R"), 2.0f * fx, 1e-2) << x << " " << y;
+            EXPECT_NEAR(channel(st, x, y, "G"), fy, 1e-2) << x << " " << y;
+            EXPECT_NEAR(channel(st, x, y, "B"), 1.0f, 1e-3) << x << " " << y;
+            EXPECT_NEAR(channel(uv, x, y, "R"), fx, 1e-2) << x << " " << y;
+            EXPECT_NEAR(channel(uv, x, y, "G"), fy, 1e-2) << x << " " << y;
+            EXPECT_NEAR(channel(uv, x, y, "B"), 1.0f, 1e-3) << x << " " << y;
+        }
+}
+
+TEST(RenderShading, PaintedPlasticShowsItsTexture) {
+    // A 2 x 2 checker of four colours (32 x 32 texels, so that filtering
+    // blends them only near the quadrants' borders) on a square that fills
+    // the screen: each quadrant's inside shows its colour, lit by an ambient
+    // light of intensity 1 (Ka 1, no diffuse or specular).
+    sss::test::TempDir dir("sss_render_texture");
+    const float colours[4][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0.5f}};
+    constexpr int kTexels = 32;
+    OIIO::ImageBuf checker(OIIO::ImageSpec(kTexels, kTexels, 3, OIIO::TypeDesc::FLOAT));
+    for (int y = 0; y < kTexels; ++y)
+        for (int x = 0; x < kTexels; ++x)
+            checker.setpixel(x, y, colours[2 * (y / 16) + x / 16], 3);
+    const std::string map = dir.file("checker.exr");
+    ASSERT_TRUE(checker.write(map)) << checker.geterror();
+    const std::string rib =
+        "Format 32 32 1\nPixelSamples 2 2\nProjection \"orthographic\"\n"
+        "ScreenWindow -1 1 -1 1\nTranslate 0 0 5\nWorldBegin\n"
+        "LightSource \"ambientlight\" 1 \"intensity\" [1]\n"
+        "Surface \"paintedplastic\" \"float Ka\" [1] \"float Kd\" [0] \"float Ks\" [0] "
+        "\"string texturename\" [\"" +
+        map +
+        "\"]\n"
+        // t = 0 at the top of the image, as texture maps have it.
+        "Polygon \"P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] \"st\" [0 1  1 1  1 0  0 0]\n"
+        "WorldEnd\n";
+    sss::RenderReport report;
+    const sss::Image img = render(sss::parse_rib(rib, dir.file("scene.rib")), &report);
+    for (const std::string& w : report.warnings) ADD_FAILURE() << w;
+    for (int y : {3, 7, 12, 19, 24, 28})
+        for (int x : {3, 7, 12, 19, 24, 28}) {
+            const float* want = colours[2 * (y / 16) + x / 16];
+            EXPECT_NEAR(channel(img, x, y, "R"), want[0], 1e-2) << x << " " << y;
+            EXPECT_NEAR(channel(img, x, y, "G"), want[1], 1e-2) << x << " " << y;
+            EXPECT_NEAR(channel(img, x, y, "B"), want[2], 1e-2) << x << " " << y;
+        }
 }

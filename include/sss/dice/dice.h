@@ -18,6 +18,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "sss/scene/scene.h"
 
@@ -115,14 +116,23 @@ struct DicedSurface {
     /// Centres the dicer has no parametrisation for have zeros.
     std::vector<float> u, v, du, dv, s, t;
     std::vector<glm::vec3> dPdu, dPdv;
+    /// Per triangle vertex (same size as vertices): the primitive's (u, v)
+    /// and the texture coordinates (s, t), as the centres have them, so that
+    /// a ray hit can interpolate them over its triangle. Vertices the dicer
+    /// adds between grids have the values of their parameters. Triangles
+    /// (and triangulated polygons) have no (u, v): zeros, and s, t
+    /// interpolated from "st" ("s", "t") when given, else zeros too.
+    std::vector<glm::vec4> vertex_uvst;
 
     std::size_t size() const { return centers.size(); }
     bool has_parametric() const { return !u.empty(); }
-    /// Sizes the parametric arrays for every micropolygon (zeros).
-    void resize_parametric(std::size_t micropolygons) {
+    /// Sizes the parametric arrays for every micropolygon and every vertex
+    /// (zeros).
+    void resize_parametric(std::size_t micropolygons, std::size_t vertex_count) {
         for (auto* a : {&u, &v, &du, &dv, &s, &t}) a->resize(micropolygons);
         dPdu.resize(micropolygons);
         dPdv.resize(micropolygons);
+        vertex_uvst.resize(vertex_count);
     }
     /// Sizes every array: `micropolygons` entries (colours only when
     /// with_colors), `vertices` vertices and `triangles` triangles.

@@ -247,6 +247,7 @@ private:
             const std::size_t nv = std::max(verts, 2 * m_out.vertices.capacity());
             m_out.vertices.reserve(nv);
             m_out.vertex_normals.reserve(nv);
+            if (m_grids) m_out.vertex_uvst.reserve(nv);
         }
         const std::size_t tris = m_out.triangles.size() + 7 * more;
         if (tris > m_out.triangles.capacity())
@@ -580,8 +581,15 @@ private:
     /// coordinate variables, else the primitive's u and v.
     void evaluate_texture_coordinates(std::span<const double> us,
                                       std::span<const double> vs) {
+        evaluate_texture_coordinates(us, vs, m_st);
+    }
+
+    /// The same into `st`.
+    void evaluate_texture_coordinates(std::span<const double> us,
+                                      std::span<const double> vs,
+                                      std::vector<glm::dvec2>& st) {
         const std::size_t n = us.size() * vs.size();
-        ensure_size(m_st, n);
+        ensure_size(st, n);
         ensure_size(m_values_s, n);
         ensure_size(m_values_t, n);
         if (m_face->s.present()) m_face->s.evaluate(us, vs, m_values_s.data());
@@ -589,9 +597,20 @@ private:
         for (std::size_t j = 0; j < vs.size(); ++j)
             for (std::size_t i = 0; i < us.size(); ++i) {
                 const std::size_t k = j * us.size() + i;
-                m_st[k] =
-                    glm::dvec2(m_face->s.present() ? m_values_s[k].x : prim_u(us[i]),
-                               m_face->t.present() ? m_values_t[k].x : prim_v(vs[j]));
+                st[k] = glm::dvec2(m_face->s.present() ? m_values_s[k].x : prim_u(us[i]),
+                                   m_face->t.present() ? m_values_t[k].x : prim_v(vs[j]));
+            }
+    }
+
+    /// Appends DicedSurface::vertex_uvst of the vertices at (us[i], vs[j]),
+    /// u fastest (the order they were appended in).
+    void push_vertex_uvst(std::span<const double> us, std::span<const double> vs) {
+        evaluate_texture_coordinates(us, vs, m_vertex_st);
+        for (std::size_t j = 0; j < vs.size(); ++j)
+            for (std::size_t i = 0; i < us.size(); ++i) {
+                const glm::dvec2& st = m_vertex_st[j * us.size() + i];
+                m_out.vertex_uvst.emplace_back(
+                    glm::dvec4(prim_u(us[i]), prim_v(vs[j]), st.x, st.y));
             }
     }
 
@@ -690,6 +709,7 @@ private:
                         m_vert_cross[k], has_normal ? &m_user_n[k] : nullptr, un, vn,
                         threshold, cell));
             }
+        if (m_grids) push_vertex_uvst(m_vu, m_vv);
 
         bool stitched = false;
         for (int s = 0; s < 4; ++s) stitched |= add_side_vertices(leaf, s);
@@ -769,6 +789,8 @@ private:
                 vertex_normal(cross, has_normal ? &m_user_n[k] : nullptr, un, vn,
                               leaf.threshold, cell));
         }
+        // At their own parameters: exactly the neighbour's values there.
+        if (m_grids) push_vertex_uvst(us, vs);
         if (m_displacing) displace_side_vertices(leaf, s, us, vs);
         return true;
     }
@@ -1066,6 +1088,9 @@ private:
         m_out.vertices.emplace_back(m_cell_p[c]);
         m_out.vertex_normals.emplace_back(
             m_cell_normal[c].value_or(dvec3(m_out.vertex_normals[corners[0]])));
+        if (m_grids)
+            push_vertex_uvst(std::span<const double>(&m_cu[i], 1),
+                             std::span<const double>(&m_cv[j], 1));
         for (std::size_t k = 0; k < m_poly.size(); ++k) {
             const uint32_t a = m_poly[k];
             const uint32_t b = m_poly[(k + 1) % m_poly.size()];
@@ -1105,7 +1130,7 @@ private:
     std::vector<SurfacePoint> m_cell_eval, m_vert_eval;
     std::vector<dvec3> m_vert_n, m_cell_dp, m_cell_dn, m_tmp_p, m_tmp_n;
     // Scratch, reused from grid to grid.
-    std::vector<glm::dvec2> m_st;
+    std::vector<glm::dvec2> m_st, m_vertex_st;
     std::vector<dvec3> m_values_s, m_values_t;
     std::vector<double> m_su, m_sv, m_vu, m_vv, m_gu, m_gv, m_cu, m_cv;
     std::vector<SurfacePoint> m_eval;

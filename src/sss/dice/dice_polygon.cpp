@@ -152,6 +152,9 @@ struct TriangleCorners {
                                           glm::dvec3(0.0)};
     /// Used only with "Cs".
     std::array<glm::dvec3, 3> color{glm::dvec3(0.0), glm::dvec3(0.0), glm::dvec3(0.0)};
+    /// Texture coordinates, for DicedSurface::vertex_uvst (u and v are 0:
+    /// triangles have no parametrisation).
+    std::array<glm::dvec2, 3> st{glm::dvec2(0.0), glm::dvec2(0.0), glm::dvec2(0.0)};
 };
 
 /// Cuts one triangle into n x n similar sub-triangles, one micropolygon each
@@ -185,6 +188,8 @@ void dice_triangle(const TriangleCorners& t, std::size_t n, const glm::dvec3& fa
             const double b1 = double(i) / nn, b2 = double(j) / nn,
                          b0 = double(n - i - j) / nn;
             w.add_vertex(w0 * b0 + w1 * b1 + w2 * b2, normal_at(b1, b2));
+            if (w.with_parametric)
+                w.vertex_parametric(0.0, 0.0, b0 * t.st[0] + b1 * t.st[1] + b2 * t.st[2]);
         }
     // Row j starts after rows 0..j-1 of n+1, n, ... vertices.
     auto vertex_index = [&](std::size_t i, std::size_t j) {
@@ -314,6 +319,10 @@ public:
                 m_points.push_back(p);
                 m_bary.push_back(bary);
                 w.add_vertex(p, normal_at(bary));
+                if (w.with_parametric)
+                    w.vertex_parametric(0.0, 0.0,
+                                        bary.x * t.st[r] + bary.y * t.st[(r + 1) % 3] +
+                                            bary.z * t.st[(r + 2) % 3]);
             }
         });
         m_line_start.push_back(m_points.size());
@@ -549,7 +558,7 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
         writer.displace = &control.displace;
         writer.prim = &prim;
     }
-    if (control.grids) out.resize_parametric(total_mp);
+    if (control.grids) out.resize_parametric(total_mp, total_vertices);
     TriangleCorners tri;
     QuadCorners quad;
     QuadDicer quad_dicer;
@@ -572,6 +581,7 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
                 tri.p[k] = world[p];
                 tri.user_normal[k] = un;
                 tri.color[k] = col;
+                tri.st[k] = st.at(job.face, p, c, glm::dvec2(0.0));
             }
         }
         const std::size_t vertex0 = writer.vertex, mp0 = writer.mp,

@@ -97,7 +97,7 @@ DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control)
         writer.displace = &control.displace;
         writer.prim = &prim;
     }
-    if (control.grids) out.resize_parametric(total_mp);
+    if (control.grids) out.resize_parametric(total_mp, total_vertices);
     QuadDicer dicer;
     QuadCorners q;
     for (int f = 0; f < nf; ++f) {

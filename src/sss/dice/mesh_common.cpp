@@ -163,6 +163,9 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
                  : NormalTransform::safe_normalize(bilinear(q.normal, u, v));
         return glm::dot(n, n) > 0.0 ? n : q.fallback_normal;
     };
+    const std::array<glm::dvec3, 4> st3{
+        glm::dvec3(q.st[0], 0.0), glm::dvec3(q.st[1], 0.0), glm::dvec3(q.st[2], 0.0),
+        glm::dvec3(q.st[3], 0.0)};
     const std::size_t base = w.vertex;
     const std::size_t first = w.mp;
     std::size_t emitted = 0;
@@ -185,6 +188,8 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
                 p = bilinear(q.p, u, v);
             m_grid[j * (nu + 1) + i] = p;
             w.add_vertex(p, normal_at(u, v));
+            if (w.with_parametric)
+                w.vertex_parametric(u, v, glm::dvec2(bilinear(st3, u, v)));
         }
     for (std::size_t j = 0; j < nv; ++j)
         for (std::size_t i = 0; i < nu; ++i) {
@@ -212,9 +217,6 @@ void QuadDicer::dice(const QuadCorners& q, std::size_t nu, std::size_t nv,
             if (w.displace) m_cells.push_back(j * nu + i);
             if (w.with_parametric) {
                 ++emitted;
-                const std::array<glm::dvec3, 4> st3{
-                    glm::dvec3(q.st[0], 0.0), glm::dvec3(q.st[1], 0.0),
-                    glm::dvec3(q.st[2], 0.0), glm::dvec3(q.st[3], 0.0)};
                 w.parametric(u, v, 1.0 / du, 1.0 / dv, glm::dvec2(bilinear(st3, u, v)),
                              bilinear_dpdu(q.p, v), bilinear_dpdv(q.p, u));
             }

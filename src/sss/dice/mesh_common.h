@@ -212,6 +212,10 @@ struct SurfaceWriter {
         out.vertex_normals[vertex] = to_float(n);
         ++vertex;
     }
+    /// Parametric data (u, v, s, t) of the last vertex.
+    void vertex_parametric(double u, double v, const glm::dvec2& st) {
+        out.vertex_uvst[vertex - 1] = glm::vec4(glm::dvec4(u, v, st.x, st.y));
+    }
     void add_triangle(std::size_t a, std::size_t b, std::size_t c) {
         if (3 * triangle >= out.triangles.size()) overflow();
         out.triangles[3 * triangle + 0] = static_cast<uint32_t>(a);
@@ -238,7 +242,7 @@ struct SurfaceWriter {
     }
     void finish() {
         out.resize(mp, vertex, triangle, with_colors);
-        if (with_parametric) out.resize_parametric(mp);
+        if (with_parametric) out.resize_parametric(mp, vertex);
     }
 };
 

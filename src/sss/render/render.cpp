@@ -266,7 +266,11 @@ struct Renderer {
     std::unique_ptr<ShadingResources> resources;
     std::unique_ptr<RenderServices> services;
     std::vector<Aov> aovs;
-    std::vector<char> derivatives;          ///< per primitive: its shader differentiates
+    std::vector<char> derivatives; ///< per primitive: its shader differentiates
+    /// Per primitive: its shader reads u, v, s, t, du or dv (or looks up a
+    /// texture): it is diced with DicedSurface::vertex_uvst, which the hits
+    /// interpolate.
+    std::vector<char> parametric;
     int values = 4;                         ///< per sample: RGBA, then the AOVs
     std::vector<Surface> surfaces;          ///< by primitive
     std::vector<uint32_t> camera_primitive; ///< camera mesh -> primitive
@@ -309,6 +313,8 @@ struct SurfaceHit {
     glm::dvec3 dpdx, dpdy; ///< one pixel's footprint on the tangent plane
     double radius = 0.0;   ///< texture3d filter radius
     float depth = 0.0f;
+    uint32_t triangle = 0;      ///< the triangle hit, and the barycentrics of
+    float b1 = 0.0f, b2 = 0.0f; ///< its vertices 1 and 2 at the hit
     uint64_t seed = 0;
 };
 
@@ -412,10 +418,40 @@ void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
         };
         h.dpdx = project(job.camera_x * pixel);
         h.dpdy = project(job.camera_y * pixel);
+        h.triangle = hit.triangle;
+        h.b1 = hit.u;
+        h.b2 = hit.v;
         h.seed = detail::splitmix64(cs.key ^
                                     (0xA5A5A5A5ull + static_cast<uint64_t>(cs.layers)));
         hits.push_back(h);
     }
+}
+
+/// (u, v, s, t) at a hit, linear over its triangle (DicedSurface::
+/// vertex_uvst), and at its two neighbours (the hit moved by dpdx and dpdy,
+/// in the triangle's plane): the barycentric blend, then its gradient.
+std::array<glm::dvec4, 3> hit_uvst(const DicedSurface& d, const SurfaceHit& h) {
+    const uint32_t* tri = &d.triangles[3 * std::size_t(h.triangle)];
+    const glm::dvec4 a0(d.vertex_uvst[tri[0]]), a1(d.vertex_uvst[tri[1]]),
+        a2(d.vertex_uvst[tri[2]]);
+    const double b1 = h.b1, b2 = h.b2;
+    const glm::dvec4 at = (1.0 - b1 - b2) * a0 + b1 * a1 + b2 * a2;
+    std::array<glm::dvec4, 3> out{at, at, at};
+    const glm::dvec3 v0(d.vertices[tri[0]]);
+    const glm::dvec3 e1 = glm::dvec3(d.vertices[tri[1]]) - v0;
+    const glm::dvec3 e2 = glm::dvec3(d.vertices[tri[2]]) - v0;
+    const glm::dvec3 cross = glm::cross(e1, e2);
+    const double cross2 = glm::dot(cross, cross);
+    if (!(cross2 > 0.0) || !std::isfinite(cross2)) return out;
+    // Gradients of the barycentrics b1 and b2 in the triangle's plane.
+    const glm::dvec3 g1 = glm::cross(e2, cross) / cross2;
+    const glm::dvec3 g2 = glm::cross(cross, e1) / cross2;
+    const auto change = [&](const glm::dvec3& step) {
+        return (a1 - a0) * glm::dot(g1, step) + (a2 - a0) * glm::dot(g2, step);
+    };
+    out[1] += change(h.dpdx);
+    out[2] += change(h.dpdy);
+    return out;
 }
 
 /// Shades the hits of one pass, primitive by primitive in batches, and
@@ -458,8 +494,19 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         batch.dPdv.resize(m);
         batch.Cs.resize(m);
         batch.Os.resize(m);
+        // At hits the batch's u and v directions are one pixel step along
+        // the camera's x and y (dPdu, dPdv are those steps' footprints),
+        // so du = dv = 1 pixel: Du(x) is x's change per pixel.
         batch.du.assign(m, 1.0f);
         batch.dv.assign(m, 1.0f);
+        const DicedSurface& diced = job.surfaces[prim_index].diced;
+        const bool parametric = !diced.vertex_uvst.empty();
+        if (parametric) {
+            batch.u.resize(m);
+            batch.v.resize(m);
+            batch.s.resize(m);
+            batch.t.resize(m);
+        }
         batch.dicing_area.resize(m);
         batch.radius.resize(m);
         // Point i of the batch draws its samples from hash(seed, i): the
@@ -477,6 +524,8 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             const glm::vec3 n_c(glm::normalize(job.normal_to_camera * h.n));
             const glm::vec3 ng_c(glm::normalize(job.normal_to_camera * h.ng));
             const float area = glm::length(glm::cross(du_c, dv_c));
+            std::array<glm::dvec4, 3> uvst{}; // at the hit and its neighbours
+            if (parametric) uvst = hit_uvst(diced, h);
             for (std::size_t q = 0; q < r; ++q) {
                 const std::size_t i = k * r + q;
                 const glm::vec3 offset = q == 1 ? du_c : q == 2 ? dv_c : glm::vec3(0.0f);
@@ -490,6 +539,12 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
                 batch.Os[i] = glm::vec3(h.os);
                 batch.dicing_area[i] = area;
                 batch.radius[i] = static_cast<float>(h.radius);
+                if (parametric) {
+                    batch.u[i] = static_cast<float>(uvst[q].x);
+                    batch.v[i] = static_cast<float>(uvst[q].y);
+                    batch.s[i] = static_cast<float>(uvst[q].z);
+                    batch.t[i] = static_cast<float>(uvst[q].w);
+                }
             }
         }
         const auto& lights = job.shaders.lights_of[prim_index];
@@ -685,6 +740,19 @@ std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
     return aovs;
 }
 
+/// Whether a surface shader needs u, v, s and t at its hits: it reads one of
+/// u, v, s, t, du, dv, or looks up a texture (by s and t when it gives no
+/// coordinates). Other shaders are diced without them (less to dice).
+bool program_reads_parametric(const Program& program) {
+    static const char* const names[] = {"u", "v", "s", "t", "du", "dv"};
+    for (const Symbol& sym : program.symbols)
+        if (sym.kind == SymbolKind::Global &&
+            std::find_if(std::begin(names), std::end(names),
+                         [&](const char* n) { return sym.name == n; }) != std::end(names))
+            return true;
+    return program_uses(program, "texture");
+}
+
 /// Shaders, lights, AOVs and shading resources (textures, brick maps and
 /// point clouds are opened on first use); true when some light or shader
 /// traces shadow or occlusion rays.
@@ -696,9 +764,12 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     job.services = std::make_unique<RenderServices>(scene, frame);
     job.aovs = plan_aovs(scene, job.shaders);
     job.derivatives.resize(scene.primitives.size());
-    for (std::size_t i = 0; i < scene.primitives.size(); ++i)
-        job.derivatives[i] =
-            program_uses_derivatives(job.shaders.surface_of[i]->program());
+    job.parametric.resize(scene.primitives.size());
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        const Program& program = job.shaders.surface_of[i]->program();
+        job.derivatives[i] = program_uses_derivatives(program);
+        job.parametric[i] = program_reads_parametric(program);
+    }
     job.values = 4;
     for (const Aov& a : job.aovs) job.values += a.as_rgb ? 3 : a.floats;
     bool any_shadows = false;
@@ -757,6 +828,7 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
                 std::min(1e9, std::round(job.camera.xres * edge / kEdgePixels)));
         }
         control.displace = displacer.hook(to_dice[k]);
+        control.grids = job.parametric[to_dice[k]] != 0;
         requests[k] = {to_dice[k], control};
     }
     std::vector<DicedSurface> diced =
@@ -765,6 +837,12 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
                 const float len = glm::length(n);
                 if (len > 0.0f && std::isfinite(len)) n /= len;
             }
+            // Hits use the vertices' (u, v, s, t) only: free the centres'.
+            for (auto* a : {&d.u, &d.v, &d.du, &d.dv, &d.s, &d.t})
+                std::vector<float>().swap(*a);
+            std::vector<glm::vec3>().swap(d.dPdu);
+            std::vector<glm::vec3>().swap(d.dPdv);
+            std::vector<DicedGrid>().swap(d.grids);
             job.surfaces[i].triangle_colors = triangle_colors(d);
         });
     for (std::size_t i : to_dice) job.surfaces[i].diced = std::move(diced[i]);
