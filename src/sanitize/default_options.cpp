@@ -38,6 +38,12 @@ SSS_SANITIZER_HOOK const char* __asan_default_options() {
            "new_delete_type_mismatch=0";
 }
 
+// OpenImageIO 2.4 keeps per-thread texture tiles of threads that ended until
+// the process exits (Debian's libOpenImageIO): not ours.
+SSS_SANITIZER_HOOK const char* __lsan_default_suppressions() {
+    return "leak:libOpenImageIO.so\nleak:libOpenImageIO_Util.so\n";
+}
+
 SSS_SANITIZER_HOOK const char* __ubsan_default_options() {
     return "halt_on_error=1:exitcode=99:print_stacktrace=1";
 }

@@ -355,9 +355,13 @@ TEST(RslCorpus, Bake3dAndTexture3d) {
     PointCloud cloud;
     const int n = 32;
     cloud.resize(std::size_t(n) * n);
-    Channel& v = cloud.add_channel("v", ChannelType::Float);
-    Channel& c = cloud.add_channel("c", ChannelType::Color);
-    Channel& x = cloud.add_channel("x", ChannelType::Float);
+    // Every channel first: adding one may move the others.
+    cloud.add_channel("v", ChannelType::Float);
+    cloud.add_channel("c", ChannelType::Color);
+    cloud.add_channel("x", ChannelType::Float);
+    Channel& v = *cloud.find_channel("v");
+    Channel& c = *cloud.find_channel("c");
+    Channel& x = *cloud.find_channel("x");
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
             const std::size_t k = std::size_t(j) * n + i;

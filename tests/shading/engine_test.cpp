@@ -373,12 +373,14 @@ surface t(output varying float r = 0; output varying point q = 0;) {
     point s = transform("screen", transform("raster", transform("NDC", P)));
     point n = transform("NDC", "current", transform("NDC", P));
     r = distance(back, P) + distance(c, P) + distance(n, P)
-        + abs(length(v) - 1) + distance(transform("current", "shader", transform("shader", P)), P);
+        + abs(length(v) - 1) + distance(transform("shader", "current", transform("shader", P)), P);
     q = transform("object", "world", point(0, 0, 0));
 }
 )",
                          b);
     for (int i = 0; i < 3; ++i) EXPECT_LT(r[i], 1e-4f) << i;
+    // Finite on its own: NaN would have been written as 0 and passed.
+    EXPECT_EQ(e.context.nonfinite_points(), 0u);
     TypeSpec ty;
     std::vector<float> q;
     e.context.output("q", ty, q);

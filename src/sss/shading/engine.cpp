@@ -735,7 +735,26 @@ bool ShadingContext::Impl::space_to_current(const std::string& space,
     const Scene& scene = services.scene();
     if (space == "screen" || space == "raster" || space == "NDC") {
         const Camera& cam = scene.options.camera;
-        const glm::dmat4 camera_to_ndc = cam.world_to_ndc() * camera_to_world;
+        // x and y as PRMan's screen/NDC/raster; depth as 1/z (perspective) or
+        // z (orthographic): the depth-mapped z of Camera::world_to_ndc is
+        // 1 - near/z, which a float cannot tell apart from 1 with the default
+        // near clip, and the spaces must round-trip.
+        glm::dmat4 proj(1.0);
+        if (cam.perspective) {
+            const double c = 1.0 / std::tan(cam.fov * 3.14159265358979323846 / 360.0);
+            proj = glm::dmat4(0.0);
+            proj[0][0] = c;
+            proj[1][1] = c;
+            proj[3][2] = 1.0;
+            proj[2][3] = 1.0;
+        }
+        const auto window = cam.resolved_screen_window();
+        glm::dmat4 window_to_ndc(1.0);
+        window_to_ndc[0][0] = 1.0 / (window[1] - window[0]);
+        window_to_ndc[3][0] = -window[0] / (window[1] - window[0]);
+        window_to_ndc[1][1] = -1.0 / (window[3] - window[2]);
+        window_to_ndc[3][1] = window[3] / (window[3] - window[2]);
+        const glm::dmat4 camera_to_ndc = window_to_ndc * proj;
         glm::dmat4 to;
         if (space == "NDC") {
             to = camera_to_ndc;
