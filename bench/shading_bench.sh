@@ -74,7 +74,7 @@ for scene in "$root"/scenes/*/run; do
     SSS_BIN_DIR="$new_bin" "$scene" "$work/new-$name" >/dev/null 2>&1 || { echo "  $name: FAILED with the RSL build"; status=1; continue; }
     for img in "$work/old-$name"/*.exr; do
         f=$(basename "$img")
-        out=$(idiff -a -fail 0.05 -failpercent 0.5 "$img" "$work/new-$name/$f" 2>&1 || true)
+        out=$(idiff -v -a -fail 0.05 -failpercent 0.5 "$img" "$work/new-$name/$f" 2>&1 || true)
         rms=$(sed -n 's/.*RMS error = *\([^ ]*\).*/\1/p' <<<"$out" | head -1)
         max=$(sed -n 's/.*Max error *= *\([^ ]*\).*/\1/p' <<<"$out" | head -1)
         verdict=PASS

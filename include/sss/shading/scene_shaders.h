@@ -43,10 +43,15 @@ struct SceneShaders {
 /// Whether `program` has an op named `op`.
 bool program_uses(const Program& program, std::string_view op);
 
+/// Whether `program` reads the surface's parametrisation: one of the globals
+/// u, v, s, t, du, dv, dPdu, dPdv, or a texture lookup (by s and t when it
+/// gives no coordinates). Other shaders are diced without it (less work).
+bool program_reads_parametric(const Program& program);
+
 /// Whether `program` differentiates values over the batch (Du, Dv, Deriv,
-/// calculatenormal, area, filterstep, filtered texture and environment
-/// lookups): then a renderer shades ray hits with their neighbours
-/// (BatchLayout::Triplets) instead of alone.
+/// calculatenormal, area other than area(P, "dicing"), filterstep, filtered
+/// texture and environment lookups): then a renderer shades ray hits with
+/// their neighbours (BatchLayout::Triplets) and a baker whole grids.
 bool program_uses_derivatives(const Program& program);
 
 /// Loads and binds the scene's shaders (surface, displacement, light). Throws

@@ -279,18 +279,25 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
     DiceControl occluder_control = control;
     occluder_control.coarsening = kOccluderCoarsening;
     std::vector<DiceRequest> requests;
-    // Baked surfaces are shaded grid by grid.
-    control.grids = true;
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const int job = plan.job_of[i];
         if (job < 0 && !plan.occluder[i]) continue;
         DiceRequest request{i, control};
+        // Shaders that differentiate or read u, v, s, t are shaded grid by
+        // grid with the parametrisation; the others need neither.
+        if (job >= 0) {
+            const Program& program =
+                plan.jobs[static_cast<std::size_t>(job)].shader->program();
+            request.control.grids =
+                program_uses_derivatives(program) || program_reads_parametric(program);
+        }
         if (job < 0) {
             request.control = occluder_control;
         } else if (options.spacing_from_material && !options.material) {
             request.control.spacing = *plan.job_mfp[job] * options.mfp_fraction;
         }
         request.control.displace = displacer.hook(i);
+        if (job >= 0 && request.control.displace) request.control.grids = true;
         requests.push_back(request);
     }
     return dice_all(scene, requests);
@@ -428,18 +435,20 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         const DicedSurface& d = diced[jobs[j].prim];
         const std::size_t n = d.size();
         total_points += n;
-        // Each grid is one batch (exact derivatives); the points between
-        // grids go in chunks.
+        // A shader that differentiates gets each grid as one batch (exact
+        // derivatives), the points between grids in chunks; any other shader
+        // gets chunks of kChunk points (fewer, larger batches run faster).
         std::size_t at = 0;
         const auto points_up_to = [&](std::size_t end) {
             for (std::size_t b = at; b < end; b += kChunk)
                 chunks.push_back({j, b, std::min(end, b + kChunk), nullptr});
         };
-        for (const DicedGrid& g : d.grids) {
-            points_up_to(g.first);
-            chunks.push_back({j, g.first, g.first + g.size(), &g});
-            at = g.first + g.size();
-        }
+        if (program_uses_derivatives(jobs[j].shader->program()))
+            for (const DicedGrid& g : d.grids) {
+                points_up_to(g.first);
+                chunks.push_back({j, g.first, g.first + g.size(), &g});
+                at = g.first + g.size();
+            }
         points_up_to(n);
     }
     BakeServices services(scene, tracer, frame, options.output);
@@ -472,8 +481,9 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
                 batch.nu = ch.grid->nu;
                 batch.nv = ch.grid->nv;
             }
-            fill_parametric(d, ch.begin, glm::dmat3(to_camera), batch);
         }
+        if (d.has_parametric())
+            fill_parametric(d, ch.begin, glm::dmat3(to_camera), batch);
         batch.primitive = &prim;
         batch.P.resize(n);
         batch.N.resize(n);

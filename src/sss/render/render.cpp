@@ -740,19 +740,6 @@ std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
     return aovs;
 }
 
-/// Whether a surface shader needs u, v, s and t at its hits: it reads one of
-/// u, v, s, t, du, dv, or looks up a texture (by s and t when it gives no
-/// coordinates). Other shaders are diced without them (less to dice).
-bool program_reads_parametric(const Program& program) {
-    static const char* const names[] = {"u", "v", "s", "t", "du", "dv"};
-    for (const Symbol& sym : program.symbols)
-        if (sym.kind == SymbolKind::Global &&
-            std::find_if(std::begin(names), std::end(names),
-                         [&](const char* n) { return sym.name == n; }) != std::end(names))
-            return true;
-    return program_uses(program, "texture");
-}
-
 /// Shaders, lights, AOVs and shading resources (textures, brick maps and
 /// point clouds are opened on first use); true when some light or shader
 /// traces shadow or occlusion rays.

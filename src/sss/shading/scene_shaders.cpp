@@ -63,10 +63,28 @@ bool program_uses(const Program& program, std::string_view op) {
                        [&](const Op& o) { return o.name == op; });
 }
 
+bool program_reads_parametric(const Program& program) {
+    static const char* const names[] = {"u", "v", "s", "t", "du", "dv", "dPdu", "dPdv"};
+    for (const Symbol& sym : program.symbols)
+        if (sym.kind == SymbolKind::Global &&
+            std::find_if(std::begin(names), std::end(names),
+                         [&](const char* n) { return sym.name == n; }) != std::end(names))
+            return true;
+    return program_uses(program, "texture");
+}
+
 bool program_uses_derivatives(const Program& program) {
-    for (const Op& o : program.ops)
+    for (const Op& o : program.ops) {
+        // area(P, "dicing") is the micropolygon's own area: no neighbours.
+        if (o.name == "area" && o.args.size() == 3) {
+            const Symbol& space = program.symbols[static_cast<std::size_t>(o.args[2])];
+            if (space.kind == SymbolKind::Const && space.strings.size() == 1 &&
+                space.strings[0] == "dicing")
+                continue;
+        }
         for (const detail::BuiltinSignature& sig : detail::builtin_signatures())
             if (sig.derivatives && o.name == sig.name) return true;
+    }
     return false;
 }
 
