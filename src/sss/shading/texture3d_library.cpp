@@ -15,6 +15,7 @@
 
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
+#include "texture2d_backend.h"
 #include "texture_library_impl.h"
 
 namespace sss::detail {
@@ -209,10 +210,11 @@ void TextureLibrary::invalidate(const std::string& file) {
     {
         std::lock_guard lock(m_impl->mutex);
         // Calls in flight keep their entries (shared_ptr) until they finish.
-        m_impl->files.erase(file);
         m_impl->files3d.erase(file);
     }
-    m_impl->system()->invalidate(OIIO::ustring(file), true);
+    // The 2-D side only when the plugin is loaded: nothing else cached it.
+    if (Texture2dBackend* b = m_impl->loaded.load(std::memory_order_acquire))
+        b->invalidate(file);
 }
 
 } // namespace sss::detail

@@ -2,6 +2,7 @@
 // Internal to the texture library (texture_library.cpp,
 // texture3d_library.cpp): the files it has opened, each once.
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -10,24 +11,12 @@
 #include <unordered_set>
 #include <vector>
 
-#include <OpenImageIO/texture.h>
-
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_lookup.h"
 #include "texture_library.h"
 
 namespace sss::detail {
-
-/// A 2-D texture or environment map as opened by the texture system.
-struct TextureFile {
-    std::once_flag once;
-    OIIO::TextureSystem::TextureHandle* handle = nullptr; ///< null: unreadable
-    std::string error;                                    ///< "file: reason"
-    int nchannels = 0;
-    int width = 0, height = 0;
-    std::string format; ///< OIIO "textureformat" ("" for plain images)
-};
 
 /// A 3-D texture: a brick map, or a point cloud (.ptc, .ply) with its lookup.
 struct Texture3dFile {
@@ -62,21 +51,22 @@ struct Texture3dFile {
     void index_cloud();
 };
 
+class Texture2dBackend; // texture2d_backend.h
+
 struct TextureLibrary::Impl {
     Impl();
     ~Impl();
-    /// The texture system, created on first use (jobs without 2-D textures
-    /// never load OpenImageIO's texture machinery).
-    OIIO::TextureSystem* system();
-    static OIIO::TextureSystem* make_texture_system();
-    OIIO::TextureSystem* ts = nullptr;
-    std::once_flag ts_once;
-    std::mutex mutex; ///< guards the two maps (not the files' contents)
-    std::unordered_map<std::string, std::shared_ptr<TextureFile>> files;
+    /// The 2-D texture plugin, loaded on first use; null (with *error set)
+    /// when it cannot be loaded.
+    Texture2dBackend* textures(std::string* error);
+    std::once_flag plugin_once;
+    std::unique_ptr<Texture2dBackend> backend;
+    /// The backend once loaded (for invalidate(), which must not load it).
+    std::atomic<Texture2dBackend*> loaded{nullptr};
+    std::string plugin_error;
+    std::mutex mutex; ///< guards files3d (not the files' contents)
     std::unordered_map<std::string, std::shared_ptr<Texture3dFile>> files3d;
 
-    /// The entry of a file, opened on first use by whichever thread asks first.
-    std::shared_ptr<TextureFile> open(const std::string& file);
     std::shared_ptr<Texture3dFile> open3d(const std::string& file);
 };
 

@@ -1,0 +1,42 @@
+#pragma once
+// Internal to the shading module: the OpenImageIO side of 2-D textures and
+// environment maps, built as a plugin (libsss_texture2d.so, next to the
+// tools: <bin>/../lib) and loaded on the first texture lookup, so that tools
+// and jobs that never look up a 2-D texture do not load OpenImageIO and the
+// 260 libraries behind it (0.15 s at every process start).
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "texture_library.h"
+
+namespace sss::detail {
+
+/// What TextureLibrary forwards to the plugin: the 2-D calls of texture_library.h.
+class Texture2dBackend {
+public:
+    virtual ~Texture2dBackend() = default;
+    virtual bool texture(const std::string& file, int channel, int nchannels,
+                         const TextureOptions& options, std::size_t count, const float* s,
+                         const float* t, const float* ds_du, const float* dt_du,
+                         const float* ds_dv, const float* dt_dv, const uint8_t* mask,
+                         float* out, std::string* error) = 0;
+    virtual bool environment(const std::string& file, int channel, int nchannels,
+                             const TextureOptions& options, std::size_t count,
+                             const glm::vec3* dir, const glm::vec3* ddir_du,
+                             const glm::vec3* ddir_dv, const uint8_t* mask, float* out,
+                             std::string* error) = 0;
+    virtual bool texture_info(const std::string& file, const std::string& key,
+                              int expected_floats, float* numbers, std::string* text) = 0;
+    virtual void invalidate(const std::string& file) = 0;
+};
+
+/// The plugin's entry point (extern "C", looked up by name).
+using MakeTexture2dBackend = Texture2dBackend* (*)();
+constexpr const char* kTexture2dEntry = "sss_make_texture2d_backend";
+constexpr const char* kTexture2dPlugin = "libsss_texture2d.so";
+
+} // namespace sss::detail
