@@ -8,6 +8,7 @@
 /// over lights of Cl * max(0, N.L), with ray-traced shadows when a light asks
 /// for them.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -90,5 +91,10 @@ void light_samples(const std::vector<Light>& lights, const std::vector<int>& act
 
 /// Improved Perlin gradient noise in [0, 1] (RenderMan's noise() range), deterministic.
 double noise3(const glm::dvec3& p);
+
+/// noise3's permutation table, stored twice (512 entries) so that p[p[x] + y]
+/// needs no wrapping: shared with the shading module's noise family so that
+/// RSL's noise(point) equals noise3.
+const std::array<uint8_t, 512>& noise_permutation();
 
 } // namespace sss

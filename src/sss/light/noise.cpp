@@ -41,8 +41,7 @@ PermutationTable make_permutation() {
 }
 
 const PermutationTable& permutation() {
-    static const PermutationTable table = make_permutation();
-    return table;
+    return noise_permutation();
 }
 
 /// Gradients: the 12 cube-edge directions, 4 of them repeated to make 16 so
@@ -96,6 +95,11 @@ double perlin(double x, double y, double z) {
 }
 
 } // namespace
+
+const std::array<uint8_t, 512>& noise_permutation() {
+    static const PermutationTable table = make_permutation();
+    return table;
+}
 
 double noise3(const glm::dvec3& p) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))

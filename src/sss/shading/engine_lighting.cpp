@@ -51,6 +51,7 @@
 #include "engine_internal.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/util/hash.h"
+#include "sss/util/parse.h"
 
 namespace sss {
 
@@ -58,25 +59,10 @@ using namespace detail;
 
 namespace {
 
-std::vector<std::string> split_list(const std::string& s) {
-    std::vector<std::string> out;
-    std::string cur;
-    for (char c : s) {
-        if (c == ',' || c == ' ' || c == '\t') {
-            if (!cur.empty()) out.push_back(cur);
-            cur.clear();
-        } else {
-            cur += c;
-        }
-    }
-    if (!cur.empty()) out.push_back(cur);
-    return out;
-}
-
 bool category_matches(const std::string& cat, const std::vector<std::string>& light) {
     if (cat.empty()) return true;
     bool any_positive = false, positive_hit = false;
-    for (const std::string& term : split_list(cat)) {
+    for (const std::string& term : split_words(cat)) {
         const bool exclude = term[0] == '-';
         const std::string name = exclude ? term.substr(1) : term;
         const bool has = std::find(light.begin(), light.end(), name) != light.end();
@@ -102,7 +88,7 @@ LightState& ShadingContext::Impl::describe_light(int index) {
         const ShaderInstance& inst = *ls.instance;
         ls.described = true;
         ls.ambient = !inst.bound().has_illuminate;
-        ls.categories = split_list(inst.string_parameter("__category").value_or(""));
+        ls.categories = split_words(inst.string_parameter("__category").value_or(""));
         ls.nondiffuse = inst.float_parameter("__nondiffuse").value_or(0.0f) != 0.0f;
         ls.nonspecular = inst.float_parameter("__nonspecular").value_or(0.0f) != 0.0f;
         ls.frame = std::make_unique<Frame>();

@@ -30,6 +30,7 @@
 #include <glm/matrix.hpp>
 
 #include "engine_internal.h"
+#include "sss/util/parse.h"
 #include "sss/util/version.h"
 #include "texture_library.h"
 
@@ -533,21 +534,6 @@ bool bind_texture3d(const BindInfo& in, BoundOp& b, std::string&) {
     return true;
 }
 
-std::vector<std::string> split_names(const std::string& s) {
-    std::vector<std::string> out;
-    std::string cur;
-    for (char c : s) {
-        if (c == ',' || c == ' ' || c == '\t') {
-            if (!cur.empty()) out.push_back(cur);
-            cur.clear();
-        } else {
-            cur += c;
-        }
-    }
-    if (!cur.empty()) out.push_back(cur);
-    return out;
-}
-
 void op_bake3d(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     const std::size_t n = f.n;
@@ -570,7 +556,7 @@ void op_bake3d(Frame& f, const BoundOp& b) {
         values.emplace_back(name, k);
     });
     std::vector<int> chan_args;
-    for (const std::string& c : split_names(f.str(b, 2, i0))) {
+    for (const std::string& c : split_words(f.str(b, 2, i0))) {
         int arg = -1;
         for (const auto& [name, k] : values)
             if (name == c) arg = k;

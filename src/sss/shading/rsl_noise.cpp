@@ -17,6 +17,7 @@
 #include <initializer_list>
 
 #include "rsl_math.h"
+#include "sss/light/lights.h"
 #include "sss/util/hash.h"
 
 namespace sss::detail {
@@ -26,27 +27,9 @@ namespace {
 /// The permutation, stored twice so that p[p[x] + y] needs no wrapping.
 using PermutationTable = std::array<uint8_t, 512>;
 
-/// Must stay identical to light/noise.cpp's make_permutation().
-PermutationTable make_permutation() {
-    std::array<uint8_t, 256> p{};
-    for (int i = 0; i < 256; ++i) p[i] = static_cast<uint8_t>(i);
-    // Fisher-Yates with our own generator: std::shuffle's result is
-    // implementation-defined, and the pattern must not change with the library.
-    uint64_t state = 0x73737320'6e6f6973ull; // "sss nois"
-    for (int i = 255; i > 0; --i) {
-        const uint64_t r = splitmix64(state) >> 32;
-        state += kSplitMixIncrement;
-        const int j = static_cast<int>((r * static_cast<uint64_t>(i + 1)) >> 32);
-        std::swap(p[i], p[j]);
-    }
-    PermutationTable table{};
-    for (int i = 0; i < 512; ++i) table[i] = p[i & 255];
-    return table;
-}
-
+/// light's noise3 permutation: RSL's 3-D noise equals noise3.
 const PermutationTable& permutation() {
-    static const PermutationTable table = make_permutation();
-    return table;
+    return noise_permutation();
 }
 
 /// 3-D gradients: the 12 cube-edge directions, 4 repeated to make 16 (Perlin

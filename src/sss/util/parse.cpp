@@ -37,4 +37,19 @@ std::string join(const std::vector<std::string>& words, const std::string& sep) 
     return out;
 }
 
+std::vector<std::string> split_words(std::string_view text) {
+    std::vector<std::string> out;
+    std::string cur;
+    for (char c : text) {
+        if (c == ',' || c == ' ' || c == '\t') {
+            if (!cur.empty()) out.push_back(cur);
+            cur.clear();
+        } else {
+            cur += c;
+        }
+    }
+    if (!cur.empty()) out.push_back(cur);
+    return out;
+}
+
 } // namespace sss
