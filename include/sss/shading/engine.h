@@ -31,6 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -41,13 +42,12 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/program.h"
 #include "sss/util/error.h"
 
 namespace sss {
-
-class RayTracer; // sss/light/ray_tracer.h
 
 namespace detail {
 struct BoundProgram; // engine_internal.h: a Program's ops bound to implementations
@@ -118,6 +118,27 @@ private:
     std::vector<ShaderArgument> m_arguments;
 };
 
+/// What kind of ray a shader traces: the `Attribute "visibility"` name that
+/// decides which objects it sees, and the `Attribute "trace"` depth limit
+/// that applies (maxdiffusedepth, maxspeculardepth).
+///  - Camera: primary rays (render only).
+///  - Diffuse: occlusion(), indirectdiffuse(), gather(... "distribution"
+///    "cosine"), gather("environment", ...).
+///  - Specular: trace(), environment("raytrace", ...), gather() with the
+///    default "uniform" distribution.
+///  - Transmission: shadow("raytrace", ...), transmission().
+enum class RayKind : uint8_t { Camera, Diffuse, Specular, Transmission };
+/// "camera", "diffuse", "specular", "transmission" (rayinfo("type")).
+const char* ray_kind_name(RayKind kind);
+
+/// How the point being shaded was reached: set by the renderer on every
+/// batch (camera hits and ptbake grids: depth 0, kind Camera, label "").
+struct RayContext {
+    int depth = 0;       ///< rayinfo("depth")
+    RayKind kind = RayKind::Camera; ///< rayinfo("type")
+    std::string label;   ///< rayinfo("label"): the label of the ray that hit
+};
+
 /// How the points of a batch are related, for derivatives (Du, Dv, area,
 /// calculatenormal, texture filter widths).
 enum class BatchLayout {
@@ -157,6 +178,8 @@ struct ShadingBatch {
     /// else area(P)).
     std::vector<float> radius;
     float time = 0.0f;
+    /// How the points were reached (rayinfo; depth limits of their rays).
+    RayContext ray;
     /// Seed of random() (and of the sample patterns of shadow(),
     /// transmission() and occlusion()): point i of the batch draws from
     /// hash(seed, i, the call, the how-many-th call of it), so results depend
@@ -179,6 +202,37 @@ struct ShadingBatch {
     /// Outputs: Ci and Oi after a surface shader, P and N after a
     /// displacement shader (written back into P and N).
     std::vector<glm::vec3> Ci, Oi;
+};
+
+/// Rays a shader asks the renderer to trace and, for the ones that hit,
+/// shade with the hit object's own surface shader (ShadingServices::trace).
+/// Everything is in world space except the returned shader values, which
+/// are in the current (camera) space like every shading value.
+struct RayQuery {
+    // --- request
+    RayKind kind = RayKind::Specular;
+    std::string label;       ///< the rays' label (gather "label"), rayinfo at the hits
+    int depth = 1;           ///< depth of these rays: the shading point's depth + 1
+    std::vector<ShadowRay> rays; ///< origins already offset; unit directions
+    /// Angle (radians) between neighbouring rays of one shading point: the
+    /// hit's footprint (filter widths, dPdu/dPdv) is length * spread wide.
+    float spread = 0.0f;
+    /// Variables of the hit shader to return: a global ("Ci", "Oi", "P",
+    /// "N", "Cs", "s"...) or an output parameter of the surface shader, and
+    /// the floats per ray each takes (1, 3 or 16; matching the caller's
+    /// variable). Empty: the hits are found but nothing is shaded.
+    std::vector<std::string> outputs;
+    std::vector<int> output_floats;
+    /// Seed of the hit shaders' random numbers (ray r's batch point draws
+    /// from hash(seed, r)): results never depend on the thread count.
+    uint64_t seed = 0;
+
+    // --- results (ShadingServices::trace fills every vector)
+    std::vector<uint8_t> hit;     ///< per ray
+    std::vector<float> length;    ///< distance to the hit; infinity for misses
+    /// Per output: rays.size() * output_floats[k] floats; 0 for misses and
+    /// for hits whose shader has no such variable.
+    std::vector<std::vector<float>> values;
 };
 
 /// Values a bake3d call hands to the pipeline: world-space points, and for
@@ -206,6 +260,25 @@ public:
     /// Ray tracer of the objects visible to transmission rays (shadow
     /// "raytrace", transmission()), or null: then nothing is occluded.
     virtual const RayTracer* occluders() const { return nullptr; }
+    /// Traces `query.rays` against the objects visible to `query.kind` and
+    /// shades the hits (ray tracing shadeops). The default sees nothing:
+    /// every ray misses. Rays deeper than the scene's limits (`Option
+    /// "trace" "maxdepth"`, `Attribute "trace" "maxdiffusedepth" /
+    /// "maxspeculardepth"` of the shading point) miss without being traced.
+    virtual void trace(RayQuery& query) {
+        query.hit.assign(query.rays.size(), 0);
+        query.length.assign(query.rays.size(), std::numeric_limits<float>::infinity());
+        query.values.resize(query.outputs.size());
+        for (std::size_t k = 0; k < query.outputs.size(); ++k)
+            query.values[k].assign(query.rays.size() * query.output_floats[k], 0.0f);
+    }
+    /// Transmission along segments (shadow("raytrace"), transmission()):
+    /// out[r] = the colour that gets through ray r (1 = nothing in the
+    /// way), from the opacity of what the rays cross as `Attribute "shade"
+    /// "transmissionhitmode"` says ("primitive": Os; "shader": the hit
+    /// shader's Oi). The default: all-or-nothing through occluders().
+    virtual void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                          int depth);
     /// Receives what bake3d writes (ptbake collects it; render too).
     virtual void bake3d(Bake3dRecord&& record) { (void)record; }
     /// printf output (one message per call).

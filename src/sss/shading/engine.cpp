@@ -545,6 +545,29 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
 
 } // namespace detail
 
+const char* ray_kind_name(RayKind kind) {
+    switch (kind) {
+    case RayKind::Camera: return "camera";
+    case RayKind::Diffuse: return "diffuse";
+    case RayKind::Specular: return "specular";
+    case RayKind::Transmission: return "transmission";
+    }
+    return "camera";
+}
+
+void ShadingServices::transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                               int depth) {
+    (void)depth;
+    const RayTracer* rt = occluders();
+    if (!rt || count == 0) {
+        std::fill(out, out + count, glm::vec3(1.0f));
+        return;
+    }
+    std::vector<uint8_t> hit(count);
+    rt->occluded(rays, count, hit.data());
+    for (std::size_t r = 0; r < count; ++r) out[r] = glm::vec3(hit[r] ? 0.0f : 1.0f);
+}
+
 // ---------------------------------------------------------------------------
 // ShaderInstance
 
