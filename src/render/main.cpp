@@ -101,8 +101,9 @@ int run(const std::vector<std::string>& argv) {
             "%dx%d samples\n",
             rib.c_str(), scene.primitives.size(), scene.lights.size(), report.triangles,
             xres, yres, nx, ny);
-        std::printf("render: %zu camera rays, %zu shadow and occlusion rays\n",
-                    report.camera_rays, report.shadow_rays);
+        std::printf("render: %zu camera rays, %zu shadow and occlusion rays, %zu "
+                    "secondary rays\n",
+                    report.camera_rays, report.shadow_rays, report.secondary_rays);
         for (const std::string& f : report.files)
             std::printf("render: wrote %s\n", f.c_str());
         for (const std::string& f : report.baked_files)

@@ -175,6 +175,11 @@ std::vector<DicedSurface> dice_all(const Scene& scene,
                                    std::span<const DiceRequest> requests,
                                    const DiceFinish& finish = {});
 
+/// For surfaces with per-micropolygon colours: each triangle's colour, the
+/// colour of the micropolygon centre nearest to its centroid (a hash grid of
+/// cells the size of the largest micropolygon). Empty without colours.
+std::vector<glm::vec3> triangle_colors(const DicedSurface& d);
+
 /// Surface area of a quadric primitive in its object space, computed
 /// independently of the dicer (closed forms, or an accurate 1D quadrature of
 /// the surface of revolution): for tests and checks. ValueError for other kinds.

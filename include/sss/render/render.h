@@ -43,6 +43,10 @@ struct RenderReport {
     std::size_t triangles = 0;
     std::size_t camera_rays = 0;
     std::size_t shadow_rays = 0;
+    /// Rays traced through the scene for the shaders' ray-tracing shadeops
+    /// (trace, gather, occlusion, indirectdiffuse, transmission with
+    /// opacity), the hit shaders' own rays included.
+    std::size_t secondary_rays = 0;
     double setup_seconds = 0.0;  ///< dicing, Embree build, maps opened
     double render_seconds = 0.0; ///< pixels
     double write_seconds = 0.0;

@@ -131,6 +131,7 @@ struct Attributes {
     /// Whether `Attribute "visibility" kind` ("camera", "transmission",
     /// "diffuse"...) leaves the object visible: only an explicit 0 (or
     /// "transparent") turns it off, so objects cast shadows by default.
+    /// "diffuse" and "specular" fall back to PRMan 12's "trace".
     bool visible_to(const char* kind) const;
 };
 

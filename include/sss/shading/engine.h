@@ -223,6 +223,9 @@ struct RayQuery {
     /// variable). Empty: the hits are found but nothing is shaded.
     std::vector<std::string> outputs;
     std::vector<int> output_floats;
+    /// The primitive whose shader traces the rays (its `Attribute "trace"`
+    /// depth limits apply); the engine sets it from ShadingBatch::primitive.
+    const Primitive* origin = nullptr;
     /// Seed of the hit shaders' random numbers (ray r's batch point draws
     /// from hash(seed, r)): results never depend on the thread count.
     uint64_t seed = 0;

@@ -32,6 +32,7 @@
 #include "sss/shading/bake3d_file.h"
 #include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
+#include "sss/shading/scene_rays.h"
 #include "sss/shading/scene_shaders.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
@@ -223,14 +224,18 @@ struct BakePlan {
 /// job each, in primitive order) and which only cast shadows; ValueError
 /// when nothing is baked.
 BakePlan plan_jobs(const Scene& scene, const SceneShaders& shaders,
-                   const BakeOptions& options, bool any_shadows, BakeReport& report) {
+                   const BakeOptions& options, bool any_shadows, bool any_rays,
+                   BakeReport& report) {
     BakePlan plan;
     plan.job_of.assign(scene.primitives.size(), -1);
     plan.occluder.assign(scene.primitives.size(), 0);
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const Primitive& prim = scene.primitives[i];
         const ShaderInstance& shader = *shaders.surface_of[i];
-        plan.occluder[i] = any_shadows && prim.attributes->visible_to("transmission");
+        const Attributes& attr = *prim.attributes;
+        plan.occluder[i] =
+            (any_shadows && attr.visible_to("transmission")) ||
+            (any_rays && (attr.visible_to("diffuse") || attr.visible_to("specular")));
         if (program_uses(shader.program(), "bake3d")) {
             plan.job_of[i] = static_cast<int>(plan.jobs.size());
             plan.jobs.push_back(make_job(scene, i, shader, options));
@@ -270,8 +275,8 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
 
 /// Dices what is baked or casts shadows; the rest is not needed.
 std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& options,
-                                     const BakePlan& plan, double spacing,
-                                     Displacer& displacer) {
+                                     const SceneShaders& shaders, const BakePlan& plan,
+                                     double spacing, bool any_rays, Displacer& displacer) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
@@ -293,6 +298,10 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
         }
         if (job < 0) {
             request.control = occluder_control;
+            // Ray hits interpolate (u, v, s, t) over the triangles for hit
+            // shaders that read them.
+            request.control.grids =
+                any_rays && program_reads_parametric(shaders.surface_of[i]->program());
         } else if (options.spacing_from_material && !options.material) {
             request.control.spacing = *plan.job_mfp[job] * options.mfp_fraction;
         }
@@ -388,8 +397,25 @@ public:
                  const std::string& output)
         : m_scene(scene), m_occluders(occluders), m_frame(frame), m_output(output) {}
     const Scene& scene() const override { return m_scene; }
-    const RayTracer* occluders() const override { return m_occluders; }
+    const RayTracer* occluders() const override {
+        return m_rays ? m_rays->occluders() : m_occluders;
+    }
     std::optional<int> frame() const override { return m_frame; }
+    /// The scene's secondary rays (when some shader traces them).
+    void set_scene_rays(const SceneRays* rays) { m_rays = rays; }
+    void trace(RayQuery& query) override {
+        if (m_rays)
+            m_rays->trace(query);
+        else
+            ShadingServices::trace(query);
+    }
+    void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                  int depth) override {
+        if (m_rays)
+            m_rays->transmit(rays, count, out, depth);
+        else
+            ShadingServices::transmit(rays, count, out, depth);
+    }
     void bake3d(Bake3dRecord&& record) override {
         if (!m_output.empty()) record.file = m_output;
         if (s_sink) s_sink->push_back(std::move(record));
@@ -406,6 +432,7 @@ public:
 private:
     const Scene& m_scene;
     const RayTracer* m_occluders;
+    const SceneRays* m_rays = nullptr;
     std::optional<int> m_frame;
     std::string m_output;
     std::mutex m_mutex;
@@ -421,8 +448,9 @@ thread_local std::vector<Bake3dRecord>* BakeServices::s_sink = nullptr;
 std::vector<std::vector<Bake3dRecord>>
 shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders& shaders,
              const std::vector<BakeJob>& jobs, const std::vector<DicedSurface>& diced,
-             const RayTracer* tracer, std::optional<int> frame,
-             const ShadingResources& resources, BakeReport& report) {
+             const RayTracer* tracer, const SceneRays* scene_rays,
+             std::optional<int> frame, const ShadingResources& resources,
+             BakeReport& report) {
     std::size_t total_points = 0;
     std::vector<std::size_t> first_point(jobs.size());
     struct Chunk {
@@ -452,7 +480,9 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         points_up_to(n);
     }
     BakeServices services(scene, tracer, frame, options.output);
-    const double extent = tracer ? tracer->scene_extent() : 0.0;
+    services.set_scene_rays(scene_rays);
+    const double extent =
+        tracer ? tracer->scene_extent() : scene_rays ? scene_rays->extent() : 0.0;
     const Camera& camera = scene.options.camera;
     const glm::dmat4& to_camera = camera.world_to_camera;
     const glm::dmat3 normal_to_camera =
@@ -590,14 +620,20 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
     for (const std::string& w : shaders.warnings) report.warnings.push_back(w);
     bool any_shadows = false;
-    for (const char* op :
-         {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
+    for (const char* op : {"shadow", "transmission"})
         any_shadows = any_shadows || shaders.uses(op);
+    // Shaders that trace rays through the scene (ray-traced global
+    // illumination bakes): the scene's surfaces, shaded where rays hit.
+    bool any_rays = false;
+    for (const auto& s : shaders.surfaces)
+        any_rays = any_rays || program_traces_rays(s->program());
+    for (const auto& s : shaders.lights)
+        any_rays = any_rays || program_traces_rays(s->program());
     for (const auto& light : shaders.lights)
         if (program_uses(light->program(), "shadow") ||
             program_uses(light->program(), "transmission"))
             ++report.shadow_lights;
-    BakePlan plan = plan_jobs(scene, shaders, options, any_shadows, report);
+    BakePlan plan = plan_jobs(scene, shaders, options, any_shadows, any_rays, report);
     job_mean_free_paths(scene, options, spacing.material_mfp, plan);
 
     // Displacement shaders run while dicing, before the occluders are built:
@@ -606,18 +642,33 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     BakeServices dice_services(scene, nullptr, frame, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::vector<DicedSurface> diced =
-        dice_scene(scene, options, plan, spacing.spacing, displacer);
+        dice_scene(scene, options, shaders, plan, spacing.spacing, any_rays, displacer);
     for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
     report.dice_seconds = watch.seconds();
 
     check_spacing(scene, plan, diced, report);
     const std::unique_ptr<RayTracer> tracer =
-        build_occluders(scene, plan, diced, any_shadows, report);
+        build_occluders(scene, plan, diced, any_shadows && !any_rays, report);
+    std::unique_ptr<SceneRays> scene_rays;
+    std::vector<std::vector<glm::vec3>> colors(scene.primitives.size());
+    if (any_rays) {
+        std::vector<RaySurface> surfaces(scene.primitives.size());
+        for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+            if (!plan.occluder[i] && plan.job_of[i] < 0) continue;
+            colors[i] = triangle_colors(diced[i]);
+            surfaces[i] = {&diced[i], &colors[i]};
+            if (plan.job_of[i] < 0 && !diced[i].triangles.empty())
+                ++report.occluder_primitives;
+        }
+        scene_rays = std::make_unique<SceneRays>(scene, shaders, resources, dice_services,
+                                                 std::move(surfaces));
+        report.occluder_triangles = scene_rays->triangles();
+    }
     report.trace_build_seconds = watch.seconds() - report.dice_seconds;
 
     std::vector<std::vector<Bake3dRecord>> records =
-        shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(), frame,
-                     resources, report);
+        shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(),
+                     scene_rays.get(), frame, resources, report);
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 

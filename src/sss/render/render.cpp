@@ -41,6 +41,7 @@
 #include "sss/shading/bake3d_file.h"
 #include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
+#include "sss/shading/scene_rays.h"
 #include "sss/shading/scene_shaders.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
@@ -151,69 +152,9 @@ struct Surface {
     std::vector<glm::vec3> triangle_colors;
     bool camera = true;  ///< seen by camera rays
     bool shadows = true; ///< casts shadows and occludes
+    /// Seen by the shaders' secondary rays (trace, gather, occlusion...).
+    bool secondary = false;
 };
-
-/// For primitives with per-micropolygon colours: each triangle takes the
-/// colour of the micropolygon centre nearest to its centroid (a hash grid of
-/// cells the size of the largest micropolygon). Empty without colours.
-std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
-    std::vector<glm::vec3> colors;
-    if (d.colors.empty() || d.triangles.empty()) return colors;
-    float cell = 0.0f;
-    for (float r : d.radii) cell = std::max(cell, r);
-    if (!(cell > 0.0f)) cell = 1.0f;
-    const auto key = [&](const glm::vec3& p, int dx, int dy, int dz) {
-        const int64_t x = static_cast<int64_t>(std::floor(p.x / cell)) + dx;
-        const int64_t y = static_cast<int64_t>(std::floor(p.y / cell)) + dy;
-        const int64_t z = static_cast<int64_t>(std::floor(p.z / cell)) + dz;
-        return detail::splitmix64(static_cast<uint64_t>(x) * 0x9E3779B1u ^
-                                  static_cast<uint64_t>(y) * 0x85EBCA77u ^
-                                  static_cast<uint64_t>(z) * 0xC2B2AE3Du);
-    };
-    // Open hashing into sorted (key, index) pairs.
-    std::vector<std::pair<uint64_t, uint32_t>> grid(d.size());
-    for (std::size_t i = 0; i < d.size(); ++i)
-        grid[i] = {key(d.centers[i], 0, 0, 0), static_cast<uint32_t>(i)};
-    std::sort(grid.begin(), grid.end());
-    const std::size_t triangles = d.triangles.size() / 3;
-    colors.resize(triangles);
-    for (std::size_t t = 0; t < triangles; ++t) {
-        const glm::vec3 c =
-            (d.vertices[d.triangles[3 * t]] + d.vertices[d.triangles[3 * t + 1]] +
-             d.vertices[d.triangles[3 * t + 2]]) /
-            3.0f;
-        float best = std::numeric_limits<float>::infinity();
-        uint32_t best_i = 0;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const uint64_t k = key(c, dx, dy, dz);
-                    auto it = std::lower_bound(grid.begin(), grid.end(),
-                                               std::make_pair(k, uint32_t{0}));
-                    for (; it != grid.end() && it->first == k; ++it) {
-                        const glm::vec3 e = d.centers[it->second] - c;
-                        const float dist = glm::dot(e, e);
-                        if (dist < best || (dist == best && it->second < best_i)) {
-                            best = dist;
-                            best_i = it->second;
-                        }
-                    }
-                }
-        if (!std::isfinite(best)) {
-            // Nothing in the neighbouring cells (a sliver far from any centre).
-            for (std::size_t i = 0; i < d.size(); ++i) {
-                const glm::vec3 e = d.centers[i] - c;
-                const float dist = glm::dot(e, e);
-                if (dist < best) {
-                    best = dist;
-                    best_i = static_cast<uint32_t>(i);
-                }
-            }
-        }
-        colors[t] = d.colors[best_i];
-    }
-    return colors;
-}
 
 /// An AOV of the image: an output variable of the surface shaders.
 struct Aov {
@@ -240,6 +181,21 @@ public:
     }
     std::optional<int> frame() const override { return m_frame; }
     void set_occluders(const RayTracer* tracer) { m_occluders = tracer; }
+    /// The scene's secondary rays (when some shader traces them).
+    void set_scene_rays(const SceneRays* rays) { m_rays = rays; }
+    void trace(RayQuery& query) override {
+        if (m_rays)
+            m_rays->trace(query);
+        else
+            ShadingServices::trace(query);
+    }
+    void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                  int depth) override {
+        if (m_rays)
+            m_rays->transmit(rays, count, out, depth);
+        else
+            ShadingServices::transmit(rays, count, out, depth);
+    }
     /// bake3d in a render (a bake RIB rendered): the records go to the
     /// current tile's list, so the files come out in tile order.
     void bake3d(Bake3dRecord&& record) override {
@@ -251,6 +207,7 @@ private:
     const Scene& m_scene;
     std::optional<int> m_frame;
     const RayTracer* m_occluders = nullptr;
+    const SceneRays* m_rays = nullptr;
     std::mutex m_mutex;
     static thread_local std::vector<Bake3dRecord>* s_sink;
 };
@@ -277,6 +234,9 @@ struct Renderer {
     std::unique_ptr<RayTracer> camera_tracer;
     std::unique_ptr<RayTracer> shadow_tracer; ///< only when it differs from the camera's
     const RayTracer* occluders = nullptr;
+    /// Whether some shader traces secondary rays, and the scene they see.
+    bool any_rays = false;
+    std::unique_ptr<SceneRays> scene_rays;
     double extent = 0.0;
     /// Pixel size per unit of depth (perspective; hits lie beyond hither), or
     /// the pixel size (orthographic): Camera::pixel_size_at without its tan().
@@ -761,9 +721,13 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     for (const Aov& a : job.aovs) job.values += a.as_rgb ? 3 : a.floats;
     bool any_shadows = false;
     for (const char* op :
-         {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse"})
+         {"shadow", "transmission", "occlusion", "trace", "indirectdiffuse", "gather"})
         any_shadows = any_shadows || job.shaders.uses(op);
-    return any_shadows;
+    for (const auto& s : job.shaders.surfaces)
+        job.any_rays = job.any_rays || program_traces_rays(s->program());
+    for (const auto& s : job.shaders.lights)
+        job.any_rays = job.any_rays || program_traces_rays(s->program());
+    return any_shadows || job.any_rays;
 }
 
 /// What is diced: everything the camera sees, and everything that casts
@@ -780,7 +744,9 @@ std::vector<std::size_t> plan_surfaces(Renderer& job, bool any_shadows,
         Surface& s = job.surfaces[i];
         s.camera = visible_to(scene.primitives[i], "camera");
         s.shadows = any_shadows && visible_to(scene.primitives[i], "transmission");
-        if (s.camera || s.shadows) to_dice.push_back(i);
+        s.secondary = job.any_rays && (visible_to(scene.primitives[i], "diffuse") ||
+                                       visible_to(scene.primitives[i], "specular"));
+        if (s.camera || s.shadows || s.secondary) to_dice.push_back(i);
         if (s.camera != s.shadows && any_shadows) *separate_shadows = true;
     }
     return to_dice;
@@ -1038,12 +1004,17 @@ Image resolve_pixels(const Renderer& job, const TileGrid& grid,
 void report_rays(const Renderer& job, RenderReport& report) {
     report.camera_rays = job.camera_rays.load();
     report.shadow_rays = job.shadow_rays.load();
+    if (job.scene_rays) {
+        report.secondary_rays = job.scene_rays->rays_traced();
+    }
     if (job.bad_samples.load() > 0)
         report.warnings.push_back(std::to_string(job.bad_samples.load()) +
                                   " samples had non-finite values and were left black");
-    if (job.nan_points.load() > 0)
+    const uint64_t nan_points =
+        job.nan_points.load() + (job.scene_rays ? job.scene_rays->nonfinite_points() : 0);
+    if (nan_points > 0)
         report.warnings.push_back(
-            std::to_string(job.nan_points.load()) +
+            std::to_string(nan_points) +
             " shading points gave NaN or infinite values, written as 0");
 }
 
@@ -1080,6 +1051,15 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     dice_surfaces(job, to_dice, report);
     build_tracers(job, to_dice, any_shadows, separate_shadows, report);
     job.services->set_occluders(job.occluders);
+    if (job.any_rays) {
+        std::vector<RaySurface> surfaces(scene.primitives.size());
+        for (std::size_t i : to_dice)
+            if (job.surfaces[i].shadows || job.surfaces[i].secondary)
+                surfaces[i] = {&job.surfaces[i].diced, &job.surfaces[i].triangle_colors};
+        job.scene_rays = std::make_unique<SceneRays>(scene, job.shaders, *job.resources,
+                                                     *job.services, std::move(surfaces));
+        job.services->set_scene_rays(job.scene_rays.get());
+    }
     report.setup_seconds = watch.seconds();
 
     const TileGrid grid(job.camera.xres, job.camera.yres);

@@ -96,8 +96,10 @@ std::unordered_map<std::string, Decl> predeclared() {
         "procedural display resource coordinatesystem compression",
         T::String, C::Uniform);
     add("gridsize eyesplits texturememory binary rasterorient camera diffuse specular "
-        "transmission photon maxdiffusedepth maxspeculardepth backfacing hidden",
+        "transmission photon maxdiffusedepth maxspeculardepth backfacing hidden "
+        "maxdepth trace",
         T::Integer, C::Uniform);
+    add("transmissionhitmode diffusehitmode specularhitmode", T::String, C::Uniform);
     add("bucketsize origin resolution", T::Integer, C::Uniform, 2);
     add("quantize", T::Float, C::Uniform, 4);
     add("jitter", T::Integer, C::Uniform);

@@ -1,0 +1,95 @@
+#pragma once
+/// \file scene_rays.h
+/// The scene as secondary rays see it (issue 14): the diced surfaces in
+/// Embree, one ray tracer per kind of ray (`Attribute "visibility"`
+/// "diffuse", "specular", "transmission"; identical sets share one), and the
+/// shading of ray hits with the hit object's own surface shader and lights,
+/// recursively (a hit shader may trace rays too, up to the depth limits).
+/// ptbake and render both implement ShadingServices::trace() and
+/// transmit() with it.
+///
+/// Rules (docs/shading.md, "Ray tracing"):
+///  - Depth: rays of depth d are traced when d <= `Option "trace"
+///    "maxdepth"` (default 10) and, for diffuse rays, d <= the shooting
+///    primitive's `Attribute "trace" "maxdiffusedepth"` (default 1), for
+///    specular rays d <= "maxspeculardepth" (default 2); deeper rays miss.
+///    Transmission rays are always traced.
+///  - What a ray hits: the nearest surface visible to its kind, skipping
+///    back faces of one-sided (`Sides 1`) surfaces and fully transparent
+///    ones (Os = 0).
+///  - Hits are shaded (when the query asks for values) by the primitive's
+///    surface shader with its lights, as a Points batch at depth d: P, N, Ng
+///    on the diced surface, I from the ray's origin, Cs/Os, u v s t when the
+///    shader reads them, dPdu/dPdv the ray footprint (length * spread) on
+///    the tangent plane. `Attribute "shade" "diffusehitmode" /
+///    "specularhitmode"` "primitive" skip the shader (Ci = Cs, Oi = Os).
+///    bake3d calls of hit shaders are dropped (they would bake points from
+///    ray hits).
+///  - Transmission: the product of (1 - Os) of every surface along the ray
+///    (`"shade" "transmissionhitmode"` "primitive", the default) or of
+///    (1 - Oi) of the hit shader ("shader").
+///  - Results never depend on the thread count: hit batches are formed in
+///    ray order per primitive and seeded from the query's seed.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "sss/dice/dice.h"
+#include "sss/light/ray_tracer.h"
+#include "sss/scene/scene.h"
+#include "sss/shading/engine.h"
+#include "sss/shading/scene_shaders.h"
+
+namespace sss {
+
+/// One primitive as rays see it.
+struct RaySurface {
+    const DicedSurface* diced = nullptr; ///< null or no triangles: not traced
+    /// Cs per triangle (triangle_colors), or empty for the attributes' Color.
+    const std::vector<glm::vec3>* triangle_colors = nullptr;
+};
+
+/// Whether `program` traces rays that need the scene (trace, gather,
+/// indirectdiffuse, occlusion, or environment/shadow with "raytrace").
+bool program_traces_rays(const Program& program);
+
+/// Secondary rays over a diced scene; thread-safe after construction.
+class SceneRays {
+public:
+    /// `surfaces` by primitive index (scene.primitives order). `outer`
+    /// receives printf output and warnings of hit shaders. Everything
+    /// given must outlive the SceneRays.
+    SceneRays(const Scene& scene, const SceneShaders& shaders,
+              const ShadingResources& resources, ShadingServices& outer,
+              std::vector<RaySurface> surfaces);
+    ~SceneRays();
+    SceneRays(const SceneRays&) = delete;
+    SceneRays& operator=(const SceneRays&) = delete;
+
+    /// ShadingServices::trace: traces and shades (see the file comment).
+    void trace(RayQuery& query) const;
+    /// ShadingServices::transmit.
+    void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                  int depth) const;
+    /// The transmission tracer (binary occlusion), null when nothing casts
+    /// shadows.
+    const RayTracer* occluders() const;
+    /// Diagonal of the traced scene's bounds.
+    float extent() const;
+    /// Rays traced so far (all kinds, hits shaded or not).
+    uint64_t rays_traced() const;
+    /// Points of hit shaders whose results were NaN or infinite (written as 0).
+    uint64_t nonfinite_points() const;
+    /// Triangles in the tracers (each distinct set counted once).
+    std::size_t triangles() const;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> m_impl;
+};
+
+} // namespace sss
