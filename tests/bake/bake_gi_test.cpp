@@ -1,0 +1,159 @@
+// ptbake with ray-traced global illumination (issue 14): closed-form checks
+// of occlusion() and indirectdiffuse() on a plane under a sphere, and a
+// furnace (the inside of a glowing sphere) for the recursion of hit shaders.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "sss/bake/bake.h"
+#include "sss/scene/rib.h"
+#include "test_util.h"
+
+namespace {
+
+/// The plane z = 0 (normal turned towards +z) bakes occlusion and
+/// indirect diffuse light; a sphere of radius 1 floats at height 2.
+const char* kPlaneShader = R"(
+surface bake_gi_plane(string filename = ""; float samples = 64;
+                      string distribution = "cosine"; string envmap = "") {
+    normal Nn = normalize(ntransform("world", N));
+    if (zcomp(Nn) < 0) Nn = -Nn;
+    Nn = ntransform("world", "current", Nn);
+    float occ = occlusion(P, Nn, samples, "distribution", distribution);
+    color ind = indirectdiffuse(P, Nn, samples, "environmentmap", envmap);
+    bake3d(filename, "occ,ind", P, Nn, "occ", occ, "ind", ind);
+    Ci = 1;
+}
+)";
+
+/// The inside of a sphere that glows (Ke) and reflects diffusely (Kd).
+const char* kFurnaceShader = R"(
+surface furnace(string filename = ""; float samples = 16; float Ke = 1; float Kd = 0.5) {
+    normal Nn = normalize(N);
+    if (Nn . (point "world" (0, 0, 0) - P) < 0) Nn = -Nn;
+    color L = Ke + Kd * indirectdiffuse(P, Nn, samples);
+    float depth = 0;
+    rayinfo("depth", depth);
+    if (depth == 0) bake3d(filename, "L", P, Nn, "L", L);
+    Ci = L;
+}
+)";
+
+sss::Scene scene_in(const sss::test::TempDir& dir, const std::string& options,
+                    const std::string& world) {
+    const std::string path = dir.file("scene.rib");
+    const std::string text = options +
+                             "Format 100 100 1\nProjection \"perspective\" \"fov\" 40\n"
+                             "Translate 0 0 8\nWorldBegin\n" +
+                             world + "WorldEnd\n";
+    sss::test::write_text(path, text);
+    return sss::parse_rib(text, path);
+}
+
+struct PlaneResult {
+    double occ_rms = 0.0, ind_rms = 0.0, occ_mean_error = 0.0;
+    std::size_t points = 0;
+};
+
+/// Bakes the plane under the sphere and compares every point with the form
+/// factor of the sphere, F = R^2 d / D^3 (R = 1, centre at height d = 2,
+/// D the distance to the centre): cosine-weighted occlusion F, and with a
+/// white environment and a sphere of colour c, indirect diffuse 1 - F + c F.
+PlaneResult bake_plane(int samples, const std::string& envmap = "", double c = 0.25) {
+    sss::test::TempDir dir;
+    sss::test::write_text(dir.file("bake_gi_plane.sl"), kPlaneShader);
+    const std::string cloud = dir.file("plane.ptc");
+    const sss::Scene scene = scene_in(
+        dir, "",
+        "AttributeBegin\nSurface \"bake_gi_plane\" \"string filename\" [\"" + cloud +
+            "\"] \"float samples\" " + std::to_string(samples) +
+            " \"string envmap\" [\"" + envmap +
+            "\"]\nPolygon \"P\" [-2 -2 0  2 -2 0  2 2 0  -2 2 0]\nAttributeEnd\n"
+            "AttributeBegin\nTranslate 0 0 2\nColor [" +
+            std::to_string(c) + " " + std::to_string(c) + " " + std::to_string(c) +
+            "]\nSurface \"constant\"\nSphere 1 -1 1 360\nAttributeEnd\n");
+    sss::BakeOptions opt;
+    opt.spacing = 0.1;
+    const auto files = sss::bake_clouds(scene, opt, nullptr);
+    EXPECT_EQ(files.size(), 1u);
+    const sss::PointCloud& pc = files.at(0).second;
+    const sss::Channel* occ = pc.find_channel("occ");
+    const sss::Channel* ind = pc.find_channel("ind");
+    EXPECT_TRUE(occ && ind);
+    PlaneResult r;
+    r.points = pc.size();
+    for (std::size_t i = 0; i < pc.size(); ++i) {
+        const glm::vec3 p = pc.positions[i];
+        const double D2 = double(p.x) * p.x + double(p.y) * p.y + 4.0;
+        const double F = 2.0 / (D2 * std::sqrt(D2));
+        const double eo = occ->data[i] - F;
+        r.occ_rms += eo * eo;
+        r.occ_mean_error += eo;
+        const double expected = envmap.empty() ? c * F : 1.0 - F + c * F;
+        const double ei = ind->data[3 * i] - expected;
+        r.ind_rms += ei * ei;
+    }
+    r.occ_rms = std::sqrt(r.occ_rms / pc.size());
+    r.ind_rms = std::sqrt(r.ind_rms / pc.size());
+    r.occ_mean_error /= pc.size();
+    return r;
+}
+
+} // namespace
+
+TEST(BakeGi, OcclusionOfAPlaneUnderASphereIsItsFormFactor) {
+    const PlaneResult r = bake_plane(256);
+    ASSERT_GT(r.points, 1000u);
+    // Stratified cosine sampling: the error per point is a few 1e-3.
+    EXPECT_LT(r.occ_rms, 0.01);
+    EXPECT_LT(std::abs(r.occ_mean_error), 0.002);
+    // Without an environment only the sphere's light (c F) arrives.
+    EXPECT_LT(r.ind_rms, 0.01 * 0.25 + 0.003);
+}
+
+TEST(BakeGi, NoiseFallsAsSamplesRise) {
+    const double e16 = bake_plane(16).occ_rms;
+    const double e256 = bake_plane(256).occ_rms;
+    // 16 times the samples: at least the Monte Carlo rate (4x less noise)
+    // less a margin; stratification does better.
+    EXPECT_LT(e256, e16 / 3.0);
+}
+
+TEST(BakeGi, IndirectDiffuseSeesTheEnvironmentAndTheLitSphere) {
+    sss::test::TempDir dir;
+    const std::string white = dir.file("white.exr");
+    const std::string cmd = "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" +
+                            white + "' >/dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << "oiiotool is needed (openimageio-tools)";
+    const PlaneResult r = bake_plane(256, white, 0.25);
+    EXPECT_LT(r.ind_rms, 0.01);
+}
+
+TEST(BakeGi, FurnaceConvergesToTheGeometricSeries) {
+    // Inside a closed sphere every ray hits the wall, whose radiance is the
+    // same everywhere: with D diffuse bounces L = Ke (1 - Kd^(D+1)) / (1 - Kd).
+    for (int depth : {1, 3}) {
+        sss::test::TempDir dir;
+        sss::test::write_text(dir.file("furnace.sl"), kFurnaceShader);
+        const std::string cloud = dir.file("furnace.ptc");
+        const sss::Scene scene = scene_in(
+            dir, "",
+            "Attribute \"trace\" \"maxdiffusedepth\" " + std::to_string(depth) +
+                "\nSurface \"furnace\" \"string filename\" [\"" + cloud +
+                "\"] \"float Kd\" 0.5\nSphere 1 -1 1 360\n");
+        sss::BakeOptions opt;
+        opt.spacing = 0.25;
+        const auto files = sss::bake_clouds(scene, opt, nullptr);
+        ASSERT_EQ(files.size(), 1u);
+        const sss::PointCloud& pc = files[0].second;
+        const sss::Channel* L = pc.find_channel("L");
+        ASSERT_TRUE(L);
+        const double expected = (1.0 - std::pow(0.5, depth + 1)) / 0.5;
+        double worst = 0.0;
+        for (std::size_t i = 0; i < pc.size(); ++i)
+            worst = std::max(worst, std::abs(L->data[3 * i] - expected));
+        EXPECT_LT(worst, 1e-3) << "maxdiffusedepth " << depth;
+    }
+}
