@@ -615,8 +615,35 @@ TEST(RslErrors, MiscStatements) {
     EXPECT_TRUE(has_error(ds, "only 1 enclosing loop"));
     ds = compile_errors("volume v() { Ci = 1; }");
     EXPECT_TRUE(has_error(ds, "volume shaders are not supported"));
-    ds = compile_errors("surface s() { gather(\"\", P, N, 1, 4) { Ci = 1; } }");
-    EXPECT_TRUE(has_error(ds, "gather is not supported yet"));
+    ds = compile_errors("surface s() { gather(\"\", P, N, 1) { Ci = 1; } }");
+    EXPECT_TRUE(has_error(ds, "gather takes (category, P, dir, angle, samples"));
+    ds = compile_errors(
+        "surface s() { gather(\"\", P, N, 1, 4, \"surface:Ci\", 1) { Ci = 1; } }");
+    EXPECT_TRUE(has_error(ds, "must be a variable"));
+    ds = compile_errors(
+        "surface s() { float x; gather(\"\", P, N, 1, 4, \"ray:length\", x, \"maxdist\") "
+        "{ Ci = 1; } }");
+    EXPECT_TRUE(has_error(ds, "gather takes"));
+    ds = compile_errors(
+        "surface s() { color c; gather(\"\", P, N, 1, 4, \"ray:length\", c) Ci = c; }");
+    EXPECT_TRUE(has_error(ds, "needs a float variable"));
+    ds = compile_errors(
+        "surface s() { float x; gather(\"\", P, N, 1, 4, \"ray:nosuch\", x) Ci = x; }");
+    EXPECT_TRUE(has_error(ds, "unknown gather output \"ray:nosuch\""));
+    ds = compile_errors(
+        "surface s(float k = 0) { gather(\"\", P, N, 1, 4, \"surface:Ci\", k) Ci = k; }");
+    EXPECT_TRUE(has_error(ds, "read-only"));
+    ds = compile_errors(
+        "surface s() { uniform float x = 0; gather(\"\", P, N, 1, 4, \"ray:length\", x) "
+        "Ci = x; }");
+    EXPECT_TRUE(has_error(ds, "varying value to uniform"));
+    // occlusion()/indirectdiffuse() outputs must be variables.
+    ds = compile_errors(
+        "surface s() { Ci = occlusion(P, N, 16, \"environmentcolor\", color 1); }");
+    EXPECT_TRUE(has_error(ds, "is an output: it must be a variable"));
+    ds = compile_errors(
+        "surface s() { Ci = indirectdiffuse(P, N, 16, \"occlusion\", 0.5); }");
+    EXPECT_TRUE(has_error(ds, "is an output: it must be a variable"));
     ds = compile_errors("surface s(float k) { }");
     EXPECT_TRUE(has_error(ds, "needs a default value"));
     ds = compile_errors("light l() { illuminance(P) { } }");

@@ -19,14 +19,18 @@
 ///    continue n, returns from inlined functions and from the shader), with
 ///    uniform stores written when any point runs;
 ///  - lights run lazily per batch (illuminate/solar/ambient lights,
-///    categories, __nondiffuse/__nonspecular), ray-traced shadow() and
-///    transmission() through ShadingServices::occluders(), occlusion();
+///    categories, __nondiffuse/__nonspecular);
+///  - the ray-tracing shadeops (engine_raytrace.cpp, docs/shading.md "Ray
+///    tracing"): gather, trace(), environment("raytrace"), occlusion() and
+///    indirectdiffuse() through ShadingServices::trace; shadow("raytrace")
+///    and transmission() through ShadingServices::transmit. Every ray carries
+///    depth = ShadingBatch::ray.depth + 1;
 ///  - texture/environment/textureinfo/texture3d through the job's
 ///    TextureLibrary, bake3d records handed to ShadingServices::bake3d;
 ///  - attribute/option/rendererinfo/rayinfo queries.
 /// Not supported (they run and return 0, warned once where it matters):
-/// depth-map shadow(), trace(), indirectdiffuse(), message passing
-/// (surface(), displacement(), lightsource()); gather is not compiled.
+/// depth-map shadow(), message passing (surface(), displacement(),
+/// lightsource()), gather's "primitive:" outputs (a compile error).
 
 #include <cstddef>
 #include <cstdint>
