@@ -637,6 +637,14 @@ TEST(RslErrors, MiscStatements) {
         "surface s() { uniform float x = 0; gather(\"\", P, N, 1, 4, \"ray:length\", x) "
         "Ci = x; }");
     EXPECT_TRUE(has_error(ds, "varying value to uniform"));
+    {
+        // 5 fixed arguments + 30 pairs = 65 > 64 (Op::writes is 64 bits).
+        std::string many = "surface s() { float x = 0; gather(\"\", P, N, 1, 4";
+        for (int i = 0; i < 30; ++i) many += ", \"ray:length\", x";
+        many += ") Ci = x; }";
+        ds = compile_errors(many);
+        EXPECT_TRUE(has_error(ds, "too many arguments to gather"));
+    }
     // occlusion()/indirectdiffuse() outputs must be variables.
     ds = compile_errors(
         "surface s() { Ci = occlusion(P, N, 16, \"environmentcolor\", color 1); }");
@@ -729,3 +737,27 @@ TEST(RslCompiler, CompileTextRunsThePreprocessor) {
 }
 
 } // namespace
+
+TEST(RslCompile, GatherInLightAndDisplacementShadersAndItsVaryingOutputs) {
+    for (const char* src :
+         {"light l(output varying float n = 0) { gather(\"\", Ps, vector(0, 0, 1), 1, 4) "
+          "n += 1; }",
+          "displacement d() { float len = 0; gather(\"\", P, N, 1, 4, \"ray:length\", "
+          "len) "
+          "P += N * len; }"}) {
+        SCOPED_TRACE(src);
+        const sss::Program p = sss::test::compile_one(src);
+        bool found = false;
+        for (const sss::Op& op : p.ops)
+            if (op.name == "gather") {
+                found = true;
+                for (std::size_t k = 0; k < op.args.size(); ++k)
+                    if ((op.writes >> k) & 1u) EXPECT_TRUE(p.symbols[op.args[k]].varying);
+            }
+        EXPECT_TRUE(found);
+    }
+    // A local assigned inside the body only becomes varying (masked stores).
+    const sss::Program p = sss::test::compile_one(
+        "surface s() { float k = 0; gather(\"\", P, N, 1, 4) k = 1; Ci = k; }");
+    EXPECT_TRUE(p.symbols[p.find("k")].varying);
+}

@@ -138,9 +138,9 @@ const char* ray_kind_name(RayKind kind);
 /// How the point being shaded was reached: set by the renderer on every
 /// batch (camera hits and ptbake grids: depth 0, kind Camera, label "").
 struct RayContext {
-    int depth = 0;       ///< rayinfo("depth")
+    int depth = 0;                  ///< rayinfo("depth")
     RayKind kind = RayKind::Camera; ///< rayinfo("type")
-    std::string label;   ///< rayinfo("label"): the label of the ray that hit
+    std::string label;              ///< rayinfo("label"): the label of the ray that hit
 };
 
 /// How the points of a batch are related, for derivatives (Du, Dv, area,
@@ -184,15 +184,17 @@ struct ShadingBatch {
     float time = 0.0f;
     /// How the points were reached (rayinfo; depth limits of their rays).
     RayContext ray;
-    /// Seed of random() (and of the sample patterns of shadow(),
-    /// transmission() and occlusion()): point i of the batch draws from
+    /// Seed of random() (and of the sample patterns of the ray-tracing
+    /// shadeops: gather, trace, shadow, transmission, occlusion,
+    /// indirectdiffuse): point i of the batch draws from
     /// hash(seed, i, the call, the how-many-th call of it), so results depend
     /// on the batch's seed and point order only, never on the thread count.
     /// Renderers set it from the grid or the batch index.
     uint64_t seed = 0;
-    /// Shadow and occlusion rays start this far (world units) off the surface,
-    /// along the batch's N (or Ng) turned towards the ray, as the C++ lights'
-    /// ray_offset; a call's "bias" overrides it.
+    /// Rays start this far (world units) off the surface, as the C++ lights'
+    /// ray_offset: shadow/transmission rays along the batch's N (or Ng)
+    /// turned towards the ray, occlusion/indirectdiffuse rays along their N
+    /// argument, gather/trace rays along the ray; a call's "bias" overrides it.
     float ray_offset = 0.0f;
 
     /// The primitive being shaded (object space, attributes, RIB location).
@@ -215,8 +217,8 @@ struct ShadingBatch {
 struct RayQuery {
     // --- request
     RayKind kind = RayKind::Specular;
-    std::string label;       ///< the rays' label (gather "label"), rayinfo at the hits
-    int depth = 1;           ///< depth of these rays: the shading point's depth + 1
+    std::string label; ///< the rays' label (gather "label"), rayinfo at the hits
+    int depth = 1;     ///< depth of these rays: the shading point's depth + 1
     std::vector<ShadowRay> rays; ///< origins already offset; unit directions
     /// Angle (radians) between neighbouring rays of one shading point: the
     /// hit's footprint (filter widths, dPdu/dPdv) is length * spread wide.
@@ -232,8 +234,8 @@ struct RayQuery {
     uint64_t seed = 0;
 
     // --- results (ShadingServices::trace fills every vector)
-    std::vector<uint8_t> hit;     ///< per ray
-    std::vector<float> length;    ///< distance to the hit; infinity for misses
+    std::vector<uint8_t> hit;  ///< per ray
+    std::vector<float> length; ///< distance to the hit; infinity for misses
     /// Per output: rays.size() * output_floats[k] floats; 0 for misses and
     /// for hits whose shader has no such variable.
     std::vector<std::vector<float>> values;
@@ -340,7 +342,8 @@ public:
 
     /// Points of the last execute() whose results held NaN or infinity (and
     /// were written as 0).
-    /// Shadow and occlusion rays this context has traced (all batches).
+    /// Rays this context has handed to ShadingServices::trace and transmit
+    /// (all batches).
     uint64_t rays_traced() const;
     std::size_t nonfinite_points() const;
     /// "N points of shader X at file:line gave NaN or infinity; written as 0"
