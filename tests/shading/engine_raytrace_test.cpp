@@ -331,6 +331,54 @@ surface t(output varying float blocked = 0, open = 0, bad = 0) {
     EXPECT_TRUE(rig.services.queries[0].outputs.empty());
 }
 
+/// A constant lat-long environment map of colour c.
+std::string constant_map(const std::string& name, glm::vec3 c);
+
+TEST(EngineRaytrace, GatherEnvironmentMapAndSamplebase) {
+    Rig rig;
+    rig.services.mode = FakeWorld::HalfX;
+    const std::string grey = constant_map("gather_grey", glm::vec3(0.25f, 0.5f, 0.75f));
+    ShadingBatch b = points(2);
+    ParamList params;
+    params.set(string_param("map", grey));
+    ShaderInstance inst(compile_shader(R"(
+surface t(string map = ""; output varying float bad = 0, open = 0, widest = 0, nearest = 1e9) {
+    color c = 0;
+    point o = 0;
+    gather("environment", P, N, PI / 2, 32, "environment:color", c,
+           "environmentmap", map) {
+    } else {
+        open += 1;
+        bad += abs(comp(c, 0) - 0.25) + abs(comp(c, 1) - 0.5) + abs(comp(c, 2) - 0.75);
+    }
+    gather("", P, N, PI / 2, 64, "ray:origin", o, "samplebase", 1, "bias", 0) {
+        widest = max(widest, distance(o, P));
+        nearest = min(nearest, distance(o, P));
+    } else {
+        widest = max(widest, distance(o, P));
+        nearest = min(nearest, distance(o, P));
+    }
+}
+)"),
+                        params, Matrix4(1.0), "test.rib:1");
+    rig.context.execute(inst, b);
+    TypeSpec type;
+    std::vector<float> bad, open, widest, nearest;
+    rig.context.output("bad", type, bad);
+    rig.context.output("open", type, open);
+    rig.context.output("widest", type, widest);
+    rig.context.output("nearest", type, nearest);
+    // The micropolygon: |dPdu x dPdv| du dv = 1/2: radius sqrt(1 / (2 pi)).
+    const float radius = std::sqrt(0.5f / float(kPi));
+    for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_LT(bad[i], 1e-4);
+        EXPECT_GT(open[i], 8.0f);
+        EXPECT_LE(widest[i], radius * 1.0001f);
+        EXPECT_GT(widest[i], radius * 0.8f);
+        EXPECT_LT(nearest[i], radius * 0.5f);
+    }
+}
+
 TEST(EngineRaytrace, TraceAndEnvironmentRaytrace) {
     Rig rig;
     rig.services.mode = FakeWorld::HalfX;
