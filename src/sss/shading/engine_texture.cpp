@@ -9,7 +9,11 @@
 ///    coordinates the globals s, t; the filter footprint is the differences
 ///    of s and t to the neighbour points (Du(s) du...). A file that cannot
 ///    be read is a ShaderRuntimeError (texture3d too).
-///  - environment(file[ch], dir): dir converted to world space.
+///  - environment(file[ch], dir): dir converted to world space; the name
+///    "raytrace" traces rays instead (environment_raytrace,
+///    engine_raytrace.cpp).
+///  - rayinfo: "depth", "type", "label" (ShadingBatch::ray), "origin",
+///    "direction", "length" (from I).
 ///  - texture3d(file, P, N, "channel", out...): P and N converted to the
 ///    option "coordsystem" (default world); outputs written only where the
 ///    lookup finds data (returns 1 there, 0 elsewhere).
