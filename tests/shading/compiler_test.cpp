@@ -761,3 +761,17 @@ TEST(RslCompile, GatherInLightAndDisplacementShadersAndItsVaryingOutputs) {
         "surface s() { float k = 0; gather(\"\", P, N, 1, 4) k = 1; Ci = k; }");
     EXPECT_TRUE(p.symbols[p.find("k")].varying);
 }
+
+TEST(RslCompile, RayinfoOfTheBatchIsUniformOfTheRayVarying) {
+    // "depth", "type", "label" are the batch's: a uniform variable takes them.
+    const sss::Program p = sss::test::compile_one(
+        "surface s() { uniform float d = 0; float x = rayinfo(\"depth\", d); Ci = d; }");
+    EXPECT_FALSE(p.symbols[p.find("d")].varying);
+    // "origin", "direction", "length" differ per point.
+    const sss::Program q = sss::test::compile_one(
+        "surface s() { point o = 0; float x = rayinfo(\"origin\", o); Ci = xcomp(o); }");
+    EXPECT_TRUE(q.symbols[q.find("o")].varying);
+    auto ds = sss::test::compile_errors(
+        "surface s() { uniform float l = 0; float x = rayinfo(\"length\", l); Ci = l; }");
+    EXPECT_TRUE(sss::test::has_error(ds, "varying value to uniform"));
+}

@@ -108,7 +108,7 @@ constexpr BuiltinSignature kTable[] = {
     {"option", "f=sF"}, {"option", "f=sC"}, {"option", "f=sP"}, {"option", "f=sS"},
     {"option", "f=s[F]"}, {"option", "f=sM"},
     {"rendererinfo", "f=sF"}, {"rendererinfo", "f=sS"}, {"rendererinfo", "f=s[F]"},
-    {"rayinfo", "f=sF", V}, {"rayinfo", "f=sS", V}, {"rayinfo", "f=sP", V}, {"rayinfo", "f=sV", V},
+    {"rayinfo", "f=sF"}, {"rayinfo", "f=sS"}, {"rayinfo", "f=sP"}, {"rayinfo", "f=sV"},
     {"surface", "f=sF"}, {"surface", "f=sC"}, {"surface", "f=sP"}, {"surface", "f=sV"},
     {"surface", "f=sN"}, {"surface", "f=sS"}, {"surface", "f=sM"},
     {"displacement", "f=sF"}, {"displacement", "f=sC"}, {"displacement", "f=sP"},

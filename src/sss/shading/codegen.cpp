@@ -1201,6 +1201,13 @@ private:
         std::vector<int> syms;
         std::vector<bool> out;
         bool call_varying = p.sig->always_varying;
+        // rayinfo's "origin", "direction" and "length" differ per point
+        // ("depth", "type", "label" are the batch's: uniform).
+        if (name == "rayinfo" && !args.empty() && args[0].val.ok() &&
+            is_const(args[0].val.sym) && !m_p.symbols[args[0].val.sym].strings.empty()) {
+            const std::string& key = m_p.symbols[args[0].val.sym].strings[0];
+            call_varying = key == "origin" || key == "direction" || key == "length";
+        }
         for (std::size_t i = 0; i < args.size(); ++i) {
             const PArg& s = m.slots[i];
             ArgInfo& a = args[i];
