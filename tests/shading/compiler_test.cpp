@@ -615,8 +615,43 @@ TEST(RslErrors, MiscStatements) {
     EXPECT_TRUE(has_error(ds, "only 1 enclosing loop"));
     ds = compile_errors("volume v() { Ci = 1; }");
     EXPECT_TRUE(has_error(ds, "volume shaders are not supported"));
-    ds = compile_errors("surface s() { gather(\"\", P, N, 1, 4) { Ci = 1; } }");
-    EXPECT_TRUE(has_error(ds, "gather is not supported yet"));
+    ds = compile_errors("surface s() { gather(\"\", P, N, 1) { Ci = 1; } }");
+    EXPECT_TRUE(has_error(ds, "gather takes (category, P, dir, angle, samples"));
+    ds = compile_errors(
+        "surface s() { gather(\"\", P, N, 1, 4, \"surface:Ci\", 1) { Ci = 1; } }");
+    EXPECT_TRUE(has_error(ds, "must be a variable"));
+    ds = compile_errors(
+        "surface s() { float x; gather(\"\", P, N, 1, 4, \"ray:length\", x, \"maxdist\") "
+        "{ Ci = 1; } }");
+    EXPECT_TRUE(has_error(ds, "gather takes"));
+    ds = compile_errors(
+        "surface s() { color c; gather(\"\", P, N, 1, 4, \"ray:length\", c) Ci = c; }");
+    EXPECT_TRUE(has_error(ds, "needs a float variable"));
+    ds = compile_errors(
+        "surface s() { float x; gather(\"\", P, N, 1, 4, \"ray:nosuch\", x) Ci = x; }");
+    EXPECT_TRUE(has_error(ds, "unknown gather output \"ray:nosuch\""));
+    ds = compile_errors(
+        "surface s(float k = 0) { gather(\"\", P, N, 1, 4, \"surface:Ci\", k) Ci = k; }");
+    EXPECT_TRUE(has_error(ds, "read-only"));
+    ds = compile_errors(
+        "surface s() { uniform float x = 0; gather(\"\", P, N, 1, 4, \"ray:length\", x) "
+        "Ci = x; }");
+    EXPECT_TRUE(has_error(ds, "varying value to uniform"));
+    {
+        // 5 fixed arguments + 30 pairs = 65 > 64 (Op::writes is 64 bits).
+        std::string many = "surface s() { float x = 0; gather(\"\", P, N, 1, 4";
+        for (int i = 0; i < 30; ++i) many += ", \"ray:length\", x";
+        many += ") Ci = x; }";
+        ds = compile_errors(many);
+        EXPECT_TRUE(has_error(ds, "too many arguments to gather"));
+    }
+    // occlusion()/indirectdiffuse() outputs must be variables.
+    ds = compile_errors(
+        "surface s() { Ci = occlusion(P, N, 16, \"environmentcolor\", color 1); }");
+    EXPECT_TRUE(has_error(ds, "is an output: it must be a variable"));
+    ds = compile_errors(
+        "surface s() { Ci = indirectdiffuse(P, N, 16, \"occlusion\", 0.5); }");
+    EXPECT_TRUE(has_error(ds, "is an output: it must be a variable"));
     ds = compile_errors("surface s(float k) { }");
     EXPECT_TRUE(has_error(ds, "needs a default value"));
     ds = compile_errors("light l() { illuminance(P) { } }");
@@ -702,3 +737,41 @@ TEST(RslCompiler, CompileTextRunsThePreprocessor) {
 }
 
 } // namespace
+
+TEST(RslCompile, GatherInLightAndDisplacementShadersAndItsVaryingOutputs) {
+    for (const char* src :
+         {"light l(output varying float n = 0) { gather(\"\", Ps, vector(0, 0, 1), 1, 4) "
+          "n += 1; }",
+          "displacement d() { float len = 0; gather(\"\", P, N, 1, 4, \"ray:length\", "
+          "len) "
+          "P += N * len; }"}) {
+        SCOPED_TRACE(src);
+        const sss::Program p = sss::test::compile_one(src);
+        bool found = false;
+        for (const sss::Op& op : p.ops)
+            if (op.name == "gather") {
+                found = true;
+                for (std::size_t k = 0; k < op.args.size(); ++k)
+                    if ((op.writes >> k) & 1u) EXPECT_TRUE(p.symbols[op.args[k]].varying);
+            }
+        EXPECT_TRUE(found);
+    }
+    // A local assigned inside the body only becomes varying (masked stores).
+    const sss::Program p = sss::test::compile_one(
+        "surface s() { float k = 0; gather(\"\", P, N, 1, 4) k = 1; Ci = k; }");
+    EXPECT_TRUE(p.symbols[p.find("k")].varying);
+}
+
+TEST(RslCompile, RayinfoOfTheBatchIsUniformOfTheRayVarying) {
+    // "depth", "type", "label" are the batch's: a uniform variable takes them.
+    const sss::Program p = sss::test::compile_one(
+        "surface s() { uniform float d = 0; float x = rayinfo(\"depth\", d); Ci = d; }");
+    EXPECT_FALSE(p.symbols[p.find("d")].varying);
+    // "origin", "direction", "length" differ per point.
+    const sss::Program q = sss::test::compile_one(
+        "surface s() { point o = 0; float x = rayinfo(\"origin\", o); Ci = xcomp(o); }");
+    EXPECT_TRUE(q.symbols[q.find("o")].varying);
+    auto ds = sss::test::compile_errors(
+        "surface s() { uniform float l = 0; float x = rayinfo(\"length\", l); Ci = l; }");
+    EXPECT_TRUE(sss::test::has_error(ds, "varying value to uniform"));
+}

@@ -312,11 +312,13 @@ TEST(RslCorpus, Lighting) {
     std::vector<const ShaderInstance*> list;
     for (const ShaderInstance& l : lights) list.push_back(&l);
     run_corpus("lighting.sl", plane_grid(8, 8), {}, &e, list);
-    // The unsupported calls warned.
+    // The unsupported calls warned (trace() and indirectdiffuse() no longer do).
     std::string all;
     for (const std::string& w : e.services.warnings) all += w + "\n";
-    for (const char* name : {"trace()", "indirectdiffuse()", "depth-map shadows"})
+    for (const char* name : {"depth-map shadows"})
         EXPECT_NE(all.find(name), std::string::npos) << name << " in:\n" << all;
+    for (const char* name : {"trace()", "indirectdiffuse()"})
+        EXPECT_EQ(all.find(name), std::string::npos) << name << " in:\n" << all;
 }
 
 /// Writes a float image of `channels` channels with value(x, y, c).
@@ -428,6 +430,10 @@ TEST(RslCorpus, Queries) {
     run_corpus("queries.sl", b, {}, &e);
 }
 
+TEST(RslCorpus, Raytrace) {
+    run_corpus("raytrace.sl", plane_grid(4, 2));
+}
+
 TEST(RslCorpus, Preprocessor) {
     run_corpus("preprocessor.sl", plane_grid(4, 1));
 }
@@ -537,9 +543,16 @@ const BadShader kBadShaders[] = {
      "'x' is already declared in this scope", 3, 11},
     {"break outside a loop", "surface t() {\n    break;\n}\n", "break outside a loop", 2,
      5},
-    {"gather (not supported)",
-     "surface t() {\n    gather(\"\", P, N, 1, 4) { Ci = 1; }\n}\n",
-     "gather is not supported yet", 2, 5},
+    {"gather output not a variable",
+     "surface t() {\n    gather(\"\", P, N, 1, 4, \"surface:Ci\", Ci + 1) { Ci = 1; "
+     "}\n}\n",
+     "the value of gather output \"surface:Ci\" must be a variable", 2, 45},
+    {"gather argument count", "surface t() {\n    gather(\"\", P, N, 1) { Ci = 1; }\n}\n",
+     "gather takes (category, P, dir, angle, samples", 2, 5},
+    {"gather primitive output",
+     "surface t() {\n    color c;\n    gather(\"\", P, N, 1, 4, \"primitive:Cs\", c) Ci "
+     "= c;\n}\n",
+     "primitive variables of the hit are not supported", 3, 44},
 };
 
 TEST(RslCorpusErrors, BadShadersGiveClearMessages) {

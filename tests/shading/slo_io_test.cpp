@@ -8,6 +8,7 @@
 #include <string>
 
 #include "rsl_test_util.h"
+#include "sss/shading/engine.h"
 #include "sss/shading/program.h"
 #include "sss/util/error.h"
 
@@ -172,3 +173,54 @@ TEST(RslSlo, MissingFileIsIoError) {
 }
 
 } // namespace
+
+namespace {
+const char* kGatherShader = R"(
+surface g(output varying float n = 0) {
+    color c = 0;
+    float len = 0;
+    vector d = 0;
+    gather("illuminance", P, N, PI / 4, 8, "surface:Ci", c, "ray:length", len,
+           "ray:direction", d, "distribution", "cosine", "maxdist", 10) {
+        n += 1;
+    } else {
+        n += 100;
+    }
+    Ci = c + len + xcomp(d);
+}
+)";
+} // namespace
+
+TEST(RslSlo, GatherRoundTripsAndItsFlagsAreChecked) {
+    const Program p = test::compile_one(kGatherShader);
+    int gi = -1;
+    for (std::size_t i = 0; i < p.ops.size(); ++i)
+        if (p.ops[i].name == "gather") gi = static_cast<int>(i);
+    ASSERT_GE(gi, 0);
+    const Op& g = p.ops[gi];
+    // cat P dir angle samples + 5 pairs; the three output values are written.
+    ASSERT_EQ(g.args.size(), 15u);
+    EXPECT_EQ(g.writes, (uint64_t(1) << 6) | (uint64_t(1) << 8) | (uint64_t(1) << 10));
+    EXPECT_GT(g.jump[0], gi + 1);
+    EXPECT_GT(g.jump[1], g.jump[0]); // the else body
+    EXPECT_EQ(g.jump[2], -1);
+    for (int k : {6, 8, 10}) EXPECT_TRUE(p.symbols[g.args[k]].varying) << k;
+    const std::string text = to_text(p);
+    const Program q = from_text(text);
+    ASSERT_EQ(q.ops.size(), p.ops.size());
+    EXPECT_EQ(q.ops[gi].args, g.args);
+    EXPECT_EQ(q.ops[gi].jump, g.jump);
+    EXPECT_EQ(q.ops[gi].writes, g.writes);
+    EXPECT_EQ(to_text(q), text);
+    // A written fixed argument or option name, or a bad range, is refused.
+    for (uint64_t bad : {uint64_t(1), uint64_t(1) << 5, uint64_t(1) << 20}) {
+        Program r = p;
+        r.ops[gi].writes |= bad;
+        EXPECT_THROW(from_text(to_text(r)), ValueError) << bad;
+    }
+    Program r = p;
+    r.ops[gi].jump[1] = r.ops[gi].jump[0] - 1;
+    EXPECT_THROW(from_text(to_text(r)), ValueError);
+    // The engine binds it.
+    EXPECT_NO_THROW(ShaderInstance(std::make_shared<Program>(q), {}, Matrix4(1.0), "x"));
+}

@@ -19,14 +19,18 @@
 ///    continue n, returns from inlined functions and from the shader), with
 ///    uniform stores written when any point runs;
 ///  - lights run lazily per batch (illuminate/solar/ambient lights,
-///    categories, __nondiffuse/__nonspecular), ray-traced shadow() and
-///    transmission() through ShadingServices::occluders(), occlusion();
+///    categories, __nondiffuse/__nonspecular);
+///  - the ray-tracing shadeops (engine_raytrace.cpp, docs/shading.md "Ray
+///    tracing"): gather, trace(), environment("raytrace"), occlusion() and
+///    indirectdiffuse() through ShadingServices::trace; shadow("raytrace")
+///    and transmission() through ShadingServices::transmit. Every ray carries
+///    depth = ShadingBatch::ray.depth + 1;
 ///  - texture/environment/textureinfo/texture3d through the job's
 ///    TextureLibrary, bake3d records handed to ShadingServices::bake3d;
 ///  - attribute/option/rendererinfo/rayinfo queries.
 /// Not supported (they run and return 0, warned once where it matters):
-/// depth-map shadow(), trace(), indirectdiffuse(), message passing
-/// (surface(), displacement(), lightsource()); gather is not compiled.
+/// depth-map shadow(), message passing (surface(), displacement(),
+/// lightsource()), gather's "primitive:" outputs (a compile error).
 
 #include <cstddef>
 #include <cstdint>
@@ -134,9 +138,9 @@ const char* ray_kind_name(RayKind kind);
 /// How the point being shaded was reached: set by the renderer on every
 /// batch (camera hits and ptbake grids: depth 0, kind Camera, label "").
 struct RayContext {
-    int depth = 0;       ///< rayinfo("depth")
+    int depth = 0;                  ///< rayinfo("depth")
     RayKind kind = RayKind::Camera; ///< rayinfo("type")
-    std::string label;   ///< rayinfo("label"): the label of the ray that hit
+    std::string label;              ///< rayinfo("label"): the label of the ray that hit
 };
 
 /// How the points of a batch are related, for derivatives (Du, Dv, area,
@@ -180,15 +184,17 @@ struct ShadingBatch {
     float time = 0.0f;
     /// How the points were reached (rayinfo; depth limits of their rays).
     RayContext ray;
-    /// Seed of random() (and of the sample patterns of shadow(),
-    /// transmission() and occlusion()): point i of the batch draws from
+    /// Seed of random() (and of the sample patterns of the ray-tracing
+    /// shadeops: gather, trace, shadow, transmission, occlusion,
+    /// indirectdiffuse): point i of the batch draws from
     /// hash(seed, i, the call, the how-many-th call of it), so results depend
     /// on the batch's seed and point order only, never on the thread count.
     /// Renderers set it from the grid or the batch index.
     uint64_t seed = 0;
-    /// Shadow and occlusion rays start this far (world units) off the surface,
-    /// along the batch's N (or Ng) turned towards the ray, as the C++ lights'
-    /// ray_offset; a call's "bias" overrides it.
+    /// Rays start this far (world units) off the surface, as the C++ lights'
+    /// ray_offset: shadow/transmission rays along the batch's N (or Ng)
+    /// turned towards the ray, occlusion/indirectdiffuse rays along their N
+    /// argument, gather/trace rays along the ray; a call's "bias" overrides it.
     float ray_offset = 0.0f;
 
     /// The primitive being shaded (object space, attributes, RIB location).
@@ -211,8 +217,8 @@ struct ShadingBatch {
 struct RayQuery {
     // --- request
     RayKind kind = RayKind::Specular;
-    std::string label;       ///< the rays' label (gather "label"), rayinfo at the hits
-    int depth = 1;           ///< depth of these rays: the shading point's depth + 1
+    std::string label; ///< the rays' label (gather "label"), rayinfo at the hits
+    int depth = 1;     ///< depth of these rays: the shading point's depth + 1
     std::vector<ShadowRay> rays; ///< origins already offset; unit directions
     /// Angle (radians) between neighbouring rays of one shading point: the
     /// hit's footprint (filter widths, dPdu/dPdv) is length * spread wide.
@@ -231,8 +237,8 @@ struct RayQuery {
     uint64_t seed = 0;
 
     // --- results (ShadingServices::trace fills every vector)
-    std::vector<uint8_t> hit;     ///< per ray
-    std::vector<float> length;    ///< distance to the hit; infinity for misses
+    std::vector<uint8_t> hit;  ///< per ray
+    std::vector<float> length; ///< distance to the hit; infinity for misses
     /// Per output: rays.size() * output_floats[k] floats; 0 for misses and
     /// for hits whose shader has no such variable.
     std::vector<std::vector<float>> values;
@@ -339,7 +345,8 @@ public:
 
     /// Points of the last execute() whose results held NaN or infinity (and
     /// were written as 0).
-    /// Shadow and occlusion rays this context has traced (all batches).
+    /// Rays this context has handed to ShadingServices::trace and transmit
+    /// (all batches).
     uint64_t rays_traced() const;
     std::size_t nonfinite_points() const;
     /// "N points of shader X at file:line gave NaN or infinity; written as 0"

@@ -45,6 +45,16 @@
 ///    means the whole sphere).
 ///  - `illuminate p axis angle` / `solar axis angle` (light shaders): body
 ///    [i+1, jump[0]); without axis/angle the angle symbol holds -1.
+///  - `gather cat p dir angle samples ("name" value)...`: ray tracing
+///    (engine_raytrace.cpp): the hit body is ops [i+1, jump[0]), the else
+///    body [jump[0], jump[1]), each run once per sample for the points whose
+///    ray hit / missed. cat is "" when the source gave "" (also
+///    "illuminance", "environment"); p a point, dir a vector, angle and
+///    samples floats. Option values whose name has a ':' prefix
+///    ("surface:<var>", "ray:length", "ray:direction", "ray:origin",
+///    "environment:color", "environment:direction") are variables the op
+///    writes (their bits in `writes`; no other bit is set); the others are
+///    read. Not a loop level for break/continue.
 ///  - anything else is a built-in function call (builtins.h lists every
 ///    name and its overloads); token-value lists follow the fixed arguments
 ///    as (string, value) symbol pairs. `texture`, `environment` and `shadow`
@@ -79,7 +89,15 @@
 ///    when absent; axis the constant vector (0,0,0) and angle PI when
 ///    absent. `illuminate p axis angle` / `solar axis angle`: the constant
 ///    vector (0,0,0) and -1 when absent.
-///  - `break`/`continue` count `loop` ops only (not illuminance), within
+///  - `gather`: the five fixed arguments are always present; output token
+///    names must be constant strings and their values variables (a
+///    "primitive:" output is a compile error); the bodies count as being
+///    under a varying condition and the outputs are varying. occlusion()
+///    and indirectdiffuse() also write the values of their
+///    "environmentcolor", "environmentdir" and "occlusion" options (which
+///    must be variables). An op has at most 64 arguments (`writes` is 64
+///    bits): a call with more is a compile error.
+///  - `break`/`continue` count `loop` ops only (not illuminance, gather), within
 ///    the enclosing block (a function cannot break its caller's loop).
 ///  - Symbols: temps are "$t<n>", constants "$c<n>" (deduplicated), locals of
 ///    the body keep their name ("x", or "x@2" when a name is reused in

@@ -1184,12 +1184,30 @@ private:
         return true;
     }
 
+    // occlusion() and indirectdiffuse(): the values of "environmentcolor",
+    // "environmentdir" and "occlusion" are outputs (variables, written).
+    bool ray_output_token(const std::string& fn, const ArgInfo& name) {
+        if (fn != "occlusion" && fn != "indirectdiffuse") return false;
+        if (!name.val.ok() || !is_const(name.val.sym) ||
+            m_p.symbols[name.val.sym].strings.empty())
+            return false;
+        const std::string& t = m_p.symbols[name.val.sym].strings[0];
+        return t == "environmentcolor" || t == "environmentdir" || t == "occlusion";
+    }
+
     Val builtin_call(const Proto& p, const Match& m, std::vector<ArgInfo>& args,
                      const Expr& e) {
         const std::string& name = p.sig->name;
         std::vector<int> syms;
         std::vector<bool> out;
         bool call_varying = p.sig->always_varying;
+        // rayinfo's "origin", "direction" and "length" differ per point
+        // ("depth", "type", "label" are the batch's: uniform).
+        if (name == "rayinfo" && !args.empty() && args[0].val.ok() &&
+            is_const(args[0].val.sym) && !m_p.symbols[args[0].val.sym].strings.empty()) {
+            const std::string& key = m_p.symbols[args[0].val.sym].strings[0];
+            call_varying = key == "origin" || key == "direction" || key == "length";
+        }
         for (std::size_t i = 0; i < args.size(); ++i) {
             const PArg& s = m.slots[i];
             ArgInfo& a = args[i];
@@ -1199,9 +1217,10 @@ private:
                 a.literal = false;
             }
             if (!a.val.ok()) return {};
+            const bool ray_out = m.token_value[i] && ray_output_token(name, args[i - 1]);
             if (s.output && m.token_value[i] && !written_token(args[i - 1], a)) {
                 // An option of a '@' list that is read, not a looked-up channel.
-            } else if (s.output) {
+            } else if (s.output || ray_out) {
                 if (!a.is_var) {
                     error(a.expr->loc, "argument " + std::to_string(i + 1) + " of '" +
                                            name +
@@ -1409,7 +1428,7 @@ private:
             light_statement(s);
             return;
         case StmtKind::Gather:
-            error(s.loc, "gather is not supported yet");
+            gather_statement(s);
             return;
         }
     }
@@ -1731,6 +1750,142 @@ private:
         --m_varying_cond;
         --depth;
         m_p.ops[op].jump[0] = here();
+    }
+
+    // gather(category, P, dir, angle, samples, "name", value...) hit [else miss]:
+    // op `gather` with the five fixed arguments (string, point, vector, float,
+    // float) and the token-value pairs; values of output tokens ("surface:x",
+    // "ray:...", "environment:...") are variables, written (varying).
+    void gather_statement(const Stmt& s) {
+        if (m_shader.kind != ShaderKind::Surface && m_shader.kind != ShaderKind::Light &&
+            m_shader.kind != ShaderKind::Displacement) {
+            error(s.loc,
+                  "gather is only allowed in surface, light and displacement shaders");
+            return;
+        }
+        const std::size_t n = s.exprs.size();
+        if (n < 5 || (n - 5) % 2 != 0) {
+            error(s.loc, "gather takes (category, P, dir, angle, samples [, \"name\", "
+                         "value]...)");
+            return;
+        }
+        std::vector<int> args;
+        bool ok = true;
+        auto arg = [&](std::size_t i, ShadingType t) {
+            Val v = typed_arg(*s.exprs[i], t);
+            ok = ok && v.ok();
+            args.push_back(v.ok() ? v.sym : 0);
+        };
+        {
+            Val c = value(*s.exprs[0]);
+            if (c.ok() && type(c.sym) != TypeSpec{ShadingType::String, 0}) {
+                error(s.exprs[0]->loc, "the gather category must be a string");
+                ok = false;
+            }
+            args.push_back(c.ok() ? c.sym : 0);
+            ok = ok && c.ok();
+        }
+        arg(1, ShadingType::Point);
+        arg(2, ShadingType::Vector);
+        arg(3, ShadingType::Float);
+        arg(4, ShadingType::Float);
+        uint64_t writes = 0;
+        std::vector<std::pair<int, SrcLoc>> outputs;
+        for (std::size_t i = 5; i + 1 < n; i += 2) {
+            Val name = value(*s.exprs[i]);
+            if (!name.ok() || type(name.sym) != TypeSpec{ShadingType::String, 0}) {
+                if (name.ok())
+                    error(s.exprs[i]->loc, "gather option names must be strings");
+                ok = false;
+                args.push_back(0);
+                args.push_back(0);
+                continue;
+            }
+            args.push_back(name.sym);
+            std::string token;
+            if (is_const(name.sym) && !m_p.symbols[name.sym].strings.empty())
+                token = m_p.symbols[name.sym].strings[0];
+            const Expr& ve = *s.exprs[i + 1];
+            const auto colon = token.find(':');
+            if (colon == std::string::npos) {
+                Val v = value(ve);
+                ok = ok && v.ok();
+                args.push_back(v.ok() ? v.sym : 0);
+                continue;
+            }
+            // An output: the variable itself.
+            const std::string group = token.substr(0, colon),
+                              key = token.substr(colon + 1);
+            auto want = [&](bool fits, const char* what) {
+                if (!fits) {
+                    error(ve.loc, "gather output \"" + token + "\" needs " + what);
+                    ok = false;
+                }
+            };
+            const Var* var =
+                ve.kind == ExprKind::Ident ? lookup(ve.text, ve.loc) : nullptr;
+            if (group == "primitive") {
+                error(ve.loc, "gather output \"" + token +
+                                  "\": primitive variables of the hit are not supported "
+                                  "(use \"surface:" +
+                                  key + "\")");
+                ok = false;
+            } else if (group != "surface" && group != "ray" && group != "environment") {
+                error(ve.loc, "unknown gather output \"" + token + "\"");
+                ok = false;
+            } else if (!var) {
+                if (ve.kind != ExprKind::Ident)
+                    error(ve.loc, "the value of gather output \"" + token +
+                                      "\" must be a variable");
+                ok = false;
+            } else if (check_writable(*var, ve.text, ve.loc)) {
+                const TypeSpec t = type(var->sym);
+                if (group == "ray") {
+                    if (key == "length")
+                        want(t == TypeSpec{ShadingType::Float, 0}, "a float variable");
+                    else if (key == "direction" || key == "origin")
+                        want(!t.is_array() && is_point_like(t.type),
+                             "a point, vector or normal variable");
+                    else {
+                        error(ve.loc, "unknown gather output \"" + token + "\"");
+                        ok = false;
+                    }
+                } else if (group == "environment") {
+                    if (key == "color")
+                        want(t == TypeSpec{ShadingType::Color, 0}, "a color variable");
+                    else if (key == "direction")
+                        want(!t.is_array() && is_point_like(t.type),
+                             "a point, vector or normal variable");
+                    else {
+                        error(ve.loc, "unknown gather output \"" + token + "\"");
+                        ok = false;
+                    }
+                } else if (key.empty() || t.type == ShadingType::String) {
+                    want(false, "a variable name and a non-string variable");
+                }
+                writes |= uint64_t(1) << std::min<std::size_t>(args.size(), 63);
+                outputs.push_back({var->sym, ve.loc});
+                args.push_back(var->sym);
+                continue;
+            } else {
+                ok = false;
+            }
+            args.push_back(0);
+        }
+        if (args.size() > 64) {
+            error(s.loc, "too many arguments to gather");
+            return;
+        }
+        if (!ok) return;
+        // Outputs vary per point (and are written under a varying mask).
+        for (const auto& [sym, at] : outputs) check_store(sym, true, at);
+        const int op = emit("gather", args, writes);
+        ++m_varying_cond;
+        sub_statement(*s.sub);
+        m_p.ops[op].jump[0] = here();
+        if (s.else_sub) sub_statement(*s.else_sub);
+        m_p.ops[op].jump[1] = here();
+        --m_varying_cond;
     }
 
     const SourceFile& m_file;

@@ -147,7 +147,8 @@ enum Control : int {
     C_Return,
     C_Illuminance,
     C_Illuminate,
-    C_Solar
+    C_Solar,
+    C_Gather
 };
 
 inline uint32_t stop_code(uint32_t kind, int depth) {
@@ -195,6 +196,8 @@ void cond_mask(const Slot& c, const std::vector<uint8_t>& parent, bool invert,
 // Declared in engine_lighting.cpp.
 void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end);
 void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end, bool solar);
+// Declared in engine_raytrace.cpp.
+void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end);
 
 void Frame::run(int begin, int end) {
     const std::vector<BoundOp>& ops = bound->ops;
@@ -311,6 +314,10 @@ void Frame::run(int begin, int end) {
             run_illuminate(*this, b, i + 1, op.jump[0], b.ia == C_Solar);
             i = op.jump[0];
             break;
+        case C_Gather:
+            run_gather(*this, b, op.jump[0], op.jump[1]);
+            i = op.jump[1];
+            break;
         default:
             fail(b, "unbound op '" + op.name + "'");
         }
@@ -330,6 +337,7 @@ const BinderTable& binders() {
         register_geometry(t);
         register_lighting(t);
         register_texture(t);
+        register_raytrace(t);
         return t;
     }();
     return table;
@@ -378,6 +386,13 @@ struct Validator {
                 walk(j[1], j[2], loops + 1, blocks, in_illuminance);
                 walk(j[2], j[3], loops, blocks, in_illuminance);
                 i = j[3];
+            } else if (op.name == "gather") {
+                // Not a loop level: break/continue inside count the loops outside.
+                range(i, i + 1, j[0], end);
+                range(i, j[0], j[1], end);
+                walk(i + 1, j[0], loops, blocks, in_illuminance);
+                walk(j[0], j[1], loops, blocks, in_illuminance);
+                i = j[1];
             } else if (op.name == "block") {
                 range(i, i + 1, j[0], end);
                 walk(i + 1, j[0], loops, blocks + 1, in_illuminance);
@@ -428,6 +443,26 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
         return n == 4 && in.is_string(0) && in.is_ptype(1) && in.is_triple_(2) &&
                in.is_float(3);
     }
+    if (name == "gather") {
+        b.ia = C_Gather;
+        if (in.program.kind != ShaderKind::Surface &&
+            in.program.kind != ShaderKind::Light &&
+            in.program.kind != ShaderKind::Displacement) {
+            why = "gather is only for surface, light and displacement shaders";
+            return false;
+        }
+        if (n < 5 || (n - 5) % 2 != 0 || !in.is_string(0) || !in.is_ptype(1) ||
+            !in.is_ptype(2) || !in.is_float(3) || !in.is_float(4))
+            return false;
+        for (int k = 5; k < n; k += 2)
+            if (!in.is_string(k)) return false;
+        for (int k = 0; k < n; ++k)
+            if (in.writes(k) && (k < 5 || (k - 5) % 2 == 0)) {
+                why = "gather writes one of its fixed arguments or option names";
+                return false;
+            }
+        return true;
+    }
     if (name == "illuminate" || name == "solar") {
         b.ia = name == "solar" ? C_Solar : C_Illuminate;
         if (in.program.kind != ShaderKind::Light) {
@@ -444,7 +479,7 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
 bool is_control(const std::string& name) {
     return name == "if" || name == "loop" || name == "break" || name == "continue" ||
            name == "block" || name == "return" || name == "illuminance" ||
-           name == "illuminate" || name == "solar";
+           name == "illuminate" || name == "solar" || name == "gather";
 }
 
 } // namespace
@@ -547,10 +582,14 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
 
 const char* ray_kind_name(RayKind kind) {
     switch (kind) {
-    case RayKind::Camera: return "camera";
-    case RayKind::Diffuse: return "diffuse";
-    case RayKind::Specular: return "specular";
-    case RayKind::Transmission: return "transmission";
+    case RayKind::Camera:
+        return "camera";
+    case RayKind::Diffuse:
+        return "diffuse";
+    case RayKind::Specular:
+        return "specular";
+    case RayKind::Transmission:
+        return "transmission";
     }
     return "camera";
 }

@@ -130,6 +130,10 @@ void register_math(BinderTable& t);     // engine_math.cpp
 void register_geometry(BinderTable& t); // engine_geometry.cpp
 void register_lighting(BinderTable& t); // engine_lighting.cpp
 void register_texture(BinderTable& t);  // engine_texture.cpp
+void register_raytrace(BinderTable& t); // engine_raytrace.cpp
+/// environment("raytrace", ...) (engine_raytrace.cpp; engine_texture.cpp
+/// routes the name "raytrace" to it).
+void environment_raytrace(Frame& f, const BoundOp& b);
 
 /// One symbol's storage in a frame.
 struct Slot {

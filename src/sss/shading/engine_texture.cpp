@@ -9,7 +9,11 @@
 ///    coordinates the globals s, t; the filter footprint is the differences
 ///    of s and t to the neighbour points (Du(s) du...). A file that cannot
 ///    be read is a ShaderRuntimeError (texture3d too).
-///  - environment(file[ch], dir): dir converted to world space.
+///  - environment(file[ch], dir): dir converted to world space; the name
+///    "raytrace" traces rays instead (environment_raytrace,
+///    engine_raytrace.cpp).
+///  - rayinfo: "depth", "type", "label" (ShadingBatch::ray), "origin",
+///    "direction", "length" (from I).
 ///  - texture3d(file, P, N, "channel", out...): P and N converted to the
 ///    option "coordsystem" (default world); outputs written only where the
 ///    lookup finds data (returns 1 there, 0 elsewhere).
@@ -203,6 +207,10 @@ void op_environment(Frame& f, const BoundOp& b) {
     const std::size_t n = f.n;
     const std::size_t i0 = f.first_active();
     const std::string& file = f.str(b, 1, i0);
+    if (file == "raytrace") {
+        environment_raytrace(f, b);
+        return;
+    }
     const int channel = static_cast<int>(*f.ptr(b, 2, i0));
     TextureOptions o;
     read_texture_options(f, b, 4, o);
@@ -419,14 +427,62 @@ void op_rendererinfo(Frame& f, const BoundOp& b) {
     set_result(f, b, known && write_query(f, b, 2, v) ? 1.0f : 0.0f);
 }
 
+/// rayinfo(key, out v): "depth", "type", "label" of how the batch was
+/// reached (ShadingBatch::ray); "origin", "direction", "length" of the ray
+/// to each point, from I (origin = P - I, direction = normalize(I), length
+/// = |I|, current space). Unknown keys (or a variable of the wrong type)
+/// return 0 and leave v alone.
 void op_rayinfo(Frame& f, const BoundOp& b) {
     const std::string& name = f.str(b, 1, f.first_active());
+    const ShadingBatch* batch = f.ctx->batch;
+    static const RayContext kCamera;
+    const RayContext& ray = batch ? batch->ray : kCamera;
     QueryValue v;
     bool known = true;
-    if (name == "depth")
-        v = number(0.0);
-    else
+    if (name == "depth") {
+        v = number(ray.depth);
+    } else if (name == "type") {
+        v = text(ray_kind_name(ray.kind));
+    } else if (name == "label") {
+        v = text(ray.label);
+    } else if (name == "origin" || name == "direction" || name == "length") {
+        const Symbol& sym = f.program->symbols[b.op->args[2]];
+        const bool want_float = name == "length";
+        const bool fits =
+            !sym.type.is_array() && (want_float ? sym.type.type == ShadingType::Float
+                                                : is_point_like(sym.type.type));
+        if (!fits) {
+            set_result(f, b, 0.0f);
+            return;
+        }
+        const int* g = f.bound->globals;
+        const Slot* Is = g[G_I] >= 0 ? &f.slots[g[G_I]] : nullptr;
+        const Slot* Ps = g[G_P] >= 0 ? &f.slots[g[G_P]] : nullptr;
+        Slot& out = f.slot(b, 2);
+        f.each(out.varying, [&](std::size_t i) {
+            glm::vec3 I(0.0f), P(0.0f);
+            if (Is)
+                I = ld3(Is->at(i));
+            else if (batch && batch->I.size() > i)
+                I = batch->I[i];
+            if (Ps)
+                P = ld3(Ps->at(i));
+            else if (batch && batch->P.size() > i)
+                P = batch->P[i];
+            const float len = glm::length(I);
+            if (name == "length")
+                *out.at(i) = std::isfinite(len) ? len : 0.0f;
+            else if (name == "origin")
+                st3(out.at(i), P - I);
+            else
+                st3(out.at(i),
+                    len > 0.0f && std::isfinite(len) ? I / len : glm::vec3(0.0f));
+        });
+        set_result(f, b, 1.0f);
+        return;
+    } else {
         known = false;
+    }
     set_result(f, b, known && write_query(f, b, 2, v) ? 1.0f : 0.0f);
 }
 

@@ -2,7 +2,7 @@
  * and without an axis, an ambient light, categories, __nondiffuse) and the
  * surface side: illuminance with and without category / axis / angle,
  * ambient, diffuse, specular, specularbrdf, phong, and the ray-traced calls
- * without occluders. Each light checks its own side (L = Ps - from, E) and
+ * without occluders (the default services: every ray misses). Each light checks its own side (L = Ps - from, E) and
  * gives Cl = 0 when that fails, which the surface's checks then see.
  *
  * corpus_test.cpp binds, with camera = world = shader space:
@@ -57,7 +57,7 @@ surface lighting(
     CHECK(illuminance_excluded); CHECK(illuminance_axis_angle); CHECK(illuminance_hemisphere);
     CHECK(specular_vs_brdf); CHECK(specular_closed_form); CHECK(phong);
     CHECK(lightsource_unsupported); CHECK(raytraced_without_occluders);
-    CHECK(depth_map_shadow_unsupported); CHECK(trace_unsupported);
+    CHECK(depth_map_shadow_unsupported); CHECK(trace_all_miss);
     float rough = 0.2; float size = 10;)
 {
     normal Nf = faceforward(normalize(N), I);
@@ -148,7 +148,10 @@ surface lighting(
     /* documented: depth-map shadows are not supported (0, warned) */
     check_depth_map_shadow_unsupported = near(shadow("nosuch.shd", P), 0, 0)
         + cnear(color shadow("nosuch.shd"[0], P, "bias", 0.1), color 0, 0);
-    /* documented: trace() and indirectdiffuse() return 0 (warned) */
-    check_trace_unsupported = cnear(trace(P, reflect(I, Nf)), color 0, 0)
-        + cnear(indirectdiffuse(P, Nf, 16), color 0, 0);
+    /* the default ShadingServices::trace misses every ray: trace() and
+       indirectdiffuse() (no environment map) give 0, and
+       environment("raytrace") too */
+    check_trace_all_miss = cnear(trace(P, reflect(I, Nf)), color 0, 0)
+        + cnear(indirectdiffuse(P, Nf, 16), color 0, 0)
+        + cnear(color environment("raytrace", reflect(I, Nf)), color 0, 0);
 }

@@ -45,8 +45,17 @@ surface queries(
     string label = "x";
     point org = 0;
     vector dir = 0;
+    string rtype = "";
+    float rlen = -1, dummy = 7;
+    /* a camera batch: depth 0, type "camera", label ""; origin/direction/
+       length of the ray from I (here I = P: the eye at the origin) */
     check_rayinfo = near(rayinfo("depth", depth), 1, 0) + near(depth, 0, 0)
-        + near(rayinfo("label", label) + rayinfo("origin", org) + rayinfo("direction", dir), 0, 0);
+        + near(rayinfo("label", label), 1, 0) + TRUTH(label == "")
+        + near(rayinfo("type", rtype), 1, 0) + TRUTH(rtype == "camera")
+        + near(rayinfo("origin", org), 1, 0) + near(length(org - (P - I)), 0, 1e-6)
+        + near(rayinfo("direction", dir), 1, 0) + near(length(dir - normalize(I)), 0, 1e-6)
+        + near(rayinfo("length", rlen), 1, 0) + near(rlen, length(I), 1e-5)
+        + near(rayinfo("nosuch", dummy), 0, 0) + near(dummy, 7, 0);
     /* documented: message passing is not supported: 0, the variable untouched */
     float f = 1;
     color c = 2;
