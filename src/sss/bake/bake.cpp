@@ -45,6 +45,11 @@ namespace {
 // length) than baked ones: 1/64 of the triangles, and the chord error of a
 // curved occluder stays a small fraction of its size.
 constexpr double kOccluderCoarsening = 8.0;
+// Surfaces that secondary rays shade (trace, gather, occlusion,
+// indirectdiffuse in a bake shader) are seen at their hit points: diced only
+// twice as coarse, so that chords stay within a fraction of a percent of a
+// curved surface (occlusion and bounced light depend on the true shape).
+constexpr double kRayCoarsening = 2.0;
 /// Shading points per batch: the unit of parallel work.
 constexpr std::size_t kChunk = 256;
 
@@ -282,7 +287,7 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
     control.camera = &scene.options.camera;
     // Shadow-only surfaces need their shape, not micropolygon density.
     DiceControl occluder_control = control;
-    occluder_control.coarsening = kOccluderCoarsening;
+    occluder_control.coarsening = any_rays ? kRayCoarsening : kOccluderCoarsening;
     std::vector<DiceRequest> requests;
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const int job = plan.job_of[i];

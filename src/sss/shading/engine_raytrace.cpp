@@ -378,6 +378,7 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
     q.kind = env || cosine ? RayKind::Diffuse : RayKind::Specular;
     q.label = o.label;
     q.depth = re.depth();
+    q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
     q.seed = re.query_seed();
     if (!env) {
         q.outputs = qnames;
@@ -505,6 +506,7 @@ void specular_rays(Frame& f, const BoundOp& b, const RayParams& o, const Slot* P
     q.kind = RayKind::Specular;
     q.label = o.label;
     q.depth = re.depth();
+    q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
     q.seed = re.query_seed();
     q.outputs = {"Ci"};
     q.output_floats = {3};
@@ -617,6 +619,7 @@ void op_hemisphere(Frame& f, const BoundOp& b) {
         q.kind = RayKind::Diffuse;
         q.label = o.label;
         q.depth = re.depth();
+        q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
         q.seed = splitmix64(re.query_seed() + pass);
         q.spread = ray_spread(o.coneangle, max_samples);
         if (Indirect) {
