@@ -235,6 +235,8 @@ struct LightState {
     bool valid = false;
     std::vector<uint8_t> computed;
     std::vector<glm::vec3> Ps, L, Cl, Ol;
+    /// The surface N the cache was computed for (the light's N global).
+    std::vector<glm::vec3> N;
     std::vector<uint8_t> lit;
     /// The request cone the cache was computed for (see Frame::request_axis).
     std::vector<glm::vec3> request_axis;

@@ -4,7 +4,10 @@
 ///  - Light shaders run lazily, once per batch per light (re-run when the
 ///    surface asks for points or positions the cache does not hold). Their
 ///    globals: Ps = the surface point, P = the origin of the light's shader
-///    space in the current space, N = 0, E = 0; L, Cl, Ol start at 0.
+///    space in the current space, N = the surface's N at Ps (its N global,
+///    else the batch's N; PRMan's convention, which envlight's
+///    `illuminate(Ps + N)` relies on), E = 0; L, Cl, Ol start at 0. The
+///    cache holds for the same Ps and N.
 ///  - `illuminate(P, axis, angle)` sets L = Ps - P (light to surface) and runs
 ///    its body where the angle between L and axis is at most angle (no axis:
 ///    everywhere); `solar(axis, angle)` sets L = axis (the direction the light
@@ -93,6 +96,13 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
     const std::size_t n = batch->size;
     const ShaderInstance& inst = *ls.instance;
     auto Pat = [&](std::size_t i) { return ld3(P + i * P_stride); };
+    // The surface normal at Ps: the surface frame's N global, else the batch's.
+    const int gN = main.bound ? main.bound->globals[G_N] : -1;
+    const Slot* surfN = gN >= 0 && main.n == n ? &main.slots[gN] : nullptr;
+    auto Nat = [&](std::size_t i) {
+        if (surfN) return ld3(surfN->at(i));
+        return batch && i < batch->N.size() ? batch->N[i] : glm::vec3(0.0f);
+    };
     const bool all = axis == nullptr || angle >= 3.14159265f;
     auto Aat = [&](std::size_t i) {
         return all ? glm::vec3(0.0f) : ld3(axis + i * axis_stride);
@@ -102,7 +112,7 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
         // this request's (everything, or the same axis and angle).
         bool ok = ls.request_all || (!all && angle == ls.request_angle);
         for (std::size_t i = 0; i < n && ok; ++i)
-            if (mask[i] && (!ls.computed[i] || ls.Ps[i] != Pat(i) ||
+            if (mask[i] && (!ls.computed[i] || ls.Ps[i] != Pat(i) || ls.N[i] != Nat(i) ||
                             (!ls.request_all && ls.request_axis[i] != Aat(i))))
                 ok = false;
         if (ok) return ls;
@@ -121,6 +131,8 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
     for (std::size_t i = 0; i < n; ++i) lf.light_Ps[i] = Pat(i);
     if (const Slot* s = sl(G_Ps))
         for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), Pat(i));
+    if (const Slot* s = sl(G_N))
+        for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), Nat(i));
     if (const Slot* s = sl(G_P)) {
         const glm::vec3 origin = xform_point(lf.shader_to_current, glm::vec3(0.0f));
         for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) st3(s->at(i), origin);
@@ -144,6 +156,8 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
 
     ls.Ps.resize(n);
     for (std::size_t i = 0; i < n; ++i) ls.Ps[i] = mask[i] ? Pat(i) : glm::vec3(0.0f);
+    ls.N.resize(n);
+    for (std::size_t i = 0; i < n; ++i) ls.N[i] = mask[i] ? Nat(i) : glm::vec3(0.0f);
     ls.computed = mask;
     auto collect = [&](int id, std::vector<glm::vec3>& out) {
         out.assign(n, glm::vec3(0.0f));
