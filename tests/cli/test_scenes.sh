@@ -13,6 +13,12 @@
 #            not in the plain matte
 #   orbit    frames 1-2 as per-frame jobs with frame patterns; the orbiting
 #            light moves; one frame run alone gives the same brick map
+#   absorption  light gathered through the teapot: the thin spout and handle
+#            glow far more than the thick body, reddest (least absorbed)
+#   gibake   indirectdiffuse in the bake: the crystal much brighter than with
+#            direct light only, and redder on the side facing the red wall
+#   domelight  the envdome dome lights skin1 (red diffusion), envlight lights
+#            the same ear about as brightly
 # Needs SSS_BIN_DIR (the folder with ptbake, ptfilter, brickmake and render) and
 # oiiotool. Every check runs; failures are listed and the script exits 1 at the end.
 set -euo pipefail
@@ -247,6 +253,54 @@ if run_scene orbit; then
         [[ ! -e orbit_farm/orbit.0001.ptc ]] || fail "orbit: frame 2 alone also made frame 1"
         image_ok orbit_farm/orbit_compare_2-2.png 160 240 "orbit frame 2 alone, its sheet"
     fi
+fi
+
+# ---------------------------------------------------------------------------
+# Absorption-only teapot: 160 x 120; the light gathered through it is "sss".
+if run_scene absorption; then
+    d=absorption
+    exr_ok $d/absorption.exr 160 120 absorption
+    read -r sr sg sb <<<"$(mean $d/absorption.exr sss.R,sss.G,sss.B 0.72 0.38 0.81 0.5)"
+    read -r hr _ _ <<<"$(mean $d/absorption.exr sss.R,sss.G,sss.B 0.16 0.42 0.31 0.58)"
+    read -r br _ _ <<<"$(mean $d/absorption.exr sss.R,sss.G,sss.B 0.47 0.54 0.59 0.66)"
+    is "sr > 3 * br && hr > 1.5 * br && br > 0" sr="$sr" hr="$hr" br="$br" ||
+        fail "absorption: spout ($sr) and handle ($hr) should glow far more than the body ($br)"
+    is "sr > sg && sg > sb" sr="$sr" sg="$sg" sb="$sb" ||
+        fail "absorption: red should get through best: $sr $sg $sb"
+fi
+
+# ---------------------------------------------------------------------------
+# GI bake: 100 x 100, with and without indirectdiffuse.
+if run_scene gibake; then
+    d=gibake
+    exr_ok $d/gibake.exr 100 100 gibake
+    exr_ok $d/gibake_direct.exr 100 100 gibake
+    image_ok $d/gibake_compare.png 200 100 "gibake compare"
+    read -r gr gg _ <<<"$(mean $d/gibake.exr R,G,B 0.4 0.45 0.48 0.55)"
+    read -r dr dg _ <<<"$(mean $d/gibake_direct.exr R,G,B 0.4 0.45 0.48 0.55)"
+    is "gr > 1.5 * dr && gg > 1.5 * dg" gr="$gr" gg="$gg" dr="$dr" dg="$dg" ||
+        fail "gibake: bounced light should brighten the crystal: GI $gr $gg, direct $dr $dg"
+    is "gr / gg > 1.05 * dr / dg" gr="$gr" gg="$gg" dr="$dr" dg="$dg" ||
+        fail "gibake: the side facing the red wall should turn red with GI: $gr/$gg vs $dr/$dg"
+fi
+
+# ---------------------------------------------------------------------------
+# Dome light: 120 x 150, the dome with sss and envlight without.
+if run_scene domelight; then
+    d=domelight
+    exr_ok $d/domelight.exr 120 150 domelight
+    exr_ok $d/domelight_envlight.exr 120 150 domelight
+    image_ok $d/domelight_compare.png 240 150 "domelight compare"
+    [[ -s $d/sky.exr && -s $d/dome.rib ]] || fail "domelight: no probe or dome: $(ls $d)"
+    n="$(grep -c '^ *LightSource "distantlight_rts"' $d/dome.rib || true)"
+    [[ "$n" == 64 ]] || fail "domelight: dome.rib has $n shadowed lights, not 64"
+    read -r sr sg sb <<<"$(mean $d/domelight.exr sss.R,sss.G,sss.B 0.33 0.3 0.66 0.7)"
+    is "sr > 0.05 && sr > sg && sg > sb" sr="$sr" sg="$sg" sb="$sb" ||
+        fail "domelight: skin1 diffusion under the dome should be red: $sr $sg $sb"
+    read -r ar _ _ <<<"$(mean $d/domelight.exr R,G,B 0.33 0.3 0.66 0.7)"
+    read -r er _ _ <<<"$(mean $d/domelight_envlight.exr R,G,B 0.33 0.3 0.66 0.7)"
+    is "er > ar / 3 && er < 3 * ar" er="$er" ar="$ar" ||
+        fail "domelight: envlight ($er) and the dome ($ar) should light the ear alike"
 fi
 
 # ---------------------------------------------------------------------------

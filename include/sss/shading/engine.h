@@ -197,6 +197,12 @@ struct ShadingBatch {
     /// argument, gather/trace rays along the ray; a call's "bias" overrides it.
     float ray_offset = 0.0f;
 
+    /// Rays leaving these points ignore hits on the batch's own primitive
+    /// closer than this (world units): render shades points on the smooth
+    /// surface the vertex normals describe, up to this far above the flat
+    /// triangles that rays hit, and a ray into the object would find its
+    /// own triangle first.
+    float self_distance = 0.0f;
     /// The primitive being shaded (object space, attributes, RIB location).
     const Primitive* primitive = nullptr;
     /// Primitive variables bound to shader parameters of the same name
@@ -232,6 +238,8 @@ struct RayQuery {
     /// The primitive whose shader traces the rays (its `Attribute "trace"`
     /// depth limits apply); the engine sets it from ShadingBatch::primitive.
     const Primitive* origin = nullptr;
+    /// Hits on `origin` closer than this are ignored (ShadingBatch::self_distance).
+    float self_distance = 0.0f;
     /// Seed of the hit shaders' random numbers (ray r's batch point draws
     /// from hash(seed, r)): results never depend on the thread count.
     uint64_t seed = 0;

@@ -276,6 +276,7 @@ struct SurfaceHit {
     uint32_t triangle = 0;      ///< the triangle hit, and the barycentrics of
     float b1 = 0.0f, b2 = 0.0f; ///< its vertices 1 and 2 at the hit
     uint64_t seed = 0;
+    double lift = 0.0; ///< distance of p above the flat triangle
 };
 
 /// Finds what each active sample's ray hits next; samples whose ray leaves
@@ -352,6 +353,7 @@ void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
         const double size =
             std::max({glm::length(v1 - v0), glm::length(v2 - v1), glm::length(v0 - v2)});
         if (!(lift > 0.0) || !(glm::length(smooth - p) < 0.5 * size)) smooth = p;
+        h.lift = glm::length(smooth - p);
         h.p = smooth;
         h.n = n;
         h.ng = ng;
@@ -474,6 +476,11 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         // batches the same way for any thread count).
         batch.seed = hits[begin].seed;
         batch.ray_offset = static_cast<float>(1e-5 * job.extent);
+        double lift = 0.0;
+        for (std::size_t k = begin; k < end; ++k) lift = std::max(lift, hits[k].lift);
+        // Rays into the object start above its flat triangles: twice the
+        // largest lift clears them (glancing rays travel farther).
+        batch.self_distance = static_cast<float>(4.0 * lift + 1e-5 * job.extent);
         for (std::size_t k = 0; k < n; ++k) {
             const SurfaceHit& h = hits[begin + k];
             const glm::dvec3 pc = glm::dvec3(to_camera * glm::dvec4(h.p, 1.0));

@@ -379,6 +379,7 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
     q.label = o.label;
     q.depth = re.depth();
     q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
+    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
     q.seed = re.query_seed();
     if (!env) {
         q.outputs = qnames;
@@ -507,6 +508,7 @@ void specular_rays(Frame& f, const BoundOp& b, const RayParams& o, const Slot* P
     q.label = o.label;
     q.depth = re.depth();
     q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
+    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
     q.seed = re.query_seed();
     q.outputs = {"Ci"};
     q.output_floats = {3};
@@ -620,6 +622,7 @@ void op_hemisphere(Frame& f, const BoundOp& b) {
         q.label = o.label;
         q.depth = re.depth();
         q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
+    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
         q.seed = splitmix64(re.query_seed() + pass);
         q.spread = ray_spread(o.coneangle, max_samples);
         if (Indirect) {

@@ -170,7 +170,7 @@ struct SceneRays::Impl {
     /// The nearest shaded surface along `ray` (skipping one-sided back faces
     /// and transparent surfaces); false for a miss.
     bool find_hit(const RayTracer& rt, const std::vector<uint32_t>& mesh_to_prim,
-                  ShadowRay ray, Hit& out) const {
+                  ShadowRay ray, const RayQuery& q, Hit& out) const {
         const float skip_base = 1e-6f * extent;
         for (int k = 0; k < kMaxSkips; ++k) {
             if (!(ray.tnear <= ray.tfar)) return false;
@@ -179,7 +179,8 @@ struct SceneRays::Impl {
             if (!h.hit) return false;
             const uint32_t prim = mesh_to_prim[h.mesh];
             const Attributes& attr = attributes_of(scene.primitives[prim]);
-            bool skip = glm::clamp(attr.opacity, 0.0, 1.0) == glm::dvec3(0.0);
+            bool skip = glm::clamp(attr.opacity, 0.0, 1.0) == glm::dvec3(0.0) ||
+                        (h.t < q.self_distance && q.origin == &scene.primitives[prim]);
             if (!skip && attr.sides == 1) {
                 const glm::vec3 n = interpolated_normal(prim, h.triangle, h.u, h.v);
                 glm::vec3 ng = h.geometric_normal;
@@ -377,7 +378,7 @@ void SceneRays::Impl::trace(RayQuery& q) const {
     hits.reserve(count);
     for (std::size_t r = 0; r < count; ++r) {
         Hit h;
-        if (!find_hit(*rt, mesh_to_prim, q.rays[r], h)) continue;
+        if (!find_hit(*rt, mesh_to_prim, q.rays[r], q, h)) continue;
         h.ray = static_cast<uint32_t>(r);
         q.hit[r] = 1;
         q.length[r] = h.t;
