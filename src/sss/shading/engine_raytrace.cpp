@@ -22,7 +22,7 @@
 ///    "samplecone" / "blur" (full apex angle) average rays in a cone.
 ///  - occlusion(P, N, samples) / indirectdiffuse(P, N, samples): Diffuse
 ///    rays, cosine distributed in "coneangle" (default PI/2) about N,
-///    adaptive by default, environment maps for the open directions.
+///    adaptive sampling on request ("adaptive" 1), environment maps for the open directions.
 ///  - shadow("raytrace", P) and transmission(Psrc, Pdst): transmit() with
 ///    Transmission rays (colour transmittance).
 
@@ -111,7 +111,7 @@ struct RayParams {
     float maxdist = 0.0f; ///< <= 0: infinite
     float coneangle = kHalfPi;
     float samplebase = 0.0f;
-    float adaptive = 1.0f;
+    float adaptive = 0.0f; // off: the early stop misses small occluders
     std::string label;
     std::string distribution;
     std::string envmap;
