@@ -30,6 +30,8 @@ public:
     explicit QuietServices(const Scene& s) : m_scene(s) {}
     const Scene& scene() const override { return m_scene; }
     void message(const std::string&) override {}
+    void warning(const std::string& text) override { warnings.push_back(text); }
+    std::vector<std::string> warnings;
 
 private:
     const Scene& m_scene;
@@ -45,8 +47,10 @@ struct RayScene {
     std::vector<DicedSurface> diced;
     std::unique_ptr<SceneRays> rays;
 
-    RayScene(const std::string& options, const std::string& world) {
+    RayScene(const std::string& options, const std::string& world,
+             const std::vector<std::pair<std::string, std::string>>& shaders_sl = {}) {
         test::write_text(dir.file("hitcolor.sl"), kHitColor);
+        for (const auto& [name, text] : shaders_sl) test::write_text(dir.file(name), text);
         const std::string path = dir.file("scene.rib");
         const std::string text = options + "Format 64 64 1\nProjection \"perspective\"\n" +
                                  "WorldBegin\n" + world + "WorldEnd\n";
@@ -213,4 +217,35 @@ TEST(SceneRays, ResultsDoNotDependOnBatching) {
         EXPECT_EQ(one.hit[0], all.hit[std::size_t(k)]);
         EXPECT_EQ(one.values[1][0], all.values[1][std::size_t(k)]);
     }
+}
+
+namespace {
+/// A mirror that gathers 8 rays per hit: inside a sphere with no depth limit
+/// worth the name the ray tree would grow 8 times per level.
+const char* kGreedy = R"(
+surface greedy(float samples = 8) {
+    color c = 0;
+    gather("illuminance", P, faceforward(normalize(N), I), PI / 2, samples,
+           "surface:Ci", c) {
+        Ci += c / samples;
+    }
+    Ci += 0.01;
+}
+)";
+} // namespace
+
+TEST(SceneRays, RunawayRayTreesStopAtTheBudget) {
+    RayScene s("Option \"trace\" \"maxdepth\" 64\n",
+               "Attribute \"trace\" \"maxspeculardepth\" 64\nSurface \"greedy\"\n"
+               "Sphere 1 -1 1 360\n",
+               {{"greedy.sl", kGreedy}});
+    RayQuery q = query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
+    q.origin = &s.scene.primitives[0];
+    s.rays->trace(q); // 8^63 rays without the budget
+    ASSERT_EQ(q.hit[0], 1);
+    EXPECT_GT(q.values[0][0], 0.01f);
+    EXPECT_TRUE(std::isfinite(q.values[0][0]));
+    EXPECT_LE(s.rays->rays_traced(), 16384u + 8u);
+    ASSERT_EQ(s.services->warnings.size(), 1u);
+    EXPECT_NE(s.services->warnings[0].find("deeper rays miss"), std::string::npos);
 }

@@ -41,6 +41,15 @@ constexpr int kDefaultMaxSpecularDepth = 2;
 /// rays; deeper recursion cannot finish).
 constexpr int kDepthCap = 64;
 
+/// A guard against ray trees that cannot finish (hit shaders that gather
+/// into each other many levels deep with many samples): the rays traced
+/// under one top-level query may be at most this many per ray of it; past
+/// that, deeper rays miss (with a warning). Two bounces of 128 samples fit.
+constexpr uint64_t kTreeRaysPerRay = 16384;
+/// Rays traced, and allowed, in the current thread's ray tree.
+thread_local uint64_t t_tree_rays = 0;
+thread_local uint64_t t_tree_budget = 0;
+
 /// The tracers: diffuse, specular and transmission.
 constexpr int kKinds = 3;
 int kind_slot(RayKind kind) {
@@ -125,6 +134,7 @@ struct SceneRays::Impl {
 
     mutable std::atomic<uint64_t> rays{0};
     mutable std::atomic<uint64_t> nonfinite{0};
+    mutable std::atomic<bool> budget_warned{false};
     std::unique_ptr<HitServices> hit_services;
     mutable tbb::enumerable_thread_specific<std::vector<std::unique_ptr<ShadingContext>>>
         contexts;
@@ -373,6 +383,18 @@ void SceneRays::Impl::trace(RayQuery& q) const {
         q.values[k].assign(count * std::size_t(std::max(q.output_floats[k], 0)), 0.0f);
     const RayTracer* rt = tracer(q.kind);
     if (!rt || count == 0 || !allowed(q)) return;
+    if (q.depth <= 1) {
+        t_tree_rays = 0;
+        t_tree_budget = std::max<uint64_t>(count, 1) * kTreeRaysPerRay;
+    } else if (t_tree_rays + count > t_tree_budget) {
+        if (!budget_warned.exchange(true))
+            outer.warning("a ray tree grew past " + std::to_string(kTreeRaysPerRay) +
+                          " rays per top-level ray (hit shaders tracing many samples "
+                          "many levels deep): deeper rays miss; lower the samples or "
+                          "Attribute \"trace\" \"maxdiffusedepth\"/\"maxspeculardepth\"");
+        return;
+    }
+    t_tree_rays += count;
     const std::vector<uint32_t>& mesh_to_prim = meshes(q.kind);
     std::vector<Hit> hits;
     hits.reserve(count);
