@@ -109,7 +109,10 @@ TEST(RenderFilter, ConstantImageStaysConstantForEveryFilter) {
     for (const char* line :
          {"", "PixelFilter \"box\" 1 1\n", "PixelFilter \"triangle\" 3 3\n",
           "PixelFilter \"catmull-rom\" 4 4\n", "PixelFilter \"gaussian\" 3 5\n",
-          "PixelFilter \"sinc\" 8 8\n", "PixelFilter \"sinc\" 16 16\n"}) {
+          "PixelFilter \"sinc\" 8 8\n", "PixelFilter \"sinc\" 16 16\n",
+          // Narrower than a pixel: most pixels have no sample within 0.1
+          // pixel of their centre and take their nearest sample instead.
+          "PixelFilter \"box\" 0.2 0.2\n"}) {
         std::string rib = "Format 40 24 1\nPixelSamples 2 2\n" + std::string(line) +
                           "Projection \"perspective\" \"fov\" 40\nTranslate 0 0 5\n"
                           "WorldBegin\nSurface \"constant\"\nColor [0.3 0.6 0.9]\n"

@@ -244,9 +244,10 @@ struct Renderer {
     int nx = 1, ny = 1; ///< pixel samples
     std::optional<PixelFilter> filter; ///< the PixelFilter
     int reach_x = 1, reach_y = 1;      ///< pixels a sample reaches on each side
-    /// The filter can sum to about zero (negative lobes): such pixels take
-    /// the value of their own sample nearest to their centre.
-    bool negative_lobes = false;
+    /// The filter's weights can sum to about zero over a pixel (negative
+    /// lobes, or narrower than a pixel): such pixels take the value of their
+    /// own sample nearest to their centre.
+    bool nearest_fallback = false;
     SceneShaders shaders;
     std::unique_ptr<ShadingResources> resources;
     std::unique_ptr<RenderServices> services;
@@ -593,8 +594,12 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
 }
 
 /// Whether a PixelFilter's weights can sum to about zero over a pixel's
-/// samples: catmull-rom (negative from r = 1 on) and sinc wider than 2 pi.
-bool has_negative_lobes(const PixelFilterSpec& spec) {
+/// samples: catmull-rom (negative from r = 1 on), sinc wider than 2 pi, and
+/// any filter narrower than a pixel (it can miss every sample of a pixel).
+/// The gaussian 2 x 2 and every other filter at least 1 pixel wide without
+/// negative lobes give each sample in a pixel a positive weight for it.
+bool needs_nearest_fallback(const PixelFilterSpec& spec) {
+    if (spec.xwidth < 1.0 || spec.ywidth < 1.0) return true;
     if (spec.name == "catmull-rom" || spec.name == "catmullrom") return true;
     return spec.name == "sinc" && std::max(spec.xwidth, spec.ywidth) > 2.0 * kPi;
 }
@@ -643,7 +648,7 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     job.reach_y = job.filter->reach_y();
     if (job.reach_x > kMaxReach || job.reach_y > kMaxReach)
         throw ValueError("PixelFilter widths must be at most 16 pixels");
-    job.negative_lobes = has_negative_lobes(filter);
+    job.nearest_fallback = needs_nearest_fallback(filter);
     // pixel_size_at is linear in the depth beyond hither (perspective).
     const double d = job.camera.perspective ? std::max(1.0, job.camera.near_clip) : 1.0;
     job.pixel_per_depth =
@@ -886,9 +891,9 @@ struct TileGrid {
 };
 
 /// Floats per pixel of the filter sums: the values, the weight sum and,
-/// for filters with negative lobes, the sum of the weights' magnitudes.
+/// for nearest_fallback filters, the sum of the weights' magnitudes.
 int filter_slots(const Renderer& job) {
-    return job.values + (job.negative_lobes ? 2 : 1);
+    return job.values + (job.nearest_fallback ? 2 : 1);
 }
 
 /// Renders every tile: its camera samples go through the scene layer by
@@ -896,9 +901,9 @@ int filter_slots(const Renderer& job) {
 /// shades the hits in batches per primitive), then each splats into the
 /// tile's buffer, which is job.reach_x (job.reach_y) pixels wider than the
 /// tile on each side (the filter's reach), of filter_slots floats per pixel.
-/// The nearest depth of its pixels goes to `depth`; for filters with
-/// negative lobes, each pixel's sample nearest to its centre goes to
-/// `nearest` (job.values floats per pixel).
+/// The nearest depth of its pixels goes to `depth`; for nearest_fallback
+/// filters, each pixel's sample nearest to its centre goes to `nearest`
+/// (job.values floats per pixel).
 std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid,
                                              const RenderJobOptions& options,
                                              std::vector<float>& depth,
@@ -910,7 +915,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
     const int rx = job.reach_x, ry = job.reach_y;
     const PixelFilter& filter = *job.filter;
     const bool lens = job.camera.depth_of_field();
-    if (job.negative_lobes)
+    if (job.nearest_fallback)
         nearest.assign(std::size_t(width) * height * job.values, 0.0f);
     std::vector<std::vector<float>> tile_sums(tiles);
     std::atomic<std::size_t> tiles_done{0};
@@ -970,6 +975,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             shade_pass(job, context, hits, samples, values);
         }
 
+        std::size_t pixel_best = 0; // nearest_fallback: the pixel's nearest sample
         for (std::size_t s = 0; s < samples.size(); ++s) {
             const CameraSample& cs = samples[s];
             float* v = &values[s * job.values];
@@ -987,22 +993,23 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             const int py = static_cast<int>(std::floor(cs.sy));
             float& z = depth[std::size_t(py) * width + px];
             z = std::min(z, cs.depth);
-            if (job.negative_lobes) {
-                // The pixel's samples come together, in order: the first
-                // one nearest to the centre wins (ties: the earlier one).
-                const std::size_t first = s - s % std::size_t(job.nx * job.ny);
-                std::size_t best = first;
-                double best_d = std::numeric_limits<double>::infinity();
-                for (std::size_t o = first; o < first + std::size_t(job.nx * job.ny);
-                     ++o) {
-                    const double dx = samples[o].sx - (px + 0.5);
-                    const double dy = samples[o].sy - (py + 0.5);
-                    if (dx * dx + dy * dy < best_d) {
-                        best_d = dx * dx + dy * dy;
-                        best = o;
+            if (job.nearest_fallback) {
+                // The pixel's samples come together, in order: at its first
+                // one, find the one nearest to the centre (ties: the earlier).
+                const std::size_t per_pixel = std::size_t(job.nx) * job.ny;
+                if (s % per_pixel == 0) {
+                    pixel_best = s;
+                    double best_d = std::numeric_limits<double>::infinity();
+                    for (std::size_t o = s; o < s + per_pixel; ++o) {
+                        const double dx = samples[o].sx - (px + 0.5);
+                        const double dy = samples[o].sy - (py + 0.5);
+                        if (dx * dx + dy * dy < best_d) {
+                            best_d = dx * dx + dy * dy;
+                            pixel_best = o;
+                        }
                     }
                 }
-                if (best == s)
+                if (pixel_best == s)
                     std::copy(v, v + job.values,
                               &nearest[(std::size_t(py) * width + px) * job.values]);
             }
@@ -1034,7 +1041,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                               slots];
                     for (int c = 0; c < job.values; ++c) acc[c] += w * v[c];
                     acc[job.values] += w;
-                    if (job.negative_lobes) acc[job.values + 1] += std::abs(w);
+                    if (job.nearest_fallback) acc[job.values + 1] += std::abs(w);
                 }
             }
         }
@@ -1076,7 +1083,7 @@ std::vector<float> add_tiles(const Renderer& job, const TileGrid& grid,
 }
 
 /// The image: filtered sums divided by their weights, and the depth. With
-/// negative lobes, a pixel whose weights sum to less than 1e-3 of their
+/// nearest_fallback filters, a pixel whose weights sum to less than 1e-3 of their
 /// magnitudes takes its nearest sample instead (no division by about 0).
 Image resolve_pixels(const Renderer& job, const TileGrid& grid,
                      const std::vector<float>& sums, const std::vector<float>& depth,
@@ -1090,7 +1097,7 @@ Image resolve_pixels(const Renderer& job, const TileGrid& grid,
             float* out = image.pixel(px, py);
             const float weight = s[job.values];
             float inv = weight > 0.0f ? 1.0f / weight : 0.0f;
-            if (job.negative_lobes && !(weight > 1e-3f * s[job.values + 1])) {
+            if (job.nearest_fallback && !(weight > 1e-3f * s[job.values + 1])) {
                 s = &nearest[(std::size_t(py) * width + px) * job.values];
                 inv = 1.0f;
             }
