@@ -35,6 +35,8 @@ std::string usage() {
            "  -newer 0|1             1: do nothing when every image is newer than the\n"
            "                         RIB, its archives and the maps its shaders read\n"
            "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
+           "  -p:N, -t:N             the same as -threads N (prman's spelling)\n"
+           "  -p                     all usable cores (-threads 0)\n"
            "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
            "  -h, --help             this help\n"
            "  --version              version information\n"
@@ -59,6 +61,10 @@ int run(const std::vector<std::string>& argv) {
             opt.yres = args.integer(o, 1, 65536);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
+        } else if (o == "p") {
+            running.threads = 0; // prman -p: every core
+        } else if (o.rfind("p:", 0) == 0 || o.rfind("t:", 0) == 0) {
+            running.threads = sss::attached_integer(o, 2, 0, 1024);
         } else if (sss::newer_option(args, o, running)) {
             continue;
         } else if (sss::run_option(args, o, running)) {

@@ -1,7 +1,8 @@
 /// \file image_io_test.cpp
 /// Image output: Display resolution (types, extensions, modes, AOV layers,
-/// pixel types), OpenEXR round trips with layers and metadata, 8-bit sRGB
-/// PNG/TIFF with straight alpha, atomic writes that leave nothing behind on
+/// pixel types), OpenEXR round trips with layers and metadata, PNG/TIFF quantised
+/// as PRMan does (linear, "quantize" and "dither", Exposure) with straight alpha,
+/// atomic writes that leave nothing behind on
 /// errors, and reading images back.
 
 #include <gtest/gtest.h>
@@ -65,6 +66,16 @@ void set_string(DisplaySpec& d, const std::string& name, const std::string& valu
     p.type = sss::ParamType::String;
     p.storage = sss::ParamClass::Uniform;
     p.strings = {value};
+    d.params.set(p);
+}
+
+void set_numbers(DisplaySpec& d, const std::string& name, std::vector<double> values) {
+    sss::Param p;
+    p.name = name;
+    p.type = sss::ParamType::Float;
+    p.storage = sss::ParamClass::Uniform;
+    p.array_size = static_cast<int>(values.size());
+    p.numbers = std::move(values);
     d.params.set(p);
 }
 
@@ -520,19 +531,23 @@ TEST(ImageIoExr, ItAndFramebufferWriteAFile) {
 // 8-bit formats
 // ---------------------------------------------------------------------------
 
-TEST(ImageIo8Bit, PngIsSrgbWithStraightAlpha) {
+TEST(ImageIo8Bit, PngIsLinearTimes255WithStraightAlpha) {
     sss::test::TempDir dir("image_io");
     Image img(4, 1, {"R", "G", "B", "A"});
     auto set = [&](int x, float r, float g, float b, float a) {
         float* p = img.pixel(x, 0);
         p[0] = r, p[1] = g, p[2] = b, p[3] = a;
     };
-    set(0, 0.5f, 0.0f, 1.0f, 1.0f);    // opaque: sRGB(0.5) = 188
+    set(0, 0.5f, 0.0f, 1.0f, 1.0f);    // opaque: round(0.5 * 255) = 128
     set(1, 0.25f, 0.1f, 0.5f, 0.5f);   // premultiplied half coverage
     set(2, 0.0f, 0.0f, 0.0f, 0.0f);    // empty
-    set(3, 3.0f, -1.0f, 0.002f, 1.0f); // clamped; linear segment of sRGB
-    DisplayTarget t =
-        sss::resolve_display(display(dir.file("b.png"), "png", "rgba"), img, true);
+    set(3, 3.0f, -1.0f, 0.002f, 1.0f); // clamped; 0.002 * 255 = 0.51
+    // No dither: the values are exactly round(255 v) (PRMan's quantize
+    // 0 255 0 255, no sRGB curve).
+    DisplaySpec spec = display(dir.file("b.png"), "png", "rgba");
+    set_numbers(spec, "dither", {0.0});
+    DisplayTarget t = sss::resolve_display(spec, img, true);
+    EXPECT_EQ(t.bits, 8);
     sss::write_display(img, t, test_metadata());
 
     EXPECT_EQ(format_of(t.path), "png");
@@ -542,19 +557,19 @@ TEST(ImageIo8Bit, PngIsSrgbWithStraightAlpha) {
     auto byte = [&](int x, int c) {
         return int(std::lround(back.pixel(x, 0)[c] * 255.0f));
     };
-    EXPECT_EQ(byte(0, 0), 188);
+    EXPECT_EQ(byte(0, 0), 128);
     EXPECT_EQ(byte(0, 1), 0);
     EXPECT_EQ(byte(0, 2), 255);
     EXPECT_EQ(byte(0, 3), 255);
     // (0.25, 0.1, 0.5) / 0.5 = (0.5, 0.2, 1.0)
-    EXPECT_EQ(byte(1, 0), 188);
-    EXPECT_EQ(byte(1, 1), 124);
+    EXPECT_EQ(byte(1, 0), 128);
+    EXPECT_EQ(byte(1, 1), 51);
     EXPECT_EQ(byte(1, 2), 255);
     EXPECT_EQ(byte(1, 3), 128);
     for (int c = 0; c < 4; ++c) EXPECT_EQ(byte(2, c), 0);
     EXPECT_EQ(byte(3, 0), 255);
     EXPECT_EQ(byte(3, 1), 0);
-    EXPECT_EQ(byte(3, 2), 7); // 12.92 * 0.002 * 255 = 6.6
+    EXPECT_EQ(byte(3, 2), 1);
     EXPECT_EQ(byte(3, 3), 255);
 
     EXPECT_EQ(sss::read_image_attribute(t.path, "Software"), "render (sss) 0.1.0");
@@ -574,11 +589,12 @@ TEST(ImageIo8Bit, TiffAndAovPng) {
     EXPECT_EQ(pixel_type_of(t.path, 0), OIIO::TypeDesc::UINT8);
     Image back = sss::read_image(t.path);
     ASSERT_EQ(back.channels, (Names{"R", "G", "B", "A"}));
-    // Pixel (1, 0): R = 11/64 over A = 14/64.
+    // Pixel (1, 0): R = 11/64 over A = 14/64; the default dither (0.5)
+    // moves a value by at most one step.
     double straight = (11.0 / 64.0) / (14.0 / 64.0);
-    double encoded = 1.055 * std::pow(straight, 1.0 / 2.4) - 0.055;
-    EXPECT_EQ(std::lround(back.pixel(1, 0)[0] * 255.0), std::lround(encoded * 255.0));
-    EXPECT_EQ(std::lround(back.pixel(1, 0)[3] * 255.0), std::lround(14.0 / 64.0 * 255.0));
+    EXPECT_LE(std::abs(std::lround(back.pixel(1, 0)[0] * 255.0) - straight * 255.0), 1.0);
+    EXPECT_LE(std::abs(std::lround(back.pixel(1, 0)[3] * 255.0) - 14.0 / 64.0 * 255.0),
+              1.0);
     EXPECT_EQ(sss::read_image_attribute(t.path, "Software"), "render (sss) 0.1.0");
 
     // An AOV in a PNG of its own: R G B from diffuse.*, no alpha so no division.
@@ -588,8 +604,7 @@ TEST(ImageIo8Bit, TiffAndAovPng) {
     Image db = sss::read_image(d.path);
     ASSERT_EQ(db.channels, (Names{"R", "G", "B"}));
     double lin = img.pixel(0, 0)[img.channel_index("diffuse.G")]; // 6/64
-    EXPECT_EQ(std::lround(db.pixel(0, 0)[1] * 255.0),
-              std::lround((1.055 * std::pow(lin, 1.0 / 2.4) - 0.055) * 255.0));
+    EXPECT_LE(std::abs(std::lround(db.pixel(0, 0)[1] * 255.0) - lin * 255.0), 1.0);
 }
 
 TEST(ImageIo8Bit, AlphaOnlyPngAndJpeg) {
@@ -601,8 +616,8 @@ TEST(ImageIo8Bit, AlphaOnlyPngAndJpeg) {
     Image ab = sss::read_image(a.path);
     ASSERT_EQ(ab.channel_count(), 1);
     // Alpha is written linear: pixel (2, 1) has A = (7 * 11 + 3) / 64 > 1 -> 255,
-    // pixel (0, 0) has A = 3/64.
-    EXPECT_EQ(std::lround(ab.pixel(0, 0)[0] * 255.0), std::lround(3.0 / 64.0 * 255.0));
+    // pixel (0, 0) has A = 3/64 (give or take the dither's one step).
+    EXPECT_LE(std::abs(std::lround(ab.pixel(0, 0)[0] * 255.0) - 3.0 / 64.0 * 255.0), 1.0);
     EXPECT_EQ(std::lround(ab.pixel(2, 1)[0] * 255.0), 255);
 
     DisplayTarget j =
@@ -701,4 +716,135 @@ TEST(ImageIoRead, Errors) {
         junk << "not an image";
     }
     EXPECT_THROW(sss::read_image(dir.file("junk.exr")), sss::FormatError);
+}
+
+// ---------------------------------------------------------------------------
+// Exposure and quantize (PRMan's Display "quantize" / "dither")
+// ---------------------------------------------------------------------------
+
+TEST(ImageIoQuantize, DitherStaysWithinOneStepAndIsReproducible) {
+    sss::test::TempDir dir("image_io");
+    Image img(32, 8, {"R", "G", "B"});
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            for (int c = 0; c < 3; ++c) img.pixel(x, y)[c] = (x + 32 * y + c) / 300.0f;
+    DisplaySpec spec = display(dir.file("d.png"), "png", "rgb");
+    set_numbers(spec, "dither", {0.5});
+    DisplayTarget t = sss::resolve_display(spec, img, true);
+    sss::write_display(img, t, test_metadata());
+    const auto first = sss::test::read_bytes(t.path);
+    Image back = sss::read_image(t.path);
+    int moved = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double exact = 255.0 * img.pixel(x, y)[c];
+                const long got = std::lround(back.pixel(x, y)[c] * 255.0f);
+                EXPECT_LE(std::abs(got - exact), 1.0) << x << " " << y << " " << c;
+                moved += got != std::lround(exact);
+            }
+    // Amplitude 0.5 moves a value whose fraction is within r/2 of .5.
+    EXPECT_GT(moved, 20);
+    // The noise is a hash of (pixel, channel): a second file is identical
+    // (so is one written by any other thread count).
+    sss::write_display(img, t, test_metadata());
+    EXPECT_EQ(sss::test::read_bytes(t.path), first);
+    for (int k = 0; k < 4; ++k) {
+        const double r = sss::dither_noise(3, 5, k);
+        EXPECT_GE(r, -1.0);
+        EXPECT_LT(r, 1.0);
+        EXPECT_EQ(r, sss::dither_noise(3, 5, k));
+    }
+    EXPECT_NE(sss::dither_noise(3, 5, 0), sss::dither_noise(3, 5, 1));
+}
+
+TEST(ImageIoQuantize, ExposureGainAndGamma) {
+    sss::test::TempDir dir("image_io");
+    Image img(1, 1, {"R", "G", "B", "A", "Z", "diffuse.R", "occ"});
+    float* p = img.pixel(0, 0);
+    p[0] = 0.18f, p[1] = 0.02f, p[2] = 0.0f, p[3] = 1.0f, p[4] = 7.0f, p[5] = 0.08f,
+    p[6] = 0.5f;
+    sss::DisplayDefaults exposure;
+    exposure.exposure_gain = 2.0;
+    exposure.exposure_gamma = 2.0;
+    // PNG, no dither: (2 v)^(1/2) * 255.
+    DisplaySpec spec = display(dir.file("e.png"), "png", "rgba");
+    set_numbers(spec, "dither", {0.0});
+    DisplayTarget t = sss::resolve_display(spec, img, true, exposure);
+    sss::write_display(img, t, test_metadata());
+    Image back = sss::read_image(t.path);
+    EXPECT_EQ(std::lround(back.pixel(0, 0)[0] * 255.0), 153); // sqrt(0.36) = 0.6
+    EXPECT_EQ(std::lround(back.pixel(0, 0)[1] * 255.0), 51);  // sqrt(0.04) = 0.2
+    EXPECT_EQ(std::lround(back.pixel(0, 0)[2] * 255.0), 0);
+    EXPECT_EQ(std::lround(back.pixel(0, 0)[3] * 255.0), 255); // alpha untouched
+    // EXR: colour and colour layers exposed; alpha, Z and float AOVs not.
+    DisplaySpec e = display(dir.file("e.exr"), "openexr", "rgbaz");
+    set_string(e, "type", "float");
+    DisplayTarget te = sss::resolve_display(e, img, true, exposure);
+    sss::write_display(img, te, test_metadata());
+    Image eb = sss::read_image(te.path);
+    auto value = [&](const std::string& c) {
+        return eb.pixel(0, 0)[eb.channel_index(c)];
+    };
+    EXPECT_NEAR(value("R"), 0.6f, 1e-6f);
+    EXPECT_NEAR(value("diffuse.R"), 0.4f, 1e-6f);
+    EXPECT_EQ(value("A"), 1.0f);
+    EXPECT_EQ(value("Z"), 7.0f);
+    EXPECT_EQ(value("occ"), 0.5f);
+}
+
+TEST(ImageIoQuantize, SixteenBitsFloatTiffAndErrors) {
+    sss::test::TempDir dir("image_io");
+    Image img(2, 1, {"R", "G", "B"});
+    for (int c = 0; c < 3; ++c) img.pixel(0, 0)[c] = 0.25f + 0.125f * c;
+    for (int c = 0; c < 3; ++c) img.pixel(1, 0)[c] = 1.5f;
+    DisplaySpec spec = display(dir.file("w.png"), "png", "rgb");
+    set_numbers(spec, "quantize", {0, 65535, 0, 65535});
+    set_numbers(spec, "dither", {0});
+    DisplayTarget t = sss::resolve_display(spec, img, true);
+    EXPECT_EQ(t.bits, 16);
+    sss::write_display(img, t, test_metadata());
+    EXPECT_EQ(pixel_type_of(t.path, 0), OIIO::TypeDesc::UINT16);
+    Image back = sss::read_image(t.path);
+    EXPECT_EQ(std::lround(back.pixel(0, 0)[0] * 65535.0), 16384); // round(16383.75)
+    EXPECT_EQ(std::lround(back.pixel(1, 0)[0] * 65535.0), 65535); // clamped to max
+    // zero, min and max: round(10 + 100 v) in [20, 60].
+    DisplaySpec z = display(dir.file("z.png"), "png", "rgb");
+    set_numbers(z, "quantize", {10, 100, 20, 60});
+    set_numbers(z, "dither", {0});
+    DisplayTarget tz = sss::resolve_display(z, img, true);
+    sss::write_display(img, tz, test_metadata());
+    Image zb = sss::read_image(tz.path);
+    EXPECT_EQ(std::lround(zb.pixel(0, 0)[0] * 255.0), 35); // 10 + 25
+    EXPECT_EQ(std::lround(zb.pixel(0, 0)[2] * 255.0), 60); // 10 + 50 = 60
+    EXPECT_EQ(std::lround(zb.pixel(1, 0)[0] * 255.0), 60); // 160 -> max
+    // one = 0: float pixels in a TIFF, unquantised.
+    DisplaySpec f = display(dir.file("f.tif"), "tiff", "rgb");
+    set_numbers(f, "quantize", {0, 0, 0, 0});
+    DisplayTarget tf = sss::resolve_display(f, img, true);
+    EXPECT_EQ(tf.bits, 32);
+    sss::write_display(img, tf, test_metadata());
+    EXPECT_EQ(pixel_type_of(tf.path, 0), OIIO::TypeDesc::FLOAT);
+    EXPECT_EQ(sss::read_image(tf.path).pixel(0, 0)[1], 0.375f);
+    // Defaults from the scene's Quantize, which a Display's parameters override.
+    sss::DisplayDefaults scene;
+    scene.quantize = sss::QuantizeSpec{0, 1023, 0, 1023, 0};
+    EXPECT_EQ(
+        sss::resolve_display(display("s.tif", "tiff", "rgb"), img, true, scene).bits, 16);
+    EXPECT_EQ(
+        sss::resolve_display(display("s.exr", "openexr", "rgb"), img, true, scene).half,
+        true);
+    // Errors: PNG cannot hold floats, JPEG 16 bits, bad parameter shapes.
+    DisplaySpec fp = display("f.png", "png", "rgb");
+    set_numbers(fp, "quantize", {0, 0, 0, 0});
+    EXPECT_THROW(sss::resolve_display(fp, img, true), sss::ValueError);
+    DisplaySpec j = display("j.jpg", "jpeg", "rgb");
+    set_numbers(j, "quantize", {0, 65535, 0, 65535});
+    EXPECT_THROW(sss::resolve_display(j, img, true), sss::ValueError);
+    DisplaySpec bad = display("b.png", "png", "rgb");
+    set_numbers(bad, "quantize", {0, 255, 0});
+    EXPECT_THROW(sss::resolve_display(bad, img, true), sss::ValueError);
+    DisplaySpec neg = display("b.png", "png", "rgb");
+    set_numbers(neg, "dither", {-1});
+    EXPECT_THROW(sss::resolve_display(neg, img, true), sss::ValueError);
 }

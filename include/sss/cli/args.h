@@ -60,6 +60,11 @@ std::string shell_quote(const std::string& word);
 std::string quoted_command_line(const std::string& head,
                                 const std::vector<std::string>& args);
 
+/// The integer written after the first `prefix` characters of an option's
+/// name ("p:4" with prefix 2 -> 4), which must lie in [lo, hi]; UsageError
+/// naming the option otherwise.
+int attached_integer(const std::string& opt, std::size_t prefix, int lo, int hi);
+
 /// Splits a comma-separated channel list ("_ssdiffusion,_radiance_t").
 /// UsageError naming opt for an empty list, an empty name or a repeated name.
 std::vector<std::string> split_channel_list(const std::string& list,

@@ -6,6 +6,7 @@
 /// diffuse.G, diffuse.B). The user-facing rules are in docs/images.md.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,6 +58,26 @@ struct DisplayTarget {
     std::vector<std::string> names;    ///< their names in the file
     bool half = true;                  ///< OpenEXR: half floats (default) or float
     std::string compression = "zip";   ///< OpenEXR compression (`"string compression"`)
+    /// Exposure gain gamma: the colour channels (R, G, B and every layer.R/G/B
+    /// but the P and N layers) become (gain * v)^(1/gamma) (v <= 0: gain * v)
+    /// in every format; alpha, Z and one-channel AOVs are left alone.
+    double exposure_gain = 1.0;
+    double exposure_gamma = 1.0;
+    /// PNG, TIFF, JPEG: the integer value is round(zero + one * v + dither * r)
+    /// clamped to [min, max], r in [-1, 1) a hash of (pixel, channel). max >
+    /// 255 writes 16 bits (PNG, TIFF); one = 0 writes float (TIFF only).
+    /// Unused for OpenEXR.
+    QuantizeSpec quantize{};
+    /// The file's pixel type for PNG/TIFF/JPEG: 8 or 16 (bits), 32 (float).
+    int bits = 8;
+};
+
+/// What a Display takes from the scene unless its parameters say otherwise:
+/// Exposure, and Quantize (PRMan's 0 255 0 255 dither 0.5 when absent).
+struct DisplayDefaults {
+    double exposure_gain = 1.0;
+    double exposure_gamma = 1.0;
+    std::optional<QuantizeSpec> quantize;
 };
 
 /// Resolves a Display: the file format from the display type ("openexr"/"exr",
@@ -66,22 +87,31 @@ struct DisplayTarget {
 /// to a name without an image extension), the channels from the mode ("rgba", "rgb",
 /// "a", "z", "rgbz", "rgbaz", or AOV names such as "diffuse", "color diffuse"
 /// or lists such as "Ci,a"), the EXR pixel type from `"string type"
-/// "half"|"float"` and compression from `"string compression"` (`"quantize"`
-/// is ignored). For the primary (non-'+') OpenEXR display, every AOV layer of
+/// "half"|"float"` and compression from `"string compression"`, the
+/// quantisation of PNG/TIFF/JPEG from `"quantize" [zero one min max]` and
+/// `"dither" [amplitude]` (else `defaults.quantize`, else PRMan's 0 255 0 255
+/// and 0.5; ignored for OpenEXR), the exposure from `defaults`. For the
+/// primary (non-'+') OpenEXR display, every AOV layer of
 /// `image` (channels with a '.') is appended as layer.channel. Throws
 /// ValueError, naming the display, for a mode naming a channel the image does
 /// not have or channels the format cannot hold.
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
-                              bool primary);
+                              bool primary, const DisplayDefaults& defaults = {});
+
+/// The dither number r in [-1, 1) of pixel (x, y), channel k of a file: a
+/// hash of the three, the same for every run and thread count.
+double dither_noise(int x, int y, int k);
 
 /// The file a Display writes (resolve_display's path, without the image):
 /// its name, plus ".exr" for an "it"/"framebuffer" display whose name has no
 /// image extension.
 std::string display_file(const DisplaySpec& display);
 
-/// Writes the target atomically (AtomicOutput) with OIIO. OpenEXR: linear,
-/// half or float, with the metadata. PNG, TIFF, JPEG: 8-bit sRGB-encoded,
-/// colour divided by alpha (straight alpha), clamped to [0, 1]. Throws
+/// Writes the target atomically (AtomicOutput) with OIIO. OpenEXR: linear
+/// (after the exposure), half or float, with the metadata. PNG, TIFF, JPEG:
+/// colour divided by alpha (straight alpha), then the exposure, then
+/// quantised by target.quantize (no sRGB encoding: 8-bit values are
+/// round(255 v) plus dither unless the exposure's gamma says otherwise). Throws
 /// ValueError (NaN/Inf pixels, channels the image does not have: nothing is
 /// written) and IoError (missing folder, write failure: the target is
 /// untouched and no temporary is left).

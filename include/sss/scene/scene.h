@@ -15,6 +15,8 @@
 /// left-handed, x right, y up, +z into the screen.
 
 #include <array>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -236,6 +238,20 @@ struct Camera {
     std::optional<std::array<double, 4>> screen_window;
     double near_clip = 1e-10; ///< Clipping hither
     double far_clip = 1e30;   ///< Clipping yon
+    /// DepthOfField fstop focallength focaldistance (camera-space units):
+    /// a thin lens of radius focallength / (2 fstop) focused at
+    /// focaldistance. fstop = infinity (the default, or `DepthOfField`
+    /// without arguments) is the pinhole camera.
+    double fstop = std::numeric_limits<double>::infinity();
+    double focal_length = 0.0;
+    double focal_distance = 0.0;
+
+    /// Whether DepthOfField gives the camera a lens (finite fstop).
+    bool depth_of_field() const { return std::isfinite(fstop) && focal_length > 0.0; }
+    /// The lens radius focallength / (2 fstop) in camera-space units (0: pinhole).
+    double lens_radius() const {
+        return depth_of_field() ? focal_length / (2.0 * fstop) : 0.0;
+    }
 
     /// The screen window in effect (given or default).
     std::array<double, 4> resolved_screen_window() const;
@@ -245,6 +261,27 @@ struct Camera {
     /// Length in world (camera) units of one raster pixel at camera-space
     /// distance `distance` from the eye (perspective) or anywhere (orthographic).
     double pixel_size_at(double distance) const;
+};
+
+/// `PixelFilter name xwidth ywidth`: the reconstruction filter (RISpec 3.2
+/// appendix E), its support xwidth by ywidth pixels. Names: box, triangle,
+/// catmull-rom, gaussian, sinc.
+struct PixelFilterSpec {
+    std::string name = "gaussian";
+    double xwidth = 2.0;
+    double ywidth = 2.0;
+};
+
+/// `Quantize "rgba" one min max ditheramplitude` (and a Display's
+/// `"quantize" [zero one min max]` / `"dither" [amplitude]`): an integer
+/// output value is round(zero + one * v + dither * r), r in [-1, 1), clamped
+/// to [min, max]. one = 0 asks for float output.
+struct QuantizeSpec {
+    double zero = 0.0;
+    double one = 255.0;
+    double min = 0.0;
+    double max = 255.0;
+    double dither = 0.5;
 };
 
 /// Image and render options.
@@ -257,6 +294,13 @@ struct RenderOptions {
     /// Every `Option "group" params`.
     std::map<std::string, ParamList> groups;
     std::string hider;
+    PixelFilterSpec pixel_filter; ///< PixelFilter (default gaussian 2 2)
+    /// Exposure gain gamma: colour = (gain * colour)^(1/gamma) when written.
+    double exposure_gain = 1.0;
+    double exposure_gamma = 1.0;
+    /// Quantize "rgba"/"rgb" (PRMan's default 255 0 255 0.5); nullopt: the
+    /// format's default. Quantize "z" is accepted and ignored (Z is float).
+    std::optional<QuantizeSpec> quantize;
     std::optional<int> frame; ///< number of the FrameBegin block read, if any
 };
 

@@ -164,4 +164,25 @@ std::vector<std::string> split_channel_list(const std::string& list,
     return names;
 }
 
+int attached_integer(const std::string& opt, std::size_t prefix, int lo, int hi) {
+    const std::string text = opt.size() > prefix ? opt.substr(prefix) : std::string();
+    std::size_t used = 0;
+    long value = 0;
+    bool ok = !text.empty() && (std::isdigit(static_cast<unsigned char>(text[0])) ||
+                                text[0] == '-' || text[0] == '+');
+    if (ok) {
+        try {
+            value = std::stol(text, &used);
+        } catch (const std::exception&) {
+            ok = false;
+        }
+    }
+    if (!ok || used != text.size())
+        throw UsageError("option -" + opt + ": '" + text + "' is not an integer");
+    if (value < lo || value > hi)
+        throw UsageError("option -" + opt + ": " + text + " is not in [" +
+                         std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return static_cast<int>(value);
+}
+
 } // namespace sss

@@ -24,6 +24,7 @@
 
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/hash.h"
 
 namespace sss {
 
@@ -196,12 +197,14 @@ std::string display_file(const DisplaySpec& display) {
 }
 
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
-                              bool primary) {
+                              bool primary, const DisplayDefaults& defaults) {
     const std::string label =
         "display '" + std::string(display.additional ? "+" : "") + display.name + "'";
     if (display.name.empty()) throw ValueError("display with an empty file name");
 
     DisplayTarget target;
+    target.exposure_gain = defaults.exposure_gain;
+    target.exposure_gamma = defaults.exposure_gamma;
     target.path = display_file(display);
     std::string type = lower(display.type);
     target.format = format_from_type(type);
@@ -266,12 +269,50 @@ DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
         return target;
     }
 
-    // 8-bit formats.
+    // Integer formats: quantisation.
     target.half = false;
+    if (defaults.quantize) target.quantize = *defaults.quantize;
+    if (const Param* q = display.params.find("quantize")) {
+        if ((q->type != ParamType::Float && q->type != ParamType::Integer) ||
+            q->numbers.size() != 4)
+            throw ValueError(label + ": \"quantize\" needs 4 numbers [zero one min max]");
+        target.quantize.zero = q->numbers[0];
+        target.quantize.one = q->numbers[1];
+        target.quantize.min = q->numbers[2];
+        target.quantize.max = q->numbers[3];
+    }
+    if (const Param* d = display.params.find("dither")) {
+        if ((d->type != ParamType::Float && d->type != ParamType::Integer) ||
+            d->numbers.size() != 1)
+            throw ValueError(label + ": \"dither\" needs one number [amplitude]");
+        target.quantize.dither = d->numbers[0];
+    }
+    const QuantizeSpec& q = target.quantize;
+    for (double v : {q.zero, q.one, q.min, q.max, q.dither})
+        if (!std::isfinite(v))
+            throw ValueError(label + ": quantize values must be finite numbers");
+    if (q.one < 0.0 || q.dither < 0.0 || q.min < 0.0 || q.min > q.max)
+        throw ValueError(label +
+                         ": quantize needs one >= 0, 0 <= min <= max and dither >= 0");
+    if (q.one == 0.0) {
+        if (target.format != "tiff")
+            throw ValueError(label + ": quantize one = 0 asks for float pixels, which " +
+                             target.format +
+                             " files cannot hold; use a TIFF or OpenEXR display");
+        target.bits = 32;
+    } else if (q.max > 65535.0) {
+        throw ValueError(label + ": quantize max " + std::to_string(q.max) +
+                         " does not fit in 16 bits");
+    } else {
+        target.bits = q.max > 255.0 ? 16 : 8;
+        if (target.bits == 16 && target.format == "jpeg")
+            throw ValueError(
+                label + ": JPEG files hold 8 bits; quantize max must be at most 255");
+    }
     if (!pixel_type.empty() && pixel_type != "uint8" && pixel_type != "byte")
-        throw ValueError(
-            label + ": " + target.format + " files are written with 8 bits " +
-            "per channel; \"string type\" '" + pixel_type + "' needs an OpenEXR display");
+        throw ValueError(label + ": " + target.format +
+                         " files take their pixel type from \"quantize\"; " +
+                         "\"string type\" '" + pixel_type + "' needs an OpenEXR display");
     for (const auto& c : target.channels)
         if (c == "Z")
             throw ValueError(label + ": depth (Z) cannot be stored in an 8-bit " +
@@ -311,13 +352,25 @@ bool needs_float(const std::string& channel) {
     return channel == "Z" || channel.rfind("P.", 0) == 0 || channel.rfind("N.", 0) == 0;
 }
 
-double srgb_encode(double linear) {
-    return linear <= 0.0031308 ? 12.92 * linear
-                               : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+/// Whether Exposure changes a channel: colour (R, G, B, layer.R/G/B), not
+/// alpha, depth, one-channel AOVs or the P and N layers.
+bool exposed(const std::string& channel) {
+    if (channel == "R" || channel == "G" || channel == "B") return true;
+    if (needs_float(channel) || channel.size() < 3) return false;
+    const std::string tail = channel.substr(channel.size() - 2);
+    return tail == ".R" || tail == ".G" || tail == ".B";
 }
 
-uint8_t to_byte(double v) {
-    return uint8_t(std::lround(255.0 * std::clamp(v, 0.0, 1.0)));
+/// (gain * v)^(1/gamma); gain * v where that is not positive.
+double expose(double v, double gain, double gamma) {
+    const double x = gain * v;
+    return gamma == 1.0 || !(x > 0.0) ? x : std::pow(x, 1.0 / gamma);
+}
+
+/// round(zero + one * v + dither * r) clamped to [min, max].
+double quantize_value(double v, const QuantizeSpec& q, double r) {
+    const double x = std::floor(q.zero + q.one * v + q.dither * r + 0.5);
+    return std::clamp(x, q.min, q.max);
 }
 
 /// "YYYY:MM:DD hh:mm:ss" local time and EXR's utcOffset (UTC = local +
@@ -390,6 +443,15 @@ int index_of(const std::vector<std::string>& list, const std::string& s) {
 
 } // namespace
 
+double dither_noise(int x, int y, int k) {
+    const uint64_t pixel =
+        detail::splitmix64((uint64_t(uint32_t(y)) << 32) | uint32_t(x)) ^
+        0x646974686572ull;
+    const uint64_t h = detail::splitmix64(pixel + uint64_t(uint32_t(k) + 1) *
+                                                      detail::kSplitMixIncrement);
+    return 2.0 * detail::unit_double(h) - 1.0;
+}
+
 void write_display(const Image& image, const DisplayTarget& target,
                    const ImageMetadata& metadata) {
     const std::string& path = target.path;
@@ -451,7 +513,20 @@ void write_display(const Image& image, const DisplayTarget& target,
     spec.z_channel = exr ? index_of(target.names, "Z") : -1;
     add_metadata(spec, metadata, exr);
 
+    // Exposure (a no-op at gain 1, gamma 1). Integer files apply it after
+    // dividing by alpha, below.
+    const bool exposure = target.exposure_gain != 1.0 || target.exposure_gamma != 1.0;
+    std::vector<char> exposed_channel(n);
+    for (std::size_t k = 0; k < n; ++k) exposed_channel[k] = exposed(target.channels[k]);
+    if (exr && exposure)
+        for (std::size_t i = 0; i < values.size(); ++i)
+            if (exposed_channel[i % n])
+                values[i] = static_cast<float>(
+                    expose(values[i], target.exposure_gain, target.exposure_gamma));
+
     std::vector<uint8_t> bytes;
+    std::vector<uint16_t> words;
+    std::vector<float> floats;
     if (exr) {
         spec.attribute("compression", target.compression);
         if (target.half) {
@@ -469,25 +544,50 @@ void write_display(const Image& image, const DisplayTarget& target,
                     values[i] = std::clamp(values[i], -kHalfMax, kHalfMax);
         }
     } else {
-        // 8-bit: straight alpha (colour divided by coverage), sRGB-encoded
-        // colour, linear alpha, clamped to [0, 1].
-        spec.attribute("oiio:ColorSpace", "sRGB");
+        // Integer (or TIFF float): straight alpha (colour divided by
+        // coverage), the exposure, then quantize: round(zero + one * v +
+        // dither * r) clamped to [min, max]. No sRGB curve: the values are
+        // linear unless the exposure's gamma encodes them.
+        const double gamma = target.exposure_gamma;
+        if (gamma == 1.0) {
+            spec.attribute("oiio:ColorSpace", "Linear");
+        } else {
+            spec.attribute("oiio:ColorSpace", "Gamma" + std::to_string(gamma));
+            spec.attribute("oiio:Gamma", static_cast<float>(gamma));
+        }
         // Our data is already unassociated: OIIO must not divide again (PNG)
         // and TIFF marks its alpha as unassociated.
         spec.attribute("oiio:UnassociatedAlpha", 1);
+        spec.set_format(target.bits == 32   ? OIIO::TypeDesc::FLOAT
+                        : target.bits == 16 ? OIIO::TypeDesc::UINT16
+                                            : OIIO::TypeDesc::UINT8);
         const int alpha = spec.alpha_channel;
-        bytes.resize(values.size());
+        if (target.bits == 32)
+            floats.resize(values.size());
+        else if (target.bits == 16)
+            words.resize(values.size());
+        else
+            bytes.resize(values.size());
         for (std::size_t p = 0; p < pixel_count; ++p) {
             const float* in = &values[p * n];
-            double a = alpha >= 0 ? double(in[alpha]) : 1.0;
+            const double a = alpha >= 0 ? double(in[alpha]) : 1.0;
+            const int x = int(p % std::size_t(image.width));
+            const int y = int(p / std::size_t(image.width));
             for (std::size_t k = 0; k < n; ++k) {
                 double v = in[k];
-                if (int(k) == alpha) {
-                    bytes[p * n + k] = to_byte(v);
+                if (int(k) != alpha && alpha >= 0 && a > 0.0) v /= a;
+                if (exposed_channel[k])
+                    v = expose(v, target.exposure_gain, target.exposure_gamma);
+                if (target.bits == 32) {
+                    floats[p * n + k] = static_cast<float>(v);
                     continue;
                 }
-                if (alpha >= 0 && a > 0.0) v /= a;
-                bytes[p * n + k] = to_byte(srgb_encode(std::clamp(v, 0.0, 1.0)));
+                const double q =
+                    quantize_value(v, target.quantize, dither_noise(x, y, int(k)));
+                if (target.bits == 16)
+                    words[p * n + k] = uint16_t(std::clamp(q, 0.0, 65535.0));
+                else
+                    bytes[p * n + k] = uint8_t(std::clamp(q, 0.0, 255.0));
             }
         }
     }
@@ -502,8 +602,10 @@ void write_display(const Image& image, const DisplayTarget& target,
     if (!out->open(file.temp_path(), spec))
         throw IoError(path,
                       "cannot write " + target.format + " image: " + out->geterror());
-    bool ok = exr ? out->write_image(OIIO::TypeDesc::FLOAT, values.data())
-                  : out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    bool ok = exr                 ? out->write_image(OIIO::TypeDesc::FLOAT, values.data())
+              : target.bits == 32 ? out->write_image(OIIO::TypeDesc::FLOAT, floats.data())
+              : target.bits == 16 ? out->write_image(OIIO::TypeDesc::UINT16, words.data())
+                                  : out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
     ok = out->close() && ok;
     if (!ok)
         throw IoError(path,

@@ -3,7 +3,9 @@
 /// triangles with vertex normals and ray traced with Embree; camera samples
 /// are stratified and jittered per pixel by a hash, shaded by the scene's RSL
 /// shaders (sss/shading) in batches of hits, composited front to back through
-/// semi-transparent surfaces and reconstructed with RenderMan's 2 x 2 Gaussian filter.
+/// semi-transparent surfaces and reconstructed with the PixelFilter (RenderMan's
+/// gaussian 2 x 2 by default). DepthOfField moves the rays' origins onto a
+/// thin lens.
 /// The image holds the beauty, Z and the AOVs; render_scene writes the Displays.
 /// render_image runs its phases in order (camera, lights and shaders,
 /// surfaces, dicing, ray tracers, tiles, pixels), each a function below.
@@ -38,6 +40,7 @@
 
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/render/camera_sampling.h"
 #include "sss/shading/bake3d_file.h"
 #include "sss/shading/displacement.h"
 #include "sss/shading/engine.h"
@@ -68,8 +71,9 @@ constexpr int kMaxLayers = 8;
 constexpr int kMaxHits = 32;
 /// A ray stops once less than this fraction of light gets through.
 constexpr double kOpaque = 1e-4;
-/// The reconstruction filter: RenderMan's gaussian 2 x 2 (radius 1 pixel).
-constexpr double kFilterRadius = 1.0;
+/// Pixels a sample may reach on each side of its own (PixelFilter widths
+/// of at most 16 pixels).
+constexpr int kMaxReach = 8;
 
 /// Whether `Attribute "visibility" name` leaves the primitive visible.
 bool visible_to(const Primitive& prim, const char* name) {
@@ -95,12 +99,23 @@ public:
         m_to_world = glm::inverse(cam.world_to_camera);
         m_affine = m_to_world[0][3] == 0.0 && m_to_world[1][3] == 0.0 &&
                    m_to_world[2][3] == 0.0 && m_to_world[3][3] == 1.0;
+        if (cam.depth_of_field()) {
+            if (!(cam.focal_distance > cam.focal_length) || !(cam.fstop > 0.0))
+                throw ValueError("DepthOfField needs fstop > 0 and focaldistance > "
+                                 "focallength > 0");
+            m_lens_radius = cam.lens_radius();
+        }
     }
 
     /// The ray through raster point (x, y) (pixels, y down), clipped to
     /// [hither, yon] along the camera's z; *units is the ray length per unit
-    /// of camera z (the depth of a hit at t is t / *units).
-    ShadowRay ray(double x, double y, double* units) const {
+    /// of camera z (the depth of a hit at t is t / *units). With
+    /// DepthOfField the ray starts at `lens` (a point of the unit disk) times
+    /// the lens radius, in the plane z = 0 of camera space, and goes through
+    /// the point where the pinhole ray meets the focal plane z =
+    /// focaldistance (orthographic cameras: the same, around the pinhole
+    /// ray's origin).
+    ShadowRay ray(double x, double y, const glm::dvec2& lens, double* units) const {
         const double sx = m_window[0] + (x / m_cam.xres) * (m_window[1] - m_window[0]);
         const double sy = m_window[3] - (y / m_cam.yres) * (m_window[3] - m_window[2]);
         glm::dvec4 origin(0.0, 0.0, 0.0, 1.0), ahead(0.0, 0.0, 1.0, 0.0);
@@ -108,6 +123,15 @@ public:
             ahead = glm::dvec4(sx * m_tan_half, sy * m_tan_half, 1.0, 0.0);
         } else {
             origin = glm::dvec4(sx, sy, 0.0, 1.0);
+        }
+        if (m_lens_radius > 0.0) {
+            // ahead.z = 1: the focal point is origin + D * ahead; from the
+            // lens point origin + L the direction to it is ahead - L / D.
+            const glm::dvec2 l = lens * m_lens_radius;
+            origin.x += l.x;
+            origin.y += l.y;
+            ahead.x -= l.x / m_cam.focal_distance;
+            ahead.y -= l.y / m_cam.focal_distance;
         }
         const glm::dvec4 o4 = m_to_world * origin;
         const glm::dvec3 o = glm::dvec3(o4) / o4.w;
@@ -120,9 +144,7 @@ public:
         if (m_affine) {
             d = glm::dvec3(m_to_world * ahead);
         } else {
-            ahead.w = 1.0;
-            if (!m_cam.perspective) ahead = origin + glm::dvec4(0.0, 0.0, 1.0, 0.0);
-            const glm::dvec4 a4 = m_to_world * ahead;
+            const glm::dvec4 a4 = m_to_world * (origin + ahead); // a point
             d = glm::dvec3(a4) / a4.w - o;
         }
         const double len = glm::length(d);
@@ -142,6 +164,7 @@ private:
     double m_tan_half = 1.0;
     Matrix4 m_to_world{1.0};
     bool m_affine = true; ///< m_to_world's last row is (0, 0, 0, 1)
+    double m_lens_radius = 0.0; ///< DepthOfField (camera units); 0: pinhole
 };
 
 /// A primitive as the renderer uses it.
@@ -219,6 +242,12 @@ struct Renderer {
     Camera camera;
     std::optional<CameraRays> rays;
     int nx = 1, ny = 1; ///< pixel samples
+    std::optional<PixelFilter> filter; ///< the PixelFilter
+    int reach_x = 1, reach_y = 1;      ///< pixels a sample reaches on each side
+    /// The filter's weights can sum to about zero over a pixel (negative
+    /// lobes, or narrower than a pixel): such pixels take the value of their
+    /// own sample nearest to their centre.
+    bool nearest_fallback = false;
     SceneShaders shaders;
     std::unique_ptr<ShadingResources> resources;
     std::unique_ptr<RenderServices> services;
@@ -564,9 +593,15 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
     }
 }
 
-/// RenderMan's gaussian filter of width 2, one axis: exp(-2 d^2), |d| < 1.
-double filter_weight(double d) {
-    return std::abs(d) < kFilterRadius ? std::exp(-2.0 * d * d) : 0.0;
+/// Whether a PixelFilter's weights can sum to about zero over a pixel's
+/// samples: catmull-rom (negative from r = 1 on), sinc wider than 2 pi, and
+/// any filter narrower than a pixel (it can miss every sample of a pixel).
+/// The gaussian 2 x 2 and every other filter at least 1 pixel wide without
+/// negative lobes give each sample in a pixel a positive weight for it.
+bool needs_nearest_fallback(const PixelFilterSpec& spec) {
+    if (spec.xwidth < 1.0 || spec.ywidth < 1.0) return true;
+    if (spec.name == "catmull-rom" || spec.name == "catmullrom") return true;
+    return spec.name == "sinc" && std::max(spec.xwidth, spec.ywidth) > 2.0 * kPi;
 }
 
 /// Image channel names, in order: beauty, Z, then each AOV (a colour as
@@ -607,6 +642,13 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     if (job.nx < 1 || job.ny < 1 || job.nx > 1024 || job.ny > 1024)
         throw ValueError("pixel samples must lie in [1, 1024]");
     job.rays.emplace(job.camera);
+    const PixelFilterSpec& filter = scene.options.pixel_filter;
+    job.filter.emplace(filter);
+    job.reach_x = job.filter->reach_x();
+    job.reach_y = job.filter->reach_y();
+    if (job.reach_x > kMaxReach || job.reach_y > kMaxReach)
+        throw ValueError("PixelFilter widths must be at most 16 pixels");
+    job.nearest_fallback = needs_nearest_fallback(filter);
     // pixel_size_at is linear in the depth beyond hither (perspective).
     const double d = job.camera.perspective ? std::max(1.0, job.camera.near_clip) : 1.0;
     job.pixel_per_depth =
@@ -848,20 +890,33 @@ struct TileGrid {
     int y0(std::size_t t) const { return static_cast<int>(t / tiles_x) * kTile; }
 };
 
-/// Sides of a tile's buffer: one pixel wider on every side (the filter's reach).
-constexpr int kSpan = kTile + 2;
+/// Floats per pixel of the filter sums: the values, the weight sum and,
+/// for nearest_fallback filters, the sum of the weights' magnitudes.
+int filter_slots(const Renderer& job) {
+    return job.values + (job.nearest_fallback ? 2 : 1);
+}
 
 /// Renders every tile: its camera samples go through the scene layer by
 /// layer (each pass traces every live sample's ray to its next surface and
 /// shades the hits in batches per primitive), then each splats into the
-/// tile's buffer of kSpan x kSpan pixels of job.values + 1 floats; the
-/// nearest depth of its pixels goes to `depth`.
+/// tile's buffer, which is job.reach_x (job.reach_y) pixels wider than the
+/// tile on each side (the filter's reach), of filter_slots floats per pixel.
+/// The nearest depth of its pixels goes to `depth`; for nearest_fallback
+/// filters, each pixel's sample nearest to its centre goes to `nearest`
+/// (job.values floats per pixel).
 std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid,
                                              const RenderJobOptions& options,
-                                             std::vector<float>& depth) {
+                                             std::vector<float>& depth,
+                                             std::vector<float>& nearest) {
     const int width = grid.width, height = grid.height;
     const std::size_t tiles = grid.count();
-    const int slots = job.values + 1; // + weight
+    const int slots = filter_slots(job);
+    const int span_x = kTile + 2 * job.reach_x, span_y = kTile + 2 * job.reach_y;
+    const int rx = job.reach_x, ry = job.reach_y;
+    const PixelFilter& filter = *job.filter;
+    const bool lens = job.camera.depth_of_field();
+    if (job.nearest_fallback)
+        nearest.assign(std::size_t(width) * height * job.values, 0.0f);
     std::vector<std::vector<float>> tile_sums(tiles);
     std::atomic<std::size_t> tiles_done{0};
     tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
@@ -875,7 +930,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
         const int y0 = grid.y0(t);
         const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
         std::vector<float>& sums = tile_sums[t];
-        sums.assign(std::size_t(kSpan) * kSpan * slots, 0.0f);
+        sums.assign(std::size_t(span_x) * span_y * slots, 0.0f);
         uint64_t camera_count = 0, bad_count = 0;
 
         // The tile's samples, pixel by pixel in row order.
@@ -885,6 +940,11 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             for (int px = x0; px < x1; ++px) {
                 const uint64_t pixel_key =
                     detail::splitmix64((uint64_t(uint32_t(py)) << 32) | uint32_t(px));
+                // Lens positions: strata of their own, paired with the pixel
+                // strata by a per-pixel shuffle (no extra numbers without DOF).
+                const std::vector<glm::dvec2> lens_uv =
+                    lens ? lens_square_samples(pixel_key, job.nx, job.ny)
+                         : std::vector<glm::dvec2>();
                 for (int j = 0; j < job.ny; ++j) {
                     for (int i = 0; i < job.nx; ++i) {
                         CameraSample cs;
@@ -895,7 +955,10 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                         cs.sy =
                             py + (j + detail::unit_double(detail::splitmix64(cs.key))) /
                                      job.ny;
-                        cs.ray = job.rays->ray(cs.sx, cs.sy, &cs.units);
+                        const glm::dvec2 uv =
+                            lens ? lens_uv[std::size_t(j * job.nx + i)] : glm::dvec2(0.5);
+                        cs.ray = job.rays->ray(cs.sx, cs.sy, concentric_disk(uv.x, uv.y),
+                                               &cs.units);
                         samples.push_back(cs);
                     }
                 }
@@ -912,6 +975,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             shade_pass(job, context, hits, samples, values);
         }
 
+        std::size_t pixel_best = 0; // nearest_fallback: the pixel's nearest sample
         for (std::size_t s = 0; s < samples.size(); ++s) {
             const CameraSample& cs = samples[s];
             float* v = &values[s * job.values];
@@ -929,25 +993,55 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             const int py = static_cast<int>(std::floor(cs.sy));
             float& z = depth[std::size_t(py) * width + px];
             z = std::min(z, cs.depth);
-            // Splat into the pixels whose filter reaches the sample: this
-            // pixel and its 8 neighbours at most.
-            double wx[3], wy[3];
-            for (int k = 0; k < 3; ++k) {
-                const int qx = px - 1 + k, qy = py - 1 + k;
-                wx[k] = qx >= 0 && qx < width ? filter_weight(cs.sx - (qx + 0.5)) : 0.0;
-                wy[k] = qy >= 0 && qy < height ? filter_weight(cs.sy - (qy + 0.5)) : 0.0;
+            if (job.nearest_fallback) {
+                // The pixel's samples come together, in order: at its first
+                // one, find the one nearest to the centre (ties: the earlier).
+                const std::size_t per_pixel = std::size_t(job.nx) * job.ny;
+                if (s % per_pixel == 0) {
+                    pixel_best = s;
+                    double best_d = std::numeric_limits<double>::infinity();
+                    for (std::size_t o = s; o < s + per_pixel; ++o) {
+                        const double dx = samples[o].sx - (px + 0.5);
+                        const double dy = samples[o].sy - (py + 0.5);
+                        if (dx * dx + dy * dy < best_d) {
+                            best_d = dx * dx + dy * dy;
+                            pixel_best = o;
+                        }
+                    }
+                }
+                if (pixel_best == s)
+                    std::copy(v, v + job.values,
+                              &nearest[(std::size_t(py) * width + px) * job.values]);
             }
-            for (int ky = 0; ky < 3; ++ky) {
+            // Splat into the pixels whose filter reaches the sample: up to
+            // reach_x (reach_y) pixels on each side of its own.
+            double wx[2 * kMaxReach + 1], wy[2 * kMaxReach + 1];
+            for (int k = 0; k <= 2 * rx; ++k) {
+                const int qx = px - rx + k;
+                wx[k] = qx >= 0 && qx < width ? filter.weight_x(cs.sx - (qx + 0.5)) : 0.0;
+            }
+            for (int k = 0; k <= 2 * ry; ++k) {
+                const int qy = py - ry + k;
+                wy[k] =
+                    qy >= 0 && qy < height ? filter.weight_y(cs.sy - (qy + 0.5)) : 0.0;
+            }
+            for (int ky = 0; ky <= 2 * ry; ++ky) {
                 if (wy[ky] == 0.0) continue;
-                for (int kx = 0; kx < 3; ++kx) {
+                for (int kx = 0; kx <= 2 * rx; ++kx) {
                     if (wx[kx] == 0.0) continue;
-                    const float w = static_cast<float>(wx[kx] * wy[ky]);
-                    // Buffer cell of pixel (px - 1 + kx, py - 1 + ky).
+                    // Radial filters (catmull-rom) have no product form.
+                    const float w = static_cast<float>(
+                        filter.separable() ? wx[kx] * wy[ky]
+                                           : filter.weight(cs.sx - (px - rx + kx + 0.5),
+                                                           cs.sy - (py - ry + ky + 0.5)));
+                    if (w == 0.0f) continue;
+                    // Buffer cell of pixel (px - rx + kx, py - ry + ky).
                     float* acc =
-                        &sums[(std::size_t(py - y0 + ky) * kSpan + (px - x0 + kx)) *
+                        &sums[(std::size_t(py - y0 + ky) * span_x + (px - x0 + kx)) *
                               slots];
                     for (int c = 0; c < job.values; ++c) acc[c] += w * v[c];
                     acc[job.values] += w;
+                    if (job.nearest_fallback) acc[job.values + 1] += std::abs(w);
                 }
             }
         }
@@ -962,21 +1056,23 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
 
 /// Adds the tiles up in a fixed order, the same sums for any thread count,
 /// freeing each tile's buffer once added.
-std::vector<float> add_tiles(const TileGrid& grid, int slots,
+std::vector<float> add_tiles(const Renderer& job, const TileGrid& grid,
                              std::vector<std::vector<float>>& tile_sums) {
     const int width = grid.width, height = grid.height;
+    const int slots = filter_slots(job);
+    const int span_x = kTile + 2 * job.reach_x, span_y = kTile + 2 * job.reach_y;
     std::vector<float> sums(std::size_t(width) * height * slots, 0.0f);
     for (std::size_t t = 0; t < grid.count(); ++t) {
         const int x0 = grid.x0(t);
         const int y0 = grid.y0(t);
         const std::vector<float>& tile = tile_sums[t];
-        for (int ty = 0; ty < kSpan; ++ty) {
-            const int py = y0 - 1 + ty;
+        for (int ty = 0; ty < span_y; ++ty) {
+            const int py = y0 - job.reach_y + ty;
             if (py < 0 || py >= height) continue;
-            for (int tx = 0; tx < kSpan; ++tx) {
-                const int px = x0 - 1 + tx;
+            for (int tx = 0; tx < span_x; ++tx) {
+                const int px = x0 - job.reach_x + tx;
                 if (px < 0 || px >= width) continue;
-                const float* src = &tile[(std::size_t(ty) * kSpan + tx) * slots];
+                const float* src = &tile[(std::size_t(ty) * span_x + tx) * slots];
                 float* dst = &sums[(std::size_t(py) * width + px) * slots];
                 for (int c = 0; c < slots; ++c) dst[c] += src[c];
             }
@@ -986,18 +1082,25 @@ std::vector<float> add_tiles(const TileGrid& grid, int slots,
     return sums;
 }
 
-/// The image: filtered sums divided by their weights, and the depth.
+/// The image: filtered sums divided by their weights, and the depth. With
+/// nearest_fallback filters, a pixel whose weights sum to less than 1e-3 of their
+/// magnitudes takes its nearest sample instead (no division by about 0).
 Image resolve_pixels(const Renderer& job, const TileGrid& grid,
-                     const std::vector<float>& sums, const std::vector<float>& depth) {
+                     const std::vector<float>& sums, const std::vector<float>& depth,
+                     const std::vector<float>& nearest) {
     const int width = grid.width, height = grid.height;
-    const int slots = job.values + 1;
+    const int slots = filter_slots(job);
     Image image(width, height, image_channels(job.aovs));
     for (int py = 0; py < height; ++py) {
         for (int px = 0; px < width; ++px) {
             const float* s = &sums[(std::size_t(py) * width + px) * slots];
             float* out = image.pixel(px, py);
             const float weight = s[job.values];
-            const float inv = weight > 0.0f ? 1.0f / weight : 0.0f;
+            float inv = weight > 0.0f ? 1.0f / weight : 0.0f;
+            if (job.nearest_fallback && !(weight > 1e-3f * s[job.values + 1])) {
+                s = &nearest[(std::size_t(py) * width + px) * job.values];
+                inv = 1.0f;
+            }
             for (int c = 0; c < 4; ++c) out[c] = s[c] * inv;
             const float z = depth[std::size_t(py) * width + px];
             out[4] = std::isfinite(z) ? z : 0.0f; // no hit: 0
@@ -1072,9 +1175,11 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     const TileGrid grid(job.camera.xres, job.camera.yres);
     std::vector<float> depth(std::size_t(grid.width) * grid.height,
                              std::numeric_limits<float>::infinity());
-    std::vector<std::vector<float>> tile_sums = render_tiles(job, grid, options, depth);
+    std::vector<float> nearest;
+    std::vector<std::vector<float>> tile_sums =
+        render_tiles(job, grid, options, depth, nearest);
     Image image =
-        resolve_pixels(job, grid, add_tiles(grid, job.values + 1, tile_sums), depth);
+        resolve_pixels(job, grid, add_tiles(job, grid, tile_sums), depth, nearest);
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
@@ -1178,9 +1283,13 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
     if (frame) meta.extra.emplace_back("sss:frame", std::to_string(*frame));
     meta.extra.emplace_back("sss:threads",
                             std::to_string(tbb::this_task_arena::max_concurrency()));
+    DisplayDefaults defaults;
+    defaults.exposure_gain = scene.options.exposure_gain;
+    defaults.exposure_gamma = scene.options.exposure_gamma;
+    defaults.quantize = scene.options.quantize;
     for (std::size_t i = 0; i < displays.size(); ++i) {
         const DisplayTarget target =
-            resolve_display(displays[i], image, static_cast<int>(i) == primary);
+            resolve_display(displays[i], image, static_cast<int>(i) == primary, defaults);
         write_display(image, target, meta);
         report.files.push_back(target.path);
     }

@@ -32,10 +32,10 @@ NameSet name_set(const char* names) {
 
 /// Requests that do not change what this toolchain computes.
 bool ignored(std::string_view name) {
-    static const NameSet names = name_set(
-        "version Version Shutter ArchiveRecord Camera Exposure Quantize PixelFilter "
-        "PixelVariance Imager DepthOfField RelativeDetail ErrorHandler Matte Bound "
-        "GeometricApproximation TextureCoordinates");
+    static const NameSet names =
+        name_set("version Version Shutter ArchiveRecord Camera "
+                 "PixelVariance Imager RelativeDetail ErrorHandler Matte Bound "
+                 "GeometricApproximation TextureCoordinates");
     return names.count(name) > 0;
 }
 
@@ -124,6 +124,10 @@ const Reader::HandlerTable& Reader::handlers() {
         {"Option", &Reader::do_option},
         {"ColorSamples", &Reader::do_color_samples},
         {"Declare", &Reader::do_declare},
+        {"DepthOfField", &Reader::do_depth_of_field},
+        {"PixelFilter", &Reader::do_pixel_filter},
+        {"Exposure", &Reader::do_exposure},
+        {"Quantize", &Reader::do_quantize},
         // blocks
         {"FrameBegin", &Reader::do_frame_begin},
         {"FrameEnd", &Reader::do_frame_end},

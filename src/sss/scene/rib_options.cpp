@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <limits>
 
 #include "rib_args.h"
 
@@ -101,6 +103,84 @@ void Reader::do_pixel_samples(const Statement& s) {
     if (!option_allowed(s)) return;
     m_scene.options.pixel_samples[0] = static_cast<int>(std::ceil(n[0]));
     m_scene.options.pixel_samples[1] = static_cast<int>(std::ceil(n[1]));
+}
+
+void Reader::do_depth_of_field(const Statement& s) {
+    std::size_t i = 0;
+    Camera& cam = m_scene.options.camera;
+    if (s.args.empty()) { // no arguments: the pinhole camera
+        if (!option_allowed(s)) return;
+        cam.fstop = std::numeric_limits<double>::infinity();
+        cam.focal_length = cam.focal_distance = 0.0;
+        return;
+    }
+    auto n = take_numbers(s, i, 3);
+    no_more_args(s, i);
+    if (!(n[0] > 0.0)) fail(s, "fstop must be positive, got " + fmt(n[0]));
+    if (!(n[1] > 0.0)) fail(s, "focallength must be positive, got " + fmt(n[1]));
+    if (!(n[2] > n[1]))
+        fail(s, "focaldistance " + fmt(n[2]) + " must be beyond focallength " +
+                    fmt(n[1]) + " (nothing could be in focus)");
+    if (!option_allowed(s)) return;
+    // RI_INFINITY (1e38) or any huge fstop: a lens of no size, the pinhole.
+    cam.fstop = n[0] >= 1e30 ? std::numeric_limits<double>::infinity() : n[0];
+    cam.focal_length = n[1];
+    cam.focal_distance = n[2];
+}
+
+void Reader::do_pixel_filter(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "filter name");
+    auto n = take_numbers(s, i, 2);
+    no_more_args(s, i);
+    std::string key = lower(name);
+    if (key == "catmullrom") key = "catmull-rom";
+    static const char* const kNames[] = {"box", "triangle", "catmull-rom", "gaussian",
+                                         "sinc"};
+    if (std::find(std::begin(kNames), std::end(kNames), key) == std::end(kNames))
+        fail(s, "unknown pixel filter \"" + name +
+                    "\" (box, triangle, catmull-rom, gaussian or sinc)");
+    for (double w : n)
+        if (!(w > 0.0 && w <= 16.0))
+            fail(s, "filter widths must lie in (0, 16] pixels, got " + fmt(n[0]) + " " +
+                        fmt(n[1]));
+    if (!option_allowed(s)) return;
+    m_scene.options.pixel_filter = {key, n[0], n[1]};
+}
+
+void Reader::do_exposure(const Statement& s) {
+    std::size_t i = 0;
+    auto n = take_numbers(s, i, 2);
+    no_more_args(s, i);
+    if (!(n[0] >= 0.0) || !std::isfinite(n[0]))
+        fail(s, "exposure gain must be 0 or more, got " + fmt(n[0]));
+    if (!(n[1] > 0.0) || !std::isfinite(n[1]))
+        fail(s, "exposure gamma must be positive, got " + fmt(n[1]));
+    if (!option_allowed(s)) return;
+    m_scene.options.exposure_gain = n[0];
+    m_scene.options.exposure_gamma = n[1];
+}
+
+void Reader::do_quantize(const Statement& s) {
+    std::size_t i = 0;
+    std::string type = take_string(s, i, "quantize type");
+    auto n = take_numbers(s, i, 4);
+    no_more_args(s, i);
+    const std::string key = lower(type);
+    if (key != "rgba" && key != "rgb" && key != "z")
+        fail(s, "unknown quantize type \"" + type + "\" (rgba, rgb or z)");
+    if (!(n[0] >= 0.0) || !(n[1] <= n[2]) || !(n[3] >= 0.0))
+        fail(s, "need one >= 0, min <= max and ditheramplitude >= 0, got " + fmt(n[0]) +
+                    " " + fmt(n[1]) + " " + fmt(n[2]) + " " + fmt(n[3]));
+    if (!option_allowed(s)) return;
+    // Depth is always written as float: Quantize "z" has nothing to change.
+    if (key == "z") return;
+    QuantizeSpec q;
+    q.one = n[0];
+    q.min = n[1];
+    q.max = n[2];
+    q.dither = n[3];
+    m_scene.options.quantize = q;
 }
 
 void Reader::do_display(const Statement& s) {

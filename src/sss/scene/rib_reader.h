@@ -145,6 +145,10 @@ private:
     void do_option(const Statement& s);
     void do_color_samples(const Statement& s);
     void do_declare(const Statement& s);
+    void do_depth_of_field(const Statement& s);
+    void do_pixel_filter(const Statement& s);
+    void do_exposure(const Statement& s);
+    void do_quantize(const Statement& s);
 
     // --- rib_attributes.cpp: attributes, shaders and lights -------------------
 
