@@ -383,7 +383,8 @@ void SceneRays::Impl::trace(RayQuery& q) const {
         q.values[k].assign(count * std::size_t(std::max(q.output_floats[k], 0)), 0.0f);
     const RayTracer* rt = tracer(q.kind);
     if (!rt || count == 0 || !allowed(q)) return;
-    if (q.depth <= 1) {
+    // A tree starts at a depth-1 query (or at a deeper one asked directly).
+    if (q.depth <= 1 || t_tree_budget == 0) {
         t_tree_rays = 0;
         t_tree_budget = std::max<uint64_t>(count, 1) * kTreeRaysPerRay;
     } else if (t_tree_rays + count > t_tree_budget) {
