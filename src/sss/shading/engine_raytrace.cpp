@@ -253,9 +253,12 @@ struct RayEnv {
     }
 };
 
-/// Environment lookups (colour, world directions) of map `file`.
+/// Environment lookups (colour, world directions) of map `file`, each
+/// filtered over the ray's footprint: a cone `spread` radians wide (the
+/// angle between neighbouring rays of the point).
 void environment_colors(Frame& f, const BoundOp& b, const std::string& file,
-                        const std::vector<glm::vec3>& dirs, std::vector<glm::vec3>& out) {
+                        const std::vector<glm::vec3>& dirs, std::vector<glm::vec3>& out,
+                        float spread) {
     out.assign(dirs.size(), glm::vec3(0.0f));
     if (file.empty() || dirs.empty()) return;
     TextureLibrary* lib = f.ctx->resources.impl().textures.get();
@@ -263,9 +266,22 @@ void environment_colors(Frame& f, const BoundOp& b, const std::string& file,
     std::vector<uint8_t> all(dirs.size(), 1);
     std::string error;
     TextureOptions o;
+    // Two directions across the footprint, perpendicular to each ray.
+    std::vector<glm::vec3> du(dirs.size()), dv(dirs.size());
+    for (std::size_t r = 0; r < dirs.size(); ++r) {
+        const glm::vec3 d = dirs[r];
+        const glm::vec3 a = std::abs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+        glm::vec3 t1 = glm::cross(d, a);
+        const float l = glm::length(t1);
+        t1 = l > 0.0f ? t1 / l : glm::vec3(0.0f);
+        du[r] = t1 * spread;
+        dv[r] = glm::cross(d, t1) * spread;
+    }
     const bool ok =
-        lib && lib->environment(file, 0, 3, o, dirs.size(), dirs.data(), nullptr, nullptr,
-                                all.data(), values.data(), &error);
+        lib && lib->environment(file, 0, 3, o, dirs.size(), dirs.data(),
+                                spread > 0.0f ? du.data() : nullptr,
+                                spread > 0.0f ? dv.data() : nullptr, all.data(),
+                                values.data(), &error);
     if (!ok)
         f.fail(b,
                "environment \"" + file + "\": " + (lib ? error : "no texture library"));
@@ -419,7 +435,7 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
     if (env && need_env) {
         std::vector<glm::vec3> dirs(q.rays.size());
         for (std::size_t r = 0; r < dirs.size(); ++r) dirs[r] = q.rays[r].direction;
-        environment_colors(f, b, o.envmap, dirs, envc);
+        environment_colors(f, b, o.envmap, dirs, envc, q.spread);
     }
 
     std::vector<uint8_t>& base = f.push_mask();
@@ -655,7 +671,7 @@ void op_hemisphere(Frame& f, const BoundOp& b) {
                     open_rays.push_back(r);
                     dirs.push_back(q.rays[r].direction);
                 }
-            environment_colors(f, b, o.envmap, dirs, envc);
+            environment_colors(f, b, o.envmap, dirs, envc, q.spread);
         }
         std::vector<glm::vec3> env_of(q.rays.size(), glm::vec3(0.0f));
         for (std::size_t j = 0; j < open_rays.size(); ++j) env_of[open_rays[j]] = envc[j];
