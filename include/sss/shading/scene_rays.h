@@ -55,6 +55,10 @@ struct RaySurface {
 /// Whether `program` traces rays that need the scene (trace, gather,
 /// indirectdiffuse, occlusion, or environment/shadow with "raytrace").
 bool program_traces_rays(const Program& program);
+/// Whether `program` traces rays whose hits matter beyond blocking light:
+/// trace, gather, indirectdiffuse, occlusion or environment("raytrace")
+/// (shadow("raytrace") and transmission() only need occluders).
+bool program_shades_hits(const Program& program);
 
 /// Secondary rays over a diced scene; thread-safe after construction.
 class SceneRays {

@@ -229,7 +229,7 @@ struct BakePlan {
 /// job each, in primitive order) and which only cast shadows; ValueError
 /// when nothing is baked.
 BakePlan plan_jobs(const Scene& scene, const SceneShaders& shaders,
-                   const BakeOptions& options, bool any_shadows, bool any_rays,
+                   const BakeOptions& options, bool any_shadows, bool any_hits,
                    BakeReport& report) {
     BakePlan plan;
     plan.job_of.assign(scene.primitives.size(), -1);
@@ -240,7 +240,7 @@ BakePlan plan_jobs(const Scene& scene, const SceneShaders& shaders,
         const Attributes& attr = *prim.attributes;
         plan.occluder[i] =
             (any_shadows && attr.visible_to("transmission")) ||
-            (any_rays && (attr.visible_to("diffuse") || attr.visible_to("specular")));
+            (any_hits && (attr.visible_to("diffuse") || attr.visible_to("specular")));
         if (program_uses(shader.program(), "bake3d")) {
             plan.job_of[i] = static_cast<int>(plan.jobs.size());
             plan.jobs.push_back(make_job(scene, i, shader, options));
@@ -281,13 +281,13 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
 /// Dices what is baked or casts shadows; the rest is not needed.
 std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& options,
                                      const SceneShaders& shaders, const BakePlan& plan,
-                                     double spacing, bool any_rays, Displacer& displacer) {
+                                     double spacing, bool any_hits, Displacer& displacer) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
     // Shadow-only surfaces need their shape, not micropolygon density.
     DiceControl occluder_control = control;
-    occluder_control.coarsening = any_rays ? kRayCoarsening : kOccluderCoarsening;
+    occluder_control.coarsening = any_hits ? kRayCoarsening : kOccluderCoarsening;
     std::vector<DiceRequest> requests;
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const int job = plan.job_of[i];
@@ -306,7 +306,7 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
             // Ray hits interpolate (u, v, s, t) over the triangles for hit
             // shaders that read them.
             request.control.grids =
-                any_rays && program_reads_parametric(shaders.surface_of[i]->program());
+                any_hits && program_reads_parametric(shaders.surface_of[i]->program());
         } else if (options.spacing_from_material && !options.material) {
             request.control.spacing = *plan.job_mfp[job] * options.mfp_fraction;
         }
@@ -629,16 +629,17 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
         any_shadows = any_shadows || shaders.uses(op);
     // Shaders that trace rays through the scene (ray-traced global
     // illumination bakes): the scene's surfaces, shaded where rays hit.
-    bool any_rays = false;
-    for (const auto& s : shaders.surfaces)
-        any_rays = any_rays || program_traces_rays(s->program());
-    for (const auto& s : shaders.lights)
-        any_rays = any_rays || program_traces_rays(s->program());
+    bool any_rays = false, any_hits = false;
+    for (const auto* list : {&shaders.surfaces, &shaders.lights})
+        for (const auto& s : *list) {
+            any_rays = any_rays || program_traces_rays(s->program());
+            any_hits = any_hits || program_shades_hits(s->program());
+        }
     for (const auto& light : shaders.lights)
         if (program_uses(light->program(), "shadow") ||
             program_uses(light->program(), "transmission"))
             ++report.shadow_lights;
-    BakePlan plan = plan_jobs(scene, shaders, options, any_shadows, any_rays, report);
+    BakePlan plan = plan_jobs(scene, shaders, options, any_shadows, any_hits, report);
     job_mean_free_paths(scene, options, spacing.material_mfp, plan);
 
     // Displacement shaders run while dicing, before the occluders are built:
@@ -647,7 +648,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     BakeServices dice_services(scene, nullptr, frame, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::vector<DicedSurface> diced =
-        dice_scene(scene, options, shaders, plan, spacing.spacing, any_rays, displacer);
+        dice_scene(scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
     for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
     report.dice_seconds = watch.seconds();
 

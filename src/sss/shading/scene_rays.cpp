@@ -80,6 +80,12 @@ bool contains_raytrace(const Program& program) {
 
 } // namespace
 
+bool program_shades_hits(const Program& program) {
+    for (const char* op : {"trace", "gather", "indirectdiffuse", "occlusion"})
+        if (program_uses(program, op)) return true;
+    return program_uses(program, "environment") && contains_raytrace(program);
+}
+
 bool program_traces_rays(const Program& program) {
     for (const char* op : {"trace", "gather", "indirectdiffuse", "occlusion"})
         if (program_uses(program, op)) return true;
