@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <random>
 #include <string>
@@ -61,6 +63,19 @@ std::string write_cube(const TempDir& dir, const std::string& name, int w, int h
                 out->write_image(OIIO::TypeDesc::FLOAT, px.data()) && out->close())
         << path;
     return path;
+}
+
+/// `file` made a tiled, MIP-mapped texture by maketx (TIFF for .tx, else
+/// OpenEXR), the cube tag restored with --attrib (maketx writes "Plain
+/// Texture" otherwise); "" when maketx is missing.
+std::string maketx_cube(const std::string& file, const std::string& out) {
+    if (!std::filesystem::exists("/usr/bin/maketx")) return "";
+    const std::string cmd =
+        "/usr/bin/maketx -d float --filter box --attrib textureformat "
+        "'CubeFace Environment' -o '" +
+        out + "' '" + file + "' >/dev/null 2>&1";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return out;
 }
 
 /// environment(map, dir) through the shading engine, point lookups.
@@ -179,9 +194,19 @@ TEST(RslEnvironmentCube, OrientationIsOpenExrs) {
     const std::vector<glm::vec3> dirs = {
         {1, 0.5f, 0}, {0.5f, 0, 1}, {0.5f, 1, 0.5f}, {0.5f, -1, 0.5f}, {-1, 0, 0.5f}};
     const glm::vec3 want[] = {{8, 4, 0}, {4, 8, 4}, {12, 4, 2}, {12, 12, 3}, {4, 8, 1}};
-    const std::vector<glm::vec3> got = lib_lookup(lib, file, dirs);
-    for (std::size_t i = 0; i < dirs.size(); ++i)
-        for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[i][k], want[i][k], 1e-4f) << i;
+    std::vector<std::string> maps = {file};
+    // The same map tiled and MIP-mapped by maketx: as TIFF (OIIO's
+    // coordinates from the image's edges) and as OpenEXR (from the border
+    // pixels' centres, "oiio:sampleborder").
+    for (const std::string out : {dir.file("ramp.tx"), dir.file("ramp_tx.exr")})
+        if (const std::string tx = maketx_cube(file, out); !tx.empty())
+            maps.push_back(tx);
+    for (const std::string& map : maps) {
+        const std::vector<glm::vec3> got = lib_lookup(lib, map, dirs);
+        for (std::size_t i = 0; i < dirs.size(); ++i)
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(got[i][k], want[i][k], 1e-4f) << map << " " << i;
+    }
 
     // Random directions against OpenEXR's faceAndPixelPosition.
     const Imath::Box2i dw(Imath::V2i(0, 0), Imath::V2i(n - 1, 6 * n - 1));
@@ -192,21 +217,24 @@ TEST(RslEnvironmentCube, OrientationIsOpenExrs) {
         std::sort(&m.x, &m.x + 3);
         if (m.z - m.y > 0.01f) rand.push_back(d);
     }
-    const std::vector<glm::vec3> got_rand = lib_lookup(lib, file, rand);
     int checked = 0;
-    for (std::size_t i = 0; i < rand.size(); ++i) {
-        Imf::CubeMapFace face;
-        Imath::V2f pif;
-        Imf::CubeMap::faceAndPixelPosition(Imath::V3f(rand[i].x, rand[i].y, rand[i].z),
-                                           dw, face, pif);
-        const Imath::V2f pos = Imf::CubeMap::pixelPosition(face, dw, pif);
-        const glm::vec3 w(pos.x, pos.y - float(int(face) * n), float(int(face)));
-        for (int k = 0; k < 3; ++k)
-            EXPECT_NEAR(got_rand[i][k], w[k], 2e-3f)
-                << "direction " << rand[i].x << "," << rand[i].y << "," << rand[i].z;
-        ++checked;
+    for (const std::string& map : maps) {
+        const std::vector<glm::vec3> got_rand = lib_lookup(lib, map, rand);
+        for (std::size_t i = 0; i < rand.size(); ++i) {
+            Imf::CubeMapFace face;
+            Imath::V2f pif;
+            Imf::CubeMap::faceAndPixelPosition(
+                Imath::V3f(rand[i].x, rand[i].y, rand[i].z), dw, face, pif);
+            const Imath::V2f pos = Imf::CubeMap::pixelPosition(face, dw, pif);
+            const glm::vec3 w(pos.x, pos.y - float(int(face) * n), float(int(face)));
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(got_rand[i][k], w[k], 2e-3f)
+                    << map << " direction " << rand[i].x << "," << rand[i].y << ","
+                    << rand[i].z;
+            ++checked;
+        }
     }
-    EXPECT_GT(checked, 350);
+    EXPECT_GT(checked, 350 * static_cast<int>(maps.size()));
 }
 
 /// A smooth environment: colour as a function of the unit direction.
@@ -308,13 +336,20 @@ TEST(RslEnvironmentCube, AWideFootprintAveragesWithinItsFace) {
     const std::string flat = write_cube(dir, "flat.exr", n, 6 * n, [](int f, int, int) {
         return glm::vec3(f == 0 ? 1.0f : (f == 1 ? 100.0f : 50.0f));
     });
-    for (float w : {0.0f, 0.1f, 0.25f, 0.5f, 1.0f, 4.0f, 100.0f}) {
-        const std::vector<glm::vec3> wide_du(dirs.size(), glm::vec3(0, w, 0));
-        const std::vector<glm::vec3> wide_dv(dirs.size(), glm::vec3(0, 0, w));
-        const std::vector<glm::vec3> f = lib_lookup(lib, flat, dirs, &wide_du, &wide_dv);
-        for (std::size_t i = 0; i < dirs.size(); ++i)
-            EXPECT_NEAR(f[i].x, 1.0f, 1e-4f) << "width " << w << " direction " << i;
-    }
+    std::vector<std::string> flats = {flat};
+    for (const std::string out : {dir.file("flat.tx"), dir.file("flat_tx.exr")})
+        if (const std::string tx = maketx_cube(flat, out); !tx.empty())
+            flats.push_back(tx);
+    for (const std::string& map : flats)
+        for (float w : {0.0f, 0.1f, 0.25f, 0.5f, 1.0f, 4.0f, 100.0f}) {
+            const std::vector<glm::vec3> wide_du(dirs.size(), glm::vec3(0, w, 0));
+            const std::vector<glm::vec3> wide_dv(dirs.size(), glm::vec3(0, 0, w));
+            const std::vector<glm::vec3> f =
+                lib_lookup(lib, map, dirs, &wide_du, &wide_dv);
+            for (std::size_t i = 0; i < dirs.size(); ++i)
+                EXPECT_NEAR(f[i].x, 1.0f, 1e-4f)
+                    << map << " width " << w << " direction " << i;
+        }
 
     // "blur" widens too (face units, both ways).
     TextureOptions blurred;

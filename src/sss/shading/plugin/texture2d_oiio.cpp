@@ -161,8 +161,11 @@ void decide_env_layout(TextureFile& tex, const std::string& file,
     if (tex.format != "CubeFace Environment") return; // lat-long (OIIO)
     const int n = spec.width;
     const bool one_by_six = n > 0 && spec.height == 6 * n;
+    // The display window: the whole image, or (as OIIO writes cube maps to
+    // OpenEXR) the first face.
     const bool whole = spec.x == spec.full_x && spec.y == spec.full_y &&
-                       spec.full_width == spec.width && spec.full_height == spec.height;
+                       spec.full_width == spec.width &&
+                       (spec.full_height == spec.height || spec.full_height == n);
     if (one_by_six && whole) {
         tex.env = EnvLayout::CubeOneBySix;
         return;
@@ -170,7 +173,9 @@ void decide_env_layout(TextureFile& tex, const std::string& file,
     tex.env = EnvLayout::Invalid;
     const std::string expected =
         "expected OpenEXR's layout: six N x N faces stacked top to bottom (+X, -X, +Y, "
-        "-Y, +Z, -Z), an N x 6N image whose data window is its display window";
+        "-Y, +Z, -Z), an N x 6N image whose display window is the whole image or the "
+        "first "
+        "face";
     std::string got = std::to_string(spec.width) + " x " + std::to_string(spec.height);
     if (one_by_six)
         got += " with data window " + std::to_string(spec.width) + " x " +
@@ -418,21 +423,26 @@ bool OiioTextures::cube_lookup(const TextureFile& tex, OIIO::TextureSystem::Pert
         return std::clamp(p, inset - 0.5f, n - 0.5f - inset);
     };
     const float x = place(a), y = static_cast<float>(f.face) * n + place(b);
-    // OIIO's texture coordinates: s = 0 and 1 are the image's edges, or,
-    // for files with "oiio:sampleborder" (OIIO reads OpenEXR's envmaps so),
-    // the centres of its border pixels.
+    // OIIO's texture coordinates are relative to the display window (the
+    // whole image, or the first face): s = 0 and 1 are its edges. For files
+    // with "oiio:sampleborder" (OIIO reads OpenEXR's envmaps so) the pixel
+    // centre coordinate is s (w - 1) wd / w (w the data window's width, wd
+    // the display window's; measured: OIIO 2.4).
+    const float wd = static_cast<float>(tex.width), hd = static_cast<float>(tex.height);
+    const float h = 6.0f * n;
     float s, t, ds, dt;
     if (tex.sample_border) {
-        const float w1 = std::max(n - 1.0f, 1.0f), h1 = 6.0f * n - 1.0f;
-        s = x / w1;
-        t = y / h1;
-        ds = shrink * pixels / w1;
-        dt = shrink * pixels / h1;
+        const float sx = n > 1.0f ? n / (wd * (n - 1.0f)) : 0.0f;
+        const float sy = h / (hd * (h - 1.0f));
+        s = x * sx;
+        t = y * sy;
+        ds = shrink * pixels * sx;
+        dt = shrink * pixels * sy;
     } else {
-        s = (x + 0.5f) / n;
-        t = (y + 0.5f) / (6.0f * n);
-        ds = shrink * pixels / n;
-        dt = shrink * pixels / (6.0f * n);
+        s = (x + 0.5f) / wd;
+        t = (y + 0.5f) / hd;
+        ds = shrink * pixels / wd;
+        dt = shrink * pixels / hd;
     }
     auto finite = [](float x) { return finite_or_zero(x); };
     return ts->texture(tex.handle, pt, opt, s, t, finite(da_du * ds), finite(db_du * dt),
