@@ -349,6 +349,15 @@ TEST(RslEnvironmentCube, AWideFootprintAveragesWithinItsFace) {
             for (std::size_t i = 0; i < dirs.size(); ++i)
                 EXPECT_NEAR(f[i].x, 1.0f, 1e-4f)
                     << map << " width " << w << " direction " << i;
+            // Blur, up to wider than the cube.
+            TextureOptions blur_only;
+            blur_only.sblur = blur_only.tblur = w;
+            std::vector<glm::vec3> b(dirs.size(), glm::vec3(-1.0f));
+            ASSERT_TRUE(lib.environment(map, 0, 3, blur_only, dirs.size(), dirs.data(),
+                                        nullptr, nullptr, nullptr, &b[0].x, nullptr));
+            for (std::size_t i = 0; i < dirs.size(); ++i)
+                EXPECT_NEAR(b[i].x, 1.0f, 1e-4f)
+                    << map << " blur " << w << " direction " << i;
         }
 
     // "blur" widens too (face units, both ways).

@@ -339,10 +339,10 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
     OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
     OIIO::TextureOpt opt = oiio_options(options, channel);
     if (cube) {
-        // Blur in face units both ways (t spans six faces), and the image's
-        // own edge pixels at the top and bottom, not black, when a coarse
-        // level's filter reaches past them.
-        // At most half a face (see cube_lookup).
+        // Blur in face units both ways (t spans the display window: six
+        // faces or one), at most half a face (see cube_lookup); and the
+        // image's own edge pixels at its top and bottom, not black, when a
+        // coarse level's filter reaches past them.
         opt.sblur = std::min(opt.sblur, 0.5f);
         opt.tblur = std::min(opt.tblur, 0.5f) / 6.0f;
         opt.swrap = opt.twrap = OIIO::TextureOpt::WrapClamp;
@@ -409,7 +409,9 @@ bool OiioTextures::cube_lookup(const TextureFile& tex, OIIO::TextureSystem::Pert
         std::max(std::hypot(da_du, db_du), std::hypot(da_dv, db_dv)) * pixels * scale;
     const float limit = 0.5f * n;
     const float shrink = std::isfinite(cone) && cone > limit ? limit / cone : 1.0f;
-    const float footprint = std::max(cone * shrink, std::max(opt.sblur, opt.tblur) * n);
+    const float blur =
+        std::max(opt.sblur, opt.tblur * static_cast<float>(tex.height) / n);
+    const float footprint = std::max(cone * shrink, blur * n);
     const float texel = std::isfinite(footprint) && footprint > 1.0f
                             ? std::exp2(std::ceil(std::log2(footprint)))
                             : 1.0f;
