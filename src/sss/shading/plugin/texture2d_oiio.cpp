@@ -147,8 +147,8 @@ struct TextureFile {
     int nchannels = 0;
     int width = 0, height = 0;
     std::string format; ///< OIIO "textureformat" ("" for plain images)
-    bool sample_border =
-        false; ///< "oiio:sampleborder": s = 0, 1 at the border pixels' centres
+    /// "oiio:sampleborder": s = 0 and 1 are the border pixels' centres.
+    bool sample_border = false;
     EnvLayout env = EnvLayout::LatLong;
     std::string env_error; ///< "file: reason" when env is Invalid
 };
@@ -174,8 +174,7 @@ void decide_env_layout(TextureFile& tex, const std::string& file,
     const std::string expected =
         "expected OpenEXR's layout: six N x N faces stacked top to bottom (+X, -X, +Y, "
         "-Y, +Z, -Z), an N x 6N image whose display window is the whole image or the "
-        "first "
-        "face";
+        "first face";
     std::string got = std::to_string(spec.width) + " x " + std::to_string(spec.height);
     if (one_by_six)
         got += " with data window " + std::to_string(spec.width) + " x " +
@@ -409,8 +408,8 @@ bool OiioTextures::cube_lookup(const TextureFile& tex, OIIO::TextureSystem::Pert
         std::max(std::hypot(da_du, db_du), std::hypot(da_dv, db_dv)) * pixels * scale;
     const float limit = 0.5f * n;
     const float shrink = std::isfinite(cone) && cone > limit ? limit / cone : 1.0f;
-    const float blur =
-        std::max(opt.sblur, opt.tblur * static_cast<float>(tex.height) / n);
+    // Blur in faces (environment() set tblur in data-window units, 6 faces).
+    const float blur = std::max(opt.sblur, 6.0f * opt.tblur);
     const float footprint = std::max(cone * shrink, blur * n);
     const float texel = std::isfinite(footprint) && footprint > 1.0f
                             ? std::exp2(std::ceil(std::log2(footprint)))
