@@ -68,7 +68,8 @@ bool set_bake3d_option(Bake3dOptions& options, std::string_view name,
 
 /// 2-D textures through one OpenImageIO TextureSystem (MIP-mapped .tx/.tex
 /// made by maketx, and any image OIIO reads, MIP-mapped on the fly),
-/// environment maps (lat-long, and cube maps OIIO supports) and 3-D textures
+/// environment maps (lat-long through OIIO, OpenEXR cube-face maps looked
+/// up face by face with OIIO's texture()) and 3-D textures
 /// (brick maps, point clouds), opened once per file. Thread-safe; one per
 /// job (owned by ShadingResources).
 class TextureLibrary {
@@ -113,8 +114,17 @@ public:
     /// in files). Plain images are read as lat-long maps. (RISpec 3.2's
     /// MakeLatLongEnvironment describes a z-up map with +x at s = 0: such a
     /// map gives at direction d what ours gives at (d.y, d.z, -d.x).) Cube
-    /// maps: whatever OIIO's environment() supports. A zero or non-finite
-    /// direction gives 0.
+    /// maps (OIIO "textureformat" = "CubeFace Environment": OpenEXR's envmap
+    /// = cube, or maketx with that attribute) are looked up by the plugin
+    /// itself in OpenEXR's layout (ImfEnvmap.h): six N x N faces stacked +X,
+    /// -X, +Y, -Y, +Z, -Z in an N x 6N image, each seen from the cube's
+    /// centre (+X: right +z, down -y; -X: right -z, down -y; +Y: right +x,
+    /// down -z; -Y: right +x, down +z; +Z: right -x, down -y; -Z: right +x,
+    /// down -y), pixel centres 0 and N-1 on the cube's edges; the footprint
+    /// is projected onto the face, capped at half a face and kept inside it
+    /// (docs/lighting.md). A cube-tagged file of another layout fails with
+    /// "file: cube-face environment map of W x H...; expected ...". A zero or
+    /// non-finite direction gives 0.
     bool environment(const std::string& file, int channel, int nchannels,
                      const TextureOptions& options, std::size_t count,
                      const glm::vec3* dir, const glm::vec3* ddir_du,

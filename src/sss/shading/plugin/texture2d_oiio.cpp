@@ -1,6 +1,10 @@
 // The 2-D texture plugin (texture2d_backend.h): texture(), environment()
 // and textureinfo() through one OpenImageIO TextureSystem per job. Built as
 // libsss_texture2d.so and loaded by TextureLibrary on first use.
+//
+// Environment maps: lat-long maps go to OIIO's environment(); cube-face maps
+// (which OIIO's environment() does not read) are looked up here, face by
+// face, with OIIO's texture() on the whole image (see CubeFace below).
 
 #include <algorithm>
 #include <cmath>
@@ -74,6 +78,63 @@ std::string file_error(const std::string& file, std::string reason) {
     return file + ": " + reason;
 }
 
+/// How environment() reads a file, decided once when it is opened.
+enum class EnvLayout {
+    LatLong,      ///< OIIO's environment() (lat-long; plain images are read as such)
+    CubeOneBySix, ///< OpenEXR's cube-face map, looked up by cube_lookup()
+    Invalid,      ///< tagged as a cube map with a layout we do not read
+};
+
+/// A direction's place on an OpenEXR cube-face map (ImfEnvmap.h): the face
+/// (0..5: +X, -X, +Y, -Y, +Z, -Z, stacked top to bottom in an N x 6N image)
+/// and the face coordinates a (image left to right) and b (top to bottom) in
+/// [-1, 1]. Each face is seen from the cube's centre, +y up on the four side
+/// faces; on +Y the image's bottom edge is towards -z, on -Y towards +z:
+///
+///     face  a (right)  b (down)
+///     +X      +z        -y
+///     -X      -z        -y
+///     +Y      +x        -z
+///     -Y      +x        +z
+///     +Z      -x        -y
+///     -Z      +x        -y
+///
+/// a = +-1 and b = +-1 are the centres of the face's border pixels (OpenEXR
+/// maps pixel centres 0..N-1 to the cube's edges; OIIO reads such files with
+/// "oiio:sampleborder" = 1).
+struct CubeFace {
+    int face = 0;
+    int major = 0; ///< axis of the face's normal
+    int a_axis = 0, b_axis = 0;
+    float a_sign = 1, b_sign = 1;
+};
+
+CubeFace cube_face(const glm::vec3& d) {
+    const glm::vec3 m(std::abs(d.x), std::abs(d.y), std::abs(d.z));
+    const int major = m.x >= m.y && m.x >= m.z ? 0 : (m.y >= m.z ? 1 : 2);
+    // {a axis, a sign, b axis, b sign} per face, from the table above.
+    static constexpr int kAxes[6][4] = {{2, 1, 1, -1}, {2, -1, 1, -1}, {0, 1, 2, -1},
+                                        {0, 1, 2, 1},  {0, -1, 1, -1}, {0, 1, 1, -1}};
+    CubeFace f;
+    f.major = major;
+    f.face = 2 * major + (d[major] < 0.0f ? 1 : 0);
+    f.a_axis = kAxes[f.face][0];
+    f.a_sign = static_cast<float>(kAxes[f.face][1]);
+    f.b_axis = kAxes[f.face][2];
+    f.b_sign = static_cast<float>(kAxes[f.face][3]);
+    return f;
+}
+
+/// The face coordinate sign * d[axis] / |d[major]| and its derivative along
+/// dd (the quotient rule), for a direction d on face f.
+void face_coordinate(const CubeFace& f, int axis, float sign, const glm::vec3& d,
+                     const glm::vec3& dd, float& x, float& dx) {
+    const float q = std::abs(d[f.major]);
+    const float dq = d[f.major] < 0.0f ? -dd[f.major] : dd[f.major];
+    x = sign * d[axis] / q;
+    dx = sign * (dd[axis] * q - d[axis] * dq) / (q * q);
+}
+
 } // namespace
 
 namespace {
@@ -86,7 +147,47 @@ struct TextureFile {
     int nchannels = 0;
     int width = 0, height = 0;
     std::string format; ///< OIIO "textureformat" ("" for plain images)
+    /// "oiio:sampleborder": s = 0 and 1 are the border pixels' centres.
+    bool sample_border = false;
+    EnvLayout env = EnvLayout::LatLong;
+    std::string env_error; ///< "file: reason" when env is Invalid
 };
+
+/// The environment layout of an opened file. OIIO reads OpenEXR's "envmap"
+/// attribute as "textureformat": "CubeFace Environment" for a cube map (and
+/// writes it back the same way); maketx tags its cube maps so too.
+void decide_env_layout(TextureFile& tex, const std::string& file,
+                       const OIIO::ImageSpec& spec) {
+    if (tex.format != "CubeFace Environment") return; // lat-long (OIIO)
+    const int n = spec.width;
+    const bool one_by_six = n > 0 && spec.height == 6 * n;
+    // The display window: the whole image, or (as OIIO writes cube maps to
+    // OpenEXR) the first face.
+    const bool whole = spec.x == spec.full_x && spec.y == spec.full_y &&
+                       spec.full_width == spec.width &&
+                       (spec.full_height == spec.height || spec.full_height == n);
+    if (one_by_six && whole) {
+        tex.env = EnvLayout::CubeOneBySix;
+        return;
+    }
+    tex.env = EnvLayout::Invalid;
+    const std::string expected =
+        "expected OpenEXR's layout: six N x N faces stacked top to bottom (+X, -X, +Y, "
+        "-Y, +Z, -Z), an N x 6N image whose display window is the whole image or the "
+        "first face";
+    std::string got = std::to_string(spec.width) + " x " + std::to_string(spec.height);
+    if (one_by_six)
+        got += " with data window " + std::to_string(spec.width) + " x " +
+               std::to_string(spec.height) + " at (" + std::to_string(spec.x) + ", " +
+               std::to_string(spec.y) + ") and display window " +
+               std::to_string(spec.full_width) + " x " +
+               std::to_string(spec.full_height) + " at (" + std::to_string(spec.full_x) +
+               ", " + std::to_string(spec.full_y) + ")";
+    else if (spec.width * 2 == spec.height * 3)
+        got += " (a 3 x 2 arrangement of faces: not read, its face order is not "
+               "documented)";
+    tex.env_error = file + ": cube-face environment map of " + got + "; " + expected;
+}
 
 class OiioTextures final : public Texture2dBackend {
 public:
@@ -108,6 +209,10 @@ public:
 
 private:
     std::shared_ptr<TextureFile> open(const std::string& file);
+    bool cube_lookup(const TextureFile& tex, OIIO::TextureSystem::Perthread* pt,
+                     OIIO::TextureOpt& options, const glm::vec3& dir,
+                     const glm::vec3& ddir_du, const glm::vec3& ddir_dv, int nchannels,
+                     float* out);
     OIIO::TextureSystem* ts = nullptr;
     std::mutex mutex; ///< guards `files` (not the files' contents)
     std::unordered_map<std::string, std::shared_ptr<TextureFile>> files;
@@ -168,6 +273,8 @@ std::shared_ptr<TextureFile> OiioTextures::open(const std::string& file) {
         entry->width = spec.full_width > 0 ? spec.full_width : spec.width;
         entry->height = spec.full_height > 0 ? spec.full_height : spec.height;
         entry->format = spec.get_string_attribute("textureformat");
+        entry->sample_border = spec.get_int_attribute("oiio:sampleborder") != 0;
+        decide_env_layout(*entry, file, spec);
     });
     return entry;
 }
@@ -223,8 +330,22 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
         if (error) *error = tex->error;
         return false;
     }
+    if (tex->env == EnvLayout::Invalid) {
+        if (error) *error = tex->env_error;
+        return false;
+    }
+    const bool cube = tex->env == EnvLayout::CubeOneBySix;
     OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
     OIIO::TextureOpt opt = oiio_options(options, channel);
+    if (cube) {
+        // Blur in face units both ways (t spans the display window: six
+        // faces or one), at most half a face (see cube_lookup); and the
+        // image's own edge pixels at its top and bottom, not black, when a
+        // coarse level's filter reaches past them.
+        opt.sblur = std::min(opt.sblur, 0.5f);
+        opt.tblur = std::min(opt.tblur, 0.5f) / 6.0f;
+        opt.swrap = opt.twrap = OIIO::TextureOpt::WrapClamp;
+    }
     const bool replicate = tex->nchannels == 1 && channel == 0 && nchannels == 3;
     const int read = replicate ? 1 : nchannels;
     const glm::vec3 zero(0.0f);
@@ -244,7 +365,10 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
             dx[a] = finite_or_zero(dx[a]);
             dy[a] = finite_or_zero(dy[a]);
         }
-        ok &= ts->environment(tex->handle, pt, opt, r, dx, dy, read, result);
+        if (cube)
+            ok &= cube_lookup(*tex, pt, opt, r, dx, dy, read, result);
+        else
+            ok &= ts->environment(tex->handle, pt, opt, r, dx, dy, read, result);
         if (replicate) result[1] = result[2] = result[0];
     }
     if (!ok) {
@@ -252,6 +376,78 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
         return false;
     }
     return true;
+}
+
+/// One lookup on an OpenEXR cube-face map (CubeFace): the direction's face
+/// and position on it, as texture coordinates of the whole N x 6N image, and
+/// the footprint of the direction's derivatives projected onto that face
+/// (so a wider ray cone blurs). The position is moved inwards, to at least
+/// half a texel of the coarsest MIP level the filter may use (1.5 texels for
+/// the bicubic filters) from the face's edges, so the filter does not reach
+/// into the faces above and below in the image, which are not the cube's
+/// neighbours: near an edge a wide footprint sees its own face only. The
+/// footprint (and blur) is capped at half a face, the widest a lookup can be
+/// without reading the MIP levels coarser than one texel per face.
+bool OiioTextures::cube_lookup(const TextureFile& tex, OIIO::TextureSystem::Perthread* pt,
+                               OIIO::TextureOpt& opt, const glm::vec3& dir,
+                               const glm::vec3& ddir_du, const glm::vec3& ddir_dv,
+                               int nchannels, float* out) {
+    const CubeFace f = cube_face(dir);
+    float a, b, da_du, db_du, da_dv, db_dv;
+    face_coordinate(f, f.a_axis, f.a_sign, dir, ddir_du, a, da_du);
+    face_coordinate(f, f.b_axis, f.b_sign, dir, ddir_du, b, db_du);
+    face_coordinate(f, f.a_axis, f.a_sign, dir, ddir_dv, a, da_dv);
+    face_coordinate(f, f.b_axis, f.b_sign, dir, ddir_dv, b, db_dv);
+    const float n = static_cast<float>(tex.width);
+    // Face coordinates -> face pixels: [-1, 1] spans the border pixels' centres.
+    const float pixels = 0.5f * (n - 1.0f);
+    // The footprint in face pixels, at most half a face: OIIO's coarser MIP
+    // levels (once a face is one texel, the 1 x 6 level) mix faces.
+    const float scale = std::max(opt.swidth, opt.twidth);
+    const float cone =
+        std::max(std::hypot(da_du, db_du), std::hypot(da_dv, db_dv)) * pixels * scale;
+    const float limit = 0.5f * n;
+    const float shrink = std::isfinite(cone) && cone > limit ? limit / cone : 1.0f;
+    // Blur in faces (environment() set tblur in data-window units, 6 faces).
+    const float blur = std::max(opt.sblur, 6.0f * opt.tblur);
+    const float footprint = std::max(cone * shrink, blur * n);
+    const float texel = std::isfinite(footprint) && footprint > 1.0f
+                            ? std::exp2(std::ceil(std::log2(footprint)))
+                            : 1.0f;
+    const bool bicubic = opt.interpmode == OIIO::TextureOpt::InterpBicubic ||
+                         opt.interpmode == OIIO::TextureOpt::InterpSmartBicubic;
+    const float inset = std::min((bicubic ? 1.5f : 0.5f) * texel, 0.5f * n);
+    // Pixel-centre coordinates in the face (0 and n - 1: the border pixels'
+    // centres), moved inwards.
+    auto place = [&](float x) {
+        const float p = (std::clamp(x, -1.0f, 1.0f) + 1.0f) * pixels;
+        return std::clamp(p, inset - 0.5f, n - 0.5f - inset);
+    };
+    const float x = place(a), y = static_cast<float>(f.face) * n + place(b);
+    // OIIO's texture coordinates are relative to the display window (the
+    // whole image, or the first face): s = 0 and 1 are its edges. For files
+    // with "oiio:sampleborder" (OIIO reads OpenEXR's envmaps so) the pixel
+    // centre coordinate is s (w - 1) wd / w (w the data window's width, wd
+    // the display window's; measured: OIIO 2.4).
+    const float wd = static_cast<float>(tex.width), hd = static_cast<float>(tex.height);
+    const float h = 6.0f * n;
+    float s, t, ds, dt;
+    if (tex.sample_border) {
+        const float sx = n > 1.0f ? n / (wd * (n - 1.0f)) : 0.0f;
+        const float sy = h / (hd * (h - 1.0f));
+        s = x * sx;
+        t = y * sy;
+        ds = shrink * pixels * sx;
+        dt = shrink * pixels * sy;
+    } else {
+        s = (x + 0.5f) / wd;
+        t = (y + 0.5f) / hd;
+        ds = shrink * pixels / wd;
+        dt = shrink * pixels / hd;
+    }
+    auto finite = [](float x) { return finite_or_zero(x); };
+    return ts->texture(tex.handle, pt, opt, s, t, finite(da_du * ds), finite(db_du * dt),
+                       finite(da_dv * ds), finite(db_dv * dt), nchannels, out);
 }
 
 bool OiioTextures::texture_info(const std::string& file, const std::string& key,
