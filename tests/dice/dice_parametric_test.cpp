@@ -765,7 +765,9 @@ TEST(DiceParametricGrids, DisplacementMovesVerticesAndCentresWithoutCracks) {
             g.P[k] += 0.1f * g.N[k];
             ++points;
         }
-        if (!g.grid) EXPECT_EQ(g.nv, 1);
+        if (!g.grid) {
+            EXPECT_EQ(g.nv, 1);
+        }
     };
     auto close = make_prim(PrimitiveKind::Sphere, {1, -1, 1, 360});
     close.object_to_world = glm::translate(sss::Matrix4(1.0), glm::dvec3(0.3, 0, 1.3));

@@ -156,8 +156,9 @@ surface s() {
                 EXPECT_EQ(op.args.size(), 5u);
                 EXPECT_EQ(p.symbols[op.args[1]].strings, std::vector<std::string>{"hsv"});
             }
-            if (d.type.type == ShadingType::Matrix)
+            if (d.type.type == ShadingType::Matrix) {
                 EXPECT_TRUE(op.args.size() == 18u || op.args.size() == 3u);
+            }
         }
         if (op.name == "cast") {
             ++casts;
@@ -752,7 +753,9 @@ TEST(RslCompile, GatherInLightAndDisplacementShadersAndItsVaryingOutputs) {
             if (op.name == "gather") {
                 found = true;
                 for (std::size_t k = 0; k < op.args.size(); ++k)
-                    if ((op.writes >> k) & 1u) EXPECT_TRUE(p.symbols[op.args[k]].varying);
+                    if ((op.writes >> k) & 1u) {
+                        EXPECT_TRUE(p.symbols[op.args[k]].varying);
+                    }
             }
         EXPECT_TRUE(found);
     }

@@ -198,7 +198,7 @@ TEST(RslEnvironmentCube, OrientationIsOpenExrs) {
     // The same map tiled and MIP-mapped by maketx: as TIFF (OIIO's
     // coordinates from the image's edges) and as OpenEXR (from the border
     // pixels' centres, "oiio:sampleborder").
-    for (const std::string out : {dir.file("ramp.tx"), dir.file("ramp_tx.exr")})
+    for (const std::string& out : {dir.file("ramp.tx"), dir.file("ramp_tx.exr")})
         if (const std::string tx = maketx_cube(file, out); !tx.empty())
             maps.push_back(tx);
     for (const std::string& map : maps) {
@@ -337,7 +337,7 @@ TEST(RslEnvironmentCube, AWideFootprintAveragesWithinItsFace) {
         return glm::vec3(f == 0 ? 1.0f : (f == 1 ? 100.0f : 50.0f));
     });
     std::vector<std::string> flats = {flat};
-    for (const std::string out : {dir.file("flat.tx"), dir.file("flat_tx.exr")})
+    for (const std::string& out : {dir.file("flat.tx"), dir.file("flat_tx.exr")})
         if (const std::string tx = maketx_cube(flat, out); !tx.empty())
             flats.push_back(tx);
     for (const std::string& map : flats)
