@@ -251,3 +251,26 @@ TEST(BakeGi, EnvlightAndTheEnvdomeDomeAgree) {
     EXPECT_NEAR(sum_e / sum_d, 1.0, 0.03);
     EXPECT_LT(std::sqrt(err2 / ref2), 0.08);
 }
+
+TEST(BakeGi, TraceBiasMovesTheRayOrigins) {
+    // Attribute "trace" "bias" 3.5 on the plane: its rays start above the
+    // sphere (which spans heights 1 to 3), so nothing occludes them.
+    sss::test::TempDir dir;
+    sss::test::write_text(dir.file("bake_gi_plane.sl"), kPlaneShader);
+    const std::string cloud = dir.file("plane.ptc");
+    const sss::Scene scene = scene_in(
+        dir, "",
+        "AttributeBegin\nAttribute \"trace\" \"bias\" [3.5]\n"
+        "Surface \"bake_gi_plane\" \"string filename\" [\"" +
+            cloud +
+            "\"]\nPolygon \"P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]\nAttributeEnd\n"
+            "AttributeBegin\nTranslate 0 0 2\nSurface \"constant\"\nSphere 1 -1 1 360\n"
+            "AttributeEnd\n");
+    sss::BakeOptions opt;
+    opt.spacing = 0.2;
+    const auto files = sss::bake_clouds(scene, opt, nullptr);
+    const sss::Channel* occ = files.at(0).second.find_channel("occ");
+    ASSERT_TRUE(occ);
+    ASSERT_GT(occ->data.size(), 50u);
+    for (float v : occ->data) EXPECT_EQ(v, 0.0f);
+}

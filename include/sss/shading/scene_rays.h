@@ -33,6 +33,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -59,6 +60,10 @@ bool program_traces_rays(const Program& program);
 /// trace, gather, indirectdiffuse, occlusion or environment("raytrace")
 /// (shadow("raytrace") and transmission() only need occluders).
 bool program_shades_hits(const Program& program);
+
+/// `Attribute "trace" "bias"` of `prim` (world units: how far rays leaving
+/// it start off its surface) when given, finite and >= 0.
+std::optional<float> trace_bias(const Primitive& prim);
 
 /// Secondary rays over a diced scene; thread-safe after construction.
 class SceneRays {

@@ -528,8 +528,8 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         batch.dicing_area.resize(n);
         batch.radius.resize(n);
         batch.seed = first_point[ch.job] + ch.begin;
-        batch.ray_offset =
-            static_cast<float>(shadow_ray_offset(d, ch.begin, ch.end, extent));
+        batch.ray_offset = trace_bias(prim).value_or(
+            static_cast<float>(shadow_ray_offset(d, ch.begin, ch.end, extent)));
         for (std::size_t k = 0; k < n; ++k) {
             const std::size_t i = ch.begin + k;
             const glm::dvec3 pc =

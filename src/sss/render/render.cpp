@@ -504,7 +504,8 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         // first hit's key fixes them for the batch (tiles are split into
         // batches the same way for any thread count).
         batch.seed = hits[begin].seed;
-        batch.ray_offset = static_cast<float>(1e-5 * job.extent);
+        batch.ray_offset =
+            trace_bias(prim).value_or(static_cast<float>(1e-5 * job.extent));
         double lift = 0.0;
         for (std::size_t k = begin; k < end; ++k) lift = std::max(lift, hits[k].lift);
         // Rays into the object start above its flat triangles: twice the

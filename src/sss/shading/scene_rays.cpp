@@ -80,6 +80,15 @@ bool contains_raytrace(const Program& program) {
 
 } // namespace
 
+std::optional<float> trace_bias(const Primitive& prim) {
+    const Attributes& attr = attributes_of(prim);
+    const auto trace = attr.groups.find("trace");
+    if (trace == attr.groups.end()) return std::nullopt;
+    const double b = trace->second.get_float("bias", -1.0);
+    if (!(b >= 0.0) || !std::isfinite(b)) return std::nullopt;
+    return static_cast<float>(b);
+}
+
 bool program_shades_hits(const Program& program) {
     for (const char* op : {"trace", "gather", "indirectdiffuse", "occlusion"})
         if (program_uses(program, op)) return true;
@@ -543,11 +552,7 @@ SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
             im.transmission_shader_mode[i] =
                 p.get_string("transmissionhitmode", "") == "shader";
         }
-        const auto trace = attr.groups.find("trace");
-        if (trace != attr.groups.end()) {
-            const double b = trace->second.get_float("bias", -1.0);
-            if (b >= 0.0 && std::isfinite(b)) im.bias[i] = static_cast<float>(b);
-        }
+        if (const std::optional<float> b = trace_bias(prim)) im.bias[i] = *b;
         const RaySurface& s = im.surfaces[i];
         if (!s.diced || s.diced->triangles.empty()) continue;
         for (int k = 0; k < kKinds; ++k)
