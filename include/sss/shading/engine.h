@@ -238,6 +238,10 @@ struct RayQuery {
     /// The primitive whose shader traces the rays (its `Attribute "trace"`
     /// depth limits apply); the engine sets it from ShadingBatch::primitive.
     const Primitive* origin = nullptr;
+    /// Whether the caller reads `length`: a query with no outputs that does
+    /// not may be answered with Embree's any-hit test (streams), its hits'
+    /// lengths left at infinity.
+    bool need_length = true;
     /// Hits on `origin` closer than this are ignored (ShadingBatch::self_distance).
     float self_distance = 0.0f;
     /// Seed of the hit shaders' random numbers (ray r's batch point draws

@@ -22,7 +22,8 @@
 ///    "samplecone" / "blur" (full apex angle) average rays in a cone.
 ///  - occlusion(P, N, samples) / indirectdiffuse(P, N, samples): Diffuse
 ///    rays, cosine distributed in "coneangle" (default PI/2) about N,
-///    adaptive sampling on request ("adaptive" 1), environment maps for the open directions.
+///    adaptive sampling on request ("adaptive" 1), environment maps for the open
+///    directions.
 ///  - shadow("raytrace", P) and transmission(Psrc, Pdst): transmit() with
 ///    Transmission rays (colour transmittance).
 
@@ -270,18 +271,18 @@ void environment_colors(Frame& f, const BoundOp& b, const std::string& file,
     std::vector<glm::vec3> du(dirs.size()), dv(dirs.size());
     for (std::size_t r = 0; r < dirs.size(); ++r) {
         const glm::vec3 d = dirs[r];
-        const glm::vec3 a = std::abs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+        const glm::vec3 a =
+            std::abs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
         glm::vec3 t1 = glm::cross(d, a);
         const float l = glm::length(t1);
         t1 = l > 0.0f ? t1 / l : glm::vec3(0.0f);
         du[r] = t1 * spread;
         dv[r] = glm::cross(d, t1) * spread;
     }
-    const bool ok =
-        lib && lib->environment(file, 0, 3, o, dirs.size(), dirs.data(),
-                                spread > 0.0f ? du.data() : nullptr,
-                                spread > 0.0f ? dv.data() : nullptr, all.data(),
-                                values.data(), &error);
+    const bool ok = lib && lib->environment(file, 0, 3, o, dirs.size(), dirs.data(),
+                                            spread > 0.0f ? du.data() : nullptr,
+                                            spread > 0.0f ? dv.data() : nullptr,
+                                            all.data(), values.data(), &error);
     if (!ok)
         f.fail(b,
                "environment \"" + file + "\": " + (lib ? error : "no texture library"));
@@ -638,12 +639,14 @@ void op_hemisphere(Frame& f, const BoundOp& b) {
         q.label = o.label;
         q.depth = re.depth();
         q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
-    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
+        q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
         q.seed = splitmix64(re.query_seed() + pass);
         q.spread = ray_spread(o.coneangle, max_samples);
         if (Indirect) {
             q.outputs = {"Ci"};
             q.output_floats = {3};
+        } else {
+            q.need_length = false; // occlusion: hit or not
         }
         std::vector<std::size_t> owner;
         f.each(true, [&](std::size_t i) {

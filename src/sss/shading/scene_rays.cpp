@@ -54,9 +54,12 @@ thread_local uint64_t t_tree_budget = 0;
 constexpr int kKinds = 3;
 int kind_slot(RayKind kind) {
     switch (kind) {
-    case RayKind::Diffuse: return 0;
-    case RayKind::Transmission: return 2;
-    default: return 1; // specular (and camera rays asked of the scene)
+    case RayKind::Diffuse:
+        return 0;
+    case RayKind::Transmission:
+        return 2;
+    default:
+        return 1; // specular (and camera rays asked of the scene)
     }
 }
 const char* const kVisibility[kKinds] = {"diffuse", "specular", "transmission"};
@@ -133,6 +136,10 @@ struct SceneRays::Impl {
     std::vector<std::unique_ptr<RayTracer>> tracers;
     std::array<int, kKinds> tracer_of{-1, -1, -1};
     std::vector<std::vector<uint32_t>> mesh_prim; ///< per tracer: mesh -> primitive
+    /// Per tracer: which primitives it holds, and whether a ray may have to
+    /// pass one of them (one-sided or fully transparent).
+    std::vector<std::vector<char>> in_tracer;
+    std::vector<char> skippable;
     std::size_t triangle_count = 0;
     float extent = 0.0f;
 
@@ -141,7 +148,7 @@ struct SceneRays::Impl {
     std::vector<char> parametric;
     std::vector<char> diffuse_primitive_mode, specular_primitive_mode;
     std::vector<char> transmission_shader_mode;
-    std::vector<float> bias; ///< Attribute "trace" "bias", or < 0
+    std::vector<float> bias;         ///< Attribute "trace" "bias", or < 0
     bool transmission_binary = true; ///< opaque occluders, "primitive" mode
 
     glm::dmat4 to_camera{1.0};
@@ -162,7 +169,8 @@ struct SceneRays::Impl {
         auto& list = contexts.local();
         const auto d = static_cast<std::size_t>(std::max(depth, 0));
         if (list.size() <= d) list.resize(d + 1);
-        if (!list[d]) list[d] = std::make_unique<ShadingContext>(resources, *hit_services);
+        if (!list[d])
+            list[d] = std::make_unique<ShadingContext>(resources, *hit_services);
         return *list[d];
     }
 
@@ -186,8 +194,8 @@ struct SceneRays::Impl {
             const Attributes& a = attributes_of(*q.origin);
             const auto it = a.groups.find("trace");
             if (it != a.groups.end())
-                limit = it->second.get_int(diffuse ? "maxdiffusedepth" : "maxspeculardepth",
-                                           limit);
+                limit = it->second.get_int(
+                    diffuse ? "maxdiffusedepth" : "maxspeculardepth", limit);
         }
         return q.depth <= limit;
     }
@@ -287,7 +295,8 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
         for (auto* v : {&batch.u, &batch.v, &batch.s, &batch.t}) v->resize(n);
     batch.dicing_area.resize(n);
     batch.radius.resize(n);
-    batch.seed = detail::splitmix64(q.seed ^ (0x5851F42D4C957F2Dull * (hits[begin].ray + 1)));
+    batch.seed =
+        detail::splitmix64(q.seed ^ (0x5851F42D4C957F2Dull * (hits[begin].ray + 1)));
     batch.ray_offset = bias[prim_index] >= 0.0f ? bias[prim_index] : 1e-5f * extent;
     batch.ray = RayContext{q.depth, q.kind, q.label};
     const glm::dmat3 linear(to_camera);
@@ -323,8 +332,8 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
         batch.Ng[k] = glm::vec3(glm::normalize(normal_to_camera * ng));
         batch.dPdu[k] = glm::vec3(linear * (t1 * w));
         batch.dPdv[k] = glm::vec3(linear * (t2 * w));
-        batch.Cs[k] = colors && !colors->empty() ? (*colors)[h.triangle]
-                                                 : glm::vec3(attr.color);
+        batch.Cs[k] =
+            colors && !colors->empty() ? (*colors)[h.triangle] : glm::vec3(attr.color);
         batch.Os[k] = glm::vec3(glm::clamp(attr.opacity, 0.0, 1.0));
         batch.dicing_area[k] = static_cast<float>(w * w);
         batch.radius[k] = static_cast<float>(0.5 * w);
@@ -374,8 +383,8 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
     // Ci, Oi (and, in primitive mode, Cs and Os) from the batch.
     for (std::size_t o = 0; o < q.outputs.size(); ++o) {
         const std::string& name = q.outputs[o];
-        const std::vector<glm::vec3>* src = name == "Ci"   ? &batch.Ci
-                                            : name == "Oi" ? &batch.Oi
+        const std::vector<glm::vec3>* src = name == "Ci"                     ? &batch.Ci
+                                            : name == "Oi"                   ? &batch.Oi
                                             : primitive_mode && name == "Cs" ? &batch.Cs
                                             : primitive_mode && name == "Os" ? &batch.Os
                                                                              : nullptr;
@@ -412,6 +421,27 @@ void SceneRays::Impl::trace(RayQuery& q) const {
     }
     t_tree_rays += count;
     const std::vector<uint32_t>& mesh_to_prim = meshes(q.kind);
+    if (q.outputs.empty() && !q.need_length) {
+        // Hit or not: Embree's any-hit test over the whole stream, then the
+        // exact search only for blocked rays that might have to pass a
+        // surface (one-sided, transparent, or the shooter's own triangles).
+        std::vector<uint8_t> blocked(count);
+        rt->occluded(q.rays.data(), count, blocked.data());
+        rays.fetch_add(count, std::memory_order_relaxed);
+        const int t = tracer_of[static_cast<std::size_t>(kind_slot(q.kind))];
+        const bool own =
+            q.self_distance > 0.0f && q.origin && q.origin >= scene.primitives.data() &&
+            q.origin < scene.primitives.data() + scene.primitives.size() &&
+            in_tracer[static_cast<std::size_t>(t)]
+                     [static_cast<std::size_t>(q.origin - scene.primitives.data())];
+        const bool exact = own || skippable[static_cast<std::size_t>(t)];
+        for (std::size_t r = 0; r < count; ++r) {
+            if (!blocked[r]) continue;
+            Hit h;
+            q.hit[r] = exact ? find_hit(*rt, mesh_to_prim, q.rays[r], q, h) : 1;
+        }
+        return;
+    }
     std::vector<Hit> hits;
     hits.reserve(count);
     for (std::size_t r = 0; r < count; ++r) {
@@ -517,8 +547,8 @@ void SceneRays::Impl::transmit(const ShadowRay* in, std::size_t count, glm::vec3
 SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
                      const ShadingResources& resources, ShadingServices& outer,
                      std::vector<RaySurface> surfaces)
-    : m_impl(std::make_unique<Impl>(scene, shaders, resources, outer,
-                                    std::move(surfaces))) {
+    : m_impl(
+          std::make_unique<Impl>(scene, shaders, resources, outer, std::move(surfaces))) {
     Impl& im = *m_impl;
     const std::size_t count = scene.primitives.size();
     im.surfaces.resize(count);
@@ -546,7 +576,8 @@ SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
         const auto shade = attr.groups.find("shade");
         if (shade != attr.groups.end()) {
             const ParamList& p = shade->second;
-            im.diffuse_primitive_mode[i] = p.get_string("diffusehitmode", "") == "primitive";
+            im.diffuse_primitive_mode[i] =
+                p.get_string("diffusehitmode", "") == "primitive";
             im.specular_primitive_mode[i] =
                 p.get_string("specularhitmode", "") == "primitive";
             im.transmission_shader_mode[i] =
@@ -576,7 +607,13 @@ SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
         }
         auto rt = std::make_unique<RayTracer>();
         std::vector<uint32_t> mesh_to_prim;
+        std::vector<char> in(count, 0);
+        char skip = 0;
         for (uint32_t i : m) {
+            const Attributes& attr = attributes_of(scene.primitives[i]);
+            in[i] = 1;
+            skip = skip || attr.sides == 1 ||
+                   glm::clamp(attr.opacity, 0.0, 1.0) == glm::dvec3(0.0);
             const DicedSurface& d = *im.surfaces[i].diced;
             rt->add_mesh(d.vertices, d.triangles);
             mesh_to_prim.push_back(i);
@@ -587,6 +624,8 @@ SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
         im.tracer_of[std::size_t(k)] = static_cast<int>(im.tracers.size());
         im.tracers.push_back(std::move(rt));
         im.mesh_prim.push_back(std::move(mesh_to_prim));
+        im.in_tracer.push_back(std::move(in));
+        im.skippable.push_back(skip);
     }
 }
 
