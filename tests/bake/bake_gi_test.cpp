@@ -274,3 +274,49 @@ TEST(BakeGi, TraceBiasMovesTheRayOrigins) {
     ASSERT_GT(occ->data.size(), 50u);
     for (float v : occ->data) EXPECT_EQ(v, 0.0f);
 }
+
+TEST(BakeGi, WhiteFurnaceBakesOneEverywhere) {
+    // White surfaces (Ci = indirectdiffuse) under a white environment: the
+    // light is 1 everywhere, at every bounce (a ray cut off by the depth
+    // limit sees the white environment, which is what the surfaces it would
+    // have hit send too). Any energy lost or gained in the hit shading shows.
+    sss::test::TempDir dir;
+    const std::string white = dir.file("white.exr");
+    const std::string cmd = "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" +
+                            white + "' >/dev/null 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << "oiiotool is needed (openimageio-tools)";
+    sss::test::write_text(dir.file("white_gi.sl"), R"(
+surface white_gi(string filename = ""; string envmap = ""; float up = 0) {
+    normal Nn = normalize(N);
+    if (up != 0) {
+        Nn = normalize(ntransform("world", Nn));
+        if (zcomp(Nn) < 0) Nn = -Nn;
+        Nn = ntransform("world", "current", Nn);
+    }
+    Ci = indirectdiffuse(P, Nn, 16, "environmentmap", envmap);
+    float depth = 0;
+    rayinfo("depth", depth);
+    if (depth == 0) bake3d(filename, "L", P, Nn, "L", Ci);
+}
+)");
+    const std::string cloud = dir.file("white.ptc");
+    const std::string args = " \"string filename\" [\"" + cloud +
+                             "\"] \"string envmap\" [\"" + white + "\"]";
+    const sss::Scene scene =
+        scene_in(dir, "",
+                 "Attribute \"trace\" \"maxdiffusedepth\" [2]\n"
+                 "AttributeBegin\nSurface \"white_gi\"" + args +
+                     " \"float up\" [1]\nPolygon \"P\" [-2 -2 0  2 -2 0  2 2 0  -2 2 0]\n"
+                     "AttributeEnd\nAttributeBegin\nTranslate 0 0 1.2\nSurface \"white_gi\"" +
+                     args + "\nSphere 1 -1 1 360\nAttributeEnd\n");
+    sss::BakeOptions opt;
+    opt.spacing = 0.25;
+    const auto files = sss::bake_clouds(scene, opt, nullptr);
+    ASSERT_EQ(files.size(), 1u);
+    const sss::Channel* L = files[0].second.find_channel("L");
+    ASSERT_TRUE(L);
+    ASSERT_GT(L->data.size(), 300u);
+    double worst = 0.0;
+    for (float v : L->data) worst = std::max(worst, std::abs(double(v) - 1.0));
+    EXPECT_LT(worst, 1e-3);
+}
