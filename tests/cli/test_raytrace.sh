@@ -65,8 +65,9 @@ RIB
 bake_scene missing.rib nothere.exr
 run "$bin/ptbake" -spacing 0.2 missing.rib
 if expect_rc 1 "ptbake, missing environment map"; then
-    [[ "$err" == "ptbake ERROR: "*"nothere.exr"* ]] || fail "missing map: $err"
-    [[ "$(wc -l <<<"$err")" == 1 ]] || fail "missing map: more than one line: $err"
+    # One line that names the file (a sanitizer build may add its report after it).
+    first="$(head -n 1 <<<"$err")"
+    [[ "$first" == "ptbake ERROR: "*"nothere.exr"*"no such file"* ]] || fail "missing map: $err"
 fi
 [[ ! -e out.ptc ]] || fail "a cloud was written despite the missing map"
 echo "not an image" > corrupt.exr
