@@ -319,6 +319,8 @@ struct Scene {
     /// then each ReadArchive / DelayedReadArchive file and OBJ mesh once, in
     /// first-read order. The inputs of `-newer 1`.
     std::vector<std::string> sources;
+    /// WorldBegin blocks read (a file with none is an archive, not a scene).
+    int worlds = 0;
 };
 
 } // namespace sss

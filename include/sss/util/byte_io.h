@@ -14,12 +14,20 @@
 
 namespace sss::detail {
 
+/// Throws IoError unless `path` names a regular file (after symbolic
+/// links): an input that is a directory, a FIFO, a socket or a device is
+/// refused with what it is, before anything opens it (opening a FIFO would
+/// block until a writer came, a device could be endless). `context` follows
+/// "cannot open" in the message (e.g. " (ReadArchive at a.rib:3)").
+void require_regular_file(const std::string& path, const std::string& context = "");
+
 /// Reads a file byte by byte through a buffer. A gzip stream (magic 1f 8b) is
 /// inflated on the fly. Short reads happen only at the end of the data; a
 /// corrupt gzip stream throws FormatError, an OS read error IoError.
 class ByteSource {
 public:
-    /// Opens path; IoError if it cannot be opened or is a directory.
+    /// Opens path; IoError if it cannot be opened or is not a regular file
+    /// (require_regular_file).
     explicit ByteSource(const std::string& path);
     ~ByteSource();
     ByteSource(const ByteSource&) = delete;

@@ -32,6 +32,7 @@
 
 #include "brickmap_format.h"
 #include "sss/brick/brickmap.h"
+#include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -380,6 +381,7 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes)
     Impl& m = *m_impl;
     m.path = path;
     m.budget = cache_bytes;
+    detail::require_regular_file(path); // before open(): a FIFO would block it
     m.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (m.fd < 0)
         throw IoError(path, std::string("cannot open: ") + std::strerror(errno));

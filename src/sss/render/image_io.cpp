@@ -23,6 +23,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "sss/util/atomic_output.h"
+#include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
 
@@ -623,6 +624,7 @@ namespace {
 std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    detail::require_regular_file(path); // a FIFO would block OpenImageIO
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     auto in = OIIO::ImageInput::open(path, &config);

@@ -1154,6 +1154,10 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
 
     Renderer job;
+    if (scene.primitives.empty())
+        report.warnings.push_back((scene.path.empty() ? std::string("the scene")
+                                                      : scene.path) +
+                                  ": no geometry in the world: the image is empty");
     setup_camera(job, scene, options);
     const bool any_shadows = resolve_shading(job, scene, frame, report);
     bool separate_shadows = false;

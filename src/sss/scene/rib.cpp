@@ -221,6 +221,11 @@ void Reader::warn_once(const std::string& key, const Statement& s,
 
 Scene read_rib(const std::string& path, const RibReadOptions& options) {
     Scene scene = parse_rib(rib::slurp(path, ""), path, options);
+    // Geometry outside a world block is already an error: a file without
+    // one is an archive (or not RIB at all), never a scene to render or bake.
+    if (scene.worlds == 0)
+        throw ValueError(path + ": no WorldBegin: not a scene (an archive is read with "
+                                "ReadArchive from a scene's world block)");
     scene.sources.insert(scene.sources.begin(), path);
     return scene;
 }

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "obj_import.h"
+#include "sss/util/byte_io.h"
 #include "rib_args.h"
 
 namespace sss::rib {
@@ -65,6 +66,7 @@ void Reader::run_file(const Statement& from, const std::string& path) {
 }
 
 std::string slurp(const std::string& path, const std::string& context) {
+    detail::require_regular_file(path, context);
     std::ifstream in(path, std::ios::binary);
     if (!in)
         throw IoError(path,

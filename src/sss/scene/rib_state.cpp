@@ -95,6 +95,7 @@ void Reader::do_world_begin(const Statement& s) {
     if (m_object) fail(s, "WorldBegin inside ObjectBegin");
     push(s, Block::World);
     m_in_world = true;
+    ++m_scene.worlds;
     m_world_to_camera = m_ctm;
     Camera& cam = m_scene.options.camera;
     cam.world_to_camera = m_ctm;

@@ -31,7 +31,10 @@
 #include <sstream>
 #include <unordered_map>
 
+#include <sys/stat.h>
+
 #include "sss/shading/preprocess.h"
+#include "sss/util/byte_io.h"
 
 namespace sss {
 
@@ -1030,6 +1033,9 @@ private:
                             (searched.empty() ? std::string(" (no folders to search)")
                                               : " (searched " + searched + ")"));
         }
+        struct stat st {};
+        if (::stat(found.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+            fail(where, "include file \"" + found + "\" is not a regular file");
         std::ifstream in(found, std::ios::binary);
         std::ostringstream data;
         data << in.rdbuf();
@@ -1311,6 +1317,7 @@ private:
 };
 
 std::string read_file(const std::string& path) {
+    detail::require_regular_file(path, " (the shader source)");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path, "cannot open the shader source");
     std::ostringstream data;

@@ -28,6 +28,7 @@
 #include "builtins.h"
 #include "sss/shading/program.h"
 #include "sss/util/atomic_output.h"
+#include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -578,6 +579,7 @@ Program read_program(std::istream& in, const std::string& path) {
 }
 
 Program read_program_file(const std::string& path) {
+    detail::require_regular_file(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(path, "cannot open");
     return read_program(in, path);

@@ -31,7 +31,22 @@ gzFile as_gz(void* p) {
 
 } // namespace
 
+void require_regular_file(const std::string& path, const std::string& context) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0)
+        throw IoError(path, "cannot open" + context + ": " + std::strerror(errno));
+    if (S_ISREG(st.st_mode)) return;
+    const char* what = S_ISDIR(st.st_mode)    ? "is a directory"
+                       : S_ISFIFO(st.st_mode) ? "is a FIFO (a pipe), not a regular file"
+                       : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file"
+                       : S_ISCHR(st.st_mode)  ? "is a character device, not a regular file"
+                       : S_ISBLK(st.st_mode)  ? "is a block device, not a regular file"
+                                              : "is not a regular file";
+    throw IoError(path, std::string(what) + context);
+}
+
 ByteSource::ByteSource(const std::string& path) : m_path(path), m_buf(kInputBuffer) {
+    require_regular_file(path);
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
     struct stat st {};
