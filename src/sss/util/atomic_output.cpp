@@ -17,6 +17,8 @@
 #include <pthread.h>
 #include <unistd.h>
 
+#include <oneapi/tbb/task_scheduler_observer.h>
+
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
 
@@ -72,7 +74,41 @@ void unregister_temp_file(const std::string& path) {
     }
 }
 
+/// The thread that installed the handlers (the tool's main thread, which
+/// commits outputs).
+std::atomic<pthread_t> g_main_thread{};
+std::atomic<bool> g_main_thread_set{false};
+
+void block_termination_signals() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGHUP);
+    ::pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+
+/// Worker threads block the termination signals, so that the kernel hands
+/// them to the main thread: a handler on a worker used to run while the
+/// main thread went on to rename its temporary over the target, and the job
+/// died by the signal with its output replaced.
+class WorkerSignalMask final : public oneapi::tbb::task_scheduler_observer {
+public:
+    WorkerSignalMask() { observe(true); }
+    void on_scheduler_entry(bool is_worker) override {
+        if (is_worker) block_termination_signals();
+    }
+};
+
 extern "C" void sss_cleanup_and_die(int sig) {
+    // Taken by a thread other than the main one (a library's own thread):
+    // hand it to the main thread, which is the one that commits.
+    if (g_main_thread_set.load(std::memory_order_acquire) &&
+        !::pthread_equal(::pthread_self(), g_main_thread.load(std::memory_order_relaxed))) {
+        block_termination_signals();
+        ::pthread_kill(g_main_thread.load(std::memory_order_relaxed), sig);
+        return;
+    }
     for (TempSlot& slot : g_temp_slots) {
         if (slot.state.load(std::memory_order_acquire) == SlotArmed) ::unlink(slot.path);
     }
@@ -96,6 +132,11 @@ extern "C" void sss_cleanup_and_die(int sig) {
 void install_signal_handlers() {
     static std::once_flag once;
     std::call_once(once, [] {
+        g_main_thread.store(::pthread_self(), std::memory_order_relaxed);
+        g_main_thread_set.store(true, std::memory_order_release);
+        // Lives until exit (never destroyed: threads may enter until then).
+        static WorkerSignalMask* const workers = new WorkerSignalMask();
+        (void)workers;
         // SIGHUP too: a closed terminal or dropped ssh session ends the job
         // like a kill would.
         for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
