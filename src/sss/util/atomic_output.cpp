@@ -100,6 +100,8 @@ public:
     }
 };
 
+std::atomic<WorkerSignalMask*> g_worker_signal_mask{nullptr};
+
 extern "C" void sss_cleanup_and_die(int sig) {
     // Taken by a thread other than the main one (a library's own thread):
     // hand it to the main thread, which is the one that commits.
@@ -134,9 +136,9 @@ void install_signal_handlers() {
     std::call_once(once, [] {
         g_main_thread.store(::pthread_self(), std::memory_order_relaxed);
         g_main_thread_set.store(true, std::memory_order_release);
-        // Lives until exit (never destroyed: threads may enter until then).
-        static WorkerSignalMask* const workers = new WorkerSignalMask();
-        (void)workers;
+        // Lives until exit (never destroyed: threads may enter until then);
+        // held by a global so that leak checkers see it reachable.
+        g_worker_signal_mask.store(new WorkerSignalMask(), std::memory_order_release);
         // SIGHUP too: a closed terminal or dropped ssh session ends the job
         // like a kill would.
         for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
