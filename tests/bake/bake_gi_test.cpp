@@ -73,9 +73,8 @@ PlaneResult bake_plane(int samples, const std::string& envmap = "", double c = 0
     const sss::Scene scene = scene_in(
         dir, "",
         "AttributeBegin\nSurface \"bake_gi_plane\" \"string filename\" [\"" + cloud +
-            "\"] \"float samples\" " + std::to_string(samples) +
-            " \"float adaptive\" " + (adaptive ? "1" : "0") +
-            " \"string envmap\" [\"" + envmap +
+            "\"] \"float samples\" " + std::to_string(samples) + " \"float adaptive\" " +
+            (adaptive ? "1" : "0") + " \"string envmap\" [\"" + envmap +
             "\"]\nPolygon \"P\" [-2 -2 0  2 -2 0  2 2 0  -2 2 0]\nAttributeEnd\n"
             "AttributeBegin\nTranslate 0 0 2\nColor [" +
             std::to_string(c) + " " + std::to_string(c) + " " + std::to_string(c) +
@@ -124,13 +123,15 @@ TEST(BakeGi, NoiseFallsAsSamplesRise) {
     const PlaneResult p64 = bake_plane(64);
     const double e64 = p64.occ_rms;
     const double e256 = bake_plane(256).occ_rms;
-    std::printf("occlusion RMS error per point: 16 rays %.5f, 64 rays %.5f, 256 rays %.5f\n",
-                e16, e64, e256);
+    std::printf(
+        "occlusion RMS error per point: 16 rays %.5f, 64 rays %.5f, 256 rays %.5f\n", e16,
+        e64, e256);
     // Adaptive sampling stops after a quarter of the rays when they all
     // agree: faster, but it misses small occluders (documented).
     const PlaneResult a64 = bake_plane(64, "", 0.25, true);
-    std::printf("64 rays: mean error %.5f; adaptive, 64 rays: RMS %.5f, mean error %.5f\n",
-                p64.occ_mean_error, a64.occ_rms, a64.occ_mean_error);
+    std::printf(
+        "64 rays: mean error %.5f; adaptive, 64 rays: RMS %.5f, mean error %.5f\n",
+        p64.occ_mean_error, a64.occ_rms, a64.occ_mean_error);
     EXPECT_LT(e64, e16 / 1.5);
     // 16 times the samples: at least the Monte Carlo rate (4x less noise)
     // less a margin; stratification does better.
@@ -140,8 +141,9 @@ TEST(BakeGi, NoiseFallsAsSamplesRise) {
 TEST(BakeGi, IndirectDiffuseSeesTheEnvironmentAndTheLitSphere) {
     sss::test::TempDir dir;
     const std::string white = dir.file("white.exr");
-    const std::string cmd = "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" +
-                            white + "' >/dev/null 2>&1";
+    const std::string cmd =
+        "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" + white +
+        "' >/dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << "oiiotool is needed (openimageio-tools)";
     const PlaneResult r = bake_plane(256, white, 0.25);
     EXPECT_LT(r.ind_rms, 0.01);
@@ -154,11 +156,11 @@ TEST(BakeGi, FurnaceConvergesToTheGeometricSeries) {
         sss::test::TempDir dir;
         sss::test::write_text(dir.file("furnace.sl"), kFurnaceShader);
         const std::string cloud = dir.file("furnace.ptc");
-        const sss::Scene scene = scene_in(
-            dir, "",
-            "Attribute \"trace\" \"maxdiffusedepth\" " + std::to_string(depth) +
-                "\nSurface \"furnace\" \"string filename\" [\"" + cloud +
-                "\"] \"float Kd\" 0.5\nSphere 1 -1 1 360\n");
+        const sss::Scene scene =
+            scene_in(dir, "",
+                     "Attribute \"trace\" \"maxdiffusedepth\" " + std::to_string(depth) +
+                         "\nSurface \"furnace\" \"string filename\" [\"" + cloud +
+                         "\"] \"float Kd\" 0.5\nSphere 1 -1 1 360\n");
         sss::BakeOptions opt;
         opt.spacing = 0.25;
         const auto files = sss::bake_clouds(scene, opt, nullptr);
@@ -189,10 +191,11 @@ surface bake_diffuse(string filename = "") {
 }
 )");
     const std::string cloud = dir.file("d.ptc");
-    const sss::Scene scene =
-        scene_in(dir, "Option \"searchpath\" \"string archive\" [\"" + dir.path().string() + "\"]\n",
-                 lights + "Surface \"bake_diffuse\" \"string filename\" [\"" + cloud +
-                     "\"]\nSphere 1 -1 1 360\n");
+    const sss::Scene scene = scene_in(
+        dir,
+        "Option \"searchpath\" \"string archive\" [\"" + dir.path().string() + "\"]\n",
+        lights + "Surface \"bake_diffuse\" \"string filename\" [\"" + cloud +
+            "\"]\nSphere 1 -1 1 360\n");
     sss::BakeOptions opt;
     opt.spacing = 0.2;
     const auto files = sss::bake_clouds(scene, opt, nullptr);
@@ -210,12 +213,13 @@ std::string bin_dir() {
 TEST(BakeGi, EnvlightWithAWhiteMapGivesOne) {
     sss::test::TempDir dir;
     const std::string white = dir.file("white.exr");
-    const std::string cmd = "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" +
-                            white + "' >/dev/null 2>&1";
+    const std::string cmd =
+        "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" + white +
+        "' >/dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << "oiiotool is needed (openimageio-tools)";
-    const std::vector<float> d = bake_sphere_diffuse(
-        dir, "LightSource \"envlight\" 1 \"string envmap\" [\"" + white +
-                 "\"] \"float samples\" [64]\n");
+    const std::vector<float> d =
+        bake_sphere_diffuse(dir, "LightSource \"envlight\" 1 \"string envmap\" [\"" +
+                                     white + "\"] \"float samples\" [64]\n");
     ASSERT_GT(d.size(), 300u);
     for (float v : d) ASSERT_NEAR(v, 1.0f, 1e-3f);
 }
@@ -228,15 +232,16 @@ TEST(BakeGi, EnvlightAndTheEnvdomeDomeAgree) {
     ASSERT_FALSE(bin.empty()) << "SSS_BIN_DIR names the tools";
     sss::test::TempDir dir;
     const std::string sky = dir.file("sky.exr"), small = dir.file("small.exr");
-    const std::string cmd = "'" + bin + "/envdome' -sky 128 64 '" + sky +
-                            "' >/dev/null && oiiotool '" + sky + "' --resize:filter=box 16x8 -o '" +
-                            small + "' >/dev/null && '" + bin + "/envdome' -n 256 '" +
-                            small + "' '" + dir.file("dome.rib") + "' >/dev/null";
+    const std::string cmd =
+        "'" + bin + "/envdome' -sky 128 64 '" + sky + "' >/dev/null && oiiotool '" + sky +
+        "' --resize:filter=box 16x8 -o '" + small + "' >/dev/null && '" + bin +
+        "/envdome' -n 256 '" + small + "' '" + dir.file("dome.rib") + "' >/dev/null";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    const std::vector<float> env = bake_sphere_diffuse(
-        dir, "LightSource \"envlight\" 1 \"string envmap\" [\"" + small +
-                 "\"] \"float samples\" [1024]\n");
-    const std::vector<float> dome = bake_sphere_diffuse(dir, "ReadArchive \"dome.rib\"\n");
+    const std::vector<float> env =
+        bake_sphere_diffuse(dir, "LightSource \"envlight\" 1 \"string envmap\" [\"" +
+                                     small + "\"] \"float samples\" [1024]\n");
+    const std::vector<float> dome =
+        bake_sphere_diffuse(dir, "ReadArchive \"dome.rib\"\n");
     ASSERT_EQ(env.size(), dome.size());
     ASSERT_GT(env.size(), 300u);
     double sum_e = 0.0, sum_d = 0.0, err2 = 0.0, ref2 = 0.0;
@@ -282,8 +287,9 @@ TEST(BakeGi, WhiteFurnaceBakesOneEverywhere) {
     // have hit send too). Any energy lost or gained in the hit shading shows.
     sss::test::TempDir dir;
     const std::string white = dir.file("white.exr");
-    const std::string cmd = "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" +
-                            white + "' >/dev/null 2>&1";
+    const std::string cmd =
+        "oiiotool --pattern constant:color=1,1,1 32x16 3 -d half -o '" + white +
+        "' >/dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << "oiiotool is needed (openimageio-tools)";
     sss::test::write_text(dir.file("white_gi.sl"), R"(
 surface white_gi(string filename = ""; string envmap = ""; float up = 0) {
@@ -300,15 +306,16 @@ surface white_gi(string filename = ""; string envmap = ""; float up = 0) {
 }
 )");
     const std::string cloud = dir.file("white.ptc");
-    const std::string args = " \"string filename\" [\"" + cloud +
-                             "\"] \"string envmap\" [\"" + white + "\"]";
-    const sss::Scene scene =
-        scene_in(dir, "",
-                 "Attribute \"trace\" \"maxdiffusedepth\" [2]\n"
-                 "AttributeBegin\nSurface \"white_gi\"" + args +
-                     " \"float up\" [1]\nPolygon \"P\" [-2 -2 0  2 -2 0  2 2 0  -2 2 0]\n"
-                     "AttributeEnd\nAttributeBegin\nTranslate 0 0 1.2\nSurface \"white_gi\"" +
-                     args + "\nSphere 1 -1 1 360\nAttributeEnd\n");
+    const std::string args =
+        " \"string filename\" [\"" + cloud + "\"] \"string envmap\" [\"" + white + "\"]";
+    const sss::Scene scene = scene_in(
+        dir, "",
+        "Attribute \"trace\" \"maxdiffusedepth\" [2]\n"
+        "AttributeBegin\nSurface \"white_gi\"" +
+            args +
+            " \"float up\" [1]\nPolygon \"P\" [-2 -2 0  2 -2 0  2 2 0  -2 2 0]\n"
+            "AttributeEnd\nAttributeBegin\nTranslate 0 0 1.2\nSurface \"white_gi\"" +
+            args + "\nSphere 1 -1 1 360\nAttributeEnd\n");
     sss::BakeOptions opt;
     opt.spacing = 0.25;
     const auto files = sss::bake_clouds(scene, opt, nullptr);

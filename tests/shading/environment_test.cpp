@@ -128,7 +128,9 @@ TEST(RslEnvironment, TheBrightestDomeLightPointsAtTheSpot) {
         EXPECT_GT(got[0].y, 50.0f) << bx << "," << by;
         EXPECT_LT(got[1].y, 0.1f);
         EXPECT_LT(got[2].y, 0.1f);
-        if (std::abs(d.x) > 0.2) { EXPECT_LT(got[3].y, 0.1f); } // mirrored in x: elsewhere
+        if (std::abs(d.x) > 0.2) {
+            EXPECT_LT(got[3].y, 0.1f);
+        } // mirrored in x: elsewhere
     }
 }
 

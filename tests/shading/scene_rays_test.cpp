@@ -50,9 +50,11 @@ struct RayScene {
     RayScene(const std::string& options, const std::string& world,
              const std::vector<std::pair<std::string, std::string>>& shaders_sl = {}) {
         test::write_text(dir.file("hitcolor.sl"), kHitColor);
-        for (const auto& [name, text] : shaders_sl) test::write_text(dir.file(name), text);
+        for (const auto& [name, text] : shaders_sl)
+            test::write_text(dir.file(name), text);
         const std::string path = dir.file("scene.rib");
-        const std::string text = options + "Format 64 64 1\nProjection \"perspective\"\n" +
+        const std::string text = options +
+                                 "Format 64 64 1\nProjection \"perspective\"\n" +
                                  "WorldBegin\n" + world + "WorldEnd\n";
         test::write_text(path, text);
         scene = parse_rib(text, path);
@@ -138,7 +140,8 @@ TEST(SceneRays, DepthLimitsFollowTheShootingPrimitive) {
     s.rays->trace(s2);
     EXPECT_EQ(s2.hit[0], 1);
 
-    RayScene deep("", "Attribute \"trace\" \"maxdiffusedepth\" 3\n" + std::string(kSphere));
+    RayScene deep("",
+                  "Attribute \"trace\" \"maxdiffusedepth\" 3\n" + std::string(kSphere));
     RayQuery d3 = query(RayKind::Diffuse, 3, {kHitRay});
     d3.origin = &deep.scene.primitives[0];
     deep.rays->trace(d3);
@@ -154,11 +157,13 @@ TEST(SceneRays, DepthLimitsFollowTheShootingPrimitive) {
 TEST(SceneRays, OneSidedBackFacesAreNotSeen) {
     RayScene s("", "Sides 1\n" + std::string(kSphere));
     // From inside the sphere every face is a back face.
-    RayQuery q = query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
+    RayQuery q =
+        query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
     s.rays->trace(q);
     EXPECT_EQ(q.hit[0], 0);
     RayScene two("", kSphere);
-    RayQuery q2 = query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
+    RayQuery q2 =
+        query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
     two.rays->trace(q2);
     EXPECT_EQ(q2.hit[0], 1);
     EXPECT_NEAR(q2.length[0], 1.0f, 1e-3f);
@@ -212,7 +217,8 @@ TEST(SceneRays, ResultsDoNotDependOnBatching) {
     RayQuery all = query(RayKind::Specular, 1, many, {"Ci", "marker"});
     s.rays->trace(all);
     for (int k : {0, 250, 300, 599}) {
-        RayQuery one = query(RayKind::Specular, 1, {many[std::size_t(k)]}, {"Ci", "marker"});
+        RayQuery one =
+            query(RayKind::Specular, 1, {many[std::size_t(k)]}, {"Ci", "marker"});
         s.rays->trace(one);
         EXPECT_EQ(one.hit[0], all.hit[std::size_t(k)]);
         EXPECT_EQ(one.values[1][0], all.values[1][std::size_t(k)]);
@@ -239,7 +245,8 @@ TEST(SceneRays, RunawayRayTreesStopAtTheBudget) {
                "Attribute \"trace\" \"maxspeculardepth\" 64\nSurface \"greedy\"\n"
                "Sphere 1 -1 1 360\n",
                {{"greedy.sl", kGreedy}});
-    RayQuery q = query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
+    RayQuery q =
+        query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
     q.origin = &s.scene.primitives[0];
     s.rays->trace(q); // 8^63 rays without the budget
     ASSERT_EQ(q.hit[0], 1);

@@ -281,7 +281,8 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
 /// Dices what is baked or casts shadows; the rest is not needed.
 std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& options,
                                      const SceneShaders& shaders, const BakePlan& plan,
-                                     double spacing, bool any_hits, Displacer& displacer) {
+                                     double spacing, bool any_hits,
+                                     Displacer& displacer) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
@@ -486,8 +487,9 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
     }
     BakeServices services(scene, tracer, frame, options.output);
     services.set_scene_rays(scene_rays);
-    const double extent =
-        tracer ? tracer->scene_extent() : scene_rays ? scene_rays->extent() : 0.0;
+    const double extent = tracer       ? tracer->scene_extent()
+                          : scene_rays ? scene_rays->extent()
+                                       : 0.0;
     const Camera& camera = scene.options.camera;
     const glm::dmat4& to_camera = camera.world_to_camera;
     const glm::dmat3 normal_to_camera =

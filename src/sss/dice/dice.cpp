@@ -10,8 +10,8 @@
 #include <cmath>
 #include <exception>
 #include <limits>
-#include <utility>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -130,6 +130,5 @@ std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
     }
     return colors;
 }
-
 
 } // namespace sss

@@ -163,7 +163,7 @@ private:
     std::array<double, 4> m_window{};
     double m_tan_half = 1.0;
     Matrix4 m_to_world{1.0};
-    bool m_affine = true; ///< m_to_world's last row is (0, 0, 0, 1)
+    bool m_affine = true;       ///< m_to_world's last row is (0, 0, 0, 1)
     double m_lens_radius = 0.0; ///< DepthOfField (camera units); 0: pinhole
 };
 
@@ -241,7 +241,7 @@ struct Renderer {
     const Scene* scene = nullptr;
     Camera camera;
     std::optional<CameraRays> rays;
-    int nx = 1, ny = 1; ///< pixel samples
+    int nx = 1, ny = 1;                ///< pixel samples
     std::optional<PixelFilter> filter; ///< the PixelFilter
     int reach_x = 1, reach_y = 1;      ///< pixels a sample reaches on each side
     /// The filter's weights can sum to about zero over a pixel (negative
@@ -1155,9 +1155,9 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
 
     Renderer job;
     if (scene.primitives.empty())
-        report.warnings.push_back((scene.path.empty() ? std::string("the scene")
-                                                      : scene.path) +
-                                  ": no geometry in the world: the image is empty");
+        report.warnings.push_back(
+            (scene.path.empty() ? std::string("the scene") : scene.path) +
+            ": no geometry in the world: the image is empty");
     setup_camera(job, scene, options);
     const bool any_shadows = resolve_shading(job, scene, frame, report);
     bool separate_shadows = false;

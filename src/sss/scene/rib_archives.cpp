@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "obj_import.h"
-#include "sss/util/byte_io.h"
 #include "rib_args.h"
+#include "sss/util/byte_io.h"
 
 namespace sss::rib {
 

@@ -278,7 +278,8 @@ bool Attributes::visible_to(const char* kind) const {
     const Param* p = it->second.find(kind);
     // PRMan 12's "trace" stands for both kinds of traced rays when the
     // newer names are not given.
-    if (!p && (std::string_view(kind) == "diffuse" || std::string_view(kind) == "specular"))
+    if (!p &&
+        (std::string_view(kind) == "diffuse" || std::string_view(kind) == "specular"))
         p = it->second.find("trace");
     if (!p) return true;
     if (p->type == ParamType::String)

@@ -106,7 +106,8 @@ extern "C" void sss_cleanup_and_die(int sig) {
     // Taken by a thread other than the main one (a library's own thread):
     // hand it to the main thread, which is the one that commits.
     if (g_main_thread_set.load(std::memory_order_acquire) &&
-        !::pthread_equal(::pthread_self(), g_main_thread.load(std::memory_order_relaxed))) {
+        !::pthread_equal(::pthread_self(),
+                         g_main_thread.load(std::memory_order_relaxed))) {
         block_termination_signals();
         ::pthread_kill(g_main_thread.load(std::memory_order_relaxed), sig);
         return;

@@ -39,9 +39,9 @@ void require_regular_file(const std::string& path, const std::string& context) {
     const char* what = S_ISDIR(st.st_mode)    ? "is a directory"
                        : S_ISFIFO(st.st_mode) ? "is a FIFO (a pipe), not a regular file"
                        : S_ISSOCK(st.st_mode) ? "is a socket, not a regular file"
-                       : S_ISCHR(st.st_mode)  ? "is a character device, not a regular file"
-                       : S_ISBLK(st.st_mode)  ? "is a block device, not a regular file"
-                                              : "is not a regular file";
+                       : S_ISCHR(st.st_mode) ? "is a character device, not a regular file"
+                       : S_ISBLK(st.st_mode) ? "is a block device, not a regular file"
+                                             : "is not a regular file";
     throw IoError(path, std::string(what) + context);
 }
 
