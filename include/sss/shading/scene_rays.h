@@ -33,7 +33,9 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -64,6 +66,32 @@ bool program_shades_hits(const Program& program);
 /// `Attribute "trace" "bias"` of `prim` (world units: how far rays leaving
 /// it start off its surface) when given, finite and >= 0.
 std::optional<float> trace_bias(const Primitive& prim);
+
+class SceneRays;
+
+/// The services of a tool's run (ptbake, render): the scene, the frame,
+/// shader printf output on stdout one message at a time, and the
+/// ray-tracing shadeops through a SceneRays once one is set (before that,
+/// ShadingServices' defaults).
+class SceneServices : public ShadingServices {
+public:
+    SceneServices(const Scene& scene, std::optional<int> frame)
+        : m_scene(scene), m_frame(frame) {}
+    const Scene& scene() const override { return m_scene; }
+    std::optional<int> frame() const override { return m_frame; }
+    void message(const std::string& text) override;
+    void trace(RayQuery& query) override;
+    void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                  int depth) override;
+    void set_scene_rays(const SceneRays* rays) { m_rays = rays; }
+    const SceneRays* scene_rays() const { return m_rays; }
+
+private:
+    const Scene& m_scene;
+    std::optional<int> m_frame;
+    const SceneRays* m_rays = nullptr;
+    std::mutex m_mutex;
+};
 
 /// Secondary rays over a diced scene; thread-safe after construction.
 class SceneRays {

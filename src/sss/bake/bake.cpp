@@ -12,7 +12,6 @@
 #include <limits>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -397,51 +396,24 @@ void fill_parametric(const DicedSurface& d, std::size_t begin,
 /// What bake3d calls hand over while a chunk is shaded: collected per chunk
 /// (through a thread-local sink), so the clouds come out in point order for
 /// any number of threads.
-class BakeServices final : public ShadingServices {
+class BakeServices final : public SceneServices {
 public:
     BakeServices(const Scene& scene, const RayTracer* occluders, std::optional<int> frame,
                  const std::string& output)
-        : m_scene(scene), m_occluders(occluders), m_frame(frame), m_output(output) {}
-    const Scene& scene() const override { return m_scene; }
+        : SceneServices(scene, frame), m_occluders(occluders), m_output(output) {}
     const RayTracer* occluders() const override {
-        return m_rays ? m_rays->occluders() : m_occluders;
-    }
-    std::optional<int> frame() const override { return m_frame; }
-    /// The scene's secondary rays (when some shader traces them).
-    void set_scene_rays(const SceneRays* rays) { m_rays = rays; }
-    void trace(RayQuery& query) override {
-        if (m_rays)
-            m_rays->trace(query);
-        else
-            ShadingServices::trace(query);
-    }
-    void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
-                  int depth) override {
-        if (m_rays)
-            m_rays->transmit(rays, count, out, depth);
-        else
-            ShadingServices::transmit(rays, count, out, depth);
+        return scene_rays() ? scene_rays()->occluders() : m_occluders;
     }
     void bake3d(Bake3dRecord&& record) override {
         if (!m_output.empty()) record.file = m_output;
         if (s_sink) s_sink->push_back(std::move(record));
     }
-    void message(const std::string& text) override {
-        std::lock_guard<std::mutex> lock(m_mutex);
-        std::fputs(text.c_str(), stdout);
-        if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
-        std::fflush(stdout);
-    }
     /// Where this thread's bake3d records go (null: dropped).
     static void set_sink(std::vector<Bake3dRecord>* sink) { s_sink = sink; }
 
 private:
-    const Scene& m_scene;
     const RayTracer* m_occluders;
-    const SceneRays* m_rays = nullptr;
-    std::optional<int> m_frame;
     std::string m_output;
-    std::mutex m_mutex;
     static thread_local std::vector<Bake3dRecord>* s_sink;
 };
 thread_local std::vector<Bake3dRecord>* BakeServices::s_sink = nullptr;

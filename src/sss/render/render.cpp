@@ -25,7 +25,6 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -190,35 +189,11 @@ struct Aov {
 };
 
 /// Writes shader printf output, one message at a time.
-class RenderServices final : public ShadingServices {
+class RenderServices final : public SceneServices {
 public:
-    RenderServices(const Scene& scene, std::optional<int> frame)
-        : m_scene(scene), m_frame(frame) {}
-    const Scene& scene() const override { return m_scene; }
+    using SceneServices::SceneServices;
     const RayTracer* occluders() const override { return m_occluders; }
-    void message(const std::string& text) override {
-        std::lock_guard<std::mutex> lock(m_mutex);
-        std::fputs(text.c_str(), stdout);
-        if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
-        std::fflush(stdout);
-    }
-    std::optional<int> frame() const override { return m_frame; }
     void set_occluders(const RayTracer* tracer) { m_occluders = tracer; }
-    /// The scene's secondary rays (when some shader traces them).
-    void set_scene_rays(const SceneRays* rays) { m_rays = rays; }
-    void trace(RayQuery& query) override {
-        if (m_rays)
-            m_rays->trace(query);
-        else
-            ShadingServices::trace(query);
-    }
-    void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
-                  int depth) override {
-        if (m_rays)
-            m_rays->transmit(rays, count, out, depth);
-        else
-            ShadingServices::transmit(rays, count, out, depth);
-    }
     /// bake3d in a render (a bake RIB rendered): the records go to the
     /// current tile's list, so the files come out in tile order.
     void bake3d(Bake3dRecord&& record) override {
@@ -227,11 +202,7 @@ public:
     static void set_sink(std::vector<Bake3dRecord>* sink) { s_sink = sink; }
 
 private:
-    const Scene& m_scene;
-    std::optional<int> m_frame;
     const RayTracer* m_occluders = nullptr;
-    const SceneRays* m_rays = nullptr;
-    std::mutex m_mutex;
     static thread_local std::vector<Bake3dRecord>* s_sink;
 };
 thread_local std::vector<Bake3dRecord>* RenderServices::s_sink = nullptr;

@@ -119,6 +119,16 @@ std::vector<uint8_t>& Frame::push_mask() {
     return m;
 }
 
+void Frame::restore_mask(const std::vector<uint8_t>& entry) {
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const uint8_t on = entry[i] && stop[i] == 0;
+        mask[i] = on;
+        c += on;
+    }
+    active = c;
+}
+
 bool Frame::writes_varying(const BoundOp& b) const {
     const Op& op = *b.op;
     for (std::size_t k = 0; k < op.args.size() && k < 64; ++k)
@@ -157,13 +167,7 @@ inline uint32_t stop_code(uint32_t kind, int depth) {
 
 /// Restores `entry` minus the stopped points as the running mask.
 void restore(Frame& f, const std::vector<uint8_t>& entry) {
-    std::size_t c = 0;
-    for (std::size_t i = 0; i < f.n; ++i) {
-        const uint8_t on = entry[i] && f.stop[i] == 0;
-        f.mask[i] = on;
-        c += on;
-    }
-    f.active = c;
+    f.restore_mask(entry);
 }
 
 /// Points with stop code `code` run again.

@@ -218,6 +218,8 @@ struct Frame {
     /// Runs ops [begin, end) under the running mask.
     void run(int begin, int end);
     std::vector<uint8_t>& push_mask();
+    /// mask = entry && not stopped (after a construct's body), and recount.
+    void restore_mask(const std::vector<uint8_t>& entry);
     void pop_mask() { --mask_depth; }
     /// Whether op `b`'s results vary (any written argument, or the result).
     bool writes_varying(const BoundOp& b) const;

@@ -239,12 +239,7 @@ void run_illuminate(Frame& f, const BoundOp& b, int body_begin, int body_end,
     if (cnt > 0) f.run(body_begin, body_end);
     f.in_illuminate = was;
     // restore
-    std::size_t c = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        f.mask[i] = entry[i] && f.stop[i] == 0;
-        c += f.mask[i];
-    }
-    f.active = c;
+    f.restore_mask(entry);
     f.pop_mask();
 }
 
@@ -328,12 +323,7 @@ void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
         f.run(body_begin, body_end);
     }
     f.current_light = -1;
-    std::size_t c = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        f.mask[i] = entry[i] && f.stop[i] == 0;
-        c += f.mask[i];
-    }
-    f.active = c;
+    f.restore_mask(entry);
     f.pop_mask();
     f.pop_mask();
 }

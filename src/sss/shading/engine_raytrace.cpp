@@ -496,12 +496,7 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
             if (on > 0 && end > begin) f.run(begin, end);
         }
     }
-    std::size_t c = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        f.mask[i] = entry[i] && f.stop[i] == 0;
-        c += f.mask[i];
-    }
-    f.active = c;
+    f.restore_mask(entry);
     f.pop_mask();
     f.pop_mask();
 }

@@ -9,6 +9,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -630,6 +631,28 @@ SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
 }
 
 SceneRays::~SceneRays() = default;
+
+void SceneServices::message(const std::string& text) {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    std::fputs(text.c_str(), stdout);
+    if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
+    std::fflush(stdout);
+}
+
+void SceneServices::trace(RayQuery& query) {
+    if (m_rays)
+        m_rays->trace(query);
+    else
+        ShadingServices::trace(query);
+}
+
+void SceneServices::transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
+                             int depth) {
+    if (m_rays)
+        m_rays->transmit(rays, count, out, depth);
+    else
+        ShadingServices::transmit(rays, count, out, depth);
+}
 
 void SceneRays::trace(RayQuery& query) const {
     m_impl->trace(query);
