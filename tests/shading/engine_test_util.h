@@ -127,4 +127,32 @@ inline Param string_param(const std::string& name, const std::string& v) {
     return p;
 }
 
+/// environment(map, dir) through the shading engine for each direction,
+/// point lookups ("width" 0; world = camera space here). No warnings.
+inline std::vector<glm::vec3> environment_lookups(const std::string& map,
+                                                  const std::vector<glm::vec3>& dirs) {
+    Engine e;
+    ShadingBatch b;
+    b.layout = BatchLayout::Points;
+    b.size = dirs.size();
+    for (const glm::vec3& d : dirs) {
+        b.P.push_back(glm::vec3(0.0f));
+        b.N.push_back(d);
+    }
+    b.Ng = b.N;
+    b.I = b.N;
+    ParamList p;
+    p.set(string_param("map", map));
+    ShaderInstance inst = e.instance(R"(
+surface t(string map = "";) {
+    Ci = color environment(map, vector N, "width", 0);
+    Oi = 1;
+}
+)",
+                                     p);
+    e.context.execute(inst, b);
+    EXPECT_TRUE(e.services.warnings.empty());
+    return b.Ci;
+}
+
 } // namespace sss::test

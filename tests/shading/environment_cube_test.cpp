@@ -81,32 +81,7 @@ std::string maketx_cube(const std::string& file, const std::string& out) {
 /// environment(map, dir) through the shading engine, point lookups.
 std::vector<glm::vec3> engine_lookup(const std::string& map,
                                      const std::vector<glm::vec3>& dirs) {
-    Engine e;
-    ShadingBatch b;
-    b.layout = BatchLayout::Points;
-    b.size = dirs.size();
-    for (const glm::vec3& d : dirs) {
-        b.P.push_back(glm::vec3(0.0f));
-        b.N.push_back(d);
-    }
-    b.Ng = b.N;
-    b.I = b.N;
-    ParamList p;
-    Param sp;
-    sp.name = "map";
-    sp.type = ParamType::String;
-    sp.strings = {map};
-    p.set(sp);
-    ShaderInstance inst = e.instance(R"(
-surface t(string map = "";) {
-    Ci = color environment(map, vector N, "width", 0);
-    Oi = 1;
-}
-)",
-                                     p);
-    e.context.execute(inst, b);
-    EXPECT_TRUE(e.services.warnings.empty());
-    return b.Ci;
+    return environment_lookups(map, dirs);
 }
 
 /// TextureLibrary::environment for each direction with the derivatives

@@ -50,32 +50,7 @@ std::string make_envlatl(const LatLongImage& img, const TempDir& dir,
 /// environment(map, dir) for each direction (world = camera space here).
 std::vector<glm::vec3> lookup(const std::string& map,
                               const std::vector<glm::dvec3>& dirs) {
-    Engine e;
-    ShadingBatch b;
-    b.layout = BatchLayout::Points;
-    b.size = dirs.size();
-    for (const glm::dvec3& d : dirs) {
-        b.P.push_back(glm::vec3(0.0f));
-        b.N.push_back(glm::vec3(d));
-    }
-    b.Ng = b.N;
-    b.I = b.N;
-    ParamList p;
-    Param sp;
-    sp.name = "map";
-    sp.type = ParamType::String;
-    sp.strings = {map};
-    p.set(sp);
-    ShaderInstance inst = e.instance(R"(
-surface t(string map = "";) {
-    Ci = color environment(map, vector N, "width", 0);
-    Oi = 1;
-}
-)",
-                                     p);
-    e.context.execute(inst, b);
-    EXPECT_TRUE(e.services.warnings.empty());
-    return b.Ci;
+    return environment_lookups(map, std::vector<glm::vec3>(dirs.begin(), dirs.end()));
 }
 
 TEST(RslEnvironment, LatLongLookupsReturnThePixels) {

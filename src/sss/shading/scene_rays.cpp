@@ -491,7 +491,7 @@ void SceneRays::Impl::transmit(const ShadowRay* in, std::size_t count, glm::vec3
     q.kind = RayKind::Transmission;
     q.depth = depth;
     q.label = "transmission";
-    q.rays = live;
+    q.rays.assign(in, in + count); // the hits' I: from the original origins
     q.seed = detail::splitmix64(0x7472616E736D6974ull ^ count);
     for (int layer = 0; layer < kMaxSkips && !active.empty(); ++layer) {
         std::vector<Hit> shaded;
@@ -524,7 +524,6 @@ void SceneRays::Impl::transmit(const ShadowRay* in, std::size_t count, glm::vec3
             std::stable_sort(shaded.begin(), shaded.end(),
                              [](const Hit& a, const Hit& b) { return a.prim < b.prim; });
             std::vector<glm::vec3> oi(shaded.size());
-            q.rays.assign(in, in + count); // origins for I
             std::size_t begin = 0;
             while (begin < shaded.size()) {
                 std::size_t end = begin;
