@@ -18,6 +18,7 @@
 #include "sss/diffusion/material.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 
@@ -86,7 +87,8 @@ int run_tool(const std::string& tool, int argc, char** argv,
         std::cerr << tool << ": try '" << tool << " --help'\n";
         return 2;
     } catch (const std::bad_alloc&) {
-        print_error(tool, "out of memory");
+        std::string stage = failure_stage();
+        print_error(tool, "out of memory while " + (stage.empty() ? std::string("running") : stage));
         return 1;
     } catch (const std::exception& e) {
         print_error(tool, option_wording(e).value_or(e.what()));
