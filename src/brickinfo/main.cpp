@@ -17,6 +17,7 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/limits.h"
 
 namespace {
 
@@ -25,11 +26,14 @@ const char* const kTool = "brickinfo";
 const char* const kUsage = R"(usage: brickinfo [options] file.bkm
 
 Prints the map's format version, channels, bounding box and root cube, build
-settings, provenance and, per level, the bricks and samples with data.
-See docs/brickinfo.md.
+settings, provenance and, per level, the bricks and samples with data, after
+checking the whole file (checksums, masks, values). See docs/brickinfo.md.
 
 options:
   -info 0|1                print the report (default 1)
+  -verify 0|1              1 (default): read and check every brick first; 0:
+                           check the header and tables only (bricks are still
+                           checked when a picture or lookup reads them)
   -picture out.png         write a PNG picture of the map:
     -level D|all           the samples of depth D, seen down an axis; per
                            pixel the front-most sample; all (default): every
@@ -77,6 +81,7 @@ bool ends_with_png(const std::string& path) {
 struct Request {
     std::string map_path;
     bool info = true;
+    bool verify = true;
     std::string picture_path; ///< empty: no picture
     sss::BrickMapPictureOptions picture;
     bool have_slice = false;
@@ -101,6 +106,8 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
             return std::nullopt;
         } else if (o == "info") {
             r.info = args.integer(o, 0, 1) != 0;
+        } else if (o == "verify") {
+            r.verify = args.integer(o, 0, 1) != 0;
         } else if (o == "picture") {
             r.picture_path = args.value(o);
         } else if (o == "level") {
@@ -256,8 +263,16 @@ int run(const std::vector<std::string>& argv) {
     if (!request) return 0;
     sss::Job job(kTool, request->running);
     const sss::BrickMap map(request->map_path);
+    // Everything is checked before anything is reported: a corrupt map gives
+    // one ERROR line, not a report followed by one.
+    std::optional<std::size_t> verified;
+    if (request->verify) {
+        const sss::ScopedStage stage("checking " + request->map_path);
+        verified = map.verify();
+    }
     if (request->info) {
-        std::fputs(sss::describe_brick_map(request->map_path, map).c_str(), stdout);
+        std::fputs(sss::describe_brick_map(request->map_path, map, verified).c_str(),
+                   stdout);
         std::fflush(stdout);
     }
     if (!request->picture_path.empty()) write_picture(map, *request);

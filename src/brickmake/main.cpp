@@ -4,6 +4,7 @@
 /// Option parsing around sss::make_brick_map_from_files.
 
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -92,7 +93,18 @@ int run(const std::vector<std::string>& argv) {
         sss::warn(kTool, "-radiusscale below 1 makes large and inefficient brick maps");
 
     sss::Job job(kTool, running);
-    if (job.up_to_date({out_path}, files)) return 0;
+    // -newer 1 keeps only a map this brickmake can read: one written by an
+    // older version (no checksums) or a corrupt one is rebuilt.
+    if (job.newer()) {
+        std::error_code ec;
+        const std::string problem =
+            std::filesystem::exists(out_path, ec) ? sss::brick_map_problem(out_path) : "";
+        if (problem.empty()) {
+            if (job.up_to_date({out_path}, files)) return 0;
+        } else {
+            sss::warn(kTool, problem + "; rebuilding it");
+        }
+    }
     opt.progress = job.progress();
     opt.provenance =
         sss::quoted_command_line(std::string(kTool) + " " + sss::version_string(), argv);

@@ -219,7 +219,7 @@ TEST(BrickMapBuild, HeaderRoundTrip) {
     build(cloud, dir.file("h.bkm"), o);
     const BrickMap map(dir.file("h.bkm"));
     const sss::BrickMapInfo& info = map.info();
-    EXPECT_EQ(info.version, 1u);
+    EXPECT_EQ(info.version, 2u);
     ASSERT_EQ(info.channels.size(), 2u); // every float and color channel
     EXPECT_EQ(info.channels[0].first, "_area");
     EXPECT_EQ(info.channels[1].first, "_radiance_t");
@@ -643,9 +643,9 @@ namespace {
 
 /// Opens the file and, if that works, looks up and reads every brick: only
 /// FormatError may come out (never a crash or another exception).
-void exercise(const std::string& path) {
+void exercise(const std::string& path, sss::BrickMapChecksums checksums) {
     try {
-        const BrickMap map(path, 64u << 10);
+        const BrickMap map(path, 64u << 10, checksums);
         std::vector<float> out(static_cast<std::size_t>(map.info().data_size));
         for (float x : {-0.7f, 0.0f, 0.4f})
             map.lookup({x, 0.1f, 0.0f}, {0, 0, 1}, 0.0f, out.data());
@@ -695,32 +695,26 @@ TEST(BrickMapFile, CorruptFilesGiveFormatErrors) {
         write_bytes(bad, Bytes(good.begin(), good.begin() + cut));
         EXPECT_FALSE(open_error(bad).empty()) << "cut at " << cut;
     }
-    // Every byte before the bricks flipped: FormatError or a file that still
-    // works (a changed matrix or bounding box value).
-    for (std::size_t at = 0; at < head; ++at) {
+    // Every byte changed: tests/brick/bkm_integrity_test.cpp. Here bytes
+    // flipped without the checksums, so that the structural checks of the
+    // header, tables and bricks see them: FormatError or a file that reads.
+    for (std::size_t at = 0; at < good.size(); at += (at < head ? 3 : 101)) {
         Bytes b = good;
         b[at] ^= 0x5a;
         write_bytes(bad, b);
-        exercise(bad);
+        exercise(bad, sss::BrickMapChecksums::Ignore);
     }
-    // Bytes inside the bricks flipped: masks and data are checked on load.
     const BrickMap intact(dir.file("good.bkm"));
     EXPECT_GT(intact.info().total_bricks, 10u);
-    for (std::size_t at = head; at < good.size(); at += 101) {
-        Bytes b = good;
-        b[at] ^= 0xff;
-        write_bytes(bad, b);
-        exercise(bad);
-    }
 
     Bytes b = good;
     b[0] = 'X';
     write_bytes(bad, b);
     EXPECT_NE(open_error(bad).find("bad magic"), std::string::npos);
     b = good;
-    put_u32(b, 8, 2);
+    put_u32(b, 8, 3);
     write_bytes(bad, b);
-    EXPECT_NE(open_error(bad).find("unsupported .bkm version 2"), std::string::npos);
+    EXPECT_NE(open_error(bad).find("unsupported .bkm version 3"), std::string::npos);
     b = good;
     put_u32(b, 24, 0xffffffffu); // channel count
     write_bytes(bad, b);
@@ -758,18 +752,25 @@ TEST(BrickMapFile, NaNInABrickNamesTheBrick) {
     const uint64_t first = get_u64(b, 280);
     put_u32(b, first + 64, 0x7fc00000u);
     write_bytes(dir.file("n.bkm"), b);
-    const BrickMap map(dir.file("n.bkm")); // bricks are read on demand
-    float out[2];
-    try {
-        map.lookup({0.1f, 0.1f, 0.0f}, {0, 0, 1}, 1.0f, out);
-        FAIL() << "NaN brick accepted";
-    } catch (const sss::FormatError& e) {
-        const std::string what = e.what();
-        EXPECT_NE(what.find("n.bkm"), std::string::npos) << what;
-        EXPECT_NE(what.find("tree 5, depth 0"), std::string::npos) << what;
-        EXPECT_NE(what.find("non-finite"), std::string::npos) << what;
+    // The brick's checksum catches it first; without the checksums, the
+    // value check does.
+    for (auto mode : {sss::BrickMapChecksums::Verify, sss::BrickMapChecksums::Ignore}) {
+        const BrickMap map(dir.file("n.bkm"), 1u << 20, mode); // bricks load on demand
+        float out[2];
+        try {
+            map.lookup({0.1f, 0.1f, 0.0f}, {0, 0, 1}, 1.0f, out);
+            FAIL() << "NaN brick accepted";
+        } catch (const sss::FormatError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("n.bkm"), std::string::npos) << what;
+            EXPECT_NE(what.find("tree 5, depth 0"), std::string::npos) << what;
+            EXPECT_NE(what.find(mode == sss::BrickMapChecksums::Verify ? "CRC-32"
+                                                                       : "non-finite"),
+                      std::string::npos)
+                << what;
+        }
+        std::vector<float> data;
+        std::vector<uint8_t> present;
+        EXPECT_THROW(map.read_brick(5, 0, 0, 0, 0, data, present), sss::FormatError);
     }
-    std::vector<float> data;
-    std::vector<uint8_t> present;
-    EXPECT_THROW(map.read_brick(5, 0, 0, 0, 0, data, present), sss::FormatError);
 }

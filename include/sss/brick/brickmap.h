@@ -98,15 +98,29 @@ BrickMapBuildReport build_brick_map(const std::vector<PointCloud>& clouds,
                                     const BrickMapBuildOptions& options,
                                     const std::string& path);
 
+/// Whether a BrickMap compares the file's CRC-32 checksums
+/// (docs/bkm-format.md, "Integrity").
+enum class BrickMapChecksums {
+    Verify, ///< every tool: a mismatch is a FormatError
+    /// Fuzz target and tests only: mutated files get past the checksums to
+    /// the structural checks (which still all run).
+    Ignore
+};
+
 /// A brick map file opened for lookups. Bricks are read from the file on
 /// demand and kept in a bounded cache, so maps larger than memory work.
 /// Thread-safe: any number of threads may call lookup() at once.
 class BrickMap {
 public:
-    /// Opens and validates the header and node tables (FormatError on a
-    /// corrupt, truncated or wrong-version file; IoError if unreadable).
-    /// cache_bytes bounds the memory held by cached bricks.
-    explicit BrickMap(const std::string& path, std::size_t cache_bytes = 256u << 20);
+    /// Opens and validates the header and node tables, checksum included
+    /// (FormatError on a corrupt, truncated or wrong-version file; IoError
+    /// if unreadable; LimitError beyond Limit::Bricks; OutOfMemoryError when
+    /// the node tables would not fit in memory). cache_bytes bounds the
+    /// memory held by cached bricks. Each brick is checked (checksum,
+    /// presence mask, finite values) when it is first read, before any
+    /// lookup uses it.
+    explicit BrickMap(const std::string& path, std::size_t cache_bytes = 256u << 20,
+                      BrickMapChecksums checksums = BrickMapChecksums::Verify);
     ~BrickMap();
     BrickMap(const BrickMap&) = delete;
     BrickMap& operator=(const BrickMap&) = delete;
@@ -140,6 +154,12 @@ public:
     /// data brick or occupancy-only; false if the file has no such node.
     bool read_occupancy(int tree, int depth, uint32_t ix, uint32_t iy, uint32_t iz,
                         std::vector<uint8_t>& present) const;
+
+    /// Reads every brick, data and occupancy-only, from the file and checks
+    /// it (checksum, presence mask against its record, finite values): what
+    /// brickinfo does before it reports. FormatError naming the first bad
+    /// brick; returns the number of bricks checked. Does not use the cache.
+    std::size_t verify() const;
 
     /// Cache statistics: bricks read from disk so far, bytes currently cached.
     std::size_t bricks_loaded() const;

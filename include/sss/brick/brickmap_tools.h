@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,12 @@ BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& in
                                               const BrickMapBuildOptions& options,
                                               const std::string& output);
 
+/// Why the file at path is not a usable brick map (the message of the
+/// error opening it gives: an older version, a corrupt header or tables, not
+/// a brick map at all), or "" when it opens. brickmake -newer 1 rebuilds
+/// such an output even when it is newer than the inputs.
+std::string brick_map_problem(const std::string& path);
+
 // ---------------------------------------------------------------------------
 // brickinfo
 // ---------------------------------------------------------------------------
@@ -35,8 +42,11 @@ BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& in
 /// The brickinfo report: format version, file size, channels, bounding box
 /// and root cube, build settings, header matrices and image format when not
 /// the defaults, provenance, bricks per tree, and per level the data bricks,
-/// samples with data, occupancy-only nodes and sample spacing, with totals.
-std::string describe_brick_map(const std::string& path, const BrickMap& map);
+/// samples with data, occupancy-only nodes and sample spacing, with totals,
+/// and what was checked: bricks_verified is BrickMap::verify()'s count, or
+/// empty when the bricks were not read.
+std::string describe_brick_map(const std::string& path, const BrickMap& map,
+                               std::optional<std::size_t> bricks_verified);
 
 /// What a picture shows.
 enum class BrickMapPictureMode {

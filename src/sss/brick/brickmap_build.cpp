@@ -33,6 +33,7 @@
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+#include "sss/util/limits.h"
 #include "sss/util/progress.h"
 
 namespace sss {
@@ -134,6 +135,7 @@ struct Points {
     std::vector<double> area;   ///< surface area the point stands for
     std::vector<float> values;  ///< data_size per point
     std::vector<uint8_t> level; ///< the point's own depth
+    std::vector<uint64_t> key;  ///< Morton code of u, 21 bits per axis (the sort key)
     std::array<std::vector<uint32_t>, kBkmTrees> tree_points; ///< sorted indices
     std::array<int, kBkmTrees>
         tree_depth{}; ///< deepest own level in each tree (-1: empty)
@@ -697,9 +699,11 @@ Points prepare_points(const Input& in, const BrickMapBuildOptions& options) {
     pts.area.resize(n);
     pts.values.resize(n * static_cast<std::size_t>(ds));
     pts.level.resize(n);
+    pts.key.resize(n);
     std::vector<uint8_t> trees(n);
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
         const std::size_t i = order[k].second;
+        pts.key[k] = order[k].first;
         double r, a;
         point_size(cloud, in.area, options.radius_scale, i, r, a);
         const glm::dvec3 u = (glm::dvec3(cloud.positions[i]) - in.cube_min) / in.side;
@@ -731,6 +735,75 @@ Points prepare_points(const Input& in, const BrickMapBuildOptions& options) {
 }
 
 using Lattices = std::array<std::vector<std::unique_ptr<SampleLattice>>, kBkmTrees>;
+
+/// Limit::Bricks counts node records (data bricks and occupancy-only nodes),
+/// what a reader holds in memory. before_pruning: the estimate from the
+/// points (fail before building); otherwise the nodes about to be written.
+void check_brick_count(uint64_t nodes, const BrickMapBuildOptions& options,
+                       bool before_pruning) {
+    if (nodes <= limit(Limit::Bricks)) return;
+    std::string remedy;
+    if (before_pruning)
+        remedy = "; counted from the points before pruning: lower -maxdepth (now " +
+                 std::to_string(options.max_depth) + ") or raise -radiusscale";
+    else if (options.omit_geometry)
+        remedy = "; raise -maxerror, lower -maxdepth or raise -radiusscale";
+    else
+        remedy = "; lower -maxdepth, raise -radiusscale, or leave out the "
+                 "occupancy-only nodes with -omitgeometry 1 and raise -maxerror";
+    try {
+        check_limit(Limit::Bricks, nodes, "brick map");
+    } catch (const LimitError& e) {
+        throw LimitError(Limit::Bricks, e.what() + remedy);
+    }
+}
+
+/// What the build will hold before pruning, counted from the points alone.
+struct BuildEstimate {
+    uint64_t nodes = 0; ///< at least this many nodes (bricks before pruning)
+    uint64_t bytes = 0; ///< about this much memory for lattices and tables
+};
+
+/// A lower bound of the nodes the build creates: per tree and depth, the
+/// nodes that contain the centre of a point splatted there (each gets the
+/// sample nearest to that centre). The points are in Morton order, so the
+/// nodes of one depth are runs of equal key prefixes: one pass per tree.
+BuildEstimate estimate_build(const Points& pts) {
+    std::array<std::array<uint64_t, kBkmMaxDepth + 1>, kBkmTrees> counts{};
+    std::array<uint64_t, kBkmTrees> splats{};
+    tbb::parallel_for(0, kBkmTrees, [&](int t) {
+        uint64_t last[kBkmMaxDepth + 1];
+        std::fill(std::begin(last), std::end(last), ~uint64_t(0));
+        for (uint32_t k : pts.tree_points[t]) {
+            const uint64_t key = pts.key[k];
+            splats[t] += pts.level[k] + 1u;
+            for (int d = 0; d <= pts.level[k]; ++d) {
+                const uint64_t prefix = key >> (3 * (21 - d));
+                if (prefix != last[d]) {
+                    last[d] = prefix;
+                    ++counts[t][d];
+                }
+            }
+        }
+    });
+    BuildEstimate e;
+    uint64_t splatted = 0;
+    for (int t = 0; t < kBkmTrees; ++t) {
+        splatted += splats[t];
+        for (uint64_t c : counts[t]) e.nodes += c;
+    }
+    // Per node: its tile of sample slots (343 int32), the tile hash and
+    // coordinates, the pruning state and the node record. Per sample: the
+    // double-precision sums and the float values. Samples: about 64 a node
+    // on surfaces (measured: 64 for ptsynth spheres and boxes), but at most
+    // about 8 per point and depth where the points are sparse.
+    const uint64_t per_node = kTileSamples * 4 + 40 + 19 + 40;
+    const uint64_t per_sample =
+        8 * uint64_t(pts.data_size + 1) + 4 * uint64_t(pts.data_size);
+    const uint64_t samples = std::min(e.nodes * 64, splatted * 8);
+    e.bytes = e.nodes * per_node + samples * per_sample;
+    return e;
+}
 
 /// Splats into one lattice per (tree, depth), each filled by one task,
 /// finest depths first (they are the largest).
@@ -811,6 +884,28 @@ void make_tables(const std::array<std::vector<LevelNodes>, kBkmTrees>& levels,
             throw ValueError("brick map: too many nodes in tree " + std::to_string(t));
     }
     bkm_assign_offsets(contents);
+}
+
+/// Every node's brick checksum (the header's checksum covers them, so they
+/// are needed before anything is written): the bricks are encoded once here
+/// and again when written, rather than held in memory.
+void compute_brick_crcs(BkmContents& contents, const Lattices& lattices) {
+    const int ds = contents.info.data_size;
+    std::vector<std::pair<int, BkmNode*>> all;
+    for (int t = 0; t < kBkmTrees; ++t)
+        for (BkmNode& node : contents.trees[t]) all.emplace_back(t, &node);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, all.size(), 64), [&](const auto& range) {
+            std::vector<int32_t> slots(kBrickSamples);
+            std::vector<unsigned char> bytes;
+            for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                const auto [t, node] = all[k];
+                bytes.resize(static_cast<std::size_t>(bkm_brick_size(*node, ds)));
+                encode_brick(*lattices[t][node->depth], *node, ds, slots.data(),
+                             bytes.data());
+                node->crc = bkm_crc32(0, bytes.data(), bytes.size());
+            }
+        });
 }
 
 /// Writes the file atomically: everything before the bricks, then the
@@ -897,7 +992,17 @@ BrickMapBuildReport build_brick_map(const std::vector<PointCloud>& clouds,
 
     Lattices lattices;
     {
+        // Sort keys, positions, footprints, values, levels and tree lists.
+        check_memory(uint64_t(cloud.size()) * (80 + 4 * uint64_t(in.data_size)),
+                     "brick map: preparing " + std::to_string(cloud.size()) + " points",
+                     "build the map from fewer points");
         const Points pts = prepare_points(in, options);
+        const BuildEstimate estimate = estimate_build(pts);
+        check_brick_count(estimate.nodes, options, true);
+        check_memory(estimate.bytes,
+                     "brick map: building at least " + std::to_string(estimate.nodes) +
+                         " bricks (-maxdepth " + std::to_string(options.max_depth) + ")",
+                     "lower -maxdepth or raise -radiusscale for fewer bricks");
         lattices = splat_all(pts, progress);
     } // the lattices hold everything from here on
 
@@ -937,6 +1042,10 @@ BrickMapBuildReport build_brick_map(const std::vector<PointCloud>& clouds,
     info.format = cloud.format;
     info.provenance = options.provenance;
     make_tables(levels, options.omit_geometry, contents);
+    uint64_t written = 0;
+    for (const auto& table : contents.trees) written += table.size();
+    check_brick_count(written, options, false);
+    compute_brick_crcs(contents, lattices);
     write_file(path, contents, lattices, progress);
     if (progress) progress->finish();
 

@@ -13,10 +13,12 @@
 #include <set>
 
 #include <unistd.h>
+#include <zlib.h>
 
 #include "brickmap_format.h"
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 
 namespace sss::detail {
 
@@ -40,7 +42,7 @@ constexpr std::size_t kOffCubeSide = 128;
 constexpr std::size_t kOffWorldToEye = 136;
 constexpr std::size_t kOffWorldToNdc = 200;
 constexpr std::size_t kOffFormat = 264;
-constexpr std::size_t kOffReserved = 276;
+constexpr std::size_t kOffHeadCrc = 276;
 constexpr std::size_t kOffBrickData = 280;
 
 constexpr uint8_t kTypeFloat = 0;
@@ -152,7 +154,7 @@ std::vector<unsigned char> bkm_encode_head(const BkmContents& contents) {
         store_f32(h + kOffWorldToNdc + 4 * i, info.world_to_ndc[i]);
     }
     for (int i = 0; i < 3; ++i) store_f32(h + kOffFormat + 4 * i, info.format[i]);
-    store_u32(h + kOffReserved, 0);
+    store_u32(h + kOffHeadCrc, 0); // set last, over everything before the bricks
     store_u64(h + kOffBrickData, head);
 
     unsigned char* p = h + kBkmHeaderSize;
@@ -189,10 +191,31 @@ std::vector<unsigned char> bkm_encode_head(const BkmContents& contents) {
             store_u32(p + 16, n.iz);
             store_u32(p + 20, n.first_child);
             store_u64(p + 24, n.offset);
+            store_u32(p + 32, n.crc);
             p += kBkmNodeSize;
         }
     }
+    store_u32(h + kOffHeadCrc, bkm_crc32(0, out.data(), out.size()));
     return out;
+}
+
+uint32_t bkm_crc32(uint32_t crc, const unsigned char* bytes, std::size_t size) {
+    return static_cast<uint32_t>(::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes),
+                                           static_cast<z_size_t>(size)));
+}
+
+void bkm_check_brick_crc(const unsigned char* bytes, const BkmNode& node, int tree,
+                         int data_size, const std::string& path) {
+    const uint64_t size = bkm_brick_size(node, data_size);
+    const uint32_t crc = bkm_crc32(0, bytes, static_cast<std::size_t>(size));
+    if (crc == node.crc) return;
+    char sums[64];
+    std::snprintf(sums, sizeof sums, "stored 0x%08x, computed 0x%08x", node.crc, crc);
+    throw FormatError(path, bkm_brick_name(tree, node) + " (bytes " +
+                                std::to_string(node.offset) + " to " +
+                                std::to_string(node.offset + size - 1) +
+                                ") fails its CRC-32 check (" + sums +
+                                "): the file is corrupt; rebuild it with brickmake");
 }
 
 void bkm_pread(int fd, const std::string& path, void* dst, std::size_t size,
@@ -216,7 +239,8 @@ void bkm_pread(int fd, const std::string& path, void* dst, std::size_t size,
     }
 }
 
-BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size) {
+BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
+                          bool verify_checksums) {
     const auto fail = [&](const std::string& what) { return FormatError(path, what); };
     if (file_size < kBkmHeaderSize) {
         throw fail("file too short for a .bkm header (" + std::to_string(file_size) +
@@ -228,8 +252,14 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size) {
         throw fail("not a .bkm brick map (bad magic)");
     const uint32_t version = load_u32(h + kOffVersion);
     if (version != kBkmVersion) {
+        // Version 1 had no checksums: reading it unchecked would let any
+        // corruption through, and a brick map is always cheap to remake.
         throw fail("unsupported .bkm version " + std::to_string(version) +
-                   " (only version " + std::to_string(kBkmVersion) + " is supported)");
+                   (version < kBkmVersion
+                        ? " (written by an older brickmake, without checksums): "
+                          "rebuild it with brickmake"
+                        : " (this sss reads version " + std::to_string(kBkmVersion) +
+                              "; a newer brickmake wrote it)"));
     }
     BkmContents c;
     BrickMapInfo& info = c.info;
@@ -270,7 +300,6 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size) {
         throw fail("invalid provenance length " + std::to_string(provenance_length));
     if (table_bytes > nchannels * (4 + kBkmMaxNameLength) || table_bytes < 5 * nchannels)
         throw fail("invalid channel table size " + std::to_string(table_bytes));
-    if (load_u32(h + kOffReserved) != 0) throw fail("reserved header field is not 0");
     info.data_size = static_cast<int>(data_size);
     info.max_depth = static_cast<int>(max_depth);
 
@@ -316,10 +345,65 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size) {
                    std::to_string(brick_data) + " in a file of " +
                    std::to_string(file_size) + " bytes");
     }
-    std::vector<unsigned char> head(
-        static_cast<std::size_t>(brick_data - kBkmHeaderSize));
-    bkm_pread(fd, path, head.data(), head.size(), kBkmHeaderSize);
-    const unsigned char* base = head.data() - kBkmHeaderSize; // file offset -> pointer
+
+    // The tree directory, read on its own first: its node counts must fill
+    // the node tables exactly, stay within Limit::Bricks and fit in memory
+    // before anything is allocated for them.
+    unsigned char directory[kBkmTrees * kBkmDirEntrySize];
+    bkm_pread(fd, path, directory, sizeof directory, dir_offset);
+    uint64_t expected_table = tables_offset;
+    uint64_t total_nodes = 0;
+    std::array<uint32_t, kBkmTrees> counts{}, data_counts{};
+    for (int t = 0; t < kBkmTrees; ++t) {
+        const unsigned char* e = directory + t * kBkmDirEntrySize;
+        const uint64_t table = load_u64(e);
+        counts[t] = load_u32(e + 8);
+        data_counts[t] = load_u32(e + 12);
+        const std::string tree = "tree " + std::to_string(t);
+        if (table != expected_table)
+            throw fail("node table of " + tree + " at offset " + std::to_string(table) +
+                       ", expected " + std::to_string(expected_table));
+        if (uint64_t(counts[t]) * kBkmNodeSize > brick_data - expected_table)
+            throw fail("node count " + std::to_string(counts[t]) + " of " + tree +
+                       " does not fit in the file");
+        if (data_counts[t] > counts[t])
+            throw fail("data brick count of " + tree + " exceeds its node count");
+        expected_table += uint64_t(counts[t]) * kBkmNodeSize;
+        total_nodes += counts[t];
+    }
+    if (expected_table != brick_data)
+        throw fail("brick data at offset " + std::to_string(brick_data) + ", expected " +
+                   std::to_string(expected_table));
+    check_limit(Limit::Bricks, total_nodes, path);
+    // The tables as read, the records decoded, and BrickMap's lookup
+    // structures over them (brickmap_lookup.cpp): about 120 bytes a node.
+    // (Small maps skip the check: it reads cgroup files.)
+    const uint64_t need = brick_data + total_nodes * 120;
+    if (need >= (8u << 20))
+        check_memory(need, "opening " + path,
+                     "rebuild the map with a larger -maxerror, a smaller -maxdepth or "
+                     "-omitgeometry 1");
+
+    std::vector<unsigned char> head(static_cast<std::size_t>(brick_data));
+    std::copy(h, h + kBkmHeaderSize, head.begin());
+    bkm_pread(fd, path, head.data() + kBkmHeaderSize, head.size() - kBkmHeaderSize,
+              kBkmHeaderSize);
+    if (!std::equal(directory, directory + sizeof directory, head.begin() + dir_offset))
+        throw fail("the file changed while it was read");
+    if (verify_checksums) {
+        const uint32_t stored = load_u32(h + kOffHeadCrc);
+        store_u32(head.data() + kOffHeadCrc, 0); // the field is summed as 0
+        const uint32_t crc = bkm_crc32(0, head.data(), head.size());
+        if (crc != stored) {
+            char sums[64];
+            std::snprintf(sums, sizeof sums, "stored 0x%08x, computed 0x%08x", stored,
+                          crc);
+            throw fail("header and tables (bytes 0 to " + std::to_string(brick_data - 1) +
+                       ") fail their CRC-32 check (" + sums +
+                       "): the file is corrupt; rebuild it with brickmake");
+        }
+    }
+    const unsigned char* base = head.data(); // file offset -> pointer
 
     // Channel table.
     {
@@ -362,35 +446,14 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size) {
             throw fail("provenance text contains a NUL byte");
     }
 
-    // Tree directory and node tables.
-    uint64_t expected_table = tables_offset;
-    std::array<uint32_t, kBkmTrees> data_counts{};
-    for (int t = 0; t < kBkmTrees; ++t) {
-        const unsigned char* e = base + dir_offset + t * kBkmDirEntrySize;
-        const uint64_t table = load_u64(e);
-        const uint32_t count = load_u32(e + 8);
-        data_counts[t] = load_u32(e + 12);
-        const std::string tree = "tree " + std::to_string(t);
-        if (table != expected_table)
-            throw fail("node table of " + tree + " at offset " + std::to_string(table) +
-                       ", expected " + std::to_string(expected_table));
-        if (uint64_t(count) * kBkmNodeSize > brick_data - expected_table)
-            throw fail("node count " + std::to_string(count) + " of " + tree +
-                       " does not fit in the file");
-        if (data_counts[t] > count)
-            throw fail("data brick count of " + tree + " exceeds its node count");
-        c.trees[t].resize(count);
-        expected_table += uint64_t(count) * kBkmNodeSize;
-    }
-    if (expected_table != brick_data)
-        throw fail("brick data at offset " + std::to_string(brick_data) + ", expected " +
-                   std::to_string(expected_table));
-
+    // Node tables.
     uint64_t expected_brick = brick_data;
+    uint64_t table_offset = tables_offset;
     for (int t = 0; t < kBkmTrees; ++t) {
         std::vector<BkmNode>& nodes = c.trees[t];
-        const unsigned char* table =
-            base + load_u64(base + dir_offset + t * kBkmDirEntrySize);
+        nodes.resize(counts[t]);
+        const unsigned char* table = base + table_offset;
+        table_offset += uint64_t(counts[t]) * kBkmNodeSize;
         for (std::size_t i = 0; i < nodes.size(); ++i) {
             const unsigned char* r = table + i * kBkmNodeSize;
             BkmNode& n = nodes[i];
@@ -403,6 +466,7 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size) {
             n.iz = load_u32(r + 16);
             n.first_child = load_u32(r + 20);
             n.offset = load_u64(r + 24);
+            n.crc = load_u32(r + 32);
             const auto bad = [&](const std::string& what) {
                 return fail("node " + std::to_string(i) + " of tree " +
                             std::to_string(t) + ": " + what);

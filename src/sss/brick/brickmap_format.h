@@ -17,7 +17,9 @@ namespace sss::detail {
 /// "SSSBKM" and two zero bytes.
 inline constexpr std::array<unsigned char, 8> kBkmMagic{'S', 'S', 'S', 'B',
                                                         'K', 'M', 0,   0};
-inline constexpr uint32_t kBkmVersion = 1;
+/// Version 2 added the CRC-32 checksums (docs/bkm-format.md, "Integrity");
+/// version 1 files are refused with "rebuild it with brickmake".
+inline constexpr uint32_t kBkmVersion = 2;
 inline constexpr int kBkmTrees = 7;
 /// Deepest depth a file may use: node coordinates stay below 2^20 and a
 /// sample's lattice coordinate 7 * 2^20 still fits comfortably in 32 bits.
@@ -31,7 +33,7 @@ inline constexpr std::size_t kBkmMaxNameLength = 255;
 
 inline constexpr std::size_t kBkmHeaderSize = 288;  ///< fixed header
 inline constexpr std::size_t kBkmDirEntrySize = 16; ///< per tree
-inline constexpr std::size_t kBkmNodeSize = 32;     ///< per node record
+inline constexpr std::size_t kBkmNodeSize = 36;     ///< per node record
 inline constexpr std::size_t kBkmMaskBytes = 64;    ///< 512 presence bits
 inline constexpr int kBrickSamples = 512;           ///< 8 x 8 x 8
 
@@ -50,6 +52,7 @@ struct BkmNode {
     uint32_t ix = 0, iy = 0, iz = 0;
     uint32_t first_child = 0; ///< table index of the first child (0 if none)
     uint64_t offset = 0;      ///< file offset of the brick
+    uint32_t crc = 0;         ///< CRC-32 of the brick's bytes
 
     bool has_data() const { return (flags & kBkmNodeHasData) != 0; }
 };
@@ -72,12 +75,25 @@ struct BkmContents {
 /// Sets every node's brick offset (bricks follow the node tables in table
 /// order, tree 0 first) and info.file_size.
 void bkm_assign_offsets(BkmContents& contents);
-/// Encodes everything before the first brick (call bkm_assign_offsets first).
+/// Encodes everything before the first brick (call bkm_assign_offsets first
+/// and set every node's crc): the header's checksum covers all of it.
 std::vector<unsigned char> bkm_encode_head(const BkmContents& contents);
 /// Reads and validates everything before the bricks from an open file of
-/// file_size bytes: FormatError naming path on any inconsistency. Also fills
-/// the derived statistics of info (levels, totals, file size).
-BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size);
+/// file_size bytes: FormatError naming path on any inconsistency (with
+/// verify_checksums, also a header-and-tables checksum that does not match),
+/// LimitError for more nodes than Limit::Bricks, OutOfMemoryError when the
+/// tables would not fit in memory. Also fills the derived statistics of info
+/// (levels, totals, file size).
+BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
+                          bool verify_checksums);
+
+/// CRC-32 (zlib's: ISO-HDLC, the one of gzip and PNG) of size bytes,
+/// continuing from crc (0 to start).
+uint32_t bkm_crc32(uint32_t crc, const unsigned char* bytes, std::size_t size);
+/// FormatError unless a brick's bytes match its node record's checksum:
+/// names the brick and its byte range.
+void bkm_check_brick_crc(const unsigned char* bytes, const BkmNode& node, int tree,
+                         int data_size, const std::string& path);
 
 /// Validates and decodes one brick's bytes (bkm_brick_size(node) of them):
 /// mask gets the 512 presence bits (bit s % 64 of word s / 64), dense (if not

@@ -108,6 +108,7 @@ struct BrickMap::Impl {
     std::vector<std::pair<int, const BkmNode*>> bricks; ///< by id: tree, record
     std::unique_ptr<std::atomic<CachedBrick*>[]> slots;
     std::size_t budget = 0;
+    bool checksums = true;
 
     // Cache bookkeeping; everything below the mutex is guarded by it.
     mutable PinStripe stripes[kStripes];
@@ -236,6 +237,7 @@ struct BrickMap::Impl {
         const std::size_t size = static_cast<std::size_t>(bkm_brick_size(*node, ds));
         std::vector<unsigned char> bytes(size);
         bkm_pread(fd, path, bytes.data(), size, node->offset);
+        if (checksums) bkm_check_brick_crc(bytes.data(), *node, tree, ds, path);
         auto fresh = std::make_unique<CachedBrick>();
         const std::size_t floats = static_cast<std::size_t>(kBrickSamples) * ds;
         fresh->data.reset(new float[floats]);
@@ -376,11 +378,13 @@ struct BrickMap::Impl {
     static constexpr int kBkmBrickEdge = 7; ///< sample steps per brick edge
 };
 
-BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes)
+BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
+                   BrickMapChecksums checksums)
     : m_impl(std::make_unique<Impl>()) {
     Impl& m = *m_impl;
     m.path = path;
     m.budget = cache_bytes;
+    m.checksums = checksums == BrickMapChecksums::Verify;
     detail::require_regular_file(path); // before open(): a FIFO would block it
     m.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (m.fd < 0)
@@ -390,7 +394,8 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes)
         throw IoError(path, std::string("cannot stat: ") + std::strerror(errno));
     if (S_ISDIR(st.st_mode)) throw IoError(path, "is a directory");
     if (!S_ISREG(st.st_mode)) throw IoError(path, "not a regular file");
-    m.contents = bkm_read_head(m.fd, path, static_cast<uint64_t>(st.st_size));
+    m.contents =
+        bkm_read_head(m.fd, path, static_cast<uint64_t>(st.st_size), m.checksums);
     const BrickMapInfo& info = m.contents.info;
     m.ds = info.data_size;
     for (int a = 0; a < 3; ++a) m.cube_min[a] = info.cube_min[a];
@@ -499,6 +504,7 @@ bool BrickMap::read_brick(int tree, int depth, uint32_t ix, uint32_t iy, uint32_
     const BkmNode& node = nodes[i];
     std::vector<unsigned char> bytes(bkm_brick_size(node, m.ds));
     bkm_pread(m.fd, m.path, bytes.data(), bytes.size(), node.offset);
+    if (m.checksums) bkm_check_brick_crc(bytes.data(), node, tree, m.ds, m.path);
     uint64_t mask[8];
     data.assign(static_cast<std::size_t>(kBrickSamples) * m.ds, 0.0f);
     bkm_decode_brick(bytes.data(), node, tree, m.ds, m.path, mask, data.data());
@@ -515,12 +521,12 @@ bool BrickMap::read_occupancy(int tree, int depth, uint32_t ix, uint32_t iy, uin
     const int64_t i = find_node(nodes, depth, ix, iy, iz);
     if (i < 0) return false;
     const BkmNode& node = nodes[i];
-    unsigned char bytes[kBkmMaskBytes];
-    bkm_pread(m.fd, m.path, bytes, sizeof bytes, node.offset);
+    // The whole brick: its checksum covers the data too.
+    std::vector<unsigned char> bytes(bkm_brick_size(node, m.ds));
+    bkm_pread(m.fd, m.path, bytes.data(), bytes.size(), node.offset);
+    if (m.checksums) bkm_check_brick_crc(bytes.data(), node, tree, m.ds, m.path);
     uint64_t mask[8];
-    BkmNode mask_only = node;
-    mask_only.flags = 0; // decode the mask only
-    bkm_decode_brick(bytes, mask_only, tree, m.ds, m.path, mask, nullptr);
+    bkm_decode_brick(bytes.data(), node, tree, m.ds, m.path, mask, nullptr);
     present.assign(kBrickSamples, 0);
     for (int s = 0; s < kBrickSamples; ++s) present[s] = (mask[s >> 6] >> (s & 63)) & 1;
     return true;
@@ -533,6 +539,38 @@ std::vector<std::array<uint32_t, 3>> BrickMap::bricks_at(int tree, int depth) co
         if (n.depth == depth && n.has_data()) out.push_back({n.ix, n.iy, n.iz});
     }
     return out;
+}
+
+std::size_t BrickMap::verify() const {
+    const Impl& m = *m_impl;
+    // The bricks follow each other in table order: read them in large
+    // sequential chunks, each holding whole bricks.
+    constexpr std::size_t kChunk = 4u << 20;
+    std::vector<unsigned char> buffer;
+    uint64_t mask[8];
+    std::size_t checked = 0;
+    for (int t = 0; t < kBkmTrees; ++t) {
+        const std::vector<BkmNode>& nodes = m.contents.trees[t];
+        for (std::size_t i = 0; i < nodes.size();) {
+            std::size_t end = i;
+            uint64_t bytes = 0;
+            while (end < nodes.size() &&
+                   (end == i || bytes + bkm_brick_size(nodes[end], m.ds) <= kChunk)) {
+                bytes += bkm_brick_size(nodes[end], m.ds);
+                ++end;
+            }
+            buffer.resize(static_cast<std::size_t>(bytes));
+            bkm_pread(m.fd, m.path, buffer.data(), buffer.size(), nodes[i].offset);
+            const unsigned char* p = buffer.data();
+            for (; i < end; ++i) {
+                if (m.checksums) bkm_check_brick_crc(p, nodes[i], t, m.ds, m.path);
+                bkm_decode_brick(p, nodes[i], t, m.ds, m.path, mask, nullptr);
+                p += bkm_brick_size(nodes[i], m.ds);
+                ++checked;
+            }
+        }
+    }
+    return checked;
 }
 
 std::size_t BrickMap::bricks_loaded() const {

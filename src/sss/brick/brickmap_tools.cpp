@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <OpenImageIO/imageio.h>
@@ -22,6 +23,7 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 #include "sss/util/parse.h"
 #include "sss/util/progress.h"
 #include "sss/util/version.h"
@@ -78,19 +80,57 @@ BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& in
     std::vector<PointCloud> clouds;
     clouds.reserve(inputs.size());
     for (const std::string& in : inputs) clouds.push_back(read_point_cloud(in));
+    const ScopedStage stage("building " + output);
+    // The library only sees clouds; name the files they came from.
     try {
         return build_brick_map(clouds, options, output);
     } catch (const ValueError& e) {
-        // The library only sees clouds; name the files they came from.
         throw ValueError(join(inputs) + ": " + e.what());
+    } catch (const LimitError& e) {
+        throw LimitError(e.which(), join(inputs) + ": " + e.what());
+    } catch (const OutOfMemoryError& e) {
+        throw OutOfMemoryError(join(inputs) + ": " + e.what());
     }
+}
+
+std::string brick_map_problem(const std::string& path) {
+    try {
+        const BrickMap map(path, 0);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
 }
 
 // ---------------------------------------------------------------------------
 // brickinfo: report
 // ---------------------------------------------------------------------------
 
-std::string describe_brick_map(const std::string& path, const BrickMap& map) {
+namespace {
+
+/// Free text on one report line: control characters as \n, \t or \xNN.
+std::string one_line(const std::string& text) {
+    std::string out;
+    for (unsigned char c : text) {
+        if (c == '\n') {
+            out += "\\n";
+        } else if (c == '\t') {
+            out += "\\t";
+        } else if (c < 0x20 || c == 0x7f) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", c);
+            out += buf;
+        } else {
+            out += char(c);
+        }
+    }
+    return out;
+}
+
+} // namespace
+
+std::string describe_brick_map(const std::string& path, const BrickMap& map,
+                               std::optional<std::size_t> bricks_verified) {
     const BrickMapInfo& info = map.info();
     std::ostringstream out;
     out << "file: " << path << "\n";
@@ -115,8 +155,8 @@ std::string describe_brick_map(const std::string& path, const BrickMap& map) {
     if (info.format != std::array<float, 3>{0.0f, 0.0f, 1.0f})
         out << "image format: " << short_float(info.format[0]) << " "
             << short_float(info.format[1]) << " " << short_float(info.format[2]) << "\n";
-    out << "provenance: " << (info.provenance.empty() ? "(none)" : info.provenance)
-        << "\n";
+    out << "provenance: "
+        << (info.provenance.empty() ? "(none)" : one_line(info.provenance)) << "\n";
 
     // Bricks per tree (normal direction).
     std::string trees;
@@ -147,6 +187,12 @@ std::string describe_brick_map(const std::string& path, const BrickMap& map) {
     }
     out << "total: " << info.total_bricks << " bricks, " << info.total_samples
         << " samples, " << info.occupancy_nodes << " occupancy-only nodes\n";
+    if (bricks_verified)
+        out << "checked: header, tables and " << *bricks_verified
+            << (*bricks_verified == 1 ? " brick" : " bricks")
+            << " (CRC-32, presence masks, finite values)\n";
+    else
+        out << "checked: header and tables (CRC-32); bricks not read (-verify 0)\n";
     return out.str();
 }
 
