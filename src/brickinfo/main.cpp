@@ -261,6 +261,18 @@ void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
 int run(const std::vector<std::string>& argv) {
     std::optional<Request> request = parse_request(argv);
     if (!request) return 0;
+    // No output may replace an input, nor the picture the lookup output.
+    std::vector<std::string> inputs{request->map_path};
+    if (!request->lookup_in.empty()) inputs.push_back(request->lookup_in);
+    if (!request->picture_path.empty())
+        sss::check_output_not_input(request->picture_path, inputs, "picture");
+    if (!request->lookup_out.empty()) {
+        sss::check_output_not_input(request->lookup_out, inputs, "-lookup output");
+        if (!request->picture_path.empty() &&
+            sss::same_file(request->lookup_out, request->picture_path))
+            throw sss::UsageError("-picture and -lookup name the same output file " +
+                                  request->lookup_out);
+    }
     sss::Job job(kTool, request->running);
     const sss::BrickMap map(request->map_path);
     // Everything is checked before anything is reported: a corrupt map gives

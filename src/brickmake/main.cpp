@@ -92,6 +92,7 @@ int run(const std::vector<std::string>& argv) {
     if (opt.radius_scale < 1.0)
         sss::warn(kTool, "-radiusscale below 1 makes large and inefficient brick maps");
 
+    sss::check_output_not_input(out_path, files, "output brick map");
     sss::Job job(kTool, running);
     // -newer 1 keeps only a map this brickmake can read: one written by an
     // older version (no checksums) or a corrupt one is rebuilt.
