@@ -43,7 +43,7 @@ inline constexpr uint32_t kBkmFlagOmitGeometry = 2u;
 /// occupancy-only node: presence mask, no data).
 inline constexpr uint8_t kBkmNodeHasData = 1u;
 
-/// One node record as stored (see docs/bkm-format.md, "Node records").
+/// One node record as stored (see docs/bkm-format.md, "Node tables").
 struct BkmNode {
     uint8_t depth = 0;
     uint8_t child_mask = 0; ///< bit o: child octant o exists (o = x | y << 1 | z << 2)
