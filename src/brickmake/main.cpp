@@ -36,6 +36,7 @@ options:
   -omitgeometry 0|1      1: leave out occupancy data (default 0)
   -channels A,B,...      channels to store (default: every float and color)
   -newer 0|1             1: do nothing when out.bkm is newer than every input
+                         and a readable current-version map
   -frame N               frame number: expands %04d, #### and $F4 in file names
   -splitangle DEG        PRMan 12.5 option; accepted and ignored
   -threads N             worker threads, 0 = all usable cores (default 0)
