@@ -107,6 +107,10 @@ private:
 /// exists and this process may write into. Throws IoError naming `path`.
 void check_output_target(const std::string& path);
 
+/// Whether `path` names an existing device, FIFO or socket (symbolic links
+/// followed): an output written into, whose name says nothing about a format.
+bool writes_into_existing(const std::string& path);
+
 /// Installs the SIGINT/SIGTERM/SIGHUP handlers (once per process) that remove
 /// every uncommitted AtomicOutput temporary and then die by the same signal.
 /// A signal the parent ignores (nohup) stays ignored.

@@ -48,6 +48,8 @@ public:
     void output(const std::string& path, const std::string& use);
     /// Whether `path` is the same file as a recorded output.
     bool is_output(const std::string& path);
+    /// Whether two names are the same file (by the rule above).
+    static bool same_file(const std::string& a, const std::string& b);
 
     /// For a file a shader opens while the job runs: records it as an input
     /// of the current registry and returns "" or, when it is one of the

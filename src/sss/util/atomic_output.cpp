@@ -654,6 +654,11 @@ void OutputSet::commit() {
     m_pending.clear();
 }
 
+bool writes_into_existing(const std::string& path) {
+    struct stat st {};
+    return ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
+}
+
 void check_output_target(const std::string& path) {
     const Destination dest = resolve_destination(path);
     if (dest.special) return;

@@ -96,6 +96,10 @@ bool JobFiles::is_output(const std::string& path) {
                        [&](const Entry& o) { return o.id.same(id); });
 }
 
+bool JobFiles::same_file(const std::string& a, const std::string& b) {
+    return identify(a).same(identify(b));
+}
+
 std::string JobFiles::opened(const std::string& path, const std::string& use) {
     JobFiles* files = current();
     if (!files) return {};
