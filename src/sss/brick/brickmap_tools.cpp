@@ -451,7 +451,9 @@ BrickMapPictureReport write_brick_map_picture(const BrickMap& map,
                                               const BrickMapPictureOptions& options,
                                               const std::string& path) {
     const BrickMapInfo& info = map.info();
-    if (!ends_with_png(path)) throw ValueError(path + ": pictures are PNG files (.png)");
+    // A device or FIFO has no extension to check (it gets the PNG bytes).
+    if (!ends_with_png(path) && !writes_into_existing(path))
+        throw ValueError(path + ": pictures are PNG files (.png)");
     if (options.axis < 0 || options.axis > 2)
         throw ValueError("picture axis must be x, y or z");
     if (options.tree < -1 || options.tree > 6)
