@@ -4,7 +4,8 @@
 #  - outputs over inputs: a render Display or -o, a ptbake bake file or -o,
 #    brickmake, brickinfo, envdome and shader outputs naming a file the same
 #    job reads (the RIB, an OBJ archive, a texture a shader parameter names,
-#    a texture whose name the shader makes at run time, a cloud, a source),
+#    a texture or cloud whose name a shader makes at run time (texture,
+#    textureinfo, texture3d), a cloud, a source),
 #    also through a symbolic or hard link, are refused with one ERROR line
 #    naming both uses; ptfilter in place is allowed and replaces its input;
 #  - unknown output extensions (exit 2 for a command-line name, 1 for a name
@@ -114,6 +115,9 @@ refused "render: Display over a texture parameter" 1 render \
 refused "render: Display over a texture named at run time" 1 render \
     'texture "tex.exr"' 'Display "tex.exr" (display_runtime.rib:7) is an input of this job' \
     'a texture lookup' -- display_runtime.rib
+refused "render: Display over a texture whose header is read at run time" 1 render \
+    'textureinfo "tex.exr"' 'Display "tex.exr" (display_runtime_info.rib:7) is an input of this job' \
+    'a textureinfo lookup' -- display_runtime_info.rib
 refused "render: two Displays, one file" 1 render \
     'Display "+a.exr" (display_twice.rib:7) names the same file as Display "a.exr" (display_twice.rib:6)' \
     -- display_twice.rib
@@ -132,6 +136,9 @@ refused "ptbake: bake file over its own RIB" 1 ptbake \
 refused "ptbake: bake file over a cloud a shader reads" 1 ptbake \
     'bake file "keep.ptc"' 'is an input of this job (parameter "texturename" "keep.ptc"' \
     -- bake_over_lookup.rib
+refused "ptbake: bake file over a cloud looked up at run time" 1 ptbake \
+    'texture3d: bake file "keep.ptc" (parameter "filename" of bake_over_runtime_lookup.rib:13' \
+    'is an input of this job (a texture3d lookup)' -- bake_over_runtime_lookup.rib
 refused "brickmake over its cloud" 1 brickmake 'the output "keep.ptc" is an input of this job' \
     'the input cloud "keep.ptc"' -- keep.ptc keep.ptc
 refused "brickinfo -lookup over its cloud" 1 brickinfo 'the -lookup output "keep.ptc"' \
