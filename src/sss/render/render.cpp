@@ -1261,8 +1261,8 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
         else
             use = "Display \"" + std::string(d.additional ? "+" : "") + d.name + "\" (" +
                   d.where + ")";
-        display_format(d);
         files.output(path, use);
+        display_format(d);
         check_output_target(path);
     }
 
