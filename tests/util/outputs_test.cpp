@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -13,8 +14,10 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -142,6 +145,39 @@ TEST(AtomicOutputTargets, FifoWithoutCommitGetsNothing) {
     }
     EXPECT_FALSE(fs::exists(temp));
     EXPECT_TRUE(is_fifo(fifo));
+}
+
+TEST(AtomicOutputTargets, UnixSocketReceivesTheData) {
+    TempDir dir;
+    const std::string path = dir.file("out.sock");
+    const int listener = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    ASSERT_GE(listener, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    ASSERT_LT(path.size(), sizeof addr.sun_path);
+    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+    ASSERT_EQ(::bind(listener, reinterpret_cast<const sockaddr*>(&addr), sizeof addr), 0);
+    ASSERT_EQ(::listen(listener, 1), 0);
+    std::string received;
+    std::thread reader([&] {
+        const int c = ::accept(listener, nullptr, nullptr);
+        char buf[4096];
+        ssize_t n;
+        while ((n = ::read(c, buf, sizeof buf)) > 0) received.append(buf, std::size_t(n));
+        ::close(c);
+    });
+    {
+        sss::AtomicOutput out(path);
+        EXPECT_TRUE(out.writes_into());
+        write_text(out.temp_path(), "over the socket");
+        out.commit();
+    }
+    reader.join();
+    ::close(listener);
+    EXPECT_EQ(received, "over the socket");
+    struct stat st {};
+    ASSERT_EQ(::lstat(path.c_str(), &st), 0);
+    EXPECT_TRUE(S_ISSOCK(st.st_mode));
 }
 
 TEST(AtomicOutputTargets, CharacterDeviceStaysADevice) {
