@@ -18,6 +18,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/limits.h"
+#include "sss/util/job_files.h"
 
 namespace {
 
@@ -184,7 +185,8 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
         throw sss::UsageError("-filterscale and -compare need -lookup");
     if (filter_radius && r.lookup_in.empty() && !r.have_slice)
         throw sss::UsageError("-filterradius needs -lookup or -slice");
-    if (!r.picture_path.empty() && !ends_with_png(r.picture_path))
+    if (!r.picture_path.empty() && !ends_with_png(r.picture_path) &&
+        !sss::writes_into_existing(r.picture_path))
         throw sss::UsageError("option -picture: '" + r.picture_path +
                               "' does not end in .png (pictures are PNG files)");
 
@@ -197,6 +199,12 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
             sss::expand_frame_pattern(r.lookup_in, r.running.frame, "option -lookup");
         r.lookup_out =
             sss::expand_frame_pattern(r.lookup_out, r.running.frame, "option -lookup");
+        if (!sss::has_extension_in(r.lookup_out, sss::point_cloud_extensions()) &&
+            !sss::writes_into_existing(r.lookup_out))
+            throw sss::UsageError(
+                "option -lookup: " +
+                sss::unknown_extension_text(r.lookup_out, "a point cloud file",
+                                            sss::point_cloud_extensions()));
     }
     if (filter_radius) {
         r.lookup.filter_radius = *filter_radius;
@@ -205,27 +213,40 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
     return r;
 }
 
-/// -picture: draws the map and reports what was drawn.
-void write_picture(const sss::BrickMap& map, const Request& request) {
+/// What to print once every output is in place: stdout lines, warnings.
+struct Messages {
+    std::string out;
+    std::vector<std::string> warnings;
+};
+
+/// printf into a string.
+template <typename... Args>
+void append(std::string& text, const char* format, Args... args) {
+    char buf[4096];
+    std::snprintf(buf, sizeof buf, format, args...);
+    text += buf;
+}
+
+/// -picture: draws the map and says what was drawn.
+void write_picture(const sss::BrickMap& map, const Request& request, Messages& m) {
     const sss::BrickMapPictureReport r =
         sss::write_brick_map_picture(map, request.picture, request.picture_path);
-    std::printf("brickinfo: wrote %s: %d x %d, %s; %zu pixels with data",
-                request.picture_path.c_str(), r.width, r.height, r.description.c_str(),
-                r.pixels_with_data);
+    append(m.out, "brickinfo: wrote %s: %d x %d, %s; %zu pixels with data",
+           request.picture_path.c_str(), r.width, r.height, r.description.c_str(),
+           r.pixels_with_data);
     if (request.picture.mode == sss::BrickMapPictureMode::Level)
-        std::printf(", %zu samples drawn", r.samples_drawn);
-    std::printf("\n");
-    std::fflush(stdout);
+        append(m.out, ", %zu samples drawn", r.samples_drawn);
+    m.out += "\n";
     if (r.pixels_with_data == 0)
-        sss::warn(kTool,
-                  request.picture_path + ": no data in the picture (" +
-                      (request.have_slice ? "does the plane cross the map? " : "") +
-                      "does the tree hold data?)");
+        m.warnings.push_back(
+            request.picture_path + ": no data in the picture (" +
+            (request.have_slice ? "does the plane cross the map? " : "") +
+            "does the tree hold data?)");
 }
 
 /// -lookup: evaluates the map at every point of a cloud, writes the result and
 /// reports the differences to the input.
-void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
+void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job, Messages& m) {
     const sss::PointCloud cloud = sss::read_point_cloud(r.lookup_in);
     r.lookup.progress = job.progress();
     const sss::Stopwatch watch;
@@ -240,38 +261,43 @@ void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
     else
         std::snprintf(radius, sizeof radius, "point radius x %g",
                       double(r.lookup.filter_scale));
-    std::printf("brickinfo: lookup %s -> %s: %zu points, %zu without data, filter radius "
-                "%s, %.3f s\n",
-                r.lookup_in.c_str(), r.lookup_out.c_str(), report.points, report.misses,
-                radius, seconds);
+    append(m.out,
+           "brickinfo: lookup %s -> %s: %zu points, %zu without data, filter radius "
+           "%s, %.3f s\n",
+           r.lookup_in.c_str(), r.lookup_out.c_str(), report.points, report.misses,
+           radius, seconds);
     for (const sss::ChannelDifference& d : report.differences)
-        std::printf("brickinfo: compare %s: rms %.6g max %.6g (input rms %.6g, relative "
-                    "rms %.4g%%)\n",
-                    d.name.c_str(), d.rms, d.max_abs, d.reference_rms,
-                    d.reference_rms > 0.0 ? 100.0 * d.rms / d.reference_rms : 0.0);
+        append(m.out,
+               "brickinfo: compare %s: rms %.6g max %.6g (input rms %.6g, relative "
+               "rms %.4g%%)\n",
+               d.name.c_str(), d.rms, d.max_abs, d.reference_rms,
+               d.reference_rms > 0.0 ? 100.0 * d.rms / d.reference_rms : 0.0);
     for (const std::string& name : report.not_compared)
-        std::printf("brickinfo: compare %s: not in %s (or another type)\n", name.c_str(),
-                    r.lookup_in.c_str());
-    std::fflush(stdout);
+        append(m.out, "brickinfo: compare %s: not in %s (or another type)\n",
+               name.c_str(), r.lookup_in.c_str());
     if (report.misses > 0)
-        sss::warn(kTool, r.lookup_in + ": " + std::to_string(report.misses) +
+        m.warnings.push_back(r.lookup_in + ": " + std::to_string(report.misses) +
                              " points have no map data around them (written as 0)");
 }
 
 int run(const std::vector<std::string>& argv) {
     std::optional<Request> request = parse_request(argv);
     if (!request) return 0;
-    // No output may replace an input, nor the picture the lookup output.
-    std::vector<std::string> inputs{request->map_path};
-    if (!request->lookup_in.empty()) inputs.push_back(request->lookup_in);
-    if (!request->picture_path.empty())
-        sss::check_output_not_input(request->picture_path, inputs, "picture");
-    if (!request->lookup_out.empty()) {
-        sss::check_output_not_input(request->lookup_out, inputs, "-lookup output");
-        if (!request->picture_path.empty() &&
-            sss::same_file(request->lookup_out, request->picture_path))
-            throw sss::UsageError("-picture and -lookup name the same output file " +
-                                  request->lookup_out);
+    // No output replaces the map, the lookup's cloud or the other output.
+    sss::JobFiles files;
+    files.input(request->map_path, "the brick map \"" + request->map_path + "\"");
+    if (!request->lookup_in.empty())
+        files.input(request->lookup_in,
+                    "the -lookup input \"" + request->lookup_in + "\"");
+    if (!request->picture_path.empty()) {
+        files.output(request->picture_path,
+                     "option -picture \"" + request->picture_path + "\"");
+        sss::check_output_target(request->picture_path);
+    }
+    if (!request->lookup_in.empty()) {
+        files.output(request->lookup_out,
+                     "the -lookup output \"" + request->lookup_out + "\"");
+        sss::check_output_target(request->lookup_out);
     }
     sss::Job job(kTool, request->running);
     const sss::BrickMap map(request->map_path);
@@ -287,8 +313,15 @@ int run(const std::vector<std::string>& argv) {
                    stdout);
         std::fflush(stdout);
     }
-    if (!request->picture_path.empty()) write_picture(map, *request);
-    if (!request->lookup_in.empty()) lookup_cloud(map, *request, job);
+    // The picture and the lookup's cloud are put in place together, or neither.
+    Messages messages;
+    sss::OutputSet outputs;
+    if (!request->picture_path.empty()) write_picture(map, *request, messages);
+    if (!request->lookup_in.empty()) lookup_cloud(map, *request, job, messages);
+    outputs.commit();
+    std::fputs(messages.out.c_str(), stdout);
+    std::fflush(stdout);
+    for (const std::string& w : messages.warnings) sss::warn(kTool, w);
     return 0;
 }
 

@@ -14,6 +14,7 @@
 #include "sss/cli/tool.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
 
 namespace {
 
@@ -93,7 +94,13 @@ int run(const std::vector<std::string>& argv) {
     if (opt.radius_scale < 1.0)
         sss::warn(kTool, "-radiusscale below 1 makes large and inefficient brick maps");
 
-    sss::check_output_not_input(out_path, files, "output brick map");
+    // A brick map never replaces one of its clouds (another format).
+    sss::JobFiles job_files;
+    for (const std::string& f : files)
+        job_files.input(f, "the input cloud \"" + f + "\"");
+    job_files.output(out_path, "the output \"" + out_path + "\"");
+    sss::check_output_target(out_path);
+
     sss::Job job(kTool, running);
     // -newer 1 keeps only a map this brickmake can read: one written by an
     // older version (no checksums) or a corrupt one is rebuilt.

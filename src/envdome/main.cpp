@@ -12,6 +12,7 @@
 #include "sss/light/light_dome.h"
 #include "sss/render/image_io.h"
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 
 namespace {
 
@@ -147,6 +148,18 @@ int run(const std::vector<std::string>& args) {
         files.pop_back();
     }
     if (output.empty()) throw sss::UsageError("no output file given");
+    // The sky is OpenEXR whatever the name: the name must say so.
+    if (sky && !sss::has_extension_in(output, {".exr"}) &&
+        !sss::writes_into_existing(output))
+        throw sss::UsageError(
+            "-sky writes OpenEXR: " +
+            sss::unknown_extension_text(output, "an OpenEXR file", {".exr"}));
+    // The dome never replaces its probe.
+    sss::JobFiles job_files;
+    if (!sky)
+        for (const std::string& f : files) job_files.input(f, "the probe \"" + f + "\"");
+    job_files.output(output, "the output \"" + output + "\"");
+    sss::check_output_target(output);
     sss::Job job(kTool, running);
 
     if (sky) {

@@ -11,8 +11,10 @@
 #include "sss/cli/tool.h"
 #include "sss/diffusion/material.h"
 #include "sss/scene/rib.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
 #include "sss/util/parse.h"
 
 namespace {
@@ -104,8 +106,19 @@ int run_job(const std::vector<std::string>& argv) {
     }
     opt.frame = running.frame;
     const std::string rib = sss::expand_frame_pattern(files[0], opt.frame, "scene");
-    if (!opt.output.empty())
+    if (!opt.output.empty()) {
         opt.output = sss::expand_frame_pattern(opt.output, opt.frame, "option -o");
+        // -o over the scene is refused by name before its extension.
+        if (sss::JobFiles::same_file(opt.output, rib))
+            throw sss::OutputConflictError(
+                "option -o \"" + opt.output +
+                "\" is an input of this job (the scene file \"" + rib + "\")");
+        if (!sss::has_extension_in(opt.output, sss::point_cloud_extensions()) &&
+            !sss::writes_into_existing(opt.output))
+            throw sss::UsageError("option -o: " + sss::unknown_extension_text(
+                                                      opt.output, "a point cloud file",
+                                                      sss::point_cloud_extensions()));
+    }
 
     sss::Job job(kTool, running);
     opt.progress = job.progress();

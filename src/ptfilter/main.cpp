@@ -11,8 +11,10 @@
 #include "sss/cli/tool.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/ssdiffusion.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
 #include "sss/util/parse.h"
 
 namespace {
@@ -140,9 +142,17 @@ int run(const std::vector<std::string>& argv) {
         f = sss::expand_frame_pattern(f, running.frame, "file name");
     const std::string out_path = files.back();
     files.pop_back();
+    // The output may be one of the inputs (in place): every input is read
+    // whole before the output replaces it.
+    if (!sss::has_extension_in(out_path, sss::point_cloud_extensions()) &&
+        !sss::writes_into_existing(out_path))
+        throw sss::UsageError("output " +
+                              sss::unknown_extension_text(out_path, "a point cloud file",
+                                                          sss::point_cloud_extensions()));
     sss::Job job(kTool, running);
     if (job.up_to_date({out_path}, files)) return 0;
     opt.diffusion.progress = job.progress();
+    sss::check_output_target(out_path);
     if (job.verbose()) {
         for (const std::string& line : material)
             std::printf("ptfilter: %s\n", line.c_str());

@@ -11,7 +11,9 @@
 #include "sss/cli/tool.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/cloud/synthetic.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 
 namespace {
 
@@ -99,6 +101,12 @@ int run(const std::vector<std::string>& args) {
         throw sss::UsageError("expected one output file, got " +
                               std::to_string(positional.size()) + " arguments");
     const std::string& output = positional.front();
+    if (!sss::has_extension_in(output, sss::point_cloud_extensions()) &&
+        !sss::writes_into_existing(output))
+        throw sss::UsageError("output " +
+                              sss::unknown_extension_text(output, "a point cloud file",
+                                                          sss::point_cloud_extensions()));
+    sss::check_output_target(output);
 
     sss::Stopwatch watch;
     sss::PointCloud cloud = sss::make_synthetic_cloud(params);

@@ -10,8 +10,10 @@
 #include "sss/cli/tool.h"
 #include "sss/render/render.h"
 #include "sss/scene/rib.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
 
 namespace {
 
@@ -79,6 +81,20 @@ int run(const std::vector<std::string>& argv) {
     opt.frame = running.frame;
     opt.command_line = sss::quoted_command_line(kTool, argv);
     const std::string rib = sss::expand_frame_pattern(files[0], opt.frame, "scene");
+    if (!opt.output.empty()) {
+        // -o over the scene is refused by name before its extension.
+        const std::string out =
+            sss::expand_frame_pattern(opt.output, opt.frame, "option -o");
+        if (sss::JobFiles::same_file(out, rib))
+            throw sss::OutputConflictError(
+                "option -o \"" + out + "\" is an input of this job (the scene file \"" +
+                rib + "\")");
+        if (!sss::has_extension_in(out, sss::image_extensions()) &&
+            !sss::writes_into_existing(out))
+            throw sss::UsageError("option -o: " +
+                                  sss::unknown_extension_text(out, "an image file",
+                                                              sss::image_extensions()));
+    }
 
     sss::Job job(kTool, running);
     opt.progress = job.progress();

@@ -9,8 +9,11 @@
 
 #include "sss/cli/tool.h"
 #include "sss/shading/compiler.h"
+#include "sss/shading/preprocess.h"
 #include "sss/shading/program.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 
 namespace {
 
@@ -49,12 +52,23 @@ void add_define(sss::PreprocessOptions& options, const std::string& def) {
                                  eq == std::string::npos ? "1" : def.substr(eq + 1));
 }
 
+/// One compiled source: the files it read and the shaders it defines.
+struct Compiled {
+    std::string file;
+    std::vector<std::string> read; ///< the source, then its #includes
+    std::vector<sss::Program> shaders;
+};
+
 // Compiles one file; prints its diagnostics. Returns "" or what failed.
 std::string compile_one(const std::string& file, const sss::PreprocessOptions& options,
-                        const std::string& output, bool quiet) {
+                        const std::string& output, bool quiet,
+                        std::vector<Compiled>& compiled) {
     sss::CompileResult result;
+    std::vector<std::string> read;
     try {
-        result = sss::compile_file(file, options);
+        sss::PreprocessResult source = sss::preprocess_file(file, options);
+        read = source.files;
+        result = sss::compile_preprocessed(source);
     } catch (const sss::ShaderCompileError& e) {
         int errors = 0;
         for (const sss::Diagnostic& d : e.diagnostics()) {
@@ -84,13 +98,7 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
     if (!output.empty() && result.shaders.size() > 1)
         return file + ": defines " + std::to_string(result.shaders.size()) +
                " shaders but -o names one output";
-    for (const sss::Program& p : result.shaders) {
-        const std::string path = output.empty() ? p.name + ".slo" : output;
-        sss::write_program_file(p, path);
-        if (!quiet)
-            std::cout << file << ": " << sss::shader_kind_name(p.kind) << " " << p.name
-                      << " -> " << path << "\n";
-    }
+    compiled.push_back({file, std::move(read), std::move(result.shaders)});
     return "";
 }
 
@@ -123,16 +131,44 @@ int run(const std::vector<std::string>& args) {
     if (!output.empty() && files.size() > 1)
         throw sss::UsageError("-o names one output: give one input file");
 
+    // Every file compiles before any .slo is written: all of them, or none.
     std::vector<std::string> failed;
+    std::vector<Compiled> compiled;
     for (const std::string& file : files) {
-        const std::string what = compile_one(file, options, output, quiet);
+        const std::string what = compile_one(file, options, output, quiet, compiled);
         if (!what.empty()) failed.push_back(what);
     }
     if (!failed.empty()) {
         std::string all;
         for (const std::string& f : failed) all += (all.empty() ? "" : "; ") + f;
-        throw sss::ValueError(all);
+        throw sss::ValueError(all + (compiled.empty() ? "" : "; nothing was written"));
     }
+    // No .slo replaces a source or header, and no two shaders share one.
+    sss::JobFiles job_files;
+    for (const Compiled& c : compiled)
+        for (std::size_t i = 0; i < c.read.size(); ++i)
+            job_files.input(c.read[i], (i == 0 ? "the source \"" : "the header \"") +
+                                           c.read[i] + "\"" +
+                                           (i == 0 ? "" : " included by " + c.file));
+    std::vector<std::pair<std::string, const sss::Program*>> writes;
+    for (const Compiled& c : compiled)
+        for (const sss::Program& p : c.shaders) {
+            const std::string path = output.empty() ? p.name + ".slo" : output;
+            job_files.output(path, output.empty() ? "\"" + path + "\" (shader " + p.name +
+                                                        " of " + c.file + ")"
+                                                  : "option -o \"" + path + "\"");
+            sss::check_output_target(path);
+            writes.emplace_back(path, &p);
+        }
+    sss::OutputSet outputs;
+    for (const auto& [path, program] : writes) sss::write_program_file(*program, path);
+    outputs.commit();
+    if (!quiet)
+        for (const Compiled& c : compiled)
+            for (const sss::Program& p : c.shaders)
+                std::cout << c.file << ": " << sss::shader_kind_name(p.kind) << " "
+                          << p.name << " -> "
+                          << (output.empty() ? p.name + ".slo" : output) << "\n";
     return 0;
 }
 

@@ -143,14 +143,14 @@ expect_rc 1 "brickmake SSS_MEMORY_LIMIT=1G" &&
 cp s.ptc in.ptc
 before="$(md5sum in.ptc)"
 run "$bin/brickmake" in.ptc ./in.ptc
-expect_rc 1 "brickmake in.ptc ./in.ptc" && first_error_is "brickmake over its input" "would replace the input in.ptc"
+expect_rc 1 "brickmake in.ptc ./in.ptc" && first_error_is "brickmake over its input" "is an input of this job"
 run "$bin/brickinfo" -info 0 good.bkm -lookup in.ptc in.ptc
-expect_rc 1 "brickinfo -lookup in.ptc in.ptc" && first_error_is "brickinfo -lookup over its input" "would replace the input in.ptc"
+expect_rc 1 "brickinfo -lookup in.ptc in.ptc" && first_error_is "brickinfo -lookup over its input" "is an input of this job"
 [[ "$(md5sum in.ptc)" == "$before" ]] || fail "an input cloud was overwritten"
 cp good.bkm map.png
 before="$(md5sum map.png)"
 run "$bin/brickinfo" -info 0 map.png -picture map.png
-expect_rc 1 "brickinfo map.png -picture map.png" && first_error_is "brickinfo picture over its map" "would replace the input map.png"
+expect_rc 1 "brickinfo map.png -picture map.png" && first_error_is "brickinfo picture over its map" "is an input of this job"
 [[ "$(md5sum map.png)" == "$before" ]] || fail "the map was overwritten by its picture"
 run "$bin/brickinfo" -info 0 good.bkm -picture same.png -lookup in.ptc same.png
 expect_rc 2 "brickinfo -picture and -lookup to one file"

@@ -176,22 +176,48 @@ TEST(ImageIoResolve, FormatFromTypeAndExtension) {
         {"a.TIF", "file", "a.TIF", "tiff"},
         {"a.png", "file", "a.png", "png"},
         {"a.jpeg", "file", "a.jpeg", "jpeg"},
-        {"a", "file", "a", "openexr"},
-        {"a.xyz", "file", "a.xyz", "openexr"},
         {"a.png", "mydriver", "a.png", "png"},
-        {"a", "mydriver", "a", "openexr"},
         {"view", "it", "view.exr", "openexr"},
         {"view", "framebuffer", "view.exr", "openexr"},
         {"view.png", "it", "view.png", "png"},
         {"view.tif", "framebuffer", "view.tif", "tiff"},
         {"shot.0042", "it", "shot.0042.exr", "openexr"},
-        {"shot.0042", "file", "shot.0042", "openexr"},
         {"x.OpenEXR", "OpenEXR", "x.OpenEXR", "openexr"},
     };
     for (const auto& c : cases) {
         DisplayTarget t = sss::resolve_display(display(c.name, c.type, "rgb"), img, true);
         EXPECT_EQ(t.path, c.path) << c.name << " " << c.type;
         EXPECT_EQ(t.format, c.format) << c.name << " " << c.type;
+    }
+}
+
+TEST(ImageIoResolve, FileTypeNeedsAnImageExtension) {
+    // "file" and unknown drivers take the format from the name: a name that
+    // does not say one is an error naming the Display and its line (it used
+    // to write OpenEXR under any name).
+    Image img = test_image();
+    for (const auto& [name, type] :
+         std::vector<std::pair<std::string, std::string>>{{"a", "file"},
+                                                          {"a.xyz", "file"},
+                                                          {"shot.0042", "file"},
+                                                          {"a", "mydriver"}}) {
+        sss::DisplaySpec d = display(name, type, "rgb");
+        d.where = "scene.rib:4";
+        try {
+            sss::resolve_display(d, img, true);
+            ADD_FAILURE() << name << " " << type << ": expected ValueError";
+        } catch (const sss::ValueError& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.rfind("Display \"" + name + "\" (scene.rib:4): '" + name +
+                                     "' is not an image file name",
+                                 0),
+                      0u)
+                << what;
+            EXPECT_NE(what.find("(known: .exr, .tif, .tiff, .png, .jpg, .jpeg)"),
+                      std::string::npos)
+                << what;
+        }
+        EXPECT_THROW(sss::display_format(d), sss::ValueError);
     }
 }
 

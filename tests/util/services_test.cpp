@@ -147,9 +147,14 @@ TEST(AtomicOutput, TempNameInTargetFolder) {
     EXPECT_EQ(out.target(), target);
     fs::path temp(out.temp_path());
     EXPECT_EQ(temp.parent_path(), dir.path());
+    // ".cloud.ptc.<host>.<pid>.<8 random>.tmp"
     const std::string name = temp.filename().string();
     EXPECT_EQ(name.rfind(".cloud.ptc.", 0), 0u) << name;
-    EXPECT_EQ(name.size(), std::string(".cloud.ptc.").size() + 8 + 4) << name;
+    const std::string pid = "." + std::to_string(::getpid()) + ".";
+    const std::size_t at = name.rfind(pid);
+    ASSERT_NE(at, std::string::npos) << name;
+    EXPECT_GT(at, std::string(".cloud.ptc").size()) << "a host name before the pid";
+    EXPECT_EQ(name.size(), at + pid.size() + 8 + 4) << name;
     EXPECT_EQ(name.substr(name.size() - 4), ".tmp");
     EXPECT_TRUE(fs::exists(temp)) << "the temporary name is reserved on creation";
 
@@ -222,13 +227,18 @@ TEST(AtomicOutput, MissingFolderIsIoError) {
     EXPECT_TRUE(dir.entries().empty());
 }
 
-TEST(AtomicOutput, CommitOntoFolderFails) {
+TEST(AtomicOutput, FolderTargetIsRefusedAtOnce) {
     TempFolder dir;
     const fs::path target = dir.path() / "sub";
     fs::create_directories(target / "x");
-    sss::AtomicOutput out(target.string());
-    write_text(out.temp_path(), "data");
-    EXPECT_THROW(out.commit(), sss::IoError);
+    try {
+        sss::AtomicOutput out(target.string());
+        FAIL() << "expected IoError";
+    } catch (const sss::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(dir.entries(), std::vector<std::string>{"sub"}) << "no temporary made";
 }
 
 // ---------------------------------------------------------------------------

@@ -23,20 +23,8 @@ class Progress; // sss/util/progress.h
 // brickmake
 // ---------------------------------------------------------------------------
 
-/// Whether two names are the same file: for existing files by identity
-/// (hard links, symbolic links, "./in.ptc"), for files not written yet by
-/// their canonical names.
-bool same_file(const std::string& a, const std::string& b);
-
-/// Checks an output before any work: IoError when it is a folder,
-/// ValueError when it is one of inputs (same_file): "<output>: the <role>
-/// would replace the input <input>".
-void check_output_not_input(const std::string& output,
-                            const std::vector<std::string>& inputs,
-                            const std::string& role);
-
 /// Reads the clouds (.ptc/.ply) and builds the map at output (atomically).
-/// Refuses an output that is one of the inputs (check_output_not_input).
+/// Refuses an output that is one of the inputs or a folder (JobFiles).
 /// ValueErrors of the build are prefixed with the input file names.
 BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& inputs,
                                               const BrickMapBuildOptions& options,

@@ -80,15 +80,23 @@ struct DisplayDefaults {
     std::optional<QuantizeSpec> quantize;
 };
 
-/// Resolves a Display: the file format from the display type ("openexr"/"exr",
-/// "tiff", "png", "jpeg"; "file", "it", "framebuffer" and unknown types pick
-/// the format from the file extension, defaulting to OpenEXR when the name has
-/// none or an unknown one — "it"/"framebuffer" write a file, adding ".exr"
-/// to a name without an image extension), the channels from the mode ("rgba", "rgb",
-/// "a", "z", "rgbz", "rgbaz", or AOV names such as "diffuse", "color diffuse"
-/// or lists such as "Ci,a"), the EXR pixel type from `"string type"
-/// "half"|"float"` and compression from `"string compression"`, the
-/// quantisation of PNG/TIFF/JPEG from `"quantize" [zero one min max]` and
+/// The image file extensions render writes (.exr .tif .tiff .png .jpg .jpeg).
+const std::vector<std::string>& image_extensions();
+
+/// The format a Display writes: from the display type ("openexr"/"exr",
+/// "tiff"/"tif", "png", "jpeg"/"jpg"), else ("file", "it", "framebuffer",
+/// any other driver) from the extension of display_file(). Throws
+/// ValueError naming the Display and its line when that extension is not
+/// one of image_extensions() ("it"/"framebuffer" never: they add ".exr").
+std::string display_format(const DisplaySpec& display);
+
+/// Resolves a Display: the file format (display_format: "it"/"framebuffer"
+/// write a file, adding ".exr" to a name without an image extension;
+/// another extension with type "file" is an error), the channels from the mode ("rgba",
+/// "rgb", "a", "z", "rgbz", "rgbaz", or AOV names such as "diffuse", "color diffuse" or
+/// lists such as "Ci,a"), the EXR pixel type from `"string type" "half"|"float"` and
+/// compression from `"string compression"`, the quantisation of PNG/TIFF/JPEG from
+/// `"quantize" [zero one min max]` and
 /// `"dither" [amplitude]` (else `defaults.quantize`, else PRMan's 0 255 0 255
 /// and 0.5; ignored for OpenEXR), the exposure from `defaults`. For the
 /// primary (non-'+') OpenEXR display, every AOV layer of

@@ -224,6 +224,7 @@ struct DisplaySpec {
     std::string mode; ///< "rgba", "rgb", "_radiance_t", "Ci,a"...
     ParamList params;
     bool additional = false; ///< the name started with '+'
+    std::string where;       ///< "scene.rib:9" (empty when not read from a RIB)
 };
 
 /// The camera and image options in effect at WorldBegin.
@@ -319,6 +320,9 @@ struct Scene {
     /// then each ReadArchive / DelayedReadArchive file and OBJ mesh once, in
     /// first-read order. The inputs of `-newer 1`.
     std::vector<std::string> sources;
+    /// How each of `sources` was named, for messages: "the scene file",
+    /// "ReadArchive \"cube.obj\" at scene.rib:3".
+    std::vector<std::string> source_uses;
     /// WorldBegin blocks read (a file with none is an archive, not a scene).
     int worlds = 0;
 };

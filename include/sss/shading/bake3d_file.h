@@ -38,9 +38,12 @@ std::vector<std::pair<std::string, PointCloud>>
 bake3d_clouds(std::span<const Bake3dRecord> records,
               const ChannelDeclarations& declared = {}, const Camera* camera = nullptr);
 
-/// bake3d_clouds, each cloud written atomically (write_point_cloud: .ply by
-/// extension, else .ptc). Returns the files written, in the order of their
-/// first record. Throws ValueError naming the file, and IoError.
+/// bake3d_clouds, each cloud written atomically (write_point_cloud: .ptc or
+/// .ply by extension). Every name is checked before any file is written: a
+/// known extension, a writable folder, and (with a current JobFiles) not a
+/// file the job reads or writes otherwise. Returns the files written, in the
+/// order of their first record. Throws ValueError naming the file,
+/// OutputConflictError and IoError.
 std::vector<std::string> write_bake3d_files(std::span<const Bake3dRecord> records,
                                             const ChannelDeclarations& declared = {},
                                             const PointCloudWriteOptions& options = {},

@@ -16,6 +16,7 @@
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
 #include "sss/shading/shader_library.h"
+#include "sss/util/job_files.h"
 
 namespace sss {
 
@@ -66,5 +67,13 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
 /// `-newer 1`. A bake shader's output "filename"
 /// is among them too; callers drop their own outputs.
 std::vector<std::string> shader_input_files(const SceneShaders& shaders);
+
+/// Records in `files` what the bound shaders read that is known before they
+/// run: each shader file loaded, and each string parameter that names an
+/// existing regular file (a texture, brick map or point cloud), except the
+/// "filename" of a shader that calls bake3d, which names an output. Files a
+/// shader opens while it runs are checked as they open (JobFiles::opened).
+/// Throws OutputConflictError when one of them is an output of the job.
+void record_shader_inputs(JobFiles& files, const SceneShaders& shaders);
 
 } // namespace sss

@@ -33,8 +33,10 @@
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_rays.h"
 #include "sss/shading/scene_shaders.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
 #include "sss/util/progress.h"
 
 namespace sss {
@@ -597,6 +599,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
 
     const BakeSpacing spacing = resolve_spacing(options);
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
+    if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, shaders);
     for (const std::string& w : shaders.warnings) report.warnings.push_back(w);
     bool any_shadows = false;
     for (const char* op : {"shadow", "transmission"})
@@ -655,18 +658,52 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     return gather_clouds(scene, plan.jobs, records, report);
 }
 
-std::vector<std::string> bake_output_files(const Scene& scene,
-                                           const BakeOptions& options) {
+namespace {
+
+/// The files the bake shaders name (bake_output_files) with how each is
+/// named, for messages: "option -o \"x.ptc\"", "bake file \"a.ptc\"
+/// (parameter \"filename\" of scene.rib:12: Surface \"bake_radiance_t\")".
+std::vector<std::pair<std::string, std::string>>
+named_bake_outputs(const Scene& scene, const BakeOptions& options) {
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
-    std::vector<std::string> files;
+    std::vector<std::pair<std::string, std::string>> files;
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const ShaderInstance& shader = *shaders.surface_of[i];
         if (!program_uses(shader.program(), "bake3d")) continue;
         std::string file = bake_file(scene.primitives[i], shader, options);
-        if (!file.empty() && std::find(files.begin(), files.end(), file) == files.end())
-            files.push_back(std::move(file));
+        if (file.empty() || std::any_of(files.begin(), files.end(),
+                                        [&](const auto& f) { return f.first == file; }))
+            continue;
+        std::string use = !options.output.empty()
+                              ? "option -o \"" + file + "\""
+                              : "bake file \"" + file + "\" (parameter \"filename\" of " +
+                                    (shader.where().empty() ? scene.primitives[i].source
+                                                            : shader.where()) +
+                                    ")";
+        files.emplace_back(std::move(file), std::move(use));
     }
+    return files;
+}
+
+/// Checks an output cloud's name before anything is baked: a .ptc or .ply
+/// name, a writable folder, not a file of the job's (`files`).
+void check_bake_output(JobFiles& files, const std::string& file, const std::string& use) {
+    files.output(file, use);
+    if (!has_extension_in(file, point_cloud_extensions()) && !writes_into_existing(file))
+        throw ValueError(
+            use + ": " +
+            unknown_extension_text(file, "a point cloud file", point_cloud_extensions()));
+    check_output_target(file);
+}
+
+} // namespace
+
+std::vector<std::string> bake_output_files(const Scene& scene,
+                                           const BakeOptions& options) {
+    std::vector<std::string> files;
+    for (auto& [file, use] : named_bake_outputs(scene, options))
+        files.push_back(std::move(file));
     return files;
 }
 
@@ -686,9 +723,31 @@ std::vector<std::string> bake_input_files(const Scene& scene,
 BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
     BakeReport report;
     Stopwatch watch;
+    // Before any work: every cloud the shaders name is a .ptc or .ply in a
+    // folder that exists, and none is a file the scene reads (the shaders'
+    // files and lookups are checked in bake_clouds).
+    JobFilesScope scope;
+    JobFiles& job = scope.files();
+    for (std::size_t i = 0; i < scene.sources.size(); ++i)
+        job.input(scene.sources[i], i < scene.source_uses.size()
+                                        ? scene.source_uses[i]
+                                        : "\"" + scene.sources[i] + "\"");
+    std::vector<std::string> named;
+    for (const auto& [file, use] : named_bake_outputs(scene, options)) {
+        check_bake_output(job, file, use);
+        named.push_back(file);
+    }
     auto files = bake_clouds(scene, options, &report);
+    // Files only the bake3d calls named (computed at run time).
+    for (const auto& [path, cloud] : files)
+        if (std::find(named.begin(), named.end(), path) == named.end())
+            check_bake_output(job, path, "bake3d file \"" + path + "\"");
     const double before = watch.seconds();
+    // Every cloud is written as a temporary first and all are put in place
+    // together at the end, or none.
+    OutputSet outputs;
     for (auto& [path, cloud] : files) write_point_cloud(cloud, path, options.write);
+    outputs.commit();
     report.write_seconds = watch.seconds() - before;
     if (options.progress) options.progress->finish();
     return report;

@@ -23,6 +23,7 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 #include "sss/util/limits.h"
 #include "sss/util/parse.h"
 #include "sss/util/progress.h"
@@ -73,38 +74,17 @@ bool ends_with_png(const std::string& path) {
 // brickmake
 // ---------------------------------------------------------------------------
 
-bool same_file(const std::string& a, const std::string& b) {
-    namespace fs = std::filesystem;
-    std::error_code ea, eb;
-    const bool a_exists = fs::exists(a, ea), b_exists = fs::exists(b, eb);
-    if (a_exists && b_exists) { // by identity: hard and symbolic links
-        std::error_code ec;
-        return fs::equivalent(a, b, ec) && !ec;
-    }
-    if (a_exists != b_exists) return false;
-    // Neither written yet: by name.
-    const fs::path pa = fs::weakly_canonical(a, ea), pb = fs::weakly_canonical(b, eb);
-    return !ea && !eb && pa == pb;
-}
-
-void check_output_not_input(const std::string& output,
-                            const std::vector<std::string>& inputs,
-                            const std::string& role) {
-    // Before any work: a folder cannot be replaced by a file.
-    std::error_code ec;
-    if (std::filesystem::is_directory(output, ec))
-        throw IoError(output, "is a directory (the " + role + " must be a file)");
-    for (const std::string& in : inputs) {
-        if (same_file(output, in))
-            throw ValueError(output + ": the " + role + " would replace the input " + in);
-    }
-}
-
 BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& inputs,
                                               const BrickMapBuildOptions& options,
                                               const std::string& output) {
     if (inputs.empty()) throw ValueError("no input point cloud");
-    check_output_not_input(output, inputs, "output brick map");
+    {
+        // Before any work: a folder, or an output that is one of the clouds.
+        JobFiles files;
+        for (const std::string& in : inputs) files.input(in, "the input cloud \"" + in + "\"");
+        files.output(output, "the output brick map \"" + output + "\"");
+        check_output_target(output);
+    }
     std::vector<PointCloud> clouds;
     clouds.reserve(inputs.size());
     for (const std::string& in : inputs) clouds.push_back(read_point_cloud(in));
@@ -525,7 +505,9 @@ BrickMapPictureReport write_brick_map_picture(const BrickMap& map,
                                               const BrickMapPictureOptions& options,
                                               const std::string& path) {
     const BrickMapInfo& info = map.info();
-    if (!ends_with_png(path)) throw ValueError(path + ": pictures are PNG files (.png)");
+    // A device or FIFO has no extension to check (it gets the PNG bytes).
+    if (!ends_with_png(path) && !writes_into_existing(path))
+        throw ValueError(path + ": pictures are PNG files (.png)");
     if (options.axis < 0 || options.axis > 2)
         throw ValueError("picture axis must be x, y or z");
     if (options.tree < -1 || options.tree > 6)

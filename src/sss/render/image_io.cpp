@@ -26,6 +26,7 @@
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+#include "sss/util/job_files.h"
 
 namespace sss {
 
@@ -187,6 +188,31 @@ std::string join(const std::vector<std::string>& list, const char* sep) {
 
 } // namespace
 
+const std::vector<std::string>& image_extensions() {
+    static const std::vector<std::string> extensions = {".exr", ".tif", ".tiff",
+                                                        ".png", ".jpg", ".jpeg"};
+    return extensions;
+}
+
+std::string display_format(const DisplaySpec& display) {
+    const std::string type = lower(display.type);
+    std::string format = format_from_type(type);
+    if (!format.empty()) return format;
+    const std::string path = display_file(display);
+    // "file" and other drivers: the name decides, and must say something
+    // (a device or FIFO, which has no extension, gets OpenEXR).
+    format = format_from_extension(path);
+    if (format.empty() && writes_into_existing(path)) return "openexr";
+    if (format.empty())
+        throw ValueError(
+            "Display \"" + std::string(display.additional ? "+" : "") + display.name +
+            "\"" + (display.where.empty() ? "" : " (" + display.where + ")") + ": " +
+            unknown_extension_text(path, "an image file", image_extensions()) +
+            "; name the format in the display type (\"openexr\", "
+            "\"tiff\", \"png\", \"jpeg\") or use one of these extensions");
+    return format;
+}
+
 std::string display_file(const DisplaySpec& display) {
     // There is no window here: "it"/"framebuffer" write an OpenEXR file, and a
     // name without an image extension ("view", "shot.0042") gets ".exr".
@@ -199,21 +225,16 @@ std::string display_file(const DisplaySpec& display) {
 
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
                               bool primary, const DisplayDefaults& defaults) {
-    const std::string label =
-        "display '" + std::string(display.additional ? "+" : "") + display.name + "'";
+    const std::string label = "display '" + std::string(display.additional ? "+" : "") +
+                              display.name + "'" +
+                              (display.where.empty() ? "" : " (" + display.where + ")");
     if (display.name.empty()) throw ValueError("display with an empty file name");
 
     DisplayTarget target;
     target.exposure_gain = defaults.exposure_gain;
     target.exposure_gamma = defaults.exposure_gamma;
     target.path = display_file(display);
-    std::string type = lower(display.type);
-    target.format = format_from_type(type);
-    if (target.format.empty()) {
-        // "file", "it", "framebuffer" and unknown drivers: the name decides.
-        target.format = format_from_extension(target.path);
-        if (target.format.empty()) target.format = "openexr";
-    }
+    target.format = display_format(display);
     const bool exr = target.format == "openexr";
 
     // Channels from the mode: a comma-separated list of items.

@@ -45,9 +45,11 @@
 #include "sss/shading/engine.h"
 #include "sss/shading/scene_rays.h"
 #include "sss/shading/scene_shaders.h"
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/hash.h"
+#include "sss/util/job_files.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 #include "sss/util/version.h"
@@ -727,6 +729,7 @@ std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
 bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame,
                      RenderReport& report) {
     job.shaders = bind_scene_shaders(scene, frame);
+    if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, job.shaders);
     for (const std::string& w : job.shaders.warnings) report.warnings.push_back(w);
     job.resources = std::make_unique<ShadingResources>();
     job.services = std::make_unique<RenderServices>(scene, frame);
@@ -1238,6 +1241,34 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
     const std::vector<DisplaySpec> displays =
         job_displays(scene, options, frame, primary);
 
+    // Before any work: every Display writes a known format into a folder
+    // that exists, no two name one file, and none is a file the scene
+    // reads (the shaders' files and lookups are checked in render_image).
+    JobFilesScope scope;
+    JobFiles& files = scope.files();
+    for (std::size_t i = 0; i < scene.sources.size(); ++i)
+        files.input(scene.sources[i], i < scene.source_uses.size()
+                                          ? scene.source_uses[i]
+                                          : "\"" + scene.sources[i] + "\"");
+    for (std::size_t i = 0; i < displays.size(); ++i) {
+        const DisplaySpec& d = displays[i];
+        const std::string path = display_file(d);
+        std::string use;
+        if (static_cast<int>(i) == primary && !options.output.empty())
+            use = options.output_label + " \"" + path + "\"";
+        else if (d.where.empty())
+            use = "the output image \"" + path + "\"";
+        else
+            use = "Display \"" + std::string(d.additional ? "+" : "") + d.name + "\" (" +
+                  d.where + ")";
+        files.output(path, use);
+        display_format(d);
+        check_output_target(path);
+    }
+
+    // Every file (the shaders' bakes, then the Displays) is written as a
+    // temporary first; the set puts them all in place at the end, or none.
+    OutputSet outputs;
     Image image = render_image(scene, options, &report);
     const Stopwatch write_watch;
     ImageMetadata meta;
@@ -1263,12 +1294,17 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
     defaults.exposure_gain = scene.options.exposure_gain;
     defaults.exposure_gamma = scene.options.exposure_gamma;
     defaults.quantize = scene.options.quantize;
-    for (std::size_t i = 0; i < displays.size(); ++i) {
-        const DisplayTarget target =
-            resolve_display(displays[i], image, static_cast<int>(i) == primary, defaults);
+    // Resolve every Display (an unknown AOV, a mode the format cannot
+    // hold) before the first is written.
+    std::vector<DisplayTarget> targets;
+    for (std::size_t i = 0; i < displays.size(); ++i)
+        targets.push_back(resolve_display(displays[i], image,
+                                          static_cast<int>(i) == primary, defaults));
+    for (const DisplayTarget& target : targets) {
         write_display(image, target, meta);
         report.files.push_back(target.path);
     }
+    outputs.commit();
     report.write_seconds = write_watch.seconds();
     if (options.progress) options.progress->finish();
     return report;

@@ -227,6 +227,8 @@ Scene read_rib(const std::string& path, const RibReadOptions& options) {
         throw ValueError(path + ": no WorldBegin: not a scene (an archive is read with "
                                 "ReadArchive from a scene's world block)");
     scene.sources.insert(scene.sources.begin(), path);
+    scene.source_uses.insert(scene.source_uses.begin(),
+                             "the scene file \"" + path + "\"");
     return scene;
 }
 

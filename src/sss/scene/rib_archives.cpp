@@ -55,8 +55,10 @@ void Reader::run_file(const Statement& from, const std::string& path) {
         fail(from, "geometry outside WorldBegin/WorldEnd");
     std::string text = slurp(path, " (ReadArchive at " + where(from) + ")");
     if (std::find(m_scene.sources.begin(), m_scene.sources.end(), path) ==
-        m_scene.sources.end())
+        m_scene.sources.end()) {
         m_scene.sources.push_back(path);
+        m_scene.source_uses.push_back(from.name + " \"" + path + "\" at " + where(from));
+    }
     ++m_depth;
     if (obj)
         add_obj(text, path);

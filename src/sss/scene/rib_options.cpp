@@ -195,6 +195,7 @@ void Reader::do_display(const Statement& s) {
         d.name.erase(0, 1);
     }
     if (d.name.empty()) fail(s, "empty display name");
+    d.where = where(s);
     if (!option_allowed(s)) return;
     // A primary display replaces every earlier display.
     if (!d.additional) m_scene.options.displays.clear();

@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <map>
 
+#include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 
 namespace sss {
 
@@ -185,8 +187,22 @@ std::vector<std::string> write_bake3d_files(std::span<const Bake3dRecord> record
                                             const ChannelDeclarations& declared,
                                             const PointCloudWriteOptions& options,
                                             const Camera* camera) {
+    std::vector<std::pair<std::string, PointCloud>> clouds =
+        bake3d_clouds(records, declared, camera);
+    // Every name is checked before any file is written.
+    JobFiles* job = JobFiles::current();
+    for (const auto& [file, cloud] : clouds) {
+        const std::string use = "bake3d file \"" + file + "\"";
+        if (job) job->output(file, use);
+        if (!has_extension_in(file, point_cloud_extensions()) &&
+            !writes_into_existing(file))
+            throw ValueError(use + ": " +
+                             unknown_extension_text(file, "a point cloud file",
+                                                    point_cloud_extensions()));
+        check_output_target(file);
+    }
     std::vector<std::string> files;
-    for (auto& [file, cloud] : bake3d_clouds(records, declared, camera)) {
+    for (auto& [file, cloud] : clouds) {
         write_point_cloud(cloud, file, options);
         files.push_back(file);
     }

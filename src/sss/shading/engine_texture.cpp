@@ -34,6 +34,7 @@
 #include <glm/matrix.hpp>
 
 #include "engine_internal.h"
+#include "sss/util/job_files.h"
 #include "sss/util/parse.h"
 #include "sss/util/version.h"
 #include "texture_library.h"
@@ -282,6 +283,10 @@ void op_textureinfo(Frame& f, const BoundOp& b) {
     const std::size_t i0 = f.first_active();
     const std::string& file = f.str(b, 1, i0);
     const std::string& key = f.str(b, 2, i0);
+    // A file this job writes is never read, not even its header.
+    if (std::string conflict = JobFiles::opened(file, "a textureinfo lookup");
+        !conflict.empty())
+        f.fail(b, "textureinfo \"" + file + "\": " + conflict);
     const Symbol& sym = f.program->symbols[b.op->args[3]];
     const bool str = sym.type.type == ShadingType::String;
     QueryValue v;

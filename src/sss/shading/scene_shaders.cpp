@@ -164,6 +164,27 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
     return out;
 }
 
+void record_shader_inputs(JobFiles& files, const SceneShaders& shaders) {
+    const auto add = [&](const ShaderInstance& s) {
+        const bool bakes = program_uses(s.program(), "bake3d");
+        for (const ShaderArgument& a : s.arguments()) {
+            if (bakes && a.name == "filename") continue;
+            for (const std::string& v : a.strings) {
+                std::error_code ec;
+                if (v.empty() || !std::filesystem::is_regular_file(v, ec)) continue;
+                files.input(v, "parameter \"" + a.name + "\" \"" + v + "\" of " +
+                                   (s.where().empty() ? s.program().name : s.where()));
+            }
+        }
+    };
+    for (const auto& s : shaders.surfaces) add(*s);
+    for (const auto& s : shaders.displacements) add(*s);
+    for (const auto& l : shaders.lights) add(*l);
+    if (shaders.library)
+        for (const std::string& f : shaders.library->files())
+            files.input(f, "the shader file \"" + f + "\"");
+}
+
 std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
     std::vector<std::string> files;
     const auto add = [&](const ShaderInstance& s) {

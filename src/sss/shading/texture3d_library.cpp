@@ -15,6 +15,7 @@
 
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 #include "texture2d_backend.h"
 #include "texture_library_impl.h"
 
@@ -148,6 +149,12 @@ bool TextureLibrary::texture3d(const std::string& file,
                                uint8_t* found, std::string* error) {
     channel_floats.assign(channels.size(), 0);
     if (found) std::fill(found, found + count, uint8_t(0));
+    // A file this job writes is never read (docs/cli-conventions.md).
+    if (std::string conflict = JobFiles::opened(file, "a texture3d lookup");
+        !conflict.empty()) {
+        if (error) *error = conflict;
+        return false;
+    }
     const std::shared_ptr<Texture3dFile> f = m_impl->open3d(file);
     if (!f->error.empty()) {
         if (error) *error = f->error;

@@ -13,12 +13,22 @@
 #include <cstdlib>
 #include <dlfcn.h>
 
+#include "sss/util/job_files.h"
 #include "texture2d_backend.h"
 #include "texture_library_impl.h"
 
 namespace sss::detail {
 
 namespace {
+
+/// False (with *error) when `file` is an output of the running job: a file
+/// the job writes is never read (docs/cli-conventions.md).
+bool readable_by_job(const std::string& file, const char* use, std::string* error) {
+    std::string conflict = JobFiles::opened(file, use);
+    if (conflict.empty()) return true;
+    if (error) *error = std::move(conflict);
+    return false;
+}
 
 /// The directory of the running executable ("" when unknown).
 std::string executable_dir() {
@@ -140,6 +150,7 @@ bool TextureLibrary::texture(const std::string& file, int channel, int nchannels
                              const float* s, const float* t, const float* ds_du,
                              const float* dt_du, const float* ds_dv, const float* dt_dv,
                              const uint8_t* mask, float* out, std::string* error) {
+    if (!readable_by_job(file, "a texture lookup", error)) return false;
     Texture2dBackend* b = m_impl->textures(error);
     return b && b->texture(file, channel, nchannels, options, count, s, t, ds_du, dt_du,
                            ds_dv, dt_dv, mask, out, error);
@@ -179,6 +190,7 @@ bool TextureLibrary::environment(const std::string& file, int channel, int nchan
                                  const glm::vec3* dir, const glm::vec3* ddir_du,
                                  const glm::vec3* ddir_dv, const uint8_t* mask,
                                  float* out, std::string* error) {
+    if (!readable_by_job(file, "an environment lookup", error)) return false;
     Texture2dBackend* b = m_impl->textures(error);
     return b && b->environment(file, channel, nchannels, options, count, dir, ddir_du,
                                ddir_dv, mask, out, error);
@@ -187,6 +199,7 @@ bool TextureLibrary::environment(const std::string& file, int channel, int nchan
 bool TextureLibrary::texture_info(const std::string& file, const std::string& key,
                                   int expected_floats, float* numbers,
                                   std::string* text) {
+    if (!readable_by_job(file, "a textureinfo lookup", nullptr)) return false;
     Texture2dBackend* b = m_impl->textures(nullptr);
     return b && b->texture_info(file, key, expected_floats, numbers, text);
 }

@@ -1,0 +1,2 @@
+/* Does not compile: an undeclared variable. */
+surface broken() { Ci = nosuchvariable; Oi = Os; }
