@@ -113,14 +113,14 @@ int run_job(const std::vector<std::string>& argv) {
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
     sss::Scene scene = sss::read_rib(rib, ropt);
-    for (const std::string& w : scene.warnings) sss::warn(kTool, w);
+    sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
     if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt),
                                       sss::bake_input_files(scene, opt)))
         return 0;
 
     sss::BakeReport report = sss::bake_scene(scene, opt);
-    for (const std::string& w : report.warnings) sss::warn(kTool, w);
+    sss::warn_all(kTool, report.warnings);
     if (job.verbose()) {
         std::printf("ptbake: %s: %zu primitives, %zu lights, %zu baked, %zu occluders "
                     "(%zu triangles, %zu shadowed lights)\n",

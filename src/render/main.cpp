@@ -86,7 +86,7 @@ int run(const std::vector<std::string>& argv) {
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
     const sss::Scene scene = sss::read_rib(rib, ropt);
-    for (const std::string& w : scene.warnings) sss::warn(kTool, w);
+    sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
     if (job.newer()) {
         const sss::RenderFiles io = sss::render_files(scene, opt);
@@ -94,7 +94,7 @@ int run(const std::vector<std::string>& argv) {
     }
 
     const sss::RenderReport report = sss::render_scene(scene, opt);
-    for (const std::string& w : report.warnings) sss::warn(kTool, w);
+    sss::warn_all(kTool, report.warnings);
     if (job.verbose()) {
         const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;
         const int yres = opt.yres > 0 ? opt.yres : scene.options.camera.yres;

@@ -11,6 +11,7 @@
 #include "sss/shading/compiler.h"
 #include "sss/shading/program.h"
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 
 namespace {
 
@@ -49,11 +50,20 @@ void add_define(sss::PreprocessOptions& options, const std::string& def) {
                                  eq == std::string::npos ? "1" : def.substr(eq + 1));
 }
 
-// Compiles one file; prints its diagnostics. Returns "" or what failed.
+// "1 error in a.sl".
+std::string errors_in(int errors, const std::string& file) {
+    return std::to_string(errors) + (errors == 1 ? " error in " : " errors in ") + file;
+}
+
+// Compiles one file; prints its diagnostics (compiler style: file:line:col,
+// the source line and a caret, which editors parse). Returns "" or what
+// failed, for the one ERROR line at the end.
 std::string compile_one(const std::string& file, const sss::PreprocessOptions& options,
                         const std::string& output, bool quiet) {
     sss::CompileResult result;
+    sss::flush_standard_output(); // keeps merged logs in order
     try {
+        sss::ScopedStage stage("compiling " + file);
         result = sss::compile_file(file, options);
     } catch (const sss::ShaderCompileError& e) {
         int errors = 0;
@@ -64,8 +74,7 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
                 continue;
             std::cerr << d.format() << "\n";
         }
-        return file + ": " + std::to_string(errors) +
-               (errors == 1 ? " error" : " errors");
+        return errors_in(errors, file);
     } catch (const sss::PreprocessError& e) {
         // what() is "file:line:column: message": print it as the compiler's.
         const std::string where = e.file() + ":" + std::to_string(e.line()) + ":" +
@@ -76,7 +85,7 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
         if (!e.source_line().empty())
             std::cerr << "  " << e.source_line() << "\n  "
                       << std::string(e.column() > 0 ? e.column() - 1 : 0, ' ') << "^\n";
-        return file + ": preprocessing failed";
+        return errors_in(1, file);
     }
     if (!quiet)
         for (const sss::Diagnostic& w : result.warnings) std::cerr << w.format() << "\n";
@@ -86,10 +95,15 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
                " shaders but -o names one output";
     for (const sss::Program& p : result.shaders) {
         const std::string path = output.empty() ? p.name + ".slo" : output;
-        sss::write_program_file(p, path);
-        if (!quiet)
+        // Printed before the .slo is committed: a standard output that
+        // cannot take it fails the job with the file left as it was.
+        if (!quiet) {
             std::cout << file << ": " << sss::shader_kind_name(p.kind) << " " << p.name
                       << " -> " << path << "\n";
+            sss::flush_standard_output();
+        }
+        sss::ScopedStage stage("writing " + path);
+        sss::write_program_file(p, path);
     }
     return "";
 }

@@ -204,17 +204,23 @@ void Reader::execute(const Statement& s) {
     } else if (unsupported(s.name)) {
         warn_once("unsupported " + s.name, s, s.name + " is not supported, skipped");
     } else {
-        warn_once("unknown " + s.name, s, "unknown statement " + s.name + ", skipped");
+        // A name is a word of the lexer's (letters, digits, '_'): one line.
+        warn_once("unknown " + s.name, s,
+                  "unknown statement " + truncated(s.name, kMaxEcho) + ", skipped",
+                  "unknown statement");
     }
 }
 
-void Reader::warn(const Statement& s, const std::string& what) {
-    m_scene.warnings.push_back(where(s) + ": " + what);
+void Reader::warn(const Statement& s, const std::string& what, std::string_view kind) {
+    if (kind.empty())
+        m_scene.warnings.push_back(where(s) + ": " + what);
+    else
+        m_scene.warnings.add(kind, where(s) + ": " + what);
 }
 
 void Reader::warn_once(const std::string& key, const Statement& s,
-                       const std::string& what) {
-    if (m_warned.insert(key).second) warn(s, what);
+                       const std::string& what, std::string_view kind) {
+    if (m_warned.insert(key).second) warn(s, what, kind);
 }
 
 } // namespace rib

@@ -167,7 +167,9 @@ void Reader::do_procedural(const Statement& s) {
 }
 
 void Reader::add_obj(const std::string& text, const std::string& path) {
-    auto mesh = detail::import_obj(text, path, m_scene.warnings);
+    std::vector<std::string> warnings;
+    auto mesh = detail::import_obj(text, path, warnings);
+    for (std::string& w : warnings) m_scene.warnings.push_back(std::move(w));
     if (!mesh) return;
     Statement at;
     at.name = "ReadArchive";

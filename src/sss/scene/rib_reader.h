@@ -69,8 +69,11 @@ private:
     bool diverted(const Statement& s);
     /// Request name -> handler.
     static const HandlerTable& handlers();
-    void warn(const Statement& s, const std::string& what);
-    void warn_once(const std::string& key, const Statement& s, const std::string& what);
+    /// Adds the warning "file:line: what"; `kind` groups it with others for
+    /// the count (Warnings), else its text does.
+    void warn(const Statement& s, const std::string& what, std::string_view kind = {});
+    void warn_once(const std::string& key, const Statement& s, const std::string& what,
+                   std::string_view kind = {});
 
     // --- rib_params.cpp: parameter lists --------------------------------------
 

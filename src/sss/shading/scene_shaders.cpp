@@ -12,6 +12,7 @@
 
 #include "builtins.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -52,8 +53,8 @@ bool looks_like_file(const std::string& v) {
 }
 
 std::string call_where(const ShaderRef& ref, const char* request) {
-    return (ref.source.empty() ? std::string() : ref.source + ": ") + request + " \"" +
-           ref.name + "\"";
+    return (ref.source.empty() ? std::string() : ref.source + ": ") + request + " " +
+           sss::quoted(ref.name);
 }
 
 } // namespace

@@ -21,6 +21,7 @@
 
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -241,6 +242,9 @@ AtomicOutput::~AtomicOutput() {
 
 void AtomicOutput::commit() {
     if (m_committed) return;
+    // A job whose report could not be written fails without changing its
+    // outputs (docs/cli-conventions.md, "Standard output").
+    check_standard_output();
     int fd = ::open(m_temp.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         throw IoError(m_target, "cannot open temporary file '" + m_temp +
