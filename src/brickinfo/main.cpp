@@ -208,7 +208,7 @@ void write_picture(const sss::BrickMap& map, const Request& request) {
     if (request.picture.mode == sss::BrickMapPictureMode::Level)
         std::printf(", %zu samples drawn", r.samples_drawn);
     std::printf("\n");
-    std::fflush(stdout);
+    sss::flush_standard_output();
     if (r.pixels_with_data == 0)
         sss::warn(kTool,
                   request.picture_path + ": no data in the picture (" +
@@ -245,7 +245,7 @@ void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job) {
     for (const std::string& name : report.not_compared)
         std::printf("brickinfo: compare %s: not in %s (or another type)\n", name.c_str(),
                     r.lookup_in.c_str());
-    std::fflush(stdout);
+    sss::flush_standard_output();
     if (report.misses > 0)
         sss::warn(kTool, r.lookup_in + ": " + std::to_string(report.misses) +
                              " points have no map data around them (written as 0)");
@@ -258,7 +258,7 @@ int run(const std::vector<std::string>& argv) {
     const sss::BrickMap map(request->map_path);
     if (request->info) {
         std::fputs(sss::describe_brick_map(request->map_path, map).c_str(), stdout);
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     if (!request->picture_path.empty()) write_picture(map, *request);
     if (!request->lookup_in.empty()) lookup_cloud(map, *request, job);

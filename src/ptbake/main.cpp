@@ -13,6 +13,7 @@
 #include "sss/scene/rib.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/limits.h"
 #include "sss/util/parse.h"
 
 namespace {
@@ -112,7 +113,10 @@ int run_job(const std::vector<std::string>& argv) {
 
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
-    sss::Scene scene = sss::read_rib(rib, ropt);
+    sss::Scene scene = [&] {
+        sss::ScopedStage stage("reading " + rib);
+        return sss::read_rib(rib, ropt);
+    }();
     sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
     if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt),
@@ -138,7 +142,7 @@ int run_job(const std::vector<std::string>& argv) {
                     read_s, report.dice_seconds, report.trace_build_seconds,
                     report.light_seconds, report.write_seconds, job.seconds(),
                     job.threads());
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     return 0;
 }

@@ -62,8 +62,10 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
                         const std::string& output, bool quiet) {
     sss::CompileResult result;
     sss::flush_standard_output(); // keeps merged logs in order
+    // Outside the try: a file that does not compile ends the stage normally
+    // (the stage an exception leaves is the one an out-of-memory names).
+    sss::ScopedStage stage("compiling " + file);
     try {
-        sss::ScopedStage stage("compiling " + file);
         result = sss::compile_file(file, options);
     } catch (const sss::ShaderCompileError& e) {
         int errors = 0;
@@ -102,7 +104,7 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
                       << " -> " << path << "\n";
             sss::flush_standard_output();
         }
-        sss::ScopedStage stage("writing " + path);
+        sss::ScopedStage writing("writing " + path);
         sss::write_program_file(p, path);
     }
     return "";

@@ -19,6 +19,7 @@
 #include "sss/cli/job.h"
 #include "sss/cli/options.h"
 #include "sss/util/atomic_output.h"
+#include "sss/util/limits.h"
 #include "sss/util/messages.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"

@@ -55,7 +55,9 @@ bool unsupported(std::string_view name) {
 
 void Reader::read_text(std::string_view text, const std::string& path) {
     m_scene.path = path;
+    m_reading.emplace_back(file_key(path), path);
     run_text(text, std::make_shared<const std::string>(path));
+    m_reading.pop_back();
 }
 
 Scene Reader::finish(const std::string& path) {

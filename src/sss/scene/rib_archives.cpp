@@ -15,6 +15,8 @@
 #include "obj_import.h"
 #include "rib_args.h"
 #include "sss/util/byte_io.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss::rib {
 
@@ -22,7 +24,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kMaxArchiveDepth = 32;
+/// Statements replayed from inline archives (ReadArchive of an
+/// ArchiveBegin block) in one scene: archives that each read the next one
+/// twice double the work per level, and 32 levels would run for hours;
+/// 10 million take about 2 s and are far more than a real scene replays.
+constexpr uint64_t kMaxReplayedStatements = 10'000'000;
 
 bool ends_with_obj(const std::string& path) {
     return path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".obj";
@@ -40,16 +46,36 @@ std::string resolve_path(const Statement& s, const std::string& name) {
 
 // --- files -----------------------------------------------------------------
 
+std::string file_key(const std::string& path) {
+    std::error_code ec;
+    fs::path p = fs::weakly_canonical(fs::path(path), ec);
+    return ec ? fs::path(path).lexically_normal().string() : p.string();
+}
+
 void Reader::run_text(std::string_view text, std::shared_ptr<const std::string> path) {
     Lexer lexer(text, std::move(path));
     Statement st;
     while (lexer.next(st)) execute(st);
 }
 
+void Reader::check_archive_depth(const Statement& from, const std::string& name) {
+    check_limit(Limit::ArchiveDepth, uint64_t(m_depth) + 1,
+                where(from) + ": " + from.name + " " + sss::quoted(name));
+}
+
 void Reader::run_file(const Statement& from, const std::string& path) {
-    if (m_depth >= kMaxArchiveDepth)
-        fail(from, "archives nested more than " + std::to_string(kMaxArchiveDepth) +
-                       " deep (does \"" + path + "\" read itself?)");
+    // A file that reads itself (directly or through others) never ends:
+    // RIB has no conditions that could stop it.
+    const std::string key = file_key(path);
+    for (std::size_t i = 0; i < m_reading.size(); ++i)
+        if (m_reading[i].first == key) {
+            std::string chain;
+            for (std::size_t j = i; j < m_reading.size(); ++j)
+                chain += truncated(m_reading[j].second, kMaxEcho) + " -> ";
+            fail(from, sss::quoted(path) + " reads itself (" + chain +
+                           truncated(path, kMaxEcho) + ")");
+        }
+    check_archive_depth(from, path);
     const bool obj = ends_with_obj(path);
     if (obj && !m_object && !m_in_world)
         fail(from, "geometry outside WorldBegin/WorldEnd");
@@ -58,10 +84,12 @@ void Reader::run_file(const Statement& from, const std::string& path) {
         m_scene.sources.end())
         m_scene.sources.push_back(path);
     ++m_depth;
+    m_reading.emplace_back(key, path);
     if (obj)
         add_obj(text, path);
     else
         run_text(text, std::make_shared<const std::string>(path));
+    m_reading.pop_back();
     --m_depth;
 }
 
@@ -71,10 +99,23 @@ std::string slurp(const std::string& path, const std::string& context) {
     if (!in)
         throw IoError(path,
                       std::string("cannot open") + context + ": " + std::strerror(errno));
-    std::ostringstream ss;
-    ss << in.rdbuf();
+    // Read in one block of the file's size, after checking that the text
+    // and what parsing it may take (arguments are checked as they grow) fit.
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(path, ec);
+    std::string text;
+    if (!ec && size > 0) {
+        check_memory(size, "reading " + path, "split the scene into smaller archives");
+        text.resize(size);
+        in.read(text.data(), std::streamsize(size));
+        text.resize(std::size_t(in.gcount()));
+    }
+    // A file that grew while read: the rest too.
+    std::ostringstream rest;
+    rest << in.rdbuf();
     if (in.bad()) throw IoError(path, "read error");
-    return ss.str();
+    text += rest.str();
+    return text;
 }
 
 // --- frames ----------------------------------------------------------------
@@ -126,9 +167,23 @@ void Reader::do_archive_end(const Statement& s) {
 void Reader::read_archive(const Statement& s, const std::string& name) {
     auto it = m_archives.find(name);
     if (it != m_archives.end()) {
-        if (m_depth >= kMaxArchiveDepth)
-            fail(s, "archives nested more than " + std::to_string(kMaxArchiveDepth) +
-                        " deep (does \"" + name + "\" read itself?)");
+        check_archive_depth(s, name);
+        m_replayed += it->second.size();
+        if (m_replayed > kMaxReplayedStatements)
+            fail(s, "inline archives replayed more than " +
+                        std::to_string(kMaxReplayedStatements) +
+                        " statements (archives that read others several times grow "
+                        "exponentially with their nesting)");
+        // What the replayed statements make (primitives) is in no other
+        // estimate: check the memory every million statements.
+        if (m_replayed >= m_next_replay_check) {
+            check_memory(kMemoryCheckStep,
+                         where(s) + ": ReadArchive " + sss::quoted(name) + " (" +
+                             std::to_string(m_replayed) +
+                             " statements replayed from inline archives)",
+                         "read fewer inline archives");
+            m_next_replay_check = m_replayed + 1'000'000;
+        }
         // Copy: the archive may be redefined while it is replayed.
         std::vector<Statement> body = it->second;
         ++m_depth;

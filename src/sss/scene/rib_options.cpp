@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "rib_args.h"
+#include "sss/util/limits.h"
 
 namespace sss::rib {
 
@@ -26,6 +27,11 @@ void Reader::do_format(const Statement& s) {
     int xres = to_int(s, n[0], "xresolution");
     int yres = to_int(s, n[1], "yresolution");
     if (xres < 1 || yres < 1) fail(s, "resolution must be positive");
+    // Before anything is sized by it (render's image, ptbake's dicing rate).
+    const std::string at =
+        where(s) + ": Format " + std::to_string(xres) + " " + std::to_string(yres);
+    check_limit(Limit::ImageSide, uint64_t(std::max(xres, yres)), at);
+    check_limit(Limit::ImagePixels, uint64_t(xres) * uint64_t(yres), at);
     if (!(n[2] > 0.0)) fail(s, "pixel aspect ratio must be positive, got " + fmt(n[2]));
     if (!option_allowed(s)) return;
     m_scene.options.camera.xres = xres;

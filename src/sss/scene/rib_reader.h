@@ -46,6 +46,9 @@ struct SavedState {
 /// The whole text of a file; throws IoError "cannot open<context>: <reason>".
 std::string slurp(const std::string& path, const std::string& context);
 
+/// The identity of a file for the ReadArchive cycle check: its canonical path.
+std::string file_key(const std::string& path);
+
 class Reader {
 public:
     explicit Reader(const RibReadOptions& options)
@@ -86,6 +89,8 @@ private:
 
     void run_text(std::string_view text, std::shared_ptr<const std::string> path);
     void run_file(const Statement& from, const std::string& path);
+    /// One more level of archives is within Limit::ArchiveDepth.
+    void check_archive_depth(const Statement& from, const std::string& name);
     void read_archive(const Statement& s, const std::string& name);
     /// The mesh of an OBJ file, as a primitive under the current state.
     void add_obj(const std::string& text, const std::string& path);
@@ -208,7 +213,11 @@ private:
     std::optional<double> m_frame_aspect;
     std::map<std::string, Matrix4> m_camera_spaces; // CoordinateSystem before WorldBegin
     std::set<std::string> m_warned;
-    int m_depth = 0;
+    int m_depth = 0; // archives being read (files and inline archives)
+    /// Files being read through ReadArchive: (file_key, path as named).
+    std::vector<std::pair<std::string, std::string>> m_reading;
+    uint64_t m_replayed = 0; // statements replayed from inline archives
+    uint64_t m_next_replay_check = 1'000'000;
     // frames
     bool m_in_frame = false;
     bool m_frame_read = false;
@@ -222,6 +231,12 @@ private:
     // lights and objects
     std::unordered_map<std::string, int> m_light_handles;
     std::unordered_map<std::string, std::vector<Primitive>> m_objects;
+    // Memory of the primitives ObjectInstance and inline archives copied,
+    // checked against the budget every kMemoryCheckStep bytes.
+    static constexpr uint64_t kMemoryCheckStep = 64u << 20;
+    uint64_t m_copied_bytes = 0;
+    uint64_t m_copied_primitives = 0;
+    uint64_t m_next_memory_check = kMemoryCheckStep;
     std::vector<Primitive>* m_object = nullptr;
     std::string m_object_handle;
     // inline archives

@@ -11,12 +11,29 @@
 #include <glm/matrix.hpp>
 
 #include "rib_args.h"
+#include "sss/util/limits.h"
 #include "sss/util/math.h"
+#include "sss/util/messages.h"
 #include "sss/util/name_table.h"
 
 namespace sss::rib {
 
 namespace {
+
+/// Memory a primitive holds, roughly (its arrays and strings).
+uint64_t approx_bytes(const Primitive& p) {
+    uint64_t bytes = sizeof(Primitive) + p.source.size() + p.type.size();
+    bytes += (p.args.size() + p.tag_floatargs.size()) * sizeof(double);
+    bytes += (p.nloops.size() + p.nverts.size() + p.verts.size() + p.tag_nargs.size() +
+              p.tag_intargs.size()) *
+             sizeof(int);
+    for (const std::string& t : p.tags) bytes += sizeof(std::string) + t.size();
+    for (const Param& q : p.params.items) {
+        bytes += sizeof(Param) + q.name.size() + q.numbers.size() * sizeof(double);
+        for (const std::string& t : q.strings) bytes += sizeof(std::string) + t.size();
+    }
+    return bytes;
+}
 
 /// "file.rib:12" where a block opened.
 std::string where_saved(const SavedState& s) {
@@ -189,7 +206,22 @@ void Reader::do_object_instance(const Statement& s) {
     no_more_args(s, i);
     auto it = m_objects.find(handle);
     if (it == m_objects.end() || (m_object && handle == m_object_handle))
-        fail(s, "unknown object handle \"" + handle + "\"");
+        fail(s, "unknown object handle " + sss::quoted(handle));
+    // Each instance copies the object's primitives, and objects that
+    // instance others multiply them: check the memory as the copies grow.
+    uint64_t bytes = 0;
+    for (const Primitive& def : it->second) bytes += approx_bytes(def);
+    m_copied_bytes += bytes;
+    m_copied_primitives += it->second.size();
+    if (m_copied_bytes >= m_next_memory_check) {
+        check_memory(bytes + kMemoryCheckStep,
+                     where(s) + ": ObjectInstance " + sss::quoted(handle) + " (" +
+                         std::to_string(m_copied_primitives) +
+                         " primitives copied by instances so far)",
+                     "instance fewer objects (each ObjectInstance copies the object's "
+                     "primitives)");
+        m_next_memory_check = m_copied_bytes + kMemoryCheckStep;
+    }
     for (const Primitive& def : it->second) {
         Primitive p = def;
         add_primitive(s, std::move(p), def.object_to_world, def.source);
