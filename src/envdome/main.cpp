@@ -155,6 +155,7 @@ int run(const std::vector<std::string>& args) {
             throw sss::UsageError("-sky takes no probe, only an output file");
         sss::ScopedStage stage("making the sky " + output);
         const sss::LatLongImage img = sss::sky_probe(sky_w, sky_h, sky_opt);
+        job.progress()->update(1, 2);
         sss::Image out(sky_w, sky_h, {"R", "G", "B"});
         out.pixels = img.rgb;
         sss::DisplayTarget target;

@@ -1185,14 +1185,13 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     Image image =
         resolve_pixels(job, grid, add_tiles(job, grid, tile_sums), depth, nearest);
     // A camera that sees nothing of a scene with geometry is a mistake more
-    // often than a wish (a camera transform given after WorldBegin, a sign).
-    if (!scene.primitives.empty() && std::all_of(depth.begin(), depth.end(), [](float z) {
-            return !std::isfinite(z);
-        }))
-        report.warnings.push_back(name +
-                                  ": no surface is in view of the camera: the image is "
-                                  "empty (check the camera transform, Projection and "
-                                  "ScreenWindow before WorldBegin)");
+    // often than a wish (a camera transform after WorldBegin, a sign).
+    const auto missed = [](float z) { return !std::isfinite(z); };
+    if (!scene.primitives.empty() && std::all_of(depth.begin(), depth.end(), missed))
+        report.warnings.push_back(
+            name + ": no camera ray hit a surface: the image is empty (is the camera "
+                   "looking away from the scene, or is the scene smaller than a pixel? "
+                   "See the camera transform, Projection and ScreenWindow)");
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
