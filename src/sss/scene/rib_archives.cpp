@@ -206,7 +206,7 @@ void Reader::do_procedural(const Statement& s) {
     std::string kind = take_string(s, i, "procedural name");
     if (kind != "DelayedReadArchive") {
         warn_once("procedural " + kind, s,
-                  "Procedural \"" + kind + "\" is not supported, skipped");
+                  "Procedural " + sss::quoted(kind) + " is not supported, skipped");
         return;
     }
     auto files = take_string_array(s, i, "archive file name");

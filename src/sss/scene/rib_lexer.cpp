@@ -260,7 +260,8 @@ Lexer::Token Lexer::scan() {
         std::string l = lower(t.text);
         // A writer printing a NaN or Inf bare would otherwise look like a request.
         if (l == "nan" || l == "inf" || l == "infinity")
-            fail(t.line, m_statement, "not a finite number: '" + t.text + "'");
+            fail(t.line, m_statement,
+                 "not a finite number: '" + truncated(t.text, 10) + "'");
     } else if (uc >= 0x80 || uc < 0x20 || uc == 0x7f) {
         char hex[8];
         std::snprintf(hex, sizeof hex, "0x%02x", uc);

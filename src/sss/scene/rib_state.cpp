@@ -320,7 +320,7 @@ void Reader::do_coordinate_system(const Statement& s) {
     std::string name = take_string(s, i, "coordinate system name");
     no_more_args(s, i);
     if (name.empty()) fail(s, "empty coordinate system name");
-    if (predefined_space(name)) fail(s, "\"" + name + "\" is a predefined space");
+    if (predefined_space(name)) fail(s, sss::quoted(name) + " is a predefined space");
     if (m_in_world)
         m_scene.coordinate_systems[name] = m_ctm;
     else
@@ -340,16 +340,16 @@ void Reader::do_coord_sys_transform(const Statement& s) {
     } else if (name == "shader") {
         if (m_attr.attrs.surface) m_ctm = m_attr.attrs.surface->shader_to_world;
     } else if (name == "screen" || name == "raster" || name == "NDC") {
-        fail(s, "\"" + name + "\" space is not supported");
+        fail(s, sss::quoted(name) + " space is not supported");
     } else if (m_in_world) {
         auto it = m_scene.coordinate_systems.find(name);
         if (it == m_scene.coordinate_systems.end())
-            fail(s, "unknown coordinate system \"" + name + "\"");
+            fail(s, "unknown coordinate system " + sss::quoted(name));
         m_ctm = it->second;
     } else {
         auto it = m_camera_spaces.find(name);
         if (it == m_camera_spaces.end())
-            fail(s, "unknown coordinate system \"" + name + "\"");
+            fail(s, "unknown coordinate system " + sss::quoted(name));
         m_ctm = it->second;
     }
 }
