@@ -84,7 +84,7 @@ bool Reader::diverted(const Statement& s) {
             ++m_record_depth;
         } else if (s.name == "ArchiveEnd") {
             if (m_record_depth == 0) {
-                m_archives[m_record_name] = std::move(m_record);
+                define_archive(m_record_name, std::move(m_record));
                 m_record.clear();
                 m_recording = false;
                 return true;

@@ -26,8 +26,10 @@ namespace fs = std::filesystem;
 
 /// Statements replayed from inline archives (ReadArchive of an
 /// ArchiveBegin block) in one scene: archives that each read the next one
-/// twice double the work per level, and 32 levels would run for hours;
-/// 10 million take about 2 s and are far more than a real scene replays.
+/// twice double the work per level, and 32 levels would run for hours.
+/// 10 million (about 1 s) are far more than a real scene replays; a reading
+/// that would exceed them is refused before it starts (define_archive
+/// counts what each archive replays).
 constexpr uint64_t kMaxReplayedStatements = 10'000'000;
 
 bool ends_with_obj(const std::string& path) {
@@ -59,8 +61,11 @@ void Reader::run_text(std::string_view text, std::shared_ptr<const std::string> 
 }
 
 void Reader::check_archive_depth(const Statement& from, const std::string& name) {
-    check_limit(Limit::ArchiveDepth, uint64_t(m_depth) + 1,
-                where(from) + ": " + from.name + " " + sss::quoted(name));
+    // Read once: replays of inline archives call this millions of times.
+    if (m_max_depth == 0) m_max_depth = limit(Limit::ArchiveDepth);
+    if (uint64_t(m_depth) + 1 > m_max_depth)
+        check_limit(Limit::ArchiveDepth, uint64_t(m_depth) + 1,
+                    where(from) + ": " + from.name + " " + sss::quoted(name));
 }
 
 void Reader::run_file(const Statement& from, const std::string& path) {
@@ -164,16 +169,32 @@ void Reader::do_archive_end(const Statement& s) {
     fail(s, "ArchiveEnd without ArchiveBegin");
 }
 
+void Reader::define_archive(const std::string& name, std::vector<Statement> body) {
+    // What reading it replays, known now for the archives it reads that are
+    // defined already: an exponential nesting is refused before it runs.
+    uint64_t replays = 0;
+    for (const Statement& st : body) {
+        uint64_t n = 1;
+        if (st.name == "ReadArchive" && !st.args.empty() && st.args[0].is_string())
+            if (auto it = m_archives.find(st.args[0].string); it != m_archives.end())
+                n += it->second.replays;
+        replays = std::min(replays + n, uint64_t(1) << 62);
+    }
+    m_archives[name] = {std::make_shared<const std::vector<Statement>>(std::move(body)),
+                        replays};
+}
+
 void Reader::read_archive(const Statement& s, const std::string& name) {
     auto it = m_archives.find(name);
     if (it != m_archives.end()) {
         check_archive_depth(s, name);
-        m_replayed += it->second.size();
-        if (m_replayed > kMaxReplayedStatements)
-            fail(s, "inline archives replayed more than " +
+        if (m_replayed + it->second.replays > kMaxReplayedStatements)
+            fail(s, sss::quoted(name) + " replays " + std::to_string(it->second.replays) +
+                        " statements from inline archives, more than " +
                         std::to_string(kMaxReplayedStatements) +
-                        " statements (archives that read others several times grow "
+                        " in one scene (archives that read others several times grow "
                         "exponentially with their nesting)");
+        m_replayed += it->second.body->size();
         // What the replayed statements make (primitives) is in no other
         // estimate: check the memory every million statements.
         if (m_replayed >= m_next_replay_check) {
@@ -184,10 +205,10 @@ void Reader::read_archive(const Statement& s, const std::string& name) {
                          "read fewer inline archives");
             m_next_replay_check = m_replayed + 1'000'000;
         }
-        // Copy: the archive may be redefined while it is replayed.
-        std::vector<Statement> body = it->second;
+        // Held: the archive may be redefined while it is replayed.
+        const std::shared_ptr<const std::vector<Statement>> body = it->second.body;
         ++m_depth;
-        for (const Statement& st : body) execute(st);
+        for (const Statement& st : *body) execute(st);
         --m_depth;
         return;
     }

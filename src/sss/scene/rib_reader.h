@@ -92,6 +92,8 @@ private:
     /// One more level of archives is within Limit::ArchiveDepth.
     void check_archive_depth(const Statement& from, const std::string& name);
     void read_archive(const Statement& s, const std::string& name);
+    /// Stores an inline archive and how many statements reading it replays.
+    void define_archive(const std::string& name, std::vector<Statement> body);
     /// The mesh of an OBJ file, as a primitive under the current state.
     void add_obj(const std::string& text, const std::string& path);
     void do_frame_begin(const Statement& s);
@@ -213,7 +215,8 @@ private:
     std::optional<double> m_frame_aspect;
     std::map<std::string, Matrix4> m_camera_spaces; // CoordinateSystem before WorldBegin
     std::set<std::string> m_warned;
-    int m_depth = 0; // archives being read (files and inline archives)
+    int m_depth = 0;          // archives being read (files and inline archives)
+    uint64_t m_max_depth = 0; // limit(Limit::ArchiveDepth), once read
     /// Files being read through ReadArchive: (file_key, path as named).
     std::vector<std::pair<std::string, std::string>> m_reading;
     uint64_t m_replayed = 0; // statements replayed from inline archives
@@ -240,7 +243,14 @@ private:
     std::vector<Primitive>* m_object = nullptr;
     std::string m_object_handle;
     // inline archives
-    std::unordered_map<std::string, std::vector<Statement>> m_archives;
+    /// Shared: a replay keeps its body while the archive is redefined.
+    struct InlineArchive {
+        std::shared_ptr<const std::vector<Statement>> body;
+        /// Statements a ReadArchive of it replays, the inline archives it
+        /// reads included (as defined when it was; saturated).
+        uint64_t replays = 0;
+    };
+    std::unordered_map<std::string, InlineArchive> m_archives;
     bool m_recording = false;
     int m_record_depth = 0;
     std::string m_record_name;
