@@ -18,6 +18,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/limits.h"
+#include "sss/util/messages.h"
 #include "sss/util/job_files.h"
 
 namespace {
@@ -311,16 +312,18 @@ int run(const std::vector<std::string>& argv) {
     if (request->info) {
         std::fputs(sss::describe_brick_map(request->map_path, map, verified).c_str(),
                    stdout);
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     // The picture and the lookup's cloud are put in place together, or neither.
     Messages messages;
     sss::OutputSet outputs;
     if (!request->picture_path.empty()) write_picture(map, *request, messages);
     if (!request->lookup_in.empty()) lookup_cloud(map, *request, job, messages);
-    outputs.commit();
+    // The report goes out before the outputs are put in place: a report that
+    // cannot be written fails the job with its outputs unchanged.
     std::fputs(messages.out.c_str(), stdout);
-    std::fflush(stdout);
+    sss::flush_standard_output();
+    outputs.commit();
     for (const std::string& w : messages.warnings) sss::warn(kTool, w);
     return 0;
 }

@@ -118,8 +118,10 @@ int run(const std::vector<std::string>& argv) {
     opt.provenance =
         sss::quoted_command_line(std::string(kTool) + " " + sss::version_string(), argv);
 
-    const sss::BrickMapBuildReport report =
-        sss::make_brick_map_from_files(files, opt, out_path);
+    const sss::BrickMapBuildReport report = [&] {
+        sss::ScopedStage stage("making the brick map " + out_path);
+        return sss::make_brick_map_from_files(files, opt, out_path);
+    }();
     if (job.verbose()) {
         std::printf(
             "brickmake: %s: %zu points, %zu bricks (%zu before pruning), %llu bytes\n",
@@ -134,7 +136,7 @@ int run(const std::vector<std::string>& argv) {
         }
         std::printf("brickmake: build %.3f s, total %.3f s (with reading), threads %d\n",
                     report.seconds, job.seconds(), job.threads());
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     return 0;
 }

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -165,7 +166,9 @@ int run(const std::vector<std::string>& args) {
     if (sky) {
         if (!files.empty())
             throw sss::UsageError("-sky takes no probe, only an output file");
+        sss::ScopedStage stage("making the sky " + output);
         const sss::LatLongImage img = sss::sky_probe(sky_w, sky_h, sky_opt);
+        job.progress()->update(1, 2);
         sss::Image out(sky_w, sky_h, {"R", "G", "B"});
         out.pixels = img.rgb;
         sss::DisplayTarget target;
@@ -190,12 +193,16 @@ int run(const std::vector<std::string>& args) {
     if (files.empty()) throw sss::UsageError("no probe file given");
     if (files.size() > 1) throw sss::UsageError("more than one probe given");
     const std::string& probe = files[0];
+    std::optional<sss::ScopedStage> stage(std::in_place, "reading " + probe);
     const sss::LatLongImage img = load_probe(probe);
     job.progress()->update(1, 3);
+    stage.emplace("placing the lights of " + probe);
     const std::vector<sss::DomeLight> lights = sss::median_cut(img, count);
     job.progress()->update(2, 3);
     rib.probe = probe;
+    stage.emplace("writing " + output);
     write_text(output, sss::dome_rib(lights, rib));
+    stage.reset();
     job.progress()->finish();
     if (job.verbose()) {
         const glm::dvec3 e = sss::latlong_integral(img);

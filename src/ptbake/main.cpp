@@ -15,6 +15,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 #include "sss/util/parse.h"
 
 namespace {
@@ -125,15 +126,18 @@ int run_job(const std::vector<std::string>& argv) {
 
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
-    sss::Scene scene = sss::read_rib(rib, ropt);
-    for (const std::string& w : scene.warnings) sss::warn(kTool, w);
+    sss::Scene scene = [&] {
+        sss::ScopedStage stage("reading " + rib);
+        return sss::read_rib(rib, ropt);
+    }();
+    sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
     if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt),
                                       sss::bake_input_files(scene, opt)))
         return 0;
 
     sss::BakeReport report = sss::bake_scene(scene, opt);
-    for (const std::string& w : report.warnings) sss::warn(kTool, w);
+    sss::warn_all(kTool, report.warnings);
     if (job.verbose()) {
         std::printf("ptbake: %s: %zu primitives, %zu lights, %zu baked, %zu occluders "
                     "(%zu triangles, %zu shadowed lights)\n",
@@ -151,7 +155,7 @@ int run_job(const std::vector<std::string>& argv) {
                     read_s, report.dice_seconds, report.trace_build_seconds,
                     report.light_seconds, report.write_seconds, job.seconds(),
                     job.threads());
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     return 0;
 }

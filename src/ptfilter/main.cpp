@@ -15,6 +15,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 #include "sss/util/parse.h"
 
 namespace {
@@ -156,17 +157,23 @@ int run(const std::vector<std::string>& argv) {
     if (job.verbose()) {
         for (const std::string& line : material)
             std::printf("ptfilter: %s\n", line.c_str());
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
 
-    sss::PointCloud cloud = sss::read_point_cloud(files[0]);
-    for (std::size_t i = 1; i < files.size(); ++i)
-        cloud.append(sss::read_point_cloud(files[i]));
+    sss::PointCloud cloud;
+    for (std::size_t i = 0; i < files.size(); ++i) {
+        sss::ScopedStage stage("reading " + files[i]);
+        if (i == 0)
+            cloud = sss::read_point_cloud(files[i]);
+        else
+            cloud.append(sss::read_point_cloud(files[i]));
+    }
     double read_s = job.seconds();
 
     sss::SsDiffusionReport report;
     sss::PointCloud out;
     try {
+        sss::ScopedStage stage("filtering " + sss::join(files));
         out = sss::ssdiffusion(cloud, opt, &report);
     } catch (const sss::MissingChannelError& e) {
         throw sss::ValueError(sss::join(files) + ": input has no channel '" +
@@ -179,7 +186,10 @@ int run(const std::vector<std::string>& argv) {
     for (const std::string& w : report.warnings) sss::warn(kTool, w);
     double filter_s = job.seconds() - read_s;
 
-    sss::write_point_cloud(out, out_path, wopt);
+    {
+        sss::ScopedStage stage("writing " + out_path);
+        sss::write_point_cloud(out, out_path, wopt);
+    }
     if (job.verbose()) {
         std::printf(
             "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
@@ -197,7 +207,7 @@ int run(const std::vector<std::string>& argv) {
         std::printf(
             "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
             read_s, filter_s, job.seconds() - read_s - filter_s, job.seconds());
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     return 0;
 }

@@ -49,9 +49,11 @@ int run(const std::vector<std::string>& args) {
     if (files.empty()) throw sss::UsageError("missing input file");
 
     for (std::size_t i = 0; i < files.size(); ++i) {
+        sss::ScopedStage stage("reading " + files[i]);
         const sss::PointCloud cloud = sss::read_point_cloud(files[i]);
         std::cout << (i > 0 ? "\n" : "")
-                  << sss::describe_point_cloud(files[i], cloud, stats) << std::flush;
+                  << sss::describe_point_cloud(files[i], cloud, stats);
+        sss::flush_standard_output();
     }
     return 0;
 }

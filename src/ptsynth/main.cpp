@@ -14,6 +14,7 @@
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 
 namespace {
 
@@ -109,10 +110,18 @@ int run(const std::vector<std::string>& args) {
     sss::check_output_target(output);
 
     sss::Stopwatch watch;
-    sss::PointCloud cloud = sss::make_synthetic_cloud(params);
-    sss::write_point_cloud(cloud, output, write_options);
-    std::printf("%s: wrote %zu points to %s in %.2f s\n", kTool, cloud.size(),
+    sss::PointCloud cloud;
+    {
+        sss::ScopedStage stage("making the point cloud");
+        cloud = sss::make_synthetic_cloud(params);
+    }
+    // Printed before the file is committed: if standard output cannot take
+    // it, the job fails and the file is left as it was.
+    std::printf("%s: writing %zu points to %s (made in %.2f s)\n", kTool, cloud.size(),
                 output.c_str(), watch.seconds());
+    sss::flush_standard_output();
+    sss::ScopedStage stage("writing " + output);
+    sss::write_point_cloud(cloud, output, write_options);
     return 0;
 }
 

@@ -3,6 +3,9 @@
 /// and point-cloud _ssdiffusion lookups included) and writes its Displays,
 /// beauty and AOVs. Option parsing around sss::read_rib and sss::render_scene.
 
+#include <algorithm>
+#include <climits>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -14,6 +17,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 
 namespace {
 
@@ -59,8 +63,9 @@ int run(const std::vector<std::string>& argv) {
             opt.output = args.value(o);
             opt.output_label = "option -o";
         } else if (o == "res") {
-            opt.xres = args.integer(o, 1, 65536);
-            opt.yres = args.integer(o, 1, 65536);
+            // Any size: the image limits below say how far it may go.
+            opt.xres = args.integer(o, 1, INT_MAX);
+            opt.yres = args.integer(o, 1, INT_MAX);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
         } else if (o == "p") {
@@ -78,6 +83,14 @@ int run(const std::vector<std::string>& argv) {
     if (files.size() != 1)
         throw sss::UsageError(files.empty() ? "no scene given (usage: render scene.rib)"
                                             : "more than one scene given");
+    if (opt.xres > 0) {
+        const std::string at =
+            "option -res " + std::to_string(opt.xres) + " " + std::to_string(opt.yres);
+        sss::check_limit(sss::Limit::ImageSide, uint64_t(std::max(opt.xres, opt.yres)),
+                         at);
+        sss::check_limit(sss::Limit::ImagePixels, uint64_t(opt.xres) * uint64_t(opt.yres),
+                         at);
+    }
     opt.frame = running.frame;
     opt.command_line = sss::quoted_command_line(kTool, argv);
     const std::string rib = sss::expand_frame_pattern(files[0], opt.frame, "scene");
@@ -101,8 +114,11 @@ int run(const std::vector<std::string>& argv) {
 
     sss::RibReadOptions ropt;
     ropt.frame = opt.frame;
-    const sss::Scene scene = sss::read_rib(rib, ropt);
-    for (const std::string& w : scene.warnings) sss::warn(kTool, w);
+    const sss::Scene scene = [&] {
+        sss::ScopedStage stage("reading " + rib);
+        return sss::read_rib(rib, ropt);
+    }();
+    sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
     if (job.newer()) {
         const sss::RenderFiles io = sss::render_files(scene, opt);
@@ -110,7 +126,7 @@ int run(const std::vector<std::string>& argv) {
     }
 
     const sss::RenderReport report = sss::render_scene(scene, opt);
-    for (const std::string& w : report.warnings) sss::warn(kTool, w);
+    sss::warn_all(kTool, report.warnings);
     if (job.verbose()) {
         const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;
         const int yres = opt.yres > 0 ? opt.yres : scene.options.camera.yres;
@@ -134,7 +150,7 @@ int run(const std::vector<std::string>& argv) {
                     "total %.3f s, threads %d\n",
                     read_s, report.setup_seconds, report.render_seconds,
                     report.write_seconds, job.seconds(), job.threads());
-        std::fflush(stdout);
+        sss::flush_standard_output();
     }
     return 0;
 }

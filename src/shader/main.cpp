@@ -14,6 +14,8 @@
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace {
 
@@ -59,12 +61,23 @@ struct Compiled {
     std::vector<sss::Program> shaders;
 };
 
-// Compiles one file; prints its diagnostics. Returns "" or what failed.
+// "1 error in a.sl".
+std::string errors_in(int errors, const std::string& file) {
+    return std::to_string(errors) + (errors == 1 ? " error in " : " errors in ") + file;
+}
+
+// Compiles one file; prints its diagnostics (compiler style: file:line:col,
+// the source line and a caret, which editors parse). Returns "" or what
+// failed, for the one ERROR line at the end.
 std::string compile_one(const std::string& file, const sss::PreprocessOptions& options,
                         const std::string& output, bool quiet,
                         std::vector<Compiled>& compiled) {
     sss::CompileResult result;
     std::vector<std::string> read;
+    sss::flush_standard_output(); // keeps merged logs in order
+    // Outside the try: a file that does not compile ends the stage normally
+    // (the stage an exception leaves is the one an out-of-memory names).
+    sss::ScopedStage stage("compiling " + file);
     try {
         sss::PreprocessResult source = sss::preprocess_file(file, options);
         read = source.files;
@@ -78,8 +91,7 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
                 continue;
             std::cerr << d.format() << "\n";
         }
-        return file + ": " + std::to_string(errors) +
-               (errors == 1 ? " error" : " errors");
+        return errors_in(errors, file);
     } catch (const sss::PreprocessError& e) {
         // what() is "file:line:column: message": print it as the compiler's.
         const std::string where = e.file() + ":" + std::to_string(e.line()) + ":" +
@@ -90,7 +102,7 @@ std::string compile_one(const std::string& file, const sss::PreprocessOptions& o
         if (!e.source_line().empty())
             std::cerr << "  " << e.source_line() << "\n  "
                       << std::string(e.column() > 0 ? e.column() - 1 : 0, ' ') << "^\n";
-        return file + ": preprocessing failed";
+        return errors_in(1, file);
     }
     if (!quiet)
         for (const sss::Diagnostic& w : result.warnings) std::cerr << w.format() << "\n";
@@ -161,14 +173,20 @@ int run(const std::vector<std::string>& args) {
             writes.emplace_back(path, &p);
         }
     sss::OutputSet outputs;
-    for (const auto& [path, program] : writes) sss::write_program_file(*program, path);
-    outputs.commit();
+    for (const auto& [path, program] : writes) {
+        const sss::ScopedStage writing("writing " + path);
+        sss::write_program_file(*program, path);
+    }
+    // Printed before the .slo files are committed: a standard output that
+    // cannot take it fails the job with the files left as they were.
     if (!quiet)
         for (const Compiled& c : compiled)
             for (const sss::Program& p : c.shaders)
                 std::cout << c.file << ": " << sss::shader_kind_name(p.kind) << " "
                           << p.name << " -> "
                           << (output.empty() ? p.name + ".slo" : output) << "\n";
+    sss::flush_standard_output();
+    outputs.commit();
     return 0;
 }
 

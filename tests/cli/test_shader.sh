@@ -86,7 +86,7 @@ rc=$(run_status out.txt err.txt "$shader" bad.sl)
 [[ "$rc" = 1 ]] || fail "compile error exit $rc, expected 1"
 grep -q "^bad.sl:3:5: error: expected ';'" err.txt || { cat err.txt >&2; fail "no file:line:col error"; }
 grep -qF "      Ci = x;" err.txt || fail "source line not printed"
-grep -q "^shader ERROR: bad.sl: 1 error$" err.txt || { cat err.txt >&2; fail "no summary line"; }
+grep -q "^shader ERROR: 1 error in bad.sl$" err.txt || { cat err.txt >&2; fail "no summary line"; }
 [[ ! -f bad.slo ]] || fail "bad.slo written despite errors"
 
 cat >types.sl <<'SL'
@@ -101,7 +101,7 @@ grep -q "^types.sl:2:15: error: cannot convert point to color" err.txt ||
     { cat err.txt >&2; fail "type error not reported"; }
 grep -q "^types.sl:3:5: error: cannot assign to shader parameter 'Kd'" err.txt ||
     { cat err.txt >&2; fail "second error not reported"; }
-grep -q "^shader ERROR: types.sl: 2 errors$" err.txt || fail "no summary line"
+grep -q "^shader ERROR: 2 errors in types.sl$" err.txt || fail "no summary line"
 
 # A bad file does not stop the others.
 rc=$(run_status out.txt err.txt "$shader" types.sl two.sl)

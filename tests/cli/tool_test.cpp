@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <new>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -283,6 +284,63 @@ TEST(RunTool, WarnFormat) {
     testing::internal::CaptureStderr();
     sss::warn("mytool", "something odd");
     EXPECT_EQ(testing::internal::GetCapturedStderr(), "mytool WARNING: something odd\n");
+}
+
+TEST(RunTool, EveryMessageIsOneLine) {
+    testing::internal::CaptureStderr();
+    int rc = call_run_tool({"mytool"}, [](const std::vector<std::string>&) -> int {
+        sss::warn("mytool", "a.rib:3: Surface \"x\ny\": odd\r");
+        throw sss::ValueError("a.rib:4: Surface \"x\ny\": bad\x01");
+    });
+    std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 1);
+    EXPECT_EQ(err, "mytool WARNING: a.rib:3: Surface \"x\\ny\": odd\\x0d\n"
+                   "mytool ERROR: a.rib:4: Surface \"x\\ny\": bad\\x01\n");
+}
+
+TEST(RunTool, OutOfMemoryNamesTheStage) {
+    testing::internal::CaptureStderr();
+    int rc = call_run_tool({"mytool"}, [](const std::vector<std::string>&) -> int {
+        sss::ScopedStage job("reading scene.rib");
+        {
+            sss::ScopedStage inner("dicing scene.rib");
+            // An allocation no estimate caught (thrown, not made: under
+            // AddressSanitizer a huge allocation is a report, not bad_alloc;
+            // tests/cli/test_messages.sh makes a real one).
+            throw std::bad_alloc();
+        }
+        return 0;
+    });
+    std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 1);
+    EXPECT_EQ(err, "mytool ERROR: out of memory while dicing scene.rib\n");
+}
+
+TEST(RunTool, WarningsOfOneKindArePrintedFiveTimesThenSummarised) {
+    testing::internal::CaptureStderr();
+    int rc = call_run_tool({"mytool"}, [](const std::vector<std::string>&) -> int {
+        sss::Warnings scene;
+        for (int i = 0; i < 100000; ++i)
+            scene.push_back("s.rib:" + std::to_string(i + 3) +
+                            ": TransformBegin is never closed");
+        sss::warn_all("mytool", scene);
+        for (int i = 0; i < 7; ++i)
+            sss::warn("mytool", "frame " + std::to_string(i) + " odd");
+        sss::warn("mytool", "another kind");
+        return 0;
+    });
+    const std::vector<std::string> lines =
+        split_lines(testing::internal::GetCapturedStderr());
+    EXPECT_EQ(rc, 0);
+    ASSERT_EQ(lines.size(), 5u + 5u + 1u + 2u);
+    EXPECT_EQ(lines[0], "mytool WARNING: s.rib:3: TransformBegin is never closed");
+    EXPECT_EQ(lines[5], "mytool WARNING: frame 0 odd");
+    EXPECT_EQ(lines[10], "mytool WARNING: another kind");
+    EXPECT_EQ(lines[11], "mytool WARNING: 99995 more warnings like \"TransformBegin is "
+                         "never closed\" not shown");
+    // Kinds without a name are labelled by their first text.
+    EXPECT_EQ(lines[12],
+              "mytool WARNING: 2 more warnings like \"frame 0 odd\" not shown");
 }
 
 TEST(Version, Report) {

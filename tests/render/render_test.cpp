@@ -415,7 +415,7 @@ TEST(RenderErrors, UnknownShadersAreErrorsNamingTheSearchPath) {
     } catch (const sss::ShaderNotFoundError& e) {
         const std::string what = e.what();
         EXPECT_NE(what.find("test.rib:"), std::string::npos) << what;
-        EXPECT_NE(what.find("'wood'"), std::string::npos) << what;
+        EXPECT_NE(what.find("shader \"wood\" not found"), std::string::npos) << what;
         EXPECT_NE(what.find("search path"), std::string::npos) << what;
     }
     // No Surface at all: defaultsurface, Ka 0.2 + Kd 0.8 |N.I|, 1 at the centre.

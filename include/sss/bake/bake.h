@@ -26,6 +26,7 @@
 #include "sss/diffusion/material.h"
 #include "sss/scene/scene.h"
 #include "sss/util/error.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -67,7 +68,8 @@ struct BakeFileReport {
 /// What happened, for -progress reports and tests.
 struct BakeReport {
     std::vector<BakeFileReport> files;
-    std::vector<std::string> warnings;
+    /// Non-fatal problems, counted by kind (a few of each kind kept).
+    Warnings warnings;
     std::size_t baked_primitives = 0;
     std::size_t occluder_primitives = 0;
     std::size_t occluder_triangles = 0;

@@ -19,6 +19,8 @@
 #include "sss/cli/job.h"
 #include "sss/cli/options.h"
 #include "sss/util/atomic_output.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"
 #include "sss/util/version.h"
@@ -30,8 +32,12 @@ namespace sss {
 std::string version_report(const std::string& tool);
 
 /// Runs body(args) with the tools' uniform error handling. args excludes argv[0].
-/// UsageError -> "<tool> ERROR: <what>" on stderr, exit 2; any other exception
-/// -> "<tool> ERROR: <what>", exit 1. Returns body's result otherwise.
+/// UsageError -> "<tool> ERROR: <what>" on stderr, exit 2; std::bad_alloc ->
+/// "<tool> ERROR: out of memory while <stage>" (limits.h), exit 1; any other
+/// exception -> "<tool> ERROR: <what>", exit 1. Every message is one line
+/// (control bytes escaped). A write error on standard output fails the job:
+/// "<tool> ERROR: cannot write to standard output: <reason>", exit 1.
+/// Returns body's result otherwise, after the warning summaries.
 int run_tool(const std::string& tool, int argc, char** argv,
              const std::function<int(const std::vector<std::string>&)>& body);
 
@@ -48,7 +54,17 @@ bool standard_option(const std::string& tool, const std::string& opt,
 /// any other error (its what() is the message). run_tool uses it.
 std::optional<std::string> option_wording(const std::exception& e);
 
-/// Prints "<tool> WARNING: <what>" on stderr.
+/// Prints "<tool> WARNING: <what>" on stderr, one line, unless
+/// Warnings::kKeptPerKind warnings of its kind were printed already: those
+/// are counted, and summarised at the end of run_tool ("<tool> WARNING: 12
+/// more warnings like "..." not shown").
 void warn(const std::string& tool, const std::string& what);
+
+/// warn() for each kept warning, and the omitted ones counted for the summary.
+void warn_all(const std::string& tool, const Warnings& warnings);
+
+/// Prints the summaries of the warnings not printed so far (run_tool does,
+/// before an ERROR line or at the end).
+void print_warning_summaries(const std::string& tool);
 
 } // namespace sss

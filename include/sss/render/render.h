@@ -14,6 +14,7 @@
 
 #include "sss/render/image_io.h"
 #include "sss/scene/scene.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -39,7 +40,8 @@ struct RenderReport {
     /// Point clouds the shaders' bake3d calls wrote (a bake RIB rendered:
     /// the shaded hit points, written at the end of render_image).
     std::vector<std::string> baked_files;
-    std::vector<std::string> warnings;
+    /// Non-fatal problems, counted by kind (a few of each kind kept).
+    Warnings warnings;
     std::size_t triangles = 0;
     std::size_t camera_rays = 0;
     std::size_t shadow_rays = 0;

@@ -27,6 +27,8 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "sss/util/messages.h"
+
 namespace sss {
 
 using Matrix4 = glm::dmat4;
@@ -313,8 +315,9 @@ struct Scene {
     /// CoordinateSystem name -> space-to-world.
     std::map<std::string, Matrix4> coordinate_systems;
     /// Non-fatal problems met while reading (unknown statements...), each
-    /// "file.rib:12: ..."; the tool prints them as warnings.
-    std::vector<std::string> warnings;
+    /// "file.rib:12: ...", counted by kind (a few of each kind kept); the
+    /// tool prints them as warnings.
+    Warnings warnings;
     std::string path; ///< the RIB file it was read from
     /// Every file the scene was read from: the RIB (when read from a file),
     /// then each ReadArchive / DelayedReadArchive file and OBJ mesh once, in

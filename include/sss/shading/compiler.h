@@ -32,6 +32,8 @@ struct Diagnostic {
 class ShaderCompileError : public ValueError {
 public:
     explicit ShaderCompileError(std::vector<Diagnostic> diagnostics);
+    /// The same diagnostics under another message (one line).
+    ShaderCompileError(std::vector<Diagnostic> diagnostics, const std::string& what);
     const std::vector<Diagnostic>& diagnostics() const { return m_diagnostics; }
 
 private:

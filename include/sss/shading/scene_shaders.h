@@ -44,6 +44,13 @@ struct SceneShaders {
 /// Whether `program` has an op named `op`.
 bool program_uses(const Program& program, std::string_view op);
 
+/// A warning for a scene without light sources whose surface shaders read
+/// lights (ambient, diffuse, specular, phong, illuminance...): what they take
+/// from lights is black, so the image or bake is black where they shade.
+/// nullopt when the scene has lights or no shader reads them.
+std::optional<std::string> unlit_scene_warning(const Scene& scene,
+                                               const SceneShaders& shaders);
+
 /// Whether `program` reads the surface's parametrisation: one of the globals
 /// u, v, s, t, du, dv, dPdu, dPdv, or a texture lookup (by s and t when it
 /// gives no coordinates). Other shaders are diced without it (less work).

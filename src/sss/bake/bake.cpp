@@ -37,6 +37,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 #include "sss/util/progress.h"
 
 namespace sss {
@@ -601,6 +602,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
     if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, shaders);
     for (const std::string& w : shaders.warnings) report.warnings.push_back(w);
+    if (auto w = unlit_scene_warning(scene, shaders)) report.warnings.push_back(*w);
     bool any_shadows = false;
     for (const char* op : {"shadow", "transmission"})
         any_shadows = any_shadows || shaders.uses(op);
@@ -624,12 +626,15 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     ShadingResources resources;
     BakeServices dice_services(scene, nullptr, frame, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
+    const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
+    std::optional<ScopedStage> stage(std::in_place, "dicing " + name);
     const std::vector<DicedSurface> diced =
         dice_scene(scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
     for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
     report.dice_seconds = watch.seconds();
 
     check_spacing(scene, plan, diced, report);
+    stage.emplace("building the ray tracer for " + name);
     const std::unique_ptr<RayTracer> tracer =
         build_occluders(scene, plan, diced, any_shadows && !any_rays, report);
     std::unique_ptr<SceneRays> scene_rays;
@@ -649,6 +654,7 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     }
     report.trace_build_seconds = watch.seconds() - report.dice_seconds;
 
+    stage.emplace("baking " + name);
     std::vector<std::vector<Bake3dRecord>> records =
         shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(),
                      scene_rays.get(), frame, resources, report);
@@ -746,7 +752,10 @@ BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
     // Every cloud is written as a temporary first and all are put in place
     // together at the end, or none.
     OutputSet outputs;
-    for (auto& [path, cloud] : files) write_point_cloud(cloud, path, options.write);
+    for (auto& [path, cloud] : files) {
+        ScopedStage stage("writing " + path);
+        write_point_cloud(cloud, path, options.write);
+    }
     outputs.commit();
     report.write_seconds = watch.seconds() - before;
     if (options.progress) options.progress->finish();

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "sss/util/messages.h"
 #include "sss/util/parse.h"
 
 namespace sss {
@@ -46,7 +47,7 @@ bool outputs_up_to_date(const std::string& tool, const std::vector<std::string>&
     std::printf("%s: %s %s newer than %s inputs; nothing to do\n", tool.c_str(),
                 names.c_str(), outputs.size() == 1 ? "is" : "are",
                 outputs.size() == 1 ? "its" : "their");
-    std::fflush(stdout);
+    flush_standard_output();
     return true;
 }
 

@@ -19,6 +19,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -42,15 +43,32 @@ std::string version_report(const std::string& tool) {
 
 namespace {
 
-void flush_stdout() {
-    std::cout.flush();
-    std::fflush(stdout);
+/// Longest message printed (bytes): a message is one line a farm's log
+/// parser reads; echoes of input are already cut to kMaxEcho.
+constexpr std::size_t kMaxMessage = 4096;
+
+/// The warnings printed so far, by kind: a kind is printed
+/// Warnings::kKeptPerKind times, then counted.
+Warnings& printed_warnings() {
+    static Warnings* printed = new Warnings(); // never destroyed: used at exit
+    return *printed;
+}
+
+/// `what` as one line: control bytes escaped, cut at kMaxMessage.
+std::string one_line(const std::string& what) {
+    return escape_control(truncated(what, kMaxMessage));
+}
+
+void print_line(const std::string& tool, const char* kind, const std::string& what) {
+    // stdout first, so that merged logs keep their order.
+    flush_standard_output();
+    std::cerr << tool << kind << one_line(what) << "\n";
+    std::cerr.flush();
 }
 
 void print_error(const std::string& tool, const std::string& what) {
-    flush_stdout();
-    std::cerr << tool << " ERROR: " << what << "\n";
-    std::cerr.flush();
+    print_warning_summaries(tool);
+    print_line(tool, " ERROR: ", what);
 }
 
 } // namespace
@@ -75,20 +93,24 @@ int run_tool(const std::string& tool, int argc, char** argv,
         std::vector<std::string> args;
         for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
         int status = body(args);
-        // A result nobody could read (closed pipe, full disk) is a failure.
-        std::cout.flush();
-        if (!std::cout || std::fflush(stdout) != 0) {
-            std::cerr << tool << " ERROR: cannot write to standard output\n";
+        // A result nobody could read (closed pipe, full disk) is a failure,
+        // --help and --version included (as in GNU coreutils).
+        const std::string stdout_error = standard_output_error();
+        if (!stdout_error.empty()) {
+            print_error(tool, StandardOutputError(stdout_error).what());
             return status == 0 ? 1 : status;
         }
+        print_warning_summaries(tool);
         return status;
     } catch (const UsageError& e) {
         print_error(tool, option_wording(e).value_or(e.what()));
         std::cerr << tool << ": try '" << tool << " --help'\n";
+        std::cerr.flush();
         return 2;
     } catch (const std::bad_alloc&) {
         std::string stage = failure_stage();
-        print_error(tool, "out of memory while " + (stage.empty() ? std::string("running") : stage));
+        print_error(tool, "out of memory while " +
+                              (stage.empty() ? std::string("running") : stage));
         return 1;
     } catch (const std::exception& e) {
         print_error(tool, option_wording(e).value_or(e.what()));
@@ -100,9 +122,20 @@ int run_tool(const std::string& tool, int argc, char** argv,
 }
 
 void warn(const std::string& tool, const std::string& what) {
-    flush_stdout();
-    std::cerr << tool << " WARNING: " << what << "\n";
-    std::cerr.flush();
+    if (printed_warnings().push_back(what)) print_line(tool, " WARNING: ", what);
+}
+
+void warn_all(const std::string& tool, const Warnings& warnings) {
+    for (const std::string& w : warnings) warn(tool, w);
+    for (const Warnings::Omitted& o : warnings.omitted())
+        printed_warnings().add_omitted(o.label, o.count);
+}
+
+void print_warning_summaries(const std::string& tool) {
+    Warnings& printed = printed_warnings();
+    for (const std::string& line : printed.summaries())
+        print_line(tool, " WARNING: ", line);
+    printed = Warnings(); // printed once
 }
 
 bool standard_option(const std::string& tool, const std::string& opt,
@@ -114,7 +147,7 @@ bool standard_option(const std::string& tool, const std::string& opt,
     } else {
         return false;
     }
-    std::fflush(stdout);
+    flush_standard_output(); // run_tool reports a failure
     return true;
 }
 

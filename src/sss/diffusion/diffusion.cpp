@@ -9,6 +9,7 @@
 #include <string>
 
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 #include "sss/util/name_table.h"
 #include "sss/util/progress.h"
 
@@ -56,6 +57,7 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
         throw ValueError("diffusion needs three channel profiles");
     Stopwatch watch;
     DiffusionStats stats;
+    std::optional<ScopedStage> stage(std::in_place, "building the octree");
     Tables tables = build_tables(pb.profiles);
     Tree tree = build_tree(pb);
     stats.nodes = tree.nodes.size();
@@ -83,6 +85,7 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
                                 [](uint8_t w) { return w != 0; });
         });
     }
+    stage.emplace("evaluating the diffusion");
     evaluate_buckets(cx, buckets, result, stats);
     stats.eval_seconds = watch.seconds() - stats.build_seconds;
     if (stats_out) *stats_out = stats;

@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 
@@ -275,6 +276,7 @@ std::vector<glm::vec3> evaluate(const DiffusionProblem& pb, const SsDiffusionOpt
     const std::size_t n = pb.positions.size();
     std::vector<glm::vec3> result;
     if (o.exact) {
+        ScopedStage stage("evaluating the diffusion (all pairs)");
         std::vector<glm::dvec3> exact =
             evaluate_diffusion_exact(pb, {}, o.diffusion.progress);
         result.resize(n);

@@ -50,6 +50,7 @@
 #include "sss/util/frame_pattern.h"
 #include "sss/util/hash.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 #include "sss/util/version.h"
@@ -1085,6 +1086,25 @@ Image resolve_pixels(const Renderer& job, const TileGrid& grid,
     return image;
 }
 
+/// The image buffers fit in memory before any is allocated: per pixel the
+/// depth, the nearest samples (some filters), the tiles' filter sums (wider
+/// than the tiles by the filter's reach), their total, the image and its
+/// copy in the writer. OutOfMemoryError says how much.
+void check_image_memory(const Renderer& job, const Scene& scene) {
+    const uint64_t pixels = uint64_t(job.camera.xres) * uint64_t(job.camera.yres);
+    const double overlap = double(kTile + 2 * job.reach_x) * (kTile + 2 * job.reach_y) /
+                           double(kTile * kTile);
+    const double floats = 1.0 + (job.nearest_fallback ? job.values : 0) +
+                          filter_slots(job) * (overlap + 1.0) + 2.0 * (job.values + 1);
+    const uint64_t bytes = uint64_t(double(pixels) * floats * sizeof(float));
+    check_memory(bytes,
+                 (scene.path.empty() ? std::string("the image") : scene.path) + ": a " +
+                     std::to_string(job.camera.xres) + " x " +
+                     std::to_string(job.camera.yres) + " image of " +
+                     std::to_string(job.values + 1) + " channels",
+                 "lower the resolution (Format, or render -res)");
+}
+
 /// The ray counts, and warnings about samples that went wrong numerically.
 void report_rays(const Renderer& job, RenderReport& report) {
     report.camera_rays = job.camera_rays.load();
@@ -1132,12 +1152,19 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
         report.warnings.push_back(
             (scene.path.empty() ? std::string("the scene") : scene.path) +
             ": no geometry in the world: the image is empty");
+    const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
     setup_camera(job, scene, options);
     const bool any_shadows = resolve_shading(job, scene, frame, report);
+    if (auto w = unlit_scene_warning(scene, job.shaders)) report.warnings.push_back(*w);
+    check_image_memory(job, scene);
     bool separate_shadows = false;
     const std::vector<std::size_t> to_dice =
         plan_surfaces(job, any_shadows, &separate_shadows);
-    dice_surfaces(job, to_dice, report);
+    {
+        ScopedStage stage("dicing " + name);
+        dice_surfaces(job, to_dice, report);
+    }
+    ScopedStage building("building the ray tracer for " + name);
     build_tracers(job, to_dice, any_shadows, separate_shadows, report);
     job.services->set_occluders(job.occluders);
     if (job.any_rays) {
@@ -1151,6 +1178,7 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     }
     report.setup_seconds = watch.seconds();
 
+    ScopedStage rendering("rendering " + name);
     const TileGrid grid(job.camera.xres, job.camera.yres);
     std::vector<float> depth(std::size_t(grid.width) * grid.height,
                              std::numeric_limits<float>::infinity());
@@ -1159,6 +1187,14 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
         render_tiles(job, grid, options, depth, nearest);
     Image image =
         resolve_pixels(job, grid, add_tiles(job, grid, tile_sums), depth, nearest);
+    // A camera that sees nothing of a scene with geometry is a mistake more
+    // often than a wish (a camera transform after WorldBegin, a sign).
+    const auto missed = [](float z) { return !std::isfinite(z); };
+    if (!scene.primitives.empty() && std::all_of(depth.begin(), depth.end(), missed))
+        report.warnings.push_back(
+            name + ": no camera ray hit a surface: the image is empty (is the camera "
+                   "looking away from the scene, or is the scene smaller than a pixel? "
+                   "See the camera transform, Projection and ScreenWindow)");
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
@@ -1301,6 +1337,7 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
         targets.push_back(resolve_display(displays[i], image,
                                           static_cast<int>(i) == primary, defaults));
     for (const DisplayTarget& target : targets) {
+        ScopedStage stage("writing " + target.path);
         write_display(image, target, meta);
         report.files.push_back(target.path);
     }

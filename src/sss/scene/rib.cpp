@@ -55,7 +55,9 @@ bool unsupported(std::string_view name) {
 
 void Reader::read_text(std::string_view text, const std::string& path) {
     m_scene.path = path;
+    m_reading.emplace_back(file_key(path), path);
     run_text(text, std::make_shared<const std::string>(path));
+    m_reading.pop_back();
 }
 
 Scene Reader::finish(const std::string& path) {
@@ -82,7 +84,7 @@ bool Reader::diverted(const Statement& s) {
             ++m_record_depth;
         } else if (s.name == "ArchiveEnd") {
             if (m_record_depth == 0) {
-                m_archives[m_record_name] = std::move(m_record);
+                define_archive(m_record_name, std::move(m_record));
                 m_record.clear();
                 m_recording = false;
                 return true;
@@ -204,17 +206,23 @@ void Reader::execute(const Statement& s) {
     } else if (unsupported(s.name)) {
         warn_once("unsupported " + s.name, s, s.name + " is not supported, skipped");
     } else {
-        warn_once("unknown " + s.name, s, "unknown statement " + s.name + ", skipped");
+        // A name is a word of the lexer's (letters, digits, '_'): one line.
+        warn_once("unknown " + s.name, s,
+                  "unknown statement " + truncated(s.name, kMaxEcho) + ", skipped",
+                  "unknown statement");
     }
 }
 
-void Reader::warn(const Statement& s, const std::string& what) {
-    m_scene.warnings.push_back(where(s) + ": " + what);
+void Reader::warn(const Statement& s, const std::string& what, std::string_view kind) {
+    if (kind.empty())
+        m_scene.warnings.push_back(where(s) + ": " + what);
+    else
+        m_scene.warnings.add(kind, where(s) + ": " + what);
 }
 
 void Reader::warn_once(const std::string& key, const Statement& s,
-                       const std::string& what) {
-    if (m_warned.insert(key).second) warn(s, what);
+                       const std::string& what, std::string_view kind) {
+    if (m_warned.insert(key).second) warn(s, what, kind);
 }
 
 } // namespace rib

@@ -15,6 +15,8 @@
 #include "obj_import.h"
 #include "rib_args.h"
 #include "sss/util/byte_io.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss::rib {
 
@@ -22,7 +24,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kMaxArchiveDepth = 32;
+/// Statements replayed from inline archives (ReadArchive of an
+/// ArchiveBegin block) in one scene: archives that each read the next one
+/// twice double the work per level, and 32 levels would run for hours.
+/// 10 million (about 1 s) are far more than a real scene replays; a reading
+/// that would exceed them is refused before it starts (define_archive
+/// counts what each archive replays).
+constexpr uint64_t kMaxReplayedStatements = 10'000'000;
 
 bool ends_with_obj(const std::string& path) {
     return path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".obj";
@@ -40,16 +48,39 @@ std::string resolve_path(const Statement& s, const std::string& name) {
 
 // --- files -----------------------------------------------------------------
 
+std::string file_key(const std::string& path) {
+    std::error_code ec;
+    fs::path p = fs::weakly_canonical(fs::path(path), ec);
+    return ec ? fs::path(path).lexically_normal().string() : p.string();
+}
+
 void Reader::run_text(std::string_view text, std::shared_ptr<const std::string> path) {
     Lexer lexer(text, std::move(path));
     Statement st;
     while (lexer.next(st)) execute(st);
 }
 
+void Reader::check_archive_depth(const Statement& from, const std::string& name) {
+    // Read once: replays of inline archives call this millions of times.
+    if (m_max_depth == 0) m_max_depth = limit(Limit::ArchiveDepth);
+    if (uint64_t(m_depth) + 1 > m_max_depth)
+        check_limit(Limit::ArchiveDepth, uint64_t(m_depth) + 1,
+                    where(from) + ": " + from.name + " " + sss::quoted(name));
+}
+
 void Reader::run_file(const Statement& from, const std::string& path) {
-    if (m_depth >= kMaxArchiveDepth)
-        fail(from, "archives nested more than " + std::to_string(kMaxArchiveDepth) +
-                       " deep (does \"" + path + "\" read itself?)");
+    // A file that reads itself (directly or through others) never ends:
+    // RIB has no conditions that could stop it.
+    const std::string key = file_key(path);
+    for (std::size_t i = 0; i < m_reading.size(); ++i)
+        if (m_reading[i].first == key) {
+            std::string chain;
+            for (std::size_t j = i; j < m_reading.size(); ++j)
+                chain += truncated(m_reading[j].second, kMaxEcho) + " -> ";
+            fail(from, sss::quoted(path) + " reads itself (" + chain +
+                           truncated(path, kMaxEcho) + ")");
+        }
+    check_archive_depth(from, path);
     const bool obj = ends_with_obj(path);
     if (obj && !m_object && !m_in_world)
         fail(from, "geometry outside WorldBegin/WorldEnd");
@@ -60,10 +91,12 @@ void Reader::run_file(const Statement& from, const std::string& path) {
         m_scene.source_uses.push_back(from.name + " \"" + path + "\" at " + where(from));
     }
     ++m_depth;
+    m_reading.emplace_back(key, path);
     if (obj)
         add_obj(text, path);
     else
         run_text(text, std::make_shared<const std::string>(path));
+    m_reading.pop_back();
     --m_depth;
 }
 
@@ -73,10 +106,23 @@ std::string slurp(const std::string& path, const std::string& context) {
     if (!in)
         throw IoError(path,
                       std::string("cannot open") + context + ": " + std::strerror(errno));
-    std::ostringstream ss;
-    ss << in.rdbuf();
+    // Read in one block of the file's size, after checking that the text
+    // and what parsing it may take (arguments are checked as they grow) fit.
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(path, ec);
+    std::string text;
+    if (!ec && size > 0) {
+        check_memory(size, "reading " + path, "split the scene into smaller archives");
+        text.resize(size);
+        in.read(text.data(), std::streamsize(size));
+        text.resize(std::size_t(in.gcount()));
+    }
+    // A file that grew while read: the rest too.
+    std::ostringstream rest;
+    rest << in.rdbuf();
     if (in.bad()) throw IoError(path, "read error");
-    return ss.str();
+    text += rest.str();
+    return text;
 }
 
 // --- frames ----------------------------------------------------------------
@@ -125,16 +171,46 @@ void Reader::do_archive_end(const Statement& s) {
     fail(s, "ArchiveEnd without ArchiveBegin");
 }
 
+void Reader::define_archive(const std::string& name, std::vector<Statement> body) {
+    // What reading it replays, known now for the archives it reads that are
+    // defined already: an exponential nesting is refused before it runs.
+    uint64_t replays = 0;
+    for (const Statement& st : body) {
+        uint64_t n = 1;
+        if (st.name == "ReadArchive" && !st.args.empty() && st.args[0].is_string())
+            if (auto it = m_archives.find(st.args[0].string); it != m_archives.end())
+                n += it->second.replays;
+        replays = std::min(replays + n, uint64_t(1) << 62);
+    }
+    m_archives[name] = {std::make_shared<const std::vector<Statement>>(std::move(body)),
+                        replays};
+}
+
 void Reader::read_archive(const Statement& s, const std::string& name) {
     auto it = m_archives.find(name);
     if (it != m_archives.end()) {
-        if (m_depth >= kMaxArchiveDepth)
-            fail(s, "archives nested more than " + std::to_string(kMaxArchiveDepth) +
-                        " deep (does \"" + name + "\" read itself?)");
-        // Copy: the archive may be redefined while it is replayed.
-        std::vector<Statement> body = it->second;
+        check_archive_depth(s, name);
+        if (m_replayed + it->second.replays > kMaxReplayedStatements)
+            fail(s, sss::quoted(name) + " replays " + std::to_string(it->second.replays) +
+                        " statements from inline archives, more than " +
+                        std::to_string(kMaxReplayedStatements) +
+                        " in one scene (archives that read others several times grow "
+                        "exponentially with their nesting)");
+        m_replayed += it->second.body->size();
+        // What the replayed statements make (primitives) is in no other
+        // estimate: check the memory every million statements.
+        if (m_replayed >= m_next_replay_check) {
+            check_memory(kMemoryCheckStep,
+                         where(s) + ": ReadArchive " + sss::quoted(name) + " (" +
+                             std::to_string(m_replayed) +
+                             " statements replayed from inline archives)",
+                         "read fewer inline archives");
+            m_next_replay_check = m_replayed + 1'000'000;
+        }
+        // Held: the archive may be redefined while it is replayed.
+        const std::shared_ptr<const std::vector<Statement>> body = it->second.body;
         ++m_depth;
-        for (const Statement& st : body) execute(st);
+        for (const Statement& st : *body) execute(st);
         --m_depth;
         return;
     }
@@ -153,7 +229,7 @@ void Reader::do_procedural(const Statement& s) {
     std::string kind = take_string(s, i, "procedural name");
     if (kind != "DelayedReadArchive") {
         warn_once("procedural " + kind, s,
-                  "Procedural \"" + kind + "\" is not supported, skipped");
+                  "Procedural " + sss::quoted(kind) + " is not supported, skipped");
         return;
     }
     auto files = take_string_array(s, i, "archive file name");
@@ -169,7 +245,9 @@ void Reader::do_procedural(const Statement& s) {
 }
 
 void Reader::add_obj(const std::string& text, const std::string& path) {
-    auto mesh = detail::import_obj(text, path, m_scene.warnings);
+    std::vector<std::string> warnings;
+    auto mesh = detail::import_obj(text, path, warnings);
+    for (std::string& w : warnings) m_scene.warnings.push_back(std::move(w));
     if (!mesh) return;
     Statement at;
     at.name = "ReadArchive";

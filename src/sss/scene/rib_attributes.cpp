@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "rib_args.h"
+#include "sss/util/messages.h"
 
 namespace sss::rib {
 
@@ -28,7 +29,7 @@ Basis take_basis(const Statement& s, std::size_t& i, const char* which) {
     if (v.is_string() || (v.is_array() && v.strings.size() == 1)) {
         std::string name = v.is_string() ? v.string : v.strings[0];
         auto nb = named_basis(name);
-        if (!nb) fail(s, "unknown basis \"" + name + "\"");
+        if (!nb) fail(s, "unknown basis " + sss::quoted(name));
         b = *nb;
         ++i;
     } else {
@@ -91,7 +92,7 @@ void Reader::do_orientation(const Statement& s) {
     else if (o == "rh")
         inside = current_left_handed();
     else
-        fail(s, "orientation must be outside, inside, lh or rh, got \"" + o + "\"");
+        fail(s, "orientation must be outside, inside, lh or rh, got " + sss::quoted(o));
     attrs_mut().orientation_inside = inside;
 }
 
@@ -114,7 +115,7 @@ void Reader::do_shading_interpolation(const Statement& s) {
     std::string mode = take_string(s, i, "interpolation");
     no_more_args(s, i);
     if (mode != "constant" && mode != "smooth")
-        fail(s, "interpolation must be constant or smooth, got \"" + mode + "\"");
+        fail(s, "interpolation must be constant or smooth, got " + sss::quoted(mode));
     attrs_mut().shading_interpolation = mode;
 }
 
@@ -173,7 +174,8 @@ void Reader::do_illuminate(const Statement& s) {
     double on = take_number(s, i);
     no_more_args(s, i);
     auto it = m_light_handles.find(handle);
-    if (it == m_light_handles.end()) fail(s, "unknown light handle \"" + handle + "\"");
+    if (it == m_light_handles.end())
+        fail(s, "unknown light handle " + sss::quoted(handle));
     set_light(it->second, on != 0.0);
 }
 

@@ -10,6 +10,8 @@
 #include <cstdio>
 
 #include "sss/scene/rib.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss::rib {
 
@@ -49,30 +51,33 @@ std::string lower(std::string_view s) {
 }
 
 bool parse_number(std::string_view text, double& out, std::string& error) {
+    // Echoed cut: a token may be as long as Limit::TokenLength allows.
+    const std::string shown = truncated(text, kMaxEcho);
     std::string_view t = text;
     if (!t.empty() && t[0] == '+') t.remove_prefix(1);
     if (t.empty() || t[0] == '+') {
-        error = "malformed number '" + std::string(text) + "'";
+        error = "malformed number '" + shown + "'";
         return false;
     }
     auto r = std::from_chars(t.data(), t.data() + t.size(), out);
     if (r.ec == std::errc::result_out_of_range) {
-        error = "number '" + std::string(text) + "' out of range";
+        error = "number '" + shown + "' out of range";
         return false;
     }
     if (r.ec != std::errc() || r.ptr != t.data() + t.size()) {
-        error = "malformed number '" + std::string(text) + "'";
+        error = "malformed number '" + shown + "'";
         return false;
     }
     if (!std::isfinite(out)) {
-        error = "not a finite number: '" + std::string(text) + "'";
+        error = "not a finite number: '" + shown + "'";
         return false;
     }
     return true;
 }
 
 Lexer::Lexer(std::string_view text, std::shared_ptr<const std::string> path)
-    : m_text(text), m_path(std::move(path)) {
+    : m_text(text), m_path(std::move(path)), m_max_string(limit(Limit::StringLength)),
+      m_max_token(limit(Limit::TokenLength)) {
     if (m_text.size() >= 2 && static_cast<unsigned char>(m_text[0]) == 0x1f &&
         static_cast<unsigned char>(m_text[1]) == 0x8b)
         throw RibError(*m_path, 0, "",
@@ -109,6 +114,8 @@ bool Lexer::next(Statement& st) {
         } else {
             fail(a.line, st.name, "unexpected ']'");
         }
+        if (st.args.size() == st.args.capacity())
+            check_growth(st.args.size(), sizeof(Value), st.line, "arguments");
         st.args.push_back(std::move(v));
     }
 }
@@ -117,12 +124,37 @@ void Lexer::fail(int line, const std::string& statement, const std::string& what
     throw RibError(*m_path, line, statement, what);
 }
 
+std::string Lexer::where(int line) const {
+    std::string out = *m_path + ":" + std::to_string(line);
+    if (!m_statement.empty()) out += ": " + m_statement;
+    return out;
+}
+
+void Lexer::check_token(std::size_t length, int line, bool word) const {
+    // A word may be the next request's name: no statement then.
+    if (length > m_max_token)
+        check_limit(Limit::TokenLength, length,
+                    word ? *m_path + ":" + std::to_string(line) : where(line));
+}
+
+void Lexer::check_growth(std::size_t count, std::size_t element_bytes, int line,
+                         const char* what) const {
+    // At each doubling from 65536 elements: the vector is about to take
+    // twice its size (and its old block is alive while it moves). The text
+    // is in memory already, and 2 bytes of it ("0 ") can make a 100-byte
+    // argument: this is where a large file becomes a memory bomb.
+    if (count < 65536 || (count & (count - 1)) != 0) return;
+    check_memory(uint64_t(count) * 3 * element_bytes,
+                 where(line) + ": more than " + std::to_string(count) + " " + what,
+                 "split the data into smaller statements");
+}
+
 std::string Lexer::tok_name(const Token& t) {
     switch (t.kind) {
     case Tok::End:
         return "the end of the file";
     case Tok::Word:
-        return "'" + t.text + "'";
+        return "'" + truncated(t.text, kMaxEcho) + "'";
     case Tok::Number:
         return "a number";
     case Tok::String:
@@ -143,11 +175,17 @@ void Lexer::read_array(const Statement& st, int open_line, Value& v) {
         case Tok::Number:
             if (!v.strings.empty())
                 fail(t.line, st.name, "array mixes strings and numbers");
+            if (v.numbers.size() == v.numbers.capacity())
+                check_growth(v.numbers.size(), sizeof(double), open_line,
+                             "numbers in one array");
             v.numbers.push_back(t.number);
             break;
         case Tok::String:
             if (!v.numbers.empty())
                 fail(t.line, st.name, "array mixes numbers and strings");
+            if (v.strings.size() == v.strings.capacity())
+                check_growth(v.strings.size(), sizeof(std::string) + 16, open_line,
+                             "strings in one array");
             v.strings.push_back(std::move(t.text));
             v.string_array = true;
             break;
@@ -157,8 +195,8 @@ void Lexer::read_array(const Statement& st, int open_line, Value& v) {
             fail(t.line, st.name, "nested '[' inside an array");
         case Tok::Word:
             fail(open_line, st.name,
-                 "unterminated array: no ']' before '" + t.text + "' on line " +
-                     std::to_string(t.line));
+                 "unterminated array: no ']' before '" + truncated(t.text, kMaxEcho) +
+                     "' on line " + std::to_string(t.line));
         case Tok::End:
             fail(open_line, st.name, "end of file inside an array");
         }
@@ -208,6 +246,7 @@ Lexer::Token Lexer::scan() {
         while (m_pos < n && !is_space(m_text[m_pos]) && m_text[m_pos] != '[' &&
                m_text[m_pos] != ']' && m_text[m_pos] != '"' && m_text[m_pos] != '#')
             ++m_pos;
+        check_token(m_pos - start, t.line, false);
         std::string error;
         if (!parse_number(m_text.substr(start, m_pos - start), t.number, error))
             fail(t.line, m_statement, error);
@@ -215,12 +254,14 @@ Lexer::Token Lexer::scan() {
     } else if (is_word_start(c)) {
         std::size_t start = m_pos;
         while (m_pos < n && is_word_char(m_text[m_pos])) ++m_pos;
+        check_token(m_pos - start, t.line, true);
         t.kind = Tok::Word;
         t.text = std::string(m_text.substr(start, m_pos - start));
         std::string l = lower(t.text);
         // A writer printing a NaN or Inf bare would otherwise look like a request.
         if (l == "nan" || l == "inf" || l == "infinity")
-            fail(t.line, m_statement, "not a finite number: '" + t.text + "'");
+            fail(t.line, m_statement,
+                 "not a finite number: '" + truncated(t.text, 10) + "'");
     } else if (uc >= 0x80 || uc < 0x20 || uc == 0x7f) {
         char hex[8];
         std::snprintf(hex, sizeof hex, "0x%02x", uc);
@@ -228,7 +269,8 @@ Lexer::Token Lexer::scan() {
              std::string("binary RIB is not supported (byte ") + hex +
                  "); convert it to ASCII RIB first");
     } else {
-        fail(t.line, m_statement, std::string("unexpected character '") + c + "'");
+        fail(t.line, m_statement,
+             "unexpected character " + sss::quoted(std::string(1, c)));
     }
     return t;
 }
@@ -238,7 +280,14 @@ std::string Lexer::scan_string() {
     const int start_line = m_line;
     ++m_pos; // opening quote
     std::string out;
+    const std::size_t start = m_pos;
     while (m_pos < n) {
+        if (out.size() > m_max_string) {
+            // Its whole length (escapes counted as written), for the message.
+            std::size_t end = start;
+            while (end < n && m_text[end] != '"') end += m_text[end] == '\\' ? 2 : 1;
+            check_limit(Limit::StringLength, std::min(end, n) - start, where(start_line));
+        }
         char c = m_text[m_pos++];
         if (c == '"') return out;
         if (c == '\n') ++m_line;

@@ -3,6 +3,7 @@
 /// The RIB tokenizer: statements (a request name and its arguments) read from
 /// ASCII RIB text, and the text helpers the reader and the OBJ import share.
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -47,7 +48,10 @@ std::string lower(std::string_view s);
 /// Parses a whole token as a finite number; sets `error` otherwise.
 bool parse_number(std::string_view text, double& out, std::string& error);
 
-/// Splits ASCII RIB text into statements.
+/// Splits ASCII RIB text into statements. Strings longer than
+/// limit(Limit::StringLength) and words or numbers longer than
+/// limit(Limit::TokenLength) are LimitErrors; an argument list or array
+/// whose memory exceeds what the process may use is an OutOfMemoryError.
 class Lexer {
 public:
     /// Throws RibError for gzip-compressed text; skips a UTF-8 byte order mark.
@@ -67,6 +71,15 @@ private:
 
     [[noreturn]] void fail(int line, const std::string& statement,
                            const std::string& what);
+    /// "file:line: Statement" for limit errors.
+    std::string where(int line) const;
+    /// A token of `length` bytes starting on `line`: within TokenLength.
+    /// `word`: a word (maybe the next request), else a number of this one.
+    void check_token(std::size_t length, int line, bool word) const;
+    /// `count` elements of `element_bytes` each, about to grow: checked
+    /// against the memory budget at each doubling from 65536 elements.
+    void check_growth(std::size_t count, std::size_t element_bytes, int line,
+                      const char* what) const;
     static std::string tok_name(const Token& t);
     void read_array(const Statement& st, int open_line, Value& v);
     Token take();
@@ -80,6 +93,8 @@ private:
     Token m_peek;
     bool m_has_peek = false;
     std::string m_statement; // the statement being read, for messages
+    uint64_t m_max_string = 0;
+    uint64_t m_max_token = 0;
 };
 
 } // namespace sss::rib

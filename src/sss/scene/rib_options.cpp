@@ -10,6 +10,8 @@
 #include <limits>
 
 #include "rib_args.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss::rib {
 
@@ -26,6 +28,11 @@ void Reader::do_format(const Statement& s) {
     int xres = to_int(s, n[0], "xresolution");
     int yres = to_int(s, n[1], "yresolution");
     if (xres < 1 || yres < 1) fail(s, "resolution must be positive");
+    // Before anything is sized by it (render's image, ptbake's dicing rate).
+    const std::string at =
+        where(s) + ": Format " + std::to_string(xres) + " " + std::to_string(yres);
+    check_limit(Limit::ImageSide, uint64_t(std::max(xres, yres)), at);
+    check_limit(Limit::ImagePixels, uint64_t(xres) * uint64_t(yres), at);
     if (!(n[2] > 0.0)) fail(s, "pixel aspect ratio must be positive, got " + fmt(n[2]));
     if (!option_allowed(s)) return;
     m_scene.options.camera.xres = xres;
@@ -74,7 +81,8 @@ void Reader::do_projection(const Statement& s) {
     } else if (name == "orthographic") {
         cam.perspective = false;
     } else {
-        fail(s, "unsupported projection \"" + name + "\" (perspective or orthographic)");
+        fail(s, "unsupported projection " + sss::quoted(name) +
+                    " (perspective or orthographic)");
     }
     // RI: the projection marks camera space; the CTM restarts from identity.
     if (m_ctm != Matrix4(1.0))
@@ -168,7 +176,7 @@ void Reader::do_quantize(const Statement& s) {
     no_more_args(s, i);
     const std::string key = lower(type);
     if (key != "rgba" && key != "rgb" && key != "z")
-        fail(s, "unknown quantize type \"" + type + "\" (rgba, rgb or z)");
+        fail(s, "unknown quantize type " + sss::quoted(type) + " (rgba, rgb or z)");
     if (!(n[0] >= 0.0) || !(n[1] <= n[2]) || !(n[3] >= 0.0))
         fail(s, "need one >= 0, min <= max and ditheramplitude >= 0, got " + fmt(n[0]) +
                     " " + fmt(n[1]) + " " + fmt(n[2]) + " " + fmt(n[3]));
@@ -250,7 +258,7 @@ void Reader::do_declare(const Statement& s) {
     std::string text = take_string(s, i, "declaration");
     no_more_args(s, i);
     if (name.empty() || name.find_first_of(" \t\n[]") != std::string::npos)
-        fail(s, "bad parameter name \"" + name + "\"");
+        fail(s, "bad parameter name " + sss::quoted(name));
     Decl decl;
     std::string err = parse_decl(text, false, decl, nullptr);
     if (!err.empty()) fail(s, err);

@@ -11,6 +11,7 @@
 
 #include "rib_args.h"
 #include "rib_reader.h"
+#include "sss/util/messages.h"
 
 namespace sss::rib {
 
@@ -31,7 +32,7 @@ std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
     std::istringstream in(spaced);
     for (std::string w; in >> w;) words.push_back(w);
     std::size_t i = 0;
-    const std::string bad = "bad declaration \"" + std::string(text) + "\"";
+    const std::string bad = "bad declaration " + sss::quoted(text);
     if (i < words.size()) {
         if (auto c = parse_param_class(words[i])) {
             decl.storage = *c;
@@ -42,7 +43,7 @@ std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
     }
     if (i >= words.size()) return bad + ": no type";
     auto t = parse_param_type(words[i]);
-    if (!t) return bad + ": unknown type '" + words[i] + "'";
+    if (!t) return bad + ": unknown type '" + truncated(words[i], kMaxEcho) + "'";
     decl.type = *t;
     std::string type_words = (i > 0 ? words[0] + " " : std::string()) + words[i];
     ++i;
@@ -63,7 +64,8 @@ std::string parse_decl(std::string_view text, bool with_name, Decl& decl,
         if (i >= words.size()) return bad + ": no name";
         *name = words[i++];
     }
-    if (i != words.size()) return bad + ": unexpected '" + words[i] + "'";
+    if (i != words.size())
+        return bad + ": unexpected '" + truncated(words[i], kMaxEcho) + "'";
     if (type_text) *type_text = type_words;
     return "";
 }
@@ -168,7 +170,8 @@ ParamList Reader::take_params(const Statement& s, std::size_t i, bool single) {
             spelled = key.strings[0];
         else
             fail(s, std::string("expected a parameter name, got ") + describe(key));
-        if (i + 1 >= s.args.size()) fail(s, "parameter \"" + spelled + "\" has no value");
+        if (i + 1 >= s.args.size())
+            fail(s, "parameter " + sss::quoted(spelled) + " has no value");
         const Value& value = s.args[i + 1];
         i += 2;
 
@@ -181,8 +184,8 @@ ParamList Reader::take_params(const Statement& s, std::size_t i, bool single) {
             auto it = m_decls.find(spelled);
             if (it == m_decls.end()) {
                 if (m_warned.insert("undeclared " + spelled).second)
-                    warn(s,
-                         s.name + ": undeclared parameter \"" + spelled + "\", skipped");
+                    warn(s, s.name + ": undeclared parameter " + sss::quoted(spelled) +
+                                ", skipped");
                 continue;
             }
             p.name = spelled;
@@ -191,7 +194,7 @@ ParamList Reader::take_params(const Statement& s, std::size_t i, bool single) {
         p.type = decl.type;
         p.storage = decl.storage;
         p.array_size = decl.array_size;
-        const std::string label = "parameter \"" + p.name + "\"";
+        const std::string label = "parameter " + sss::quoted(p.name);
 
         if (p.type == ParamType::String)
             read_strings(s, value, label, single, p);

@@ -46,6 +46,9 @@ struct SavedState {
 /// The whole text of a file; throws IoError "cannot open<context>: <reason>".
 std::string slurp(const std::string& path, const std::string& context);
 
+/// The identity of a file for the ReadArchive cycle check: its canonical path.
+std::string file_key(const std::string& path);
+
 class Reader {
 public:
     explicit Reader(const RibReadOptions& options)
@@ -69,8 +72,11 @@ private:
     bool diverted(const Statement& s);
     /// Request name -> handler.
     static const HandlerTable& handlers();
-    void warn(const Statement& s, const std::string& what);
-    void warn_once(const std::string& key, const Statement& s, const std::string& what);
+    /// Adds the warning "file:line: what"; `kind` groups it with others for
+    /// the count (Warnings), else its text does.
+    void warn(const Statement& s, const std::string& what, std::string_view kind = {});
+    void warn_once(const std::string& key, const Statement& s, const std::string& what,
+                   std::string_view kind = {});
 
     // --- rib_params.cpp: parameter lists --------------------------------------
 
@@ -83,7 +89,11 @@ private:
 
     void run_text(std::string_view text, std::shared_ptr<const std::string> path);
     void run_file(const Statement& from, const std::string& path);
+    /// One more level of archives is within Limit::ArchiveDepth.
+    void check_archive_depth(const Statement& from, const std::string& name);
     void read_archive(const Statement& s, const std::string& name);
+    /// Stores an inline archive and how many statements reading it replays.
+    void define_archive(const std::string& name, std::vector<Statement> body);
     /// The mesh of an OBJ file, as a primitive under the current state.
     void add_obj(const std::string& text, const std::string& path);
     void do_frame_begin(const Statement& s);
@@ -205,7 +215,12 @@ private:
     std::optional<double> m_frame_aspect;
     std::map<std::string, Matrix4> m_camera_spaces; // CoordinateSystem before WorldBegin
     std::set<std::string> m_warned;
-    int m_depth = 0;
+    int m_depth = 0;          // archives being read (files and inline archives)
+    uint64_t m_max_depth = 0; // limit(Limit::ArchiveDepth), once read
+    /// Files being read through ReadArchive: (file_key, path as named).
+    std::vector<std::pair<std::string, std::string>> m_reading;
+    uint64_t m_replayed = 0; // statements replayed from inline archives
+    uint64_t m_next_replay_check = 1'000'000;
     // frames
     bool m_in_frame = false;
     bool m_frame_read = false;
@@ -219,10 +234,23 @@ private:
     // lights and objects
     std::unordered_map<std::string, int> m_light_handles;
     std::unordered_map<std::string, std::vector<Primitive>> m_objects;
+    // Memory of the primitives ObjectInstance and inline archives copied,
+    // checked against the budget every kMemoryCheckStep bytes.
+    static constexpr uint64_t kMemoryCheckStep = 64u << 20;
+    uint64_t m_copied_bytes = 0;
+    uint64_t m_copied_primitives = 0;
+    uint64_t m_next_memory_check = kMemoryCheckStep;
     std::vector<Primitive>* m_object = nullptr;
     std::string m_object_handle;
     // inline archives
-    std::unordered_map<std::string, std::vector<Statement>> m_archives;
+    /// Shared: a replay keeps its body while the archive is redefined.
+    struct InlineArchive {
+        std::shared_ptr<const std::vector<Statement>> body;
+        /// Statements a ReadArchive of it replays, the inline archives it
+        /// reads included (as defined when it was; saturated).
+        uint64_t replays = 0;
+    };
+    std::unordered_map<std::string, InlineArchive> m_archives;
     bool m_recording = false;
     int m_record_depth = 0;
     std::string m_record_name;

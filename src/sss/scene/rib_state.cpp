@@ -11,12 +11,29 @@
 #include <glm/matrix.hpp>
 
 #include "rib_args.h"
+#include "sss/util/limits.h"
 #include "sss/util/math.h"
+#include "sss/util/messages.h"
 #include "sss/util/name_table.h"
 
 namespace sss::rib {
 
 namespace {
+
+/// Memory a primitive holds, roughly (its arrays and strings).
+uint64_t approx_bytes(const Primitive& p) {
+    uint64_t bytes = sizeof(Primitive) + p.source.size() + p.type.size();
+    bytes += (p.args.size() + p.tag_floatargs.size()) * sizeof(double);
+    bytes += (p.nloops.size() + p.nverts.size() + p.verts.size() + p.tag_nargs.size() +
+              p.tag_intargs.size()) *
+             sizeof(int);
+    for (const std::string& t : p.tags) bytes += sizeof(std::string) + t.size();
+    for (const Param& q : p.params.items) {
+        bytes += sizeof(Param) + q.name.size() + q.numbers.size() * sizeof(double);
+        for (const std::string& t : q.strings) bytes += sizeof(std::string) + t.size();
+    }
+    return bytes;
+}
 
 /// "file.rib:12" where a block opened.
 std::string where_saved(const SavedState& s) {
@@ -189,7 +206,22 @@ void Reader::do_object_instance(const Statement& s) {
     no_more_args(s, i);
     auto it = m_objects.find(handle);
     if (it == m_objects.end() || (m_object && handle == m_object_handle))
-        fail(s, "unknown object handle \"" + handle + "\"");
+        fail(s, "unknown object handle " + sss::quoted(handle));
+    // Each instance copies the object's primitives, and objects that
+    // instance others multiply them: check the memory as the copies grow.
+    uint64_t bytes = 0;
+    for (const Primitive& def : it->second) bytes += approx_bytes(def);
+    m_copied_bytes += bytes;
+    m_copied_primitives += it->second.size();
+    if (m_copied_bytes >= m_next_memory_check) {
+        check_memory(bytes + kMemoryCheckStep,
+                     where(s) + ": ObjectInstance " + sss::quoted(handle) + " (" +
+                         std::to_string(m_copied_primitives) +
+                         " primitives copied by instances so far)",
+                     "instance fewer objects (each ObjectInstance copies the object's "
+                     "primitives)");
+        m_next_memory_check = m_copied_bytes + kMemoryCheckStep;
+    }
     for (const Primitive& def : it->second) {
         Primitive p = def;
         add_primitive(s, std::move(p), def.object_to_world, def.source);
@@ -288,7 +320,7 @@ void Reader::do_coordinate_system(const Statement& s) {
     std::string name = take_string(s, i, "coordinate system name");
     no_more_args(s, i);
     if (name.empty()) fail(s, "empty coordinate system name");
-    if (predefined_space(name)) fail(s, "\"" + name + "\" is a predefined space");
+    if (predefined_space(name)) fail(s, sss::quoted(name) + " is a predefined space");
     if (m_in_world)
         m_scene.coordinate_systems[name] = m_ctm;
     else
@@ -308,16 +340,16 @@ void Reader::do_coord_sys_transform(const Statement& s) {
     } else if (name == "shader") {
         if (m_attr.attrs.surface) m_ctm = m_attr.attrs.surface->shader_to_world;
     } else if (name == "screen" || name == "raster" || name == "NDC") {
-        fail(s, "\"" + name + "\" space is not supported");
+        fail(s, sss::quoted(name) + " space is not supported");
     } else if (m_in_world) {
         auto it = m_scene.coordinate_systems.find(name);
         if (it == m_scene.coordinate_systems.end())
-            fail(s, "unknown coordinate system \"" + name + "\"");
+            fail(s, "unknown coordinate system " + sss::quoted(name));
         m_ctm = it->second;
     } else {
         auto it = m_camera_spaces.find(name);
         if (it == m_camera_spaces.end())
-            fail(s, "unknown coordinate system \"" + name + "\"");
+            fail(s, "unknown coordinate system " + sss::quoted(name));
         m_ctm = it->second;
     }
 }

@@ -100,17 +100,17 @@ const Param* ParamList::find(std::string_view name) const {
 
 namespace {
 
-std::string quoted(std::string_view name) {
-    return "parameter \"" + std::string(name) + "\"";
+std::string parameter(std::string_view name) {
+    return "parameter " + sss::quoted(name);
 }
 
 /// The parameter's numbers, checked to be numeric and at least `needed`.
 const std::vector<double>& numbers_of(const Param& p, std::size_t needed,
                                       const char* wanted) {
     if (p.type == ParamType::String)
-        throw ValueError(quoted(p.name) + ": expected " + wanted + ", got a string");
+        throw ValueError(parameter(p.name) + ": expected " + wanted + ", got a string");
     if (p.numbers.size() < needed)
-        throw ValueError(quoted(p.name) + ": expected " + wanted + ", got " +
+        throw ValueError(parameter(p.name) + ": expected " + wanted + ", got " +
                          std::to_string(p.numbers.size()) + " numbers");
     return p.numbers;
 }
@@ -121,7 +121,7 @@ double ParamList::get_float(std::string_view name, double fallback) const {
     const Param* p = find(name);
     if (!p) return fallback;
     if (p->type != ParamType::Float && p->type != ParamType::Integer)
-        throw ValueError(quoted(name) + ": expected a float, got a " +
+        throw ValueError(parameter(name) + ": expected a float, got a " +
                          param_type_name(p->type));
     return numbers_of(*p, 1, "a float")[0];
 }
@@ -130,12 +130,12 @@ int ParamList::get_int(std::string_view name, int fallback) const {
     const Param* p = find(name);
     if (!p) return fallback;
     if (p->type != ParamType::Float && p->type != ParamType::Integer)
-        throw ValueError(quoted(name) + ": expected an integer, got a " +
+        throw ValueError(parameter(name) + ": expected an integer, got a " +
                          param_type_name(p->type));
     double v = numbers_of(*p, 1, "an integer")[0];
     // A float parameter used as a count must still hold a whole number.
     if (v != std::floor(v) || std::abs(v) > 2147483647.0)
-        throw ValueError(quoted(name) + ": expected an integer, got " +
+        throw ValueError(parameter(name) + ": expected an integer, got " +
                          std::to_string(v));
     return static_cast<int>(v);
 }
@@ -145,10 +145,10 @@ std::string ParamList::get_string(std::string_view name,
     const Param* p = find(name);
     if (!p) return fallback;
     if (p->type != ParamType::String)
-        throw ValueError(quoted(name) + ": expected a string, got a " +
+        throw ValueError(parameter(name) + ": expected a string, got a " +
                          param_type_name(p->type));
     if (p->strings.empty())
-        throw ValueError(quoted(name) + ": expected a string, got none");
+        throw ValueError(parameter(name) + ": expected a string, got none");
     return p->strings[0];
 }
 
@@ -163,7 +163,7 @@ glm::dvec3 ParamList::get_vec3(std::string_view name, const glm::dvec3& fallback
     case ParamType::Float:
         break;
     default:
-        throw ValueError(quoted(name) + ": expected 3 numbers, got a " +
+        throw ValueError(parameter(name) + ": expected 3 numbers, got a " +
                          param_type_name(p->type));
     }
     const auto& n = numbers_of(*p, 3, "3 numbers");

@@ -35,6 +35,10 @@ std::string first_error(const std::vector<Diagnostic>& diagnostics) {
 ShaderCompileError::ShaderCompileError(std::vector<Diagnostic> diagnostics)
     : ValueError(first_error(diagnostics)), m_diagnostics(std::move(diagnostics)) {}
 
+ShaderCompileError::ShaderCompileError(std::vector<Diagnostic> diagnostics,
+                                       const std::string& what)
+    : ValueError(what), m_diagnostics(std::move(diagnostics)) {}
+
 } // namespace sss
 
 namespace sss::detail {

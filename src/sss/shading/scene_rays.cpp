@@ -21,6 +21,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "sss/util/hash.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -635,7 +636,7 @@ void SceneServices::message(const std::string& text) {
     std::lock_guard<std::mutex> lock(m_mutex);
     std::fputs(text.c_str(), stdout);
     if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
-    std::fflush(stdout);
+    flush_standard_output();
 }
 
 void SceneServices::trace(RayQuery& query) {

@@ -12,6 +12,7 @@
 
 #include "builtins.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -52,8 +53,8 @@ bool looks_like_file(const std::string& v) {
 }
 
 std::string call_where(const ShaderRef& ref, const char* request) {
-    return (ref.source.empty() ? std::string() : ref.source + ": ") + request + " \"" +
-           ref.name + "\"";
+    return (ref.source.empty() ? std::string() : ref.source + ": ") + request + " " +
+           sss::quoted(ref.name);
 }
 
 } // namespace
@@ -96,6 +97,29 @@ bool SceneShaders::uses(std::string_view op) const {
     for (const auto& l : lights)
         if (program_uses(l->program(), op)) return true;
     return false;
+}
+
+std::optional<std::string> unlit_scene_warning(const Scene& scene,
+                                               const SceneShaders& shaders) {
+    if (!scene.lights.empty()) return std::nullopt;
+    std::vector<std::string> names;
+    for (const auto& s : shaders.surfaces) {
+        const Program& p = s->program();
+        bool reads = false;
+        for (const char* op :
+             {"ambient", "diffuse", "specular", "phong", "specularbrdf", "illuminance"})
+            reads = reads || program_uses(p, op);
+        if (reads && std::find(names.begin(), names.end(), p.name) == names.end())
+            names.push_back(p.name);
+    }
+    if (names.empty()) return std::nullopt;
+    std::string list;
+    for (std::size_t i = 0; i < names.size() && i < 4; ++i)
+        list += (i ? ", " : "") + names[i];
+    if (names.size() > 4) list += ", ...";
+    return (scene.path.empty() ? std::string("the scene") : scene.path) +
+           ": no light sources: the surfaces shaded by " + list +
+           " gather light from none and are black but for what they emit";
 }
 
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {

@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include "sss/shading/compiler.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -82,6 +84,37 @@ std::vector<std::string> shader_search_path(const Scene& scene) {
     return out;
 }
 
+namespace {
+
+/// compile_file for a shader a scene calls, whose errors are one line (the
+/// tools print one ERROR line; `shader file.sl` shows them all):
+/// "<where>: file.sl:3:14: message (and 2 more errors)".
+CompileResult compile_on_the_fly(const std::string& path,
+                                 const PreprocessOptions& options,
+                                 const std::string& where) {
+    try {
+        ScopedStage stage("compiling " + path);
+        return compile_file(path, options);
+    } catch (const ShaderCompileError& e) {
+        const Diagnostic* first = nullptr;
+        std::size_t errors = 0;
+        for (const Diagnostic& d : e.diagnostics())
+            if (d.severity == Diagnostic::Severity::Error && errors++ == 0) first = &d;
+        if (!first) throw;
+        std::string text = where + ": " + first->file + ":" +
+                           std::to_string(first->line) + ":" +
+                           std::to_string(first->column) + ": " + first->message;
+        if (errors > 1)
+            text += " (and " + std::to_string(errors - 1) +
+                    (errors == 2 ? " more error)" : " more errors)");
+        throw ShaderCompileError(e.diagnostics(), text);
+    } catch (const PreprocessError& e) {
+        throw ValueError(where + ": " + e.what());
+    }
+}
+
+} // namespace
+
 ShaderLibrary::ShaderLibrary(std::vector<std::string> search_path)
     : m_path(std::move(search_path)) {}
 
@@ -108,26 +141,27 @@ ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string&
                 options.include_dirs.push_back(dir);
                 if (const std::string standard = standard_shader_dir(); !standard.empty())
                     options.include_dirs.push_back(standard);
-                CompileResult result = compile_file(sl.string(), options);
+                CompileResult result = compile_on_the_fly(sl.string(), options, where);
                 for (Program& p : result.shaders)
                     if (p.name == name)
                         program = std::make_shared<const Program>(std::move(p));
                 m_files.push_back(sl.string());
                 if (!program)
                     throw ShaderNotFoundError(where + ": " + sl.string() +
-                                              " does not define a shader named '" + name +
-                                              "'");
+                                              " does not define a shader named " +
+                                              sss::quoted(name));
                 break;
             }
         }
         if (!program)
-            throw ShaderNotFoundError(
-                where + ": shader '" + name + "' not found (no " + name + ".slo or " +
-                name + ".sl in the shader search path " + join_path(m_path) + ")");
+            throw ShaderNotFoundError(where + ": shader " + sss::quoted(name) +
+                                      " not found (no .slo or .sl of that name in the "
+                                      "shader search path " +
+                                      join_path(m_path) + ")");
         m_loaded.emplace(name, program);
     }
     if (program->kind != kind)
-        throw ShaderNotFoundError(where + ": '" + name + "' is a " +
+        throw ShaderNotFoundError(where + ": " + sss::quoted(name) + " is a " +
                                   shader_kind_name(program->kind) + " shader, not a " +
                                   shader_kind_name(kind) + " shader");
     return program;

@@ -33,6 +33,7 @@
 
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -538,6 +539,9 @@ void AtomicOutput::commit() {
         set->adopt(*this);
         return;
     }
+    // A job whose report could not be written fails without changing its
+    // outputs (docs/cli-conventions.md, "Standard output").
+    check_standard_output();
     if (m_special) {
         copy_into(m_target, m_temp, m_fd);
         m_done = true;
@@ -620,6 +624,7 @@ void OutputSet::commit() {
         }
         return;
     }
+    check_standard_output();
     // Devices and FIFOs first: they can fail (a full device, a reader that
     // went away) while nothing has been renamed yet.
     for (Pending& p : m_pending) {

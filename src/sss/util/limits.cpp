@@ -260,6 +260,9 @@ void check_memory(uint64_t needed_bytes, const std::string& what, const std::str
 
 ScopedStage::ScopedStage(std::string stage) : m_uncaught(std::uncaught_exceptions()) {
     std::lock_guard<std::mutex> lock(g_stage_mutex);
+    // A stage that begins after an exception left another one: that
+    // exception was handled, and its stage names no later failure.
+    failure_stage_ref().clear();
     std::string& current = stage_ref();
     m_previous = std::move(current);
     current = std::move(stage);

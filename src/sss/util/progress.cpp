@@ -3,6 +3,8 @@
 
 #include "sss/util/progress.h"
 
+#include "sss/util/messages.h"
+
 #include <chrono>
 #include <iostream>
 
@@ -21,7 +23,8 @@ void Progress::update(uint64_t done, uint64_t total) {
     if (pct <= m_last.load(std::memory_order_relaxed)) return;
     std::lock_guard<std::mutex> lock(m_mutex);
     if (pct <= m_last.load(std::memory_order_relaxed)) return;
-    std::cout << "ALF_PROGRESS " << pct << "%\n" << std::flush;
+    std::cout << "ALF_PROGRESS " << pct << "%\n";
+    flush_standard_output();
     m_last.store(pct, std::memory_order_relaxed);
 }
 

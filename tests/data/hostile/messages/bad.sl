@@ -1,0 +1,5 @@
+surface bad() {
+    Ci = foo;
+    Oi = bar;
+    Ci = 1 + "a";
+}
