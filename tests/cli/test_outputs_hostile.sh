@@ -151,7 +151,7 @@ refused "shader -o over its source" 1 shader 'option -o "good.sl" is an input of
     'the source "good.sl"' -- -o good.sl good.sl
 refused "shader: two shaders, one .slo" 1 shader '"dup.slo" (shader dup of dup_b.sl)' \
     'names the same file as "dup.slo" (shader dup of dup_a.sl)' -- dup_a.sl dup_b.sl
-refused "shader: one file does not compile" 1 shader 'broken.sl: 1 error' \
+refused "shader: one file does not compile" 1 shader '1 error in broken.sl' \
     'nothing was written' -- good.sl broken.sl
 # ptfilter in place: meaningful (the input is read whole first), allowed.
 cp keep.ptc inplace.ptc
