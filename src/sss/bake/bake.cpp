@@ -649,6 +649,9 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     std::vector<std::vector<Bake3dRecord>> records =
         shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(),
                      scene_rays.get(), frame, resources, report);
+    const uint64_t invalid = (tracer ? tracer->invalid_rays() : 0) +
+                             (scene_rays ? scene_rays->invalid_rays() : 0);
+    if (invalid > 0) report.warnings.push_back(invalid_rays_warning(invalid));
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 

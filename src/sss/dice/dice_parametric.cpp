@@ -155,8 +155,9 @@ double cell_count(double length, double edge) {
 /// Dices the faces of one primitive into one DicedSurface.
 class Dicer {
 public:
-    Dicer(const Primitive& prim, const DiceControl& control, DicedSurface& out)
-        : m_prim(prim), m_control(control), m_out(out) {
+    Dicer(const Primitive& prim, const DiceControl& control, DicedSurface& out,
+          DiceEstimate* estimate)
+        : m_prim(prim), m_control(control), m_out(out), m_estimate(estimate) {
         const Attributes& attr = attributes_of(prim);
         m_rate = attr.shading_rate;
         const Matrix4& m = prim.object_to_world;
@@ -191,9 +192,13 @@ public:
         const Extent e = measure(0.0, 1.0, 0.0, 1.0, kFaceMeasureSamples);
         // Coarsest possible dicing first: a lower bound of the final count.
         const double at_least = cell_count(e.ulen, e.emax) * cell_count(e.vlen, e.emax);
+        if (m_estimate) {
+            add_estimate(e, at_least);
+            return;
+        }
         const double room = static_cast<double>(m_control.max_micropolygons) -
                             static_cast<double>(m_out.size());
-        if (!(at_least <= room)) too_many();
+        if (!(at_least <= room)) too_many(static_cast<double>(m_out.size()) + at_least);
         reserve_output(static_cast<std::size_t>(at_least));
         m_leaves.clear();
         m_planned = 0.0;
@@ -222,10 +227,36 @@ private:
         int side;
     };
 
-    [[noreturn]] void too_many() const {
-        fail(m_prim, "too many micropolygons (more than " +
-                         std::to_string(m_control.max_micropolygons) +
-                         "): use a larger spacing or shading rate");
+    /// LimitError: dicing needs at least `count` micropolygons.
+    [[noreturn]] void too_many(double count) const {
+        too_many_micropolygons(m_prim, m_control, count);
+    }
+
+    /// The face just measured (kFaceMeasureSamples^2 samples in m_wp, their
+    /// wanted edges in m_we), estimated: the world area of each sample cell
+    /// over its finest edge squared, plus a row of cells along each side and
+    /// the grids' ceilings; never below `at_least`.
+    void add_estimate(const Extent& e, double at_least) {
+        const std::size_t n = kFaceMeasureSamples;
+        double cells = 0.0;
+        for (std::size_t j = 0; j + 1 < n; ++j)
+            for (std::size_t i = 0; i + 1 < n; ++i) {
+                const std::size_t k00 = j * n + i, k10 = k00 + 1, k01 = k00 + n,
+                                  k11 = k01 + 1;
+                const dvec3 &p00 = m_wp[k00], &p10 = m_wp[k10], &p01 = m_wp[k01],
+                            &p11 = m_wp[k11];
+                const double area = 0.5 * (glm::length(glm::cross(p10 - p00, p11 - p00)) +
+                                           glm::length(glm::cross(p11 - p00, p01 - p00)));
+                const double edge =
+                    std::min({m_we[k00], m_we[k10], m_we[k01], m_we[k11]});
+                cells += area / (edge * edge);
+            }
+        DiceEstimate est;
+        est.micropolygons =
+            std::max(at_least, 1.2 * cells + (e.ulen + e.vlen) / e.emin + 1.0);
+        est.vertices = 1.3 * est.micropolygons + 2.0 * (e.ulen + e.vlen) / e.emin;
+        est.triangles = 2.2 * est.micropolygons;
+        *m_estimate += est;
     }
 
     /// Makes room for `more` micropolygons (and their grids) at once rather
@@ -296,12 +327,15 @@ private:
         ensure_size(m_eval, n * n);
         m_face->geometry->evaluate(m_su, m_sv, m_eval.data());
         ensure_size(m_wp, n * n);
+        ensure_size(m_we, n * n);
         Extent e;
         e.emin = std::numeric_limits<double>::infinity();
         e.emax = 0.0;
         for (std::size_t k = 0; k < n * n; ++k) {
             m_wp[k] = world_point(m_eval[k].p);
+            check_world_point(m_prim, m_wp[k]);
             const double len = edge_at(m_wp[k]);
+            m_we[k] = len;
             e.emin = std::min(e.emin, len);
             e.emax = std::max(e.emax, len);
         }
@@ -347,7 +381,8 @@ private:
         }
         const double room = static_cast<double>(m_control.max_micropolygons) -
                             static_cast<double>(m_out.size()) - m_planned;
-        if (!(nu * nv <= room) || nu > 1e9 || nv > 1e9) too_many();
+        if (!(nu * nv <= room) || nu > 1e9 || nv > 1e9)
+            too_many(static_cast<double>(m_out.size()) + m_planned + nu * nv);
         m_planned += nu * nv;
         // Typical |dPw/du x dPw/dv| of this sub-patch, to recognise noise.
         const double scale = (e.ulen / (u1 - u0)) * (e.vlen / (v1 - v0));
@@ -1109,6 +1144,7 @@ private:
     const Primitive& m_prim;
     const DiceControl& m_control;
     DicedSurface& m_out;
+    DiceEstimate* m_estimate = nullptr; ///< set: faces are only estimated
     const Face* m_face = nullptr;
     double m_rate = 1.0;
     double m_spacing = 0.0;
@@ -1134,6 +1170,7 @@ private:
     std::vector<dvec3> m_values_s, m_values_t;
     std::vector<double> m_su, m_sv, m_vu, m_vv, m_gu, m_gv, m_cu, m_cv;
     std::vector<SurfacePoint> m_eval;
+    std::vector<double> m_we; ///< wanted edge at each of m_wp
     std::vector<dvec3> m_wp, m_vert_p, m_vert_cross, m_cell_vector, m_values, m_user_n;
     std::vector<double> m_cell_area;
     std::vector<std::optional<dvec3>> m_cell_normal;
@@ -1156,8 +1193,8 @@ struct ParametricDicer::State {
 };
 
 ParametricDicer::ParametricDicer(const Primitive& prim, const DiceControl& control,
-                                 DicedSurface& out)
-    : m_state(new State{Dicer(prim, control, out)}) {}
+                                 DicedSurface& out, DiceEstimate* estimate)
+    : m_state(new State{Dicer(prim, control, out, estimate)}) {}
 
 ParametricDicer::~ParametricDicer() = default;
 
