@@ -178,6 +178,13 @@ struct DiceEstimate {
         triangles += o.triangles;
         return *this;
     }
+    /// Bytes of the DicedSurface: per micropolygon 32 (centre, normal, area,
+    /// radius), 12 more with colours, 48 more with grids' parametric data;
+    /// per vertex 24 (position, normal), 16 more with grids; per triangle 12.
+    double surface_bytes(bool colors, bool grids) const {
+        return micropolygons * (32.0 + (colors ? 12.0 : 0.0) + (grids ? 48.0 : 0.0)) +
+               vertices * (24.0 + (grids ? 16.0 : 0.0)) + triangles * 12.0;
+    }
 };
 
 /// Estimates what dice_primitive(prim, control) makes, from the primitive's
@@ -191,13 +198,14 @@ struct DiceEstimate {
 /// control.max_micropolygons.
 DiceEstimate estimate_primitive(const Primitive& prim, const DiceControl& control);
 
-/// Estimates every request (estimate_primitive, in parallel) and adds them
-/// up; throws the first failure in request order (the same for any thread
-/// count), then a LimitError "<where>: N micropolygons in the scene exceeds
-/// ..." when the sum exceeds Limit::SceneMicropolygons. `where` names the
-/// scene (its file).
-DiceEstimate estimate_dicing(const Scene& scene, std::span<const DiceRequest> requests,
-                             const std::string& where);
+/// Estimates every request (estimate_primitive, in parallel), in request
+/// order; throws the first failure in request order (the same for any
+/// thread count), then a LimitError "<where>: N micropolygons in the scene
+/// exceeds ..." when their sum exceeds Limit::SceneMicropolygons. `where`
+/// names the scene (its file).
+std::vector<DiceEstimate> estimate_dicing(const Scene& scene,
+                                          std::span<const DiceRequest> requests,
+                                          const std::string& where);
 
 /// Per-surface work that belongs with the dicing: called by dice_all with
 /// the primitive's index and its surface, right after it is diced, in the

@@ -90,8 +90,9 @@ DiceEstimate estimate_primitive(const Primitive& prim, const DiceControl& contro
     return estimate;
 }
 
-DiceEstimate estimate_dicing(const Scene& scene, std::span<const DiceRequest> requests,
-                             const std::string& where) {
+std::vector<DiceEstimate> estimate_dicing(const Scene& scene,
+                                          std::span<const DiceRequest> requests,
+                                          const std::string& where) {
     std::vector<DiceEstimate> each(requests.size());
     for_each_request(requests.size(), [&](std::size_t k) {
         each[k] = estimate_primitive(scene.primitives[requests[k].primitive],
@@ -102,7 +103,7 @@ DiceEstimate estimate_dicing(const Scene& scene, std::span<const DiceRequest> re
     const double cap = 1.8e19; // beyond uint64_t: surely over any limit
     check_limit(Limit::SceneMicropolygons,
                 static_cast<uint64_t>(std::min(total.micropolygons, cap)), where);
-    return total;
+    return each;
 }
 
 std::vector<DicedSurface> dice_all(const Scene& scene,
@@ -138,10 +139,12 @@ public:
     }
 
     /// The centre nearest to c (squared float distance as dot(e, e)); of
-    /// equally near ones the lowest index. `guess` is any centre: its
-    /// distance bounds the search from the start.
-    uint32_t nearest(const glm::vec3& c, uint32_t guess) const {
+    /// equally near ones the lowest index. `guesses` are any centres: the
+    /// nearer one bounds the search from the start.
+    uint32_t nearest(const glm::vec3& c, uint32_t guess, uint32_t guess2) const {
         Best best{dist2(guess, c), guess};
+        const float d2 = dist2(guess2, c);
+        if (d2 < best.d || (d2 == best.d && guess2 < best.i)) best = {d2, guess2};
         thread_local std::vector<uint32_t> stack;
         stack.clear();
         stack.push_back(0);
@@ -246,16 +249,19 @@ std::vector<glm::vec3> triangle_colors(const DicedSurface& d) {
     const CentreTree tree(d.centers);
     const std::size_t triangles = d.triangles.size() / 3;
     colors.resize(triangles);
+    uint32_t previous = 0;
     for (std::size_t t = 0; t < triangles; ++t) {
         const glm::vec3 c =
             (d.vertices[d.triangles[3 * t]] + d.vertices[d.triangles[3 * t + 1]] +
              d.vertices[d.triangles[3 * t + 2]]) /
             3.0f;
-        // Dicers emit a micropolygon's triangles about where they emit it:
-        // the proportional index is a close first guess.
+        // Dicers emit a micropolygon's triangles about where and when they
+        // emit it: the proportional index and the previous triangle's answer
+        // are close first guesses.
         const auto guess =
             static_cast<uint32_t>(std::min(d.size() - 1, t * d.size() / triangles));
-        colors[t] = d.colors[tree.nearest(c, guess)];
+        previous = tree.nearest(c, guess, previous);
+        colors[t] = d.colors[previous];
     }
     return colors;
 }

@@ -33,7 +33,7 @@ void fail(const Primitive& prim, const std::string& what) {
 void too_many_micropolygons(const Primitive& prim, const DiceControl& control,
                             double count) {
     char needed[32];
-    std::snprintf(needed, sizeof needed, "%.0f", std::min(count, 1e30));
+    std::snprintf(needed, sizeof needed, count < 1e15 ? "%.0f" : "%.3g", count);
     throw LimitError(
         Limit::PrimitiveMicropolygons,
         describe(prim) + ": " + needed + " " + limit_what(Limit::PrimitiveMicropolygons) +
@@ -60,12 +60,12 @@ void check_world_range(const Primitive& prim, const DicedSurface& surface) {
 
 DiceEstimate estimate_flat_face(double area, double perimeter, double edge,
                                 double pieces) {
-    // Quads become about area / e^2 micropolygons, triangles up to twice
+    // Quads become about area / e^2 micropolygons, triangles 1.15 to 2 times
     // that (similar sub-triangles); the ceilings add about one row of cells
     // along each side, and every piece is at least one micropolygon.
     const double cells = area / (edge * edge);
     DiceEstimate e;
-    e.micropolygons = 1.5 * cells + perimeter / edge + pieces;
+    e.micropolygons = 1.25 * cells + perimeter / edge + pieces;
     e.vertices = e.micropolygons + 2.0 * perimeter / edge + 3.0 * pieces;
     e.triangles = 2.0 * e.micropolygons;
     return e;

@@ -132,6 +132,9 @@ constexpr int kMaxSplitDepth = 40;
 /// whose isoparametric curves may turn a full circle).
 constexpr int kMeasureSamples = 5;
 constexpr int kFaceMeasureSamples = 9;
+/// Estimates (DiceEstimate) count regions of up to this many cells, split
+/// like the dicer's grids: 1/16 of its measuring.
+constexpr double kEstimateCells = 4096.0;
 /// A parametric cross product this much smaller than the sub-patch's typical
 /// |dPdu| |dPdv| is rounding noise (poles, collapsed patch edges), not a normal.
 constexpr double kDegenerateRatio = 1e-10;
@@ -232,31 +235,68 @@ private:
         too_many_micropolygons(m_prim, m_control, count);
     }
 
-    /// The face just measured (kFaceMeasureSamples^2 samples in m_wp, their
-    /// wanted edges in m_we), estimated: the world area of each sample cell
-    /// over its finest edge squared, plus a row of cells along each side and
-    /// the grids' ceilings; never below `at_least`.
+    /// Adds the face's estimate to *m_estimate: its regions of even wanted
+    /// edge (split like refine() splits, as long as the edge varies by more
+    /// than 2 over a region) each estimated from their samples; never below
+    /// `at_least`. Stops splitting once the primitive is surely beyond its
+    /// budget.
     void add_estimate(const Extent& e, double at_least) {
-        const std::size_t n = kFaceMeasureSamples;
-        double cells = 0.0;
-        for (std::size_t j = 0; j + 1 < n; ++j)
-            for (std::size_t i = 0; i + 1 < n; ++i) {
-                const std::size_t k00 = j * n + i, k10 = k00 + 1, k01 = k00 + n,
-                                  k11 = k01 + 1;
-                const dvec3 &p00 = m_wp[k00], &p10 = m_wp[k10], &p01 = m_wp[k01],
-                            &p11 = m_wp[k11];
-                const double area = 0.5 * (glm::length(glm::cross(p10 - p00, p11 - p00)) +
-                                           glm::length(glm::cross(p11 - p00, p01 - p00)));
-                const double edge =
-                    std::min({m_we[k00], m_we[k10], m_we[k01], m_we[k11]});
-                cells += area / (edge * edge);
-            }
-        DiceEstimate est;
-        est.micropolygons =
-            std::max(at_least, 1.2 * cells + (e.ulen + e.vlen) / e.emin + 1.0);
-        est.vertices = 1.3 * est.micropolygons + 2.0 * (e.ulen + e.vlen) / e.emin;
-        est.triangles = 2.2 * est.micropolygons;
+        m_face_estimate = DiceEstimate{};
+        estimate_region(0.0, 1.0, 0.0, 1.0, 0, e, kFaceMeasureSamples);
+        DiceEstimate est = m_face_estimate;
+        if (est.micropolygons < at_least) {
+            const double scale = at_least / std::max(est.micropolygons, 1.0);
+            est.micropolygons *= scale;
+            est.vertices *= scale;
+            est.triangles *= scale;
+        }
         *m_estimate += est;
+    }
+
+    /// One region of the face just measured with `samples` per direction,
+    /// split as refine() splits (too many cells, or a ShadingRate edge that
+    /// varies by more than 2) but into regions of up to kEstimateCells
+    /// cells, each counted as refine() counts a leaf: its longest u and v
+    /// isoparametric lines over the finest edge, rounded up. Regions of a
+    /// thin or sheared patch have far more cells than their area holds.
+    void estimate_region(double u0, double u1, double v0, double v1, int depth,
+                         const Extent& e, int samples) {
+        (void)samples;
+        const double budget = 4.0 * static_cast<double>(m_control.max_micropolygons);
+        if (m_estimate->micropolygons + m_face_estimate.micropolygons > budget) {
+            m_face_estimate.micropolygons += budget; // surely too many: stop here
+            return;
+        }
+        const double nu = cell_count(e.ulen, e.emin), nv = cell_count(e.vlen, e.emin);
+        const bool too_big = nu * nv > kEstimateCells;
+        const bool uneven = m_spacing <= 0.0 && e.emax > 2.0 * e.emin && nu * nv > 1.0;
+        if ((too_big || uneven) && depth < kMaxSplitDepth) {
+            if (nu >= nv) {
+                const double um = 0.5 * (u0 + u1);
+                estimate_region(u0, um, v0, v1, depth + 1,
+                                measure(u0, um, v0, v1, kMeasureSamples),
+                                kMeasureSamples);
+                estimate_region(um, u1, v0, v1, depth + 1,
+                                measure(um, u1, v0, v1, kMeasureSamples),
+                                kMeasureSamples);
+            } else {
+                const double vm = 0.5 * (v0 + v1);
+                estimate_region(u0, u1, v0, vm, depth + 1,
+                                measure(u0, u1, v0, vm, kMeasureSamples),
+                                kMeasureSamples);
+                estimate_region(u0, u1, vm, v1, depth + 1,
+                                measure(u0, u1, vm, v1, kMeasureSamples),
+                                kMeasureSamples);
+            }
+            return;
+        }
+        // refine() cuts this region into grids of up to kMaxGridCells, each
+        // rounding its counts up: about 15% more.
+        DiceEstimate est;
+        est.micropolygons = 1.15 * nu * nv;
+        est.vertices = 1.3 * est.micropolygons + 2.0 * (nu + nv);
+        est.triangles = 2.2 * est.micropolygons;
+        m_face_estimate += est;
     }
 
     /// Makes room for `more` micropolygons (and their grids) at once rather
@@ -1145,6 +1185,7 @@ private:
     const DiceControl& m_control;
     DicedSurface& m_out;
     DiceEstimate* m_estimate = nullptr; ///< set: faces are only estimated
+    DiceEstimate m_face_estimate;       ///< the face being estimated
     const Face* m_face = nullptr;
     double m_rate = 1.0;
     double m_spacing = 0.0;

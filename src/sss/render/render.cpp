@@ -48,6 +48,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/hash.h"
+#include "sss/util/limits.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 #include "sss/util/version.h"
@@ -725,10 +726,53 @@ std::vector<std::size_t> plan_surfaces(Renderer& job, bool any_shadows,
     return to_dice;
 }
 
+// Memory beyond the diced surfaces (DiceEstimate::surface_bytes), measured
+// with the peak resident size of the teapot scene at 600 x 450 to 4800 x
+// 3600 pixels (docs/render.md, "Memory").
+/// Per estimated triangle in one Embree tracer (vertex and index copies,
+/// BVH with spatial splits, the builder's peak).
+constexpr double kTracedTriangleBytes = 80.0;
+/// Per pixel and value of a pixel (RGBA, the AOVs, filter weights): the
+/// filter sums, the image and its copy for the output file.
+constexpr double kPixelValueBytes = 12.0;
+
+/// Estimates the dicing before it allocates anything: Limit::
+/// PrimitiveMicropolygons and Limit::SceneMicropolygons (LimitError), then
+/// the memory the diced surfaces, their colours and the ray tracers holding
+/// them need (OutOfMemoryError naming what reduces it).
+void check_dicing(const Renderer& job, const std::vector<DiceRequest>& requests,
+                  bool separate_shadows) {
+    const Scene& scene = *job.scene;
+    const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
+    const std::vector<DiceEstimate> estimates = estimate_dicing(scene, requests, name);
+    double triangles = 0.0, bytes = 0.0;
+    for (std::size_t k = 0; k < requests.size(); ++k) {
+        const std::size_t i = requests[k].primitive;
+        const Surface& s = job.surfaces[i];
+        const DiceEstimate& e = estimates[k];
+        const bool colors = scene.primitives[i].params.has("Cs");
+        triangles += e.triangles;
+        bytes += e.surface_bytes(colors, requests[k].control.grids);
+        if (colors) bytes += 12.0 * e.triangles;
+        const int tracers = (s.camera ? 1 : 0) + (separate_shadows && s.shadows ? 1 : 0) +
+                            (job.any_rays && (s.shadows || s.secondary) ? 1 : 0);
+        bytes += tracers * kTracedTriangleBytes * e.triangles;
+    }
+    const double pixels = static_cast<double>(job.camera.xres) * job.camera.yres;
+    bytes += pixels * kPixelValueBytes * (job.values + 2);
+    char what[160];
+    std::snprintf(what, sizeof what,
+                  "rendering %s (about %.3g triangles, %d x %d pixels)", name.c_str(),
+                  triangles, job.camera.xres, job.camera.yres);
+    check_memory(static_cast<uint64_t>(std::min(bytes, 1.8e19)), what,
+                 "render a smaller image (-res) or raise ShadingRate above 16 (render "
+                 "dices triangles of max(4, sqrt(ShadingRate)) pixels)");
+}
+
 /// Dices the primitives `to_dice` into triangles of about kEdgePixels, with
 /// unit vertex normals and per-triangle colours.
 void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
-                   RenderReport& report) {
+                   bool separate_shadows, RenderReport& report) {
     const Scene& scene = *job.scene;
     // Displacement shaders run while dicing, before the ray tracers are
     // built: camera and shadow rays see the displaced surfaces.
@@ -757,6 +801,9 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
         control.grids = job.parametric[to_dice[k]] != 0;
         requests[k] = {to_dice[k], control};
     }
+    ScopedStage stage("dicing " +
+                      (scene.path.empty() ? std::string("the scene") : scene.path));
+    check_dicing(job, requests, separate_shadows);
     std::vector<DicedSurface> diced =
         dice_all(scene, requests, [&](std::size_t i, DicedSurface& d) {
             for (glm::vec3& n : d.vertex_normals) {
@@ -1090,7 +1137,7 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
     bool separate_shadows = false;
     const std::vector<std::size_t> to_dice =
         plan_surfaces(job, any_shadows, &separate_shadows);
-    dice_surfaces(job, to_dice, report);
+    dice_surfaces(job, to_dice, separate_shadows, report);
     build_tracers(job, to_dice, any_shadows, separate_shadows, report);
     job.services->set_occluders(job.occluders);
     if (job.any_rays) {
