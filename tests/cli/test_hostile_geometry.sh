@@ -74,6 +74,9 @@ refused "orthographic screen window" render \
 refused "singular camera" render "singular_camera.rib:7: WorldBegin: the camera transform" \
     singular_camera.rib
 [[ "$err" == *"is singular"* ]] || fail "singular camera: $err"
+# ptbake traces no camera rays, but camera space must exist (shaders, bake3d).
+refused "ptbake: singular camera" ptbake "singular_camera.rib:7: WorldBegin: the camera transform" \
+    -spacing 0.1 singular_camera.rib
 refused "far camera" render "far_camera.rib:6: WorldBegin: the camera lies at" far_camera.rib
 refused "far hither" render "far_clipping.rib:4: Clipping: hither" far_clipping.rib
 refused "huge lens" render "huge_lens.rib:4: DepthOfField: the lens radius" huge_lens.rib

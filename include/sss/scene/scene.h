@@ -320,15 +320,16 @@ private:
     double m_lens_radius = 0.0; ///< DepthOfField (camera units); 0: pinhole
 };
 
-/// Checks that a camera can generate rays and size micropolygons (camera.cpp):
-/// an image with pixels, a finite screen window with area, a field of view
-/// in (0, 180) degrees, 0 <= hither < yon, a lens with fstop > 0 and
-/// focaldistance > focallength, a world-to-camera transform that is finite
-/// and invertible, and an eye (or, orthographic, every ray origin over the
-/// screen window and lens) within kMaxWorldCoordinate of the world origin.
+/// Checks that a camera defines camera space and can size micropolygons
+/// (camera.cpp): an image with pixels, a finite screen window with area, a
+/// field of view in (0, 180) degrees, 0 <= hither < yon, a lens with fstop >
+/// 0 and focaldistance > focallength, a world-to-camera transform that is
+/// finite and invertible, and an eye within kMaxWorldCoordinate of the world
+/// origin. With `rays` (render), also that every camera ray (over the
+/// screen window and the lens) starts within that range and has a direction.
 /// Throws ValueError naming the RIB statement responsible
-/// ("scene.rib:9: WorldBegin: the camera transform is singular ...").
-void check_camera(const Camera& camera);
+/// ("scene.rib:9: WorldBegin: the camera transform ... is singular ...").
+void check_camera(const Camera& camera, bool rays = true);
 
 /// `PixelFilter name xwidth ywidth`: the reconstruction filter (RISpec 3.2
 /// appendix E), its support xwidth by ywidth pixels. Names: box, triangle,

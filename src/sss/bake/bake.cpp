@@ -637,6 +637,9 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     Stopwatch watch;
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
 
+    // Camera space is the shaders' current space and the bake3d files'
+    // reference: it must exist (no camera rays are traced).
+    check_camera(scene.options.camera, false);
     const BakeSpacing spacing = resolve_spacing(options);
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
     for (const std::string& w : shaders.warnings) report.warnings.push_back(w);

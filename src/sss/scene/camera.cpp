@@ -107,7 +107,7 @@ CameraProjection::Ray CameraProjection::ray(double x, double y,
     return r;
 }
 
-void check_camera(const Camera& cam) {
+void check_camera(const Camera& cam, bool rays) {
     const Camera::Sources& at = cam.sources;
     if (cam.xres < 1 || cam.yres < 1)
         fail_at(at.format, "Format",
@@ -173,6 +173,7 @@ void check_camera(const Camera& cam) {
                     num(eye.z) + "), beyond the coordinate range of +-" +
                     num(kMaxWorldCoordinate));
 
+    if (!rays) return;
     // The rays at the corners of the screen window, through the rim of the
     // lens: their origins in range, their directions and intervals numbers.
     // Camera-space origins beyond the range blame the screen window or the
