@@ -178,7 +178,7 @@ TEST(DiceEstimate, TriangleColorsTakeTheNearestCentre) {
                  "\"Cs\" [1 0 0 0 1 0 0 0 1 1 1 1]");
     sss::DiceControl control;
     control.camera = &scene.options.camera;
-    control.coarsening = 8.0;
+    control.coarsening = 32.0;
     const sss::DicedSurface d = sss::dice_primitive(scene.primitives[0], control);
     const std::vector<glm::vec3> colors = sss::triangle_colors(d);
     ASSERT_EQ(colors.size(), d.triangles.size() / 3);
