@@ -144,6 +144,10 @@ int run_job(const std::vector<std::string>& argv) {
                     rib.c_str(), scene.primitives.size(), scene.lights.size(),
                     report.baked_primitives, report.occluder_primitives,
                     report.occluder_triangles, report.shadow_lights);
+        std::printf(
+            "ptbake: estimated %.4g micropolygons, %s before dicing\n",
+            report.estimated_micropolygons,
+            sss::format_bytes(static_cast<uint64_t>(report.estimated_bytes)).c_str());
         std::printf("ptbake: micropolygon size %.4g to %.4g scene units\n",
                     report.min_spacing, report.max_spacing);
         for (const sss::BakeFileReport& f : report.files) {

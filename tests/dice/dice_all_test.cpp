@@ -93,7 +93,7 @@ std::string dice_all_error(const sss::Scene& scene,
                            const sss::DiceFinish& finish = {}) {
     try {
         sss::dice_all(scene, requests, finish);
-    } catch (const sss::ValueError& e) {
+    } catch (const std::exception& e) {
         return e.what();
     }
     return "";
@@ -179,6 +179,8 @@ TEST(DiceAll, FinishFailuresCountLikeDicingFailures) {
                                [&] { return dice_all_error(scene, requests, finish); }),
                   "finish failed on 2");
     }
+    // The failure keeps its type (a bad_alloc stays one, for "out of memory").
+    EXPECT_THROW(sss::dice_all(scene, requests, finish), std::runtime_error);
 }
 
 } // namespace

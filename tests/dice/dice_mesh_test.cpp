@@ -527,7 +527,16 @@ TEST(DiceMeshPolygon, MalformedPolygonsThrowNamingTheSource) {
         sss::Primitive p = make_prim(sss::PrimitiveKind::Polygon, quad);
         sss::DiceControl c = spacing(0.001);
         c.max_micropolygons = 1000;
-        expect_value_error([&] { sss::dice_primitive(p, c); }, "micropolygons");
+        EXPECT_THROW(sss::dice_primitive(p, c), sss::LimitError);
+        try {
+            sss::estimate_primitive(p, c);
+            ADD_FAILURE() << "no LimitError";
+        } catch (const sss::LimitError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(kSource), std::string::npos) << what;
+            EXPECT_NE(what.find("SSS_LIMIT_PRIMITIVE_MICROPOLYGONS"), std::string::npos)
+                << what;
+        }
     }
 }
 

@@ -707,9 +707,27 @@ TEST(DiceParametricErrors, NameTheSource) {
 
     sss::DiceControl few = spacing(0.01);
     few.max_micropolygons = 1000;
-    expect_value_error(make_prim(PrimitiveKind::Sphere, {1, -1, 1, 360}), few,
-                       "too many micropolygons");
-    expect_value_error(make_prim(PrimitiveKind::Teapot), few, "too many micropolygons");
+    for (const sss::Primitive& prim : {make_prim(PrimitiveKind::Sphere, {1, -1, 1, 360}),
+                                       make_prim(PrimitiveKind::Teapot)}) {
+        for (bool estimate : {false, true}) {
+            try {
+                if (estimate)
+                    sss::estimate_primitive(prim, few);
+                else
+                    sss::dice_primitive(prim, few);
+                ADD_FAILURE() << "expected a LimitError";
+            } catch (const sss::LimitError& e) {
+                const std::string what = e.what();
+                EXPECT_EQ(e.which(), sss::Limit::PrimitiveMicropolygons);
+                EXPECT_NE(what.find("scene.rib:7"), std::string::npos) << what;
+                EXPECT_NE(what.find("exceeds the limit of 1000"), std::string::npos)
+                    << what;
+                EXPECT_NE(what.find("SSS_LIMIT_PRIMITIVE_MICROPOLYGONS"),
+                          std::string::npos)
+                    << what;
+            }
+        }
+    }
 }
 
 } // namespace

@@ -568,8 +568,33 @@ TEST(RayTracerTest, EmptySceneAndErrors) {
     EXPECT_THROW(tracer.occluded(ray), sss::Error);
     tracer.commit();
     EXPECT_TRUE(tracer.occluded(ray));
-    sss::ShadowRay bad{{0, 0, 0}, {0, 0, NAN}, 0.0f, 1.0f};
-    EXPECT_THROW(tracer.occluded(bad), sss::ValueError);
+    // Rays Embree cannot trace are misses, counted (never an abort in Embree).
+    const std::vector<sss::ShadowRay> bad = {
+        {{0, 0, 0}, {0, 0, NAN}, 0.0f, 1.0f},
+        {{NAN, 0, 0}, {0, 0, 1}, 0.0f, 1.0f},
+        {{0, 0, 0}, {0, 0, 0}, 0.0f, 1.0f},
+        {{0, 0, 2e18f}, {0, 0, -1}, 0.0f, 3e18f},
+        {{0, 0, 0}, {0, 0, 1}, -1.0f, 1.0f},
+        {{0, 0, 0}, {0, 0, 1}, 0.0f, NAN},
+        {{0.1f, 0.1f, 0}, {0, 0, 1}, INFINITY, INFINITY}};
+    for (const sss::ShadowRay& r : bad) {
+        EXPECT_FALSE(tracer.occluded(r));
+        EXPECT_FALSE(tracer.intersect(r).hit);
+    }
+    EXPECT_EQ(tracer.invalid_rays(), 2 * bad.size());
+    std::vector<uint8_t> hits(bad.size(), 9);
+    tracer.occluded(bad.data(), bad.size(), hits.data());
+    for (uint8_t h : hits) EXPECT_EQ(h, 0);
+    EXPECT_EQ(tracer.invalid_rays(), 3 * bad.size());
+    // Valid rays in the same batch are still answered.
+    std::vector<sss::ShadowRay> mixed = {bad[0], ray, bad[3]};
+    tracer.occluded(mixed.data(), mixed.size(), hits.data());
+    EXPECT_EQ(hits[0], 0);
+    EXPECT_EQ(hits[1], 1);
+    EXPECT_EQ(hits[2], 0);
+    // Vertices beyond Embree's range would be dropped without a word.
+    EXPECT_THROW(tracer.add_mesh({{0, 0, 2e18f}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2}),
+                 sss::ValueError);
     // Adding a mesh later needs a new commit, then sees both meshes.
     EXPECT_EQ(tracer.add_mesh({{0, 0, -1}, {1, 0, -1}, {0, 1, -1}}, {0, 1, 2}), 1u);
     tracer.commit();

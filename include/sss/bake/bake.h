@@ -74,6 +74,10 @@ struct BakeReport {
     std::size_t occluder_primitives = 0;
     std::size_t occluder_triangles = 0;
     std::size_t shadow_lights = 0;
+    /// Before dicing: the micropolygons estimated (DiceEstimate) and the
+    /// memory the bake was estimated to need for them.
+    double estimated_micropolygons = 0.0;
+    double estimated_bytes = 0.0;
     double min_spacing = 0.0; ///< smallest and largest micropolygon edge used
     double max_spacing = 0.0;
     double dice_seconds = 0.0;

@@ -15,12 +15,14 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
 #include "sss/scene/scene.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 
@@ -63,9 +65,12 @@ struct DiceControl {
     /// Edge lengths are multiplied by this (>= 1): surfaces that only cast
     /// shadows need their shape, not micropolygon density.
     double coarsening = 1.0;
-    /// Safety cap: no primitive is diced into more than this many micropolygons
-    /// (a ValueError names the primitive instead).
-    std::size_t max_micropolygons = 200'000'000;
+    /// No primitive is diced into more than this many micropolygons: a
+    /// LimitError names the primitive (file:line) and
+    /// SSS_LIMIT_PRIMITIVE_MICROPOLYGONS instead. Limit::PrimitiveMicropolygons
+    /// by default (docs/limits.md).
+    std::size_t max_micropolygons =
+        static_cast<std::size_t>(limit(Limit::PrimitiveMicropolygons));
     /// Fill DicedSurface::grids and the per-micropolygon parametric data
     /// (u, v, du, dv, s, t, dPdu, dPdv) for shading grids.
     bool grids = false;
@@ -150,7 +155,10 @@ struct DicedSurface {
 };
 
 /// Dices one primitive. Throws ValueError (naming prim.source) on malformed
-/// geometry: wrong "P" count, out-of-range indices, degenerate parameters.
+/// geometry: wrong "P" count, out-of-range indices, degenerate parameters,
+/// and a surface with a world-space point that is not finite or lies beyond
+/// kMaxWorldCoordinate (docs/scene.md, "Coordinate range"); LimitError when
+/// it would make more than control.max_micropolygons micropolygons.
 DicedSurface dice_primitive(const Primitive& prim, const DiceControl& control);
 
 /// One primitive for dice_all, and how fine to dice it.
@@ -158,6 +166,46 @@ struct DiceRequest {
     std::size_t primitive = 0; ///< index into scene.primitives
     DiceControl control;       ///< its camera (if any) must outlive dice_all
 };
+
+/// What dicing makes of a primitive, estimated before anything is diced.
+struct DiceEstimate {
+    double micropolygons = 0.0;
+    double vertices = 0.0;  ///< triangle vertices (DicedSurface::vertices)
+    double triangles = 0.0; ///< ray-tracing triangles
+    DiceEstimate& operator+=(const DiceEstimate& o) {
+        micropolygons += o.micropolygons;
+        vertices += o.vertices;
+        triangles += o.triangles;
+        return *this;
+    }
+    /// Bytes of the DicedSurface: per micropolygon 32 (centre, normal, area,
+    /// radius), 12 more with colours, 48 more with grids' parametric data;
+    /// per vertex 24 (position, normal), 16 more with grids; per triangle 12.
+    double surface_bytes(bool colors, bool grids) const {
+        return micropolygons * (32.0 + (colors ? 12.0 : 0.0) + (grids ? 48.0 : 0.0)) +
+               vertices * (24.0 + (grids ? 16.0 : 0.0)) + triangles * 12.0;
+    }
+};
+
+/// Estimates what dice_primitive(prim, control) makes, from the primitive's
+/// world-space area and perimeter and the dicing rate over it (control
+/// points of polygons and subdivision cages, a 9 x 9 grid of samples of each
+/// parametric face), without allocating per micropolygon: within a factor of
+/// about two of the real counts, rather over than under. Displacement is
+/// not foreseen. Checks what dice_primitive checks first (ValueError on
+/// malformed geometry, and on points that are not finite or lie beyond
+/// kMaxWorldCoordinate); LimitError when the estimate exceeds
+/// control.max_micropolygons.
+DiceEstimate estimate_primitive(const Primitive& prim, const DiceControl& control);
+
+/// Estimates every request (estimate_primitive, in parallel), in request
+/// order; throws the first failure in request order (the same for any
+/// thread count), then a LimitError "<where>: N micropolygons in the scene
+/// exceeds ..." when their sum exceeds Limit::SceneMicropolygons. `where`
+/// names the scene (its file).
+std::vector<DiceEstimate> estimate_dicing(const Scene& scene,
+                                          std::span<const DiceRequest> requests,
+                                          const std::string& where);
 
 /// Per-surface work that belongs with the dicing: called by dice_all with
 /// the primitive's index and its surface, right after it is diced, in the
@@ -168,16 +216,18 @@ using DiceFinish = std::function<void(std::size_t primitive, DicedSurface& surfa
 /// one surface per primitive of the scene, by index: the requested ones
 /// diced (then passed to `finish`, when given), every other one empty.
 /// Every request is tried; then, if any failed (in dice_primitive or in
-/// `finish`), throws ValueError with the message of the first failure in
-/// request order, so that the error and the surfaces are the same for any
-/// number of threads. Requests name distinct primitives.
+/// `finish`), rethrows the first failure in request order (its own type:
+/// ValueError, LimitError, std::bad_alloc...), so that the error and the
+/// surfaces are the same for any number of threads. Requests name distinct
+/// primitives.
 std::vector<DicedSurface> dice_all(const Scene& scene,
                                    std::span<const DiceRequest> requests,
                                    const DiceFinish& finish = {});
 
 /// For surfaces with per-micropolygon colours: each triangle's colour, the
-/// colour of the micropolygon centre nearest to its centroid (a hash grid of
-/// cells the size of the largest micropolygon). Empty without colours.
+/// colour of the micropolygon centre nearest to its centroid (of equally
+/// near ones the lowest index), found in a k-d tree of the centres: O(n log
+/// n) whatever the sizes of the micropolygons. Empty without colours.
 std::vector<glm::vec3> triangle_colors(const DicedSurface& d);
 
 /// Surface area of a quadric primitive in its object space, computed

@@ -45,12 +45,21 @@ public:
     /// Builds the acceleration structure.
     void commit();
 
+    // Queries never hand Embree a ray it cannot trace: a ray whose origin or
+    // direction is not finite or has a coordinate beyond Embree's range
+    // (1.844e18), whose direction is zero, whose tnear is negative or not
+    // finite or whose tfar is NaN hits nothing and is counted in
+    // invalid_rays() (docs/render.md, "Rays"). tnear > tfar hits nothing.
+
     /// True if anything is hit in (tnear, tfar).
     bool occluded(const ShadowRay& ray) const;
     /// Batch form: hit[i] = occluded(rays[i]); uses Embree packets/streams.
     void occluded(const ShadowRay* rays, std::size_t count, uint8_t* hit) const;
     /// Closest hit in (tnear, tfar).
     RayHit intersect(const ShadowRay& ray) const;
+
+    /// Rays refused as invalid (answered as misses) so far, over all threads.
+    uint64_t invalid_rays() const;
 
     /// Diagonal of the scene's bounding box (for ray offsets), 0 when empty.
     float scene_extent() const;

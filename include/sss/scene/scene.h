@@ -25,6 +25,7 @@
 #include <vector>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "sss/util/messages.h"
@@ -32,6 +33,15 @@
 namespace sss {
 
 using Matrix4 = glm::dmat4;
+
+/// The largest |coordinate| a world-space point of a diced surface, a camera
+/// or a camera ray's origin may have (docs/scene.md, "Coordinate range"):
+/// Embree drops triangles with a coordinate beyond 1.844e18 (FLT_LARGE)
+/// without a word and aborts on rays that start there, and the float
+/// arithmetic of ray offsets and squared distances overflows not far above.
+/// 1e18 leaves room for ray offsets; at that distance from the origin a float
+/// resolves 6.9e10 units, so no sensible scene comes near it.
+constexpr double kMaxWorldCoordinate = 1e18;
 
 /// Type of a RIB parameter ("float", "color", ...).
 enum class ParamType {
@@ -249,6 +259,20 @@ struct Camera {
     double focal_length = 0.0;
     double focal_distance = 0.0;
 
+    /// Where each part was set, as errors name it ("scene.rib:3: ScreenWindow");
+    /// empty when the RI default is in effect.
+    struct Sources {
+        std::string format;         ///< Format
+        std::string frame_aspect;   ///< FrameAspectRatio
+        std::string screen_window;  ///< ScreenWindow
+        std::string projection;     ///< Projection
+        std::string clipping;       ///< Clipping
+        std::string depth_of_field; ///< DepthOfField
+        /// WorldBegin: the transformation in effect there is world_to_camera.
+        std::string world_begin;
+    };
+    Sources sources;
+
     /// Whether DepthOfField gives the camera a lens (finite fstop).
     bool depth_of_field() const { return std::isfinite(fstop) && focal_length > 0.0; }
     /// The lens radius focallength / (2 fstop) in camera-space units (0: pinhole).
@@ -265,6 +289,50 @@ struct Camera {
     /// distance `distance` from the eye (perspective) or anywhere (orthographic).
     double pixel_size_at(double distance) const;
 };
+
+/// The camera's rays in world space: the ray through each raster point,
+/// through a point of the lens with DepthOfField (camera.cpp). For a camera
+/// that passed check_camera.
+class CameraProjection {
+public:
+    explicit CameraProjection(const Camera& camera);
+
+    /// A ray in world space: origin, unit direction, its length per unit of
+    /// camera z (the depth of a point at distance t is t / units) and the
+    /// interval [hither, yon] along it (yon >= 1e30: infinity).
+    struct Ray {
+        glm::dvec3 origin{0.0};
+        glm::dvec3 direction{0.0, 0.0, 1.0};
+        double units = 1.0;
+        double tnear = 0.0;
+        double tfar = 0.0;
+    };
+    /// The ray through raster point (x, y) (pixels, y down). With
+    /// DepthOfField it starts at `lens` (a point of the unit disk) times the
+    /// lens radius, in the plane z = 0 of camera space, and goes through the
+    /// point where the pinhole ray meets the focal plane z = focaldistance
+    /// (orthographic cameras: the same, around the pinhole ray's origin).
+    Ray ray(double x, double y, const glm::dvec2& lens) const;
+
+private:
+    Camera m_cam;
+    std::array<double, 4> m_window{};
+    double m_tan_half = 1.0;
+    Matrix4 m_to_world{1.0};
+    bool m_affine = true;       ///< m_to_world's last row is (0, 0, 0, 1)
+    double m_lens_radius = 0.0; ///< DepthOfField (camera units); 0: pinhole
+};
+
+/// Checks that a camera defines camera space and can size micropolygons
+/// (camera.cpp): an image with pixels, a finite screen window with area, a
+/// field of view in (0, 180) degrees, 0 <= hither < yon, a lens with fstop >
+/// 0 and focaldistance > focallength, a world-to-camera transform that is
+/// finite and invertible, and an eye within kMaxWorldCoordinate of the world
+/// origin. With `rays` (render), also that every camera ray (over the
+/// screen window and the lens) starts within that range and has a direction.
+/// Throws ValueError naming the RIB statement responsible
+/// ("scene.rib:9: WorldBegin: the camera transform ... is singular ...").
+void check_camera(const Camera& camera, bool rays = true);
 
 /// `PixelFilter name xwidth ywidth`: the reconstruction filter (RISpec 3.2
 /// appendix E), its support xwidth by ywidth pixels. Names: box, triangle,

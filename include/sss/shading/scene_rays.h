@@ -93,6 +93,13 @@ private:
     std::mutex m_mutex;
 };
 
+/// The one warning ptbake and render give about the rays their ray tracers
+/// refused (RayTracer::invalid_rays, `count` > 0): "N rays with a NaN,
+/// infinite or out-of-range origin or direction were not traced (misses)
+/// ...". Such rays come from a shader's arithmetic (a NaN direction) or a
+/// light beyond the coordinate range (docs/render.md, "Rays").
+std::string invalid_rays_warning(uint64_t count);
+
 /// Secondary rays over a diced scene; thread-safe after construction.
 class SceneRays {
 public:
@@ -120,6 +127,9 @@ public:
     uint64_t rays_traced() const;
     /// Points of hit shaders whose results were NaN or infinite (written as 0).
     uint64_t nonfinite_points() const;
+    /// Rays the tracers refused as invalid (RayTracer::invalid_rays: a
+    /// non-finite or out-of-range origin or direction), answered as misses.
+    uint64_t invalid_rays() const;
     /// Triangles in the tracers (each distinct set counted once).
     std::size_t triangles() const;
 

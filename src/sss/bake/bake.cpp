@@ -280,11 +280,12 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
                 throw SpacingMaterialError(scene.primitives[jobs[j].prim].source);
 }
 
-/// Dices what is baked or casts shadows; the rest is not needed.
-std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& options,
-                                     const SceneShaders& shaders, const BakePlan& plan,
-                                     double spacing, bool any_hits,
-                                     Displacer& displacer) {
+/// What is diced: what is baked or casts shadows (the rest is not needed),
+/// and how finely.
+std::vector<DiceRequest> dice_requests(const Scene& scene, const BakeOptions& options,
+                                       const SceneShaders& shaders, const BakePlan& plan,
+                                       double spacing, bool any_hits,
+                                       Displacer& displacer) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
@@ -317,7 +318,47 @@ std::vector<DicedSurface> dice_scene(const Scene& scene, const BakeOptions& opti
         if (job >= 0 && request.control.displace) request.control.grids = true;
         requests.push_back(request);
     }
-    return dice_all(scene, requests);
+    return requests;
+}
+
+// Memory per unit of dicing, beyond the diced surfaces themselves
+// (DiceEstimate::surface_bytes), measured on the teapot and polygon scenes
+// of docs/ptbake.md ("Memory") with their peak resident size.
+/// Per baked point: its bake3d record (P, N, radius, area, channels) and
+/// its point in the cloud written, with the vectors' spare capacity.
+constexpr double kBakedPointBytes = 140.0;
+/// Per occluder triangle in Embree (vertex and index copies, BVH with
+/// spatial splits), per vertex included.
+constexpr double kTracedTriangleBytes = 80.0;
+
+/// Estimates the dicing before it allocates anything: Limit::
+/// PrimitiveMicropolygons and Limit::SceneMicropolygons (LimitError), then
+/// the memory the diced surfaces, the occluders and the baked points need
+/// (OutOfMemoryError naming the option that reduces it).
+void check_dicing(const Scene& scene, const BakeOptions& options, const BakePlan& plan,
+                  const std::vector<DiceRequest>& requests, BakeReport& report) {
+    const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
+    const std::vector<DiceEstimate> estimates = estimate_dicing(scene, requests, name);
+    double micropolygons = 0.0, bytes = 0.0;
+    for (std::size_t k = 0; k < requests.size(); ++k) {
+        const std::size_t i = requests[k].primitive;
+        const DiceEstimate& e = estimates[k];
+        micropolygons += e.micropolygons;
+        bytes += e.surface_bytes(scene.primitives[i].params.has("Cs"),
+                                 requests[k].control.grids);
+        if (plan.job_of[i] >= 0) bytes += kBakedPointBytes * e.micropolygons;
+        if (plan.occluder[i]) bytes += kTracedTriangleBytes * e.triangles;
+    }
+    report.estimated_micropolygons = micropolygons;
+    report.estimated_bytes = bytes;
+    char what[160];
+    std::snprintf(what, sizeof what, "baking %s (about %.3g micropolygons)", name.c_str(),
+                  micropolygons);
+    const char* remedy = options.spacing_from_material ? "raise -mfpfraction"
+                         : options.spacing > 0.0
+                             ? "raise -spacing"
+                             : "raise ShadingRate or give a larger -spacing";
+    check_memory(static_cast<uint64_t>(std::min(bytes, 1.8e19)), what, remedy);
 }
 
 /// Reports the micropolygon spacing, and warns about objects without area
@@ -598,6 +639,9 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     Stopwatch watch;
     const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
 
+    // Camera space is the shaders' current space and the bake3d files'
+    // reference: it must exist (no camera rays are traced).
+    check_camera(scene.options.camera, false);
     const BakeSpacing spacing = resolve_spacing(options);
     const SceneShaders shaders = bind_scene_shaders(scene, frame);
     if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, shaders);
@@ -627,9 +671,11 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     BakeServices dice_services(scene, nullptr, frame, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
+    const std::vector<DiceRequest> requests =
+        dice_requests(scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
     std::optional<ScopedStage> stage(std::in_place, "dicing " + name);
-    const std::vector<DicedSurface> diced =
-        dice_scene(scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
+    check_dicing(scene, options, plan, requests, report);
+    const std::vector<DicedSurface> diced = dice_all(scene, requests);
     for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
     report.dice_seconds = watch.seconds();
 
@@ -658,6 +704,9 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     std::vector<std::vector<Bake3dRecord>> records =
         shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(),
                      scene_rays.get(), frame, resources, report);
+    const uint64_t invalid = (tracer ? tracer->invalid_rays() : 0) +
+                             (scene_rays ? scene_rays->invalid_rays() : 0);
+    if (invalid > 0) report.warnings.push_back(invalid_rays_warning(invalid));
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 

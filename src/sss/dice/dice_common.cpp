@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -14,6 +15,7 @@
 #include <glm/vec4.hpp>
 
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 
@@ -26,6 +28,47 @@ std::string describe(const Primitive& prim) {
 
 void fail(const Primitive& prim, const std::string& what) {
     throw ValueError(describe(prim) + ": " + what);
+}
+
+void too_many_micropolygons(const Primitive& prim, const DiceControl& control,
+                            double count) {
+    char needed[32];
+    std::snprintf(needed, sizeof needed, count < 1e15 ? "%.0f" : "%.3g", count);
+    throw LimitError(
+        Limit::PrimitiveMicropolygons,
+        describe(prim) + ": " + needed + " " + limit_what(Limit::PrimitiveMicropolygons) +
+            " exceeds the limit of " + std::to_string(control.max_micropolygons) +
+            " (set " + limit_variable(Limit::PrimitiveMicropolygons) +
+            " to raise it, or dice coarser: a larger spacing or "
+            "ShadingRate)");
+}
+
+void check_world_point(const Primitive& prim, const glm::dvec3& p) {
+    if (in_world_range(p)) return;
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "its surface reaches (%.4g, %.4g, %.4g) in world space, beyond the "
+                  "coordinate range of +-%.0e (check \"P\", \"Pw\" and the transforms)",
+                  p.x, p.y, p.z, kMaxWorldCoordinate);
+    fail(prim, buf);
+}
+
+void check_world_range(const Primitive& prim, const DicedSurface& surface) {
+    for (const glm::vec3& v : surface.vertices) check_world_point(prim, glm::dvec3(v));
+    for (const glm::vec3& c : surface.centers) check_world_point(prim, glm::dvec3(c));
+}
+
+DiceEstimate estimate_flat_face(double area, double perimeter, double edge,
+                                double pieces) {
+    // Quads become about area / e^2 micropolygons, triangles 1.15 to 2 times
+    // that (similar sub-triangles); the ceilings add about one row of cells
+    // along each side, and every piece is at least one micropolygon.
+    const double cells = area / (edge * edge);
+    DiceEstimate e;
+    e.micropolygons = 1.25 * cells + perimeter / edge + pieces;
+    e.vertices = e.micropolygons + 2.0 * perimeter / edge + 3.0 * pieces;
+    e.triangles = 2.0 * e.micropolygons;
+    return e;
 }
 
 glm::dvec3 world_normal(const Matrix4& object_to_world, const glm::dvec3& object_normal,

@@ -21,6 +21,28 @@ std::string describe(const Primitive& prim);
 /// Throws ValueError "<source>: <Kind>: <what>".
 [[noreturn]] void fail(const Primitive& prim, const std::string& what);
 
+/// Throws LimitError (Limit::PrimitiveMicropolygons) "<source>: <Kind>: N
+/// micropolygons in one primitive exceeds the limit of M (set
+/// SSS_LIMIT_PRIMITIVE_MICROPOLYGONS to raise it, or dice coarser ...)",
+/// M = control.max_micropolygons; N is what dicing needs, or at least needs.
+[[noreturn]] void too_many_micropolygons(const Primitive& prim,
+                                         const DiceControl& control, double count);
+
+/// Whether a world-space point is finite and within kMaxWorldCoordinate.
+inline bool in_world_range(const glm::dvec3& p) {
+    return std::abs(p.x) <= kMaxWorldCoordinate && std::abs(p.y) <= kMaxWorldCoordinate &&
+           std::abs(p.z) <= kMaxWorldCoordinate; // NaN fails
+}
+
+/// ValueError naming the primitive unless in_world_range(p): "<source>:
+/// <Kind>: its surface reaches (x, y, z) in world space, beyond the
+/// coordinate range of +-1e+18 ...".
+void check_world_point(const Primitive& prim, const glm::dvec3& p);
+
+/// check_world_point for every vertex and micropolygon centre of a diced
+/// surface (displacement included).
+void check_world_range(const Primitive& prim, const DicedSurface& surface);
+
 /// Normal orientation rule shared by every primitive: the object-space normal
 /// is the RenderMan formula dPdu x dPdv (for polygons: (v1-v0) x (v2-v0) summed
 /// over the loop, Newell's method), transformed to world space by the inverse
@@ -42,19 +64,35 @@ inline bool finite(const glm::dvec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-// The families of primitives, one file each; called by dice_primitive only.
+// The families of primitives, one file each; called by dice_primitive and
+// estimate_primitive only. With `estimate` set, a family checks the
+// primitive as for dicing but only adds what dicing would make to
+// *estimate (estimate_primitive), and returns an empty surface.
 
 /// Sphere, Cylinder, Cone, Disk, Torus, Hyperboloid, Paraboloid (dice_quadric.cpp).
-DicedSurface dice_quadric(const Primitive& prim, const DiceControl& control);
+DicedSurface dice_quadric(const Primitive& prim, const DiceControl& control,
+                          DiceEstimate* estimate = nullptr);
 /// Patch "bilinear" / "bicubic" (dice_patch.cpp).
-DicedSurface dice_patch(const Primitive& prim, const DiceControl& control);
+DicedSurface dice_patch(const Primitive& prim, const DiceControl& control,
+                        DiceEstimate* estimate = nullptr);
 /// PatchMesh (dice_patch.cpp).
-DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control);
+DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control,
+                             DiceEstimate* estimate = nullptr);
 /// Geometry "teapot" (dice_patch.cpp).
-DicedSurface dice_teapot(const Primitive& prim, const DiceControl& control);
+DicedSurface dice_teapot(const Primitive& prim, const DiceControl& control,
+                         DiceEstimate* estimate = nullptr);
 /// Polygon, GeneralPolygon, PointsPolygons, PointsGeneralPolygons (dice_polygon.cpp).
-DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control);
+DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
+                           DiceEstimate* estimate = nullptr);
 /// SubdivisionMesh "catmull-clark" (dice_subdiv.cpp).
-DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control);
+DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control,
+                              DiceEstimate* estimate = nullptr);
+
+/// What dicing makes of one flat face of world-space area `area` and
+/// perimeter `perimeter` at micropolygon edge `edge`, cut into `pieces`
+/// triangles or quads first: the estimate the polygon and subdivision
+/// families add up.
+DiceEstimate estimate_flat_face(double area, double perimeter, double edge,
+                                double pieces);
 
 } // namespace sss::detail

@@ -132,6 +132,9 @@ constexpr int kMaxSplitDepth = 40;
 /// whose isoparametric curves may turn a full circle).
 constexpr int kMeasureSamples = 5;
 constexpr int kFaceMeasureSamples = 9;
+/// Estimates (DiceEstimate) count regions of up to this many cells, split
+/// like the dicer's grids: 1/16 of its measuring.
+constexpr double kEstimateCells = 4096.0;
 /// A parametric cross product this much smaller than the sub-patch's typical
 /// |dPdu| |dPdv| is rounding noise (poles, collapsed patch edges), not a normal.
 constexpr double kDegenerateRatio = 1e-10;
@@ -155,8 +158,9 @@ double cell_count(double length, double edge) {
 /// Dices the faces of one primitive into one DicedSurface.
 class Dicer {
 public:
-    Dicer(const Primitive& prim, const DiceControl& control, DicedSurface& out)
-        : m_prim(prim), m_control(control), m_out(out) {
+    Dicer(const Primitive& prim, const DiceControl& control, DicedSurface& out,
+          DiceEstimate* estimate)
+        : m_prim(prim), m_control(control), m_out(out), m_estimate(estimate) {
         const Attributes& attr = attributes_of(prim);
         m_rate = attr.shading_rate;
         const Matrix4& m = prim.object_to_world;
@@ -191,9 +195,13 @@ public:
         const Extent e = measure(0.0, 1.0, 0.0, 1.0, kFaceMeasureSamples);
         // Coarsest possible dicing first: a lower bound of the final count.
         const double at_least = cell_count(e.ulen, e.emax) * cell_count(e.vlen, e.emax);
+        if (m_estimate) {
+            add_estimate(e, at_least);
+            return;
+        }
         const double room = static_cast<double>(m_control.max_micropolygons) -
                             static_cast<double>(m_out.size());
-        if (!(at_least <= room)) too_many();
+        if (!(at_least <= room)) too_many(static_cast<double>(m_out.size()) + at_least);
         reserve_output(static_cast<std::size_t>(at_least));
         m_leaves.clear();
         m_planned = 0.0;
@@ -222,10 +230,73 @@ private:
         int side;
     };
 
-    [[noreturn]] void too_many() const {
-        fail(m_prim, "too many micropolygons (more than " +
-                         std::to_string(m_control.max_micropolygons) +
-                         "): use a larger spacing or shading rate");
+    /// LimitError: dicing needs at least `count` micropolygons.
+    [[noreturn]] void too_many(double count) const {
+        too_many_micropolygons(m_prim, m_control, count);
+    }
+
+    /// Adds the face's estimate to *m_estimate: its regions of even wanted
+    /// edge (split like refine() splits, as long as the edge varies by more
+    /// than 2 over a region) each estimated from their samples; never below
+    /// `at_least`. Stops splitting once the primitive is surely beyond its
+    /// budget.
+    void add_estimate(const Extent& e, double at_least) {
+        m_face_estimate = DiceEstimate{};
+        estimate_region(0.0, 1.0, 0.0, 1.0, 0, e, kFaceMeasureSamples);
+        DiceEstimate est = m_face_estimate;
+        if (est.micropolygons < at_least) {
+            const double scale = at_least / std::max(est.micropolygons, 1.0);
+            est.micropolygons *= scale;
+            est.vertices *= scale;
+            est.triangles *= scale;
+        }
+        *m_estimate += est;
+    }
+
+    /// One region of the face just measured with `samples` per direction,
+    /// split as refine() splits (too many cells, or a ShadingRate edge that
+    /// varies by more than 2) but into regions of up to kEstimateCells
+    /// cells, each counted as refine() counts a leaf: its longest u and v
+    /// isoparametric lines over the finest edge, rounded up. Regions of a
+    /// thin or sheared patch have far more cells than their area holds.
+    void estimate_region(double u0, double u1, double v0, double v1, int depth,
+                         const Extent& e, int samples) {
+        (void)samples;
+        const double budget = 4.0 * static_cast<double>(m_control.max_micropolygons);
+        if (m_estimate->micropolygons + m_face_estimate.micropolygons > budget) {
+            m_face_estimate.micropolygons += budget; // surely too many: stop here
+            return;
+        }
+        const double nu = cell_count(e.ulen, e.emin), nv = cell_count(e.vlen, e.emin);
+        const bool too_big = nu * nv > kEstimateCells;
+        const bool uneven = m_spacing <= 0.0 && e.emax > 2.0 * e.emin && nu * nv > 1.0;
+        if ((too_big || uneven) && depth < kMaxSplitDepth) {
+            if (nu >= nv) {
+                const double um = 0.5 * (u0 + u1);
+                estimate_region(u0, um, v0, v1, depth + 1,
+                                measure(u0, um, v0, v1, kMeasureSamples),
+                                kMeasureSamples);
+                estimate_region(um, u1, v0, v1, depth + 1,
+                                measure(um, u1, v0, v1, kMeasureSamples),
+                                kMeasureSamples);
+            } else {
+                const double vm = 0.5 * (v0 + v1);
+                estimate_region(u0, u1, v0, vm, depth + 1,
+                                measure(u0, u1, v0, vm, kMeasureSamples),
+                                kMeasureSamples);
+                estimate_region(u0, u1, vm, v1, depth + 1,
+                                measure(u0, u1, vm, v1, kMeasureSamples),
+                                kMeasureSamples);
+            }
+            return;
+        }
+        // refine() cuts this region into grids of up to kMaxGridCells, each
+        // rounding its counts up: about 15% more.
+        DiceEstimate est;
+        est.micropolygons = 1.15 * nu * nv;
+        est.vertices = 1.3 * est.micropolygons + 2.0 * (nu + nv);
+        est.triangles = 2.2 * est.micropolygons;
+        m_face_estimate += est;
     }
 
     /// Makes room for `more` micropolygons (and their grids) at once rather
@@ -296,12 +367,15 @@ private:
         ensure_size(m_eval, n * n);
         m_face->geometry->evaluate(m_su, m_sv, m_eval.data());
         ensure_size(m_wp, n * n);
+        ensure_size(m_we, n * n);
         Extent e;
         e.emin = std::numeric_limits<double>::infinity();
         e.emax = 0.0;
         for (std::size_t k = 0; k < n * n; ++k) {
             m_wp[k] = world_point(m_eval[k].p);
+            check_world_point(m_prim, m_wp[k]);
             const double len = edge_at(m_wp[k]);
+            m_we[k] = len;
             e.emin = std::min(e.emin, len);
             e.emax = std::max(e.emax, len);
         }
@@ -347,7 +421,8 @@ private:
         }
         const double room = static_cast<double>(m_control.max_micropolygons) -
                             static_cast<double>(m_out.size()) - m_planned;
-        if (!(nu * nv <= room) || nu > 1e9 || nv > 1e9) too_many();
+        if (!(nu * nv <= room) || nu > 1e9 || nv > 1e9)
+            too_many(static_cast<double>(m_out.size()) + m_planned + nu * nv);
         m_planned += nu * nv;
         // Typical |dPw/du x dPw/dv| of this sub-patch, to recognise noise.
         const double scale = (e.ulen / (u1 - u0)) * (e.vlen / (v1 - v0));
@@ -1109,6 +1184,8 @@ private:
     const Primitive& m_prim;
     const DiceControl& m_control;
     DicedSurface& m_out;
+    DiceEstimate* m_estimate = nullptr; ///< set: faces are only estimated
+    DiceEstimate m_face_estimate;       ///< the face being estimated
     const Face* m_face = nullptr;
     double m_rate = 1.0;
     double m_spacing = 0.0;
@@ -1134,6 +1211,7 @@ private:
     std::vector<dvec3> m_values_s, m_values_t;
     std::vector<double> m_su, m_sv, m_vu, m_vv, m_gu, m_gv, m_cu, m_cv;
     std::vector<SurfacePoint> m_eval;
+    std::vector<double> m_we; ///< wanted edge at each of m_wp
     std::vector<dvec3> m_wp, m_vert_p, m_vert_cross, m_cell_vector, m_values, m_user_n;
     std::vector<double> m_cell_area;
     std::vector<std::optional<dvec3>> m_cell_normal;
@@ -1156,8 +1234,8 @@ struct ParametricDicer::State {
 };
 
 ParametricDicer::ParametricDicer(const Primitive& prim, const DiceControl& control,
-                                 DicedSurface& out)
-    : m_state(new State{Dicer(prim, control, out)}) {}
+                                 DicedSurface& out, DiceEstimate* estimate)
+    : m_state(new State{Dicer(prim, control, out, estimate)}) {}
 
 ParametricDicer::~ParametricDicer() = default;
 

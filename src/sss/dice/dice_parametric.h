@@ -174,8 +174,11 @@ struct Face {
 class ParametricDicer {
 public:
     /// Checks the transform and that `control` can size micropolygons for
-    /// `prim` (ValueError naming it otherwise); faces are diced into `out`.
-    ParametricDicer(const Primitive& prim, const DiceControl& control, DicedSurface& out);
+    /// `prim` (ValueError naming it otherwise); faces are diced into `out`,
+    /// or with `estimate` set only estimated into *estimate (from their
+    /// measured samples, whose world points are range-checked either way).
+    ParametricDicer(const Primitive& prim, const DiceControl& control, DicedSurface& out,
+                    DiceEstimate* estimate = nullptr);
     ~ParametricDicer();
     ParametricDicer(const ParametricDicer&) = delete;
     ParametricDicer& operator=(const ParametricDicer&) = delete;

@@ -152,7 +152,8 @@ void BicubicSurface::evaluate(std::span<const double> us, std::span<const double
     }
 }
 
-DicedSurface dice_patch(const Primitive& prim, const DiceControl& control) {
+DicedSurface dice_patch(const Primitive& prim, const DiceControl& control,
+                        DiceEstimate* estimate) {
     const bool bicubic = is_bicubic(prim);
     const std::size_t count = bicubic ? 16 : 4;
     const std::vector<dvec3> pts = read_points(prim, count);
@@ -182,11 +183,12 @@ DicedSurface dice_patch(const Primitive& prim, const DiceControl& control) {
     face.s = st.s.face(at, ub, vb);
     face.t = st.t.face(at, ub, vb);
     DicedSurface out;
-    ParametricDicer(prim, control, out).dice(face);
+    ParametricDicer(prim, control, out, estimate).dice(face);
     return out;
 }
 
-DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control) {
+DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control,
+                             DiceEstimate* estimate) {
     const bool bicubic = is_bicubic(prim);
     const Attributes& attr = attributes_of(prim);
     const int nu = prim.nu;
@@ -213,7 +215,7 @@ DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control) 
     const TexCoordVars st(prim, counts);
 
     DicedSurface out;
-    ParametricDicer dicer(prim, control, out);
+    ParametricDicer dicer(prim, control, out, estimate);
     for (int j = 0; j < pv; ++j)
         for (int i = 0; i < pu; ++i) {
             FaceIndex at;
@@ -257,11 +259,12 @@ DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control) 
     return out;
 }
 
-DicedSurface dice_teapot(const Primitive& prim, const DiceControl& control) {
+DicedSurface dice_teapot(const Primitive& prim, const DiceControl& control,
+                         DiceEstimate* estimate) {
     // Geometry "teapot" takes no per-patch data: only one Cs for all of it.
     const PrimVar cs(prim, "Cs", ClassCounts{1, 1, 1, 1, 1});
     DicedSurface out;
-    ParametricDicer dicer(prim, control, out);
+    ParametricDicer dicer(prim, control, out, estimate);
     for (const auto& cp : detail::teapot_patches()) {
         const BicubicSurface surface(cp, bezier_matrix(), bezier_matrix());
         Face face;

@@ -415,7 +415,8 @@ constexpr std::array<glm::dvec2, 4> kQuadUV{glm::dvec2(0, 0), glm::dvec2(1, 0),
 
 } // namespace
 
-DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
+DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
+                           DiceEstimate* estimate) {
     const Attributes& attr = attributes_of(prim);
     const std::vector<glm::dvec3> points = read_positions(prim);
     const PolygonTopology topo = polygon_topology(prim, points.size());
@@ -434,9 +435,42 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control) {
         for (uint32_t p : topo.corner_point) used[p] = 1;
         for (std::size_t i = 0; i < points.size(); ++i) {
             world[i] = to_world(m, points[i]);
-            if (used[i])
+            if (used[i]) {
+                check_world_point(prim, world[i]);
                 edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
+            }
         }
+    }
+    if (estimate) {
+        // Per face: its outer loop's area, every loop's perimeter, the finest
+        // edge at its corners; a convex quad is one piece, anything else
+        // about as many triangles as corners.
+        for (std::size_t f = 0; f < nfaces; ++f) {
+            const int l0 = topo.face_loops[f], l1 = topo.face_loops[f + 1];
+            const auto c0 = static_cast<std::size_t>(topo.loop_corners[l0]);
+            const auto c1 = static_cast<std::size_t>(topo.loop_corners[l0 + 1]);
+            const auto cend = static_cast<std::size_t>(topo.loop_corners[l1]);
+            const auto at = [&](std::size_t c) -> const glm::dvec3& {
+                return world[topo.corner_point[c]];
+            };
+            glm::dvec3 newell(0.0);
+            for (std::size_t c = c0 + 1; c + 1 < c1; ++c)
+                newell += glm::cross(at(c) - at(c0), at(c + 1) - at(c0));
+            double perimeter = 0.0, e = std::numeric_limits<double>::infinity();
+            for (int l = l0; l < l1; ++l) {
+                const auto b = static_cast<std::size_t>(topo.loop_corners[l]);
+                const auto n = static_cast<std::size_t>(topo.loop_corners[l + 1]) - b;
+                for (std::size_t k = 0; k < n; ++k) {
+                    perimeter += glm::length(at(b + (k + 1) % n) - at(b + k));
+                    e = std::min(e, edge[topo.corner_point[b + k]]);
+                }
+            }
+            const double corners = static_cast<double>(cend - c0);
+            const double pieces = l1 - l0 == 1 && corners == 4 ? 1.0 : corners - 2.0;
+            *estimate +=
+                estimate_flat_face(0.5 * glm::length(newell), perimeter, e, pieces);
+        }
+        return {};
     }
 
     // Convex quads stay quads (diced like REYES grids); every other face is

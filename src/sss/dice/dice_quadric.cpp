@@ -304,7 +304,8 @@ double torus_band(double major, double minor, double a, double b) {
 
 namespace detail {
 
-DicedSurface dice_quadric(const Primitive& prim, const DiceControl& control) {
+DicedSurface dice_quadric(const Primitive& prim, const DiceControl& control,
+                          DiceEstimate* estimate) {
     const QuadricSurface surface(check_quadric(prim), prim.args);
     const ClassCounts counts{1, 4, 4, 4, 4};
     const PrimVar cs(prim, "Cs", counts);
@@ -318,7 +319,7 @@ DicedSurface dice_quadric(const Primitive& prim, const DiceControl& control) {
     face.s = st.s.face(at, Matrix4(1.0), Matrix4(1.0));
     face.t = st.t.face(at, Matrix4(1.0), Matrix4(1.0));
     DicedSurface out;
-    ParametricDicer(prim, control, out).dice(face);
+    ParametricDicer(prim, control, out, estimate).dice(face);
     return out;
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -26,7 +27,8 @@ constexpr int kMaxLevels = 8;
 
 } // namespace
 
-DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control) {
+DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control,
+                              DiceEstimate* estimate) {
     const Attributes& attr = attributes_of(prim);
     const Matrix4& m = prim.object_to_world;
     const NormalTransform normals(prim);
@@ -40,9 +42,34 @@ DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control)
         edge.resize(points.size());
         for (std::size_t i = 0; i < points.size(); ++i) {
             world[i] = to_world(m, points[i]);
+            check_world_point(prim, world[i]);
             edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
         }
     };
+    if (estimate) {
+        // The cage's faces: the limit surface lies inside the cage, with
+        // about its area. A face of n != 4 corners becomes n quads.
+        measure(mesh.points);
+        for (int f = 0; f < mesh.face_count(); ++f) {
+            if (mesh.face_hole[f]) continue;
+            const int c0 = mesh.face_start[f], c1 = mesh.face_start[f + 1];
+            const auto at = [&](int c) -> const glm::dvec3& {
+                return world[mesh.corner_vertex[c]];
+            };
+            glm::dvec3 newell(0.0);
+            double perimeter = 0.0, e = std::numeric_limits<double>::infinity();
+            for (int c = c0; c < c1; ++c) {
+                const int next = c + 1 < c1 ? c + 1 : c0;
+                newell += glm::cross(at(c) - at(c0), at(next) - at(c0));
+                perimeter += glm::length(at(next) - at(c));
+                e = std::min(e, edge[mesh.corner_vertex[c]]);
+            }
+            const int n = c1 - c0;
+            *estimate += estimate_flat_face(0.5 * glm::length(newell), perimeter, e,
+                                            n == 4 ? 1.0 : static_cast<double>(n));
+        }
+        return {};
+    }
     // Uniform refinement until every control edge is at most twice the dicing
     // length at its ends; the first step is forced when faces are not quads.
     const std::size_t face_budget = std::min(kMaxRefinedFaces, control.max_micropolygons);

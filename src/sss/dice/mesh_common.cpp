@@ -130,16 +130,13 @@ std::size_t piece_count(const Primitive& prim, const DiceControl& control, doubl
     // Every piece is at least one micropolygon: one side beyond the budget is
     // reported here, before any count can overflow.
     if (!(n <= static_cast<double>(control.max_micropolygons)) || !(n <= 1e9))
-        fail(prim, "would dice into more than " +
-                       std::to_string(control.max_micropolygons) + " micropolygons");
+        too_many_micropolygons(prim, control, n);
     return static_cast<std::size_t>(n);
 }
 
 void check_budget(const Primitive& prim, const DiceControl& control, std::size_t count) {
     if (count > control.max_micropolygons)
-        fail(prim, "would dice into " + std::to_string(count) +
-                       " micropolygons, more than the limit of " +
-                       std::to_string(control.max_micropolygons));
+        too_many_micropolygons(prim, control, static_cast<double>(count));
 }
 
 void allocate(const Primitive& prim, DicedSurface& out, std::size_t micropolygons,

@@ -172,7 +172,8 @@ double edge_length(const Primitive& prim, const DiceControl& control, const glm:
 std::size_t piece_count(const Primitive& prim, const DiceControl& control, double length,
                         double edge);
 
-/// ValueError when `count` micropolygons exceed the control's budget.
+/// LimitError (too_many_micropolygons) when `count` micropolygons exceed the
+/// control's budget.
 void check_budget(const Primitive& prim, const DiceControl& control, std::size_t count);
 
 // ---------------------------------------------------------------------------

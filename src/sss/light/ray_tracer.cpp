@@ -14,6 +14,7 @@
 #include "sss/light/ray_tracer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -21,6 +22,7 @@
 
 #include <embree3/rtcore.h>
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "sss/util/error.h"
 
@@ -51,15 +53,24 @@ bool finite3(const glm::vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-/// Rejects rays Embree would trace into undefined behaviour. Returns false
-/// for an empty interval (tnear > tfar): nothing can be hit.
-bool validate(const ShadowRay& ray) {
-    if (!finite3(ray.origin) || !finite3(ray.direction))
-        throw ValueError("RayTracer: ray with a non-finite origin or direction");
-    if (!(ray.tnear >= 0.0f) || !std::isfinite(ray.tnear) || std::isnan(ray.tfar))
-        throw ValueError(
-            "RayTracer: ray interval must have 0 <= tnear and a number tfar");
-    return ray.tnear <= ray.tfar;
+/// Embree's RayK::valid(): |origin| and |direction| components at most
+/// FLT_LARGE (1.844e18), tnear and tfar not NaN; its debug checks abort the
+/// process on anything else (`Assertion 'ray.valid()' failed`).
+constexpr float kEmbreeLarge = 1.844e18f;
+
+bool in_range(const glm::vec3& v) {
+    // NaN fails every comparison: not in range.
+    return std::abs(v.x) <= kEmbreeLarge && std::abs(v.y) <= kEmbreeLarge &&
+           std::abs(v.z) <= kEmbreeLarge;
+}
+
+/// Whether a ray may go to Embree: a finite origin and direction within
+/// Embree's range, a non-zero direction, 0 <= tnear < infinity and tfar not
+/// NaN. Anything else is not traced (RayTracer::invalid_rays counts it).
+bool valid(const ShadowRay& ray) {
+    return in_range(ray.origin) && in_range(ray.direction) &&
+           glm::dot(ray.direction, ray.direction) > 0.0f && ray.tnear >= 0.0f &&
+           std::isfinite(ray.tnear) && !std::isnan(ray.tfar);
 }
 
 void fill(RTCRay& r, const ShadowRay& s) {
@@ -90,6 +101,8 @@ struct RayTracer::Impl {
     uint32_t mesh_count = 0;
     std::size_t triangle_count = 0;
     bool committed = false;
+    /// Rays refused by valid(): answered as misses.
+    mutable std::atomic<uint64_t> invalid_rays{0};
     glm::vec3 lower{std::numeric_limits<float>::infinity()};
     glm::vec3 upper{-std::numeric_limits<float>::infinity()};
 
@@ -142,8 +155,10 @@ uint32_t RayTracer::add_mesh(const std::vector<glm::vec3>& vertices,
                              std::to_string(vertices.size()));
     }
     for (std::size_t i = 0; i < vertices.size(); ++i) {
-        if (!finite3(vertices[i]))
-            throw ValueError("RayTracer: vertex " + std::to_string(i) + " is not finite");
+        // Embree would drop the triangles of such vertices without a word.
+        if (!finite3(vertices[i]) || !in_range(vertices[i]))
+            throw ValueError("RayTracer: vertex " + std::to_string(i) +
+                             " is not finite or lies beyond +-1.8e18");
     }
 
     const uint32_t index = m_impl->mesh_count;
@@ -197,7 +212,11 @@ void RayTracer::commit() {
 }
 
 bool RayTracer::occluded(const ShadowRay& ray) const {
-    if (!validate(ray) || !m_impl->ready()) return false;
+    if (!valid(ray)) {
+        m_impl->invalid_rays.fetch_add(1, std::memory_order_relaxed);
+        return false;
+    }
+    if (!(ray.tnear <= ray.tfar) || !m_impl->ready()) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay r;
@@ -209,7 +228,9 @@ bool RayTracer::occluded(const ShadowRay& ray) const {
 void RayTracer::occluded(const ShadowRay* rays, std::size_t count, uint8_t* hit) const {
     if (count == 0) return;
     if (!m_impl->ready()) {
-        for (std::size_t i = 0; i < count; ++i) validate(rays[i]);
+        uint64_t invalid = 0;
+        for (std::size_t i = 0; i < count; ++i) invalid += valid(rays[i]) ? 0 : 1;
+        m_impl->invalid_rays.fetch_add(invalid, std::memory_order_relaxed);
         std::fill(hit, hit + count, uint8_t{0});
         return;
     }
@@ -222,11 +243,19 @@ void RayTracer::occluded(const ShadowRay* rays, std::size_t count, uint8_t* hit)
     for (std::size_t begin = 0; begin < count; begin += kChunk) {
         const std::size_t n = std::min(kChunk, count - begin);
         // Rays with tnear > tfar are inactive in a stream: Embree skips them
-        // and leaves their tfar alone, so they read as not occluded.
+        // and leaves their tfar alone, so they read as not occluded. Invalid
+        // rays go in as such inactive rays.
+        uint64_t invalid = 0;
         for (std::size_t i = 0; i < n; ++i) {
-            validate(rays[begin + i]);
-            fill(chunk[i], rays[begin + i]);
+            if (valid(rays[begin + i])) {
+                fill(chunk[i], rays[begin + i]);
+            } else {
+                ++invalid;
+                fill(chunk[i],
+                     ShadowRay{glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f), 1.0f, 0.0f});
+            }
         }
+        if (invalid) m_impl->invalid_rays.fetch_add(invalid, std::memory_order_relaxed);
         rtcOccluded1M(m_impl->scene, &context, chunk, static_cast<unsigned>(n),
                       sizeof(RTCRay));
         for (std::size_t i = 0; i < n; ++i)
@@ -236,7 +265,11 @@ void RayTracer::occluded(const ShadowRay* rays, std::size_t count, uint8_t* hit)
 
 RayHit RayTracer::intersect(const ShadowRay& ray) const {
     RayHit result;
-    if (!validate(ray) || !m_impl->ready()) return result;
+    if (!valid(ray)) {
+        m_impl->invalid_rays.fetch_add(1, std::memory_order_relaxed);
+        return result;
+    }
+    if (!(ray.tnear <= ray.tfar) || !m_impl->ready()) return result;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -254,6 +287,10 @@ RayHit RayTracer::intersect(const ShadowRay& ray) const {
     result.v = rh.hit.v;
     result.geometric_normal = glm::vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     return result;
+}
+
+uint64_t RayTracer::invalid_rays() const {
+    return m_impl->invalid_rays.load(std::memory_order_relaxed);
 }
 
 float RayTracer::scene_extent() const {

@@ -82,91 +82,43 @@ bool visible_to(const Primitive& prim, const char* name) {
     return attributes_of(prim).visible_to(name);
 }
 
-/// Camera rays from raster positions.
+/// Camera rays from raster positions, as the ray tracer takes them.
 class CameraRays {
 public:
-    explicit CameraRays(const Camera& cam) : m_cam(cam) {
-        m_window = cam.resolved_screen_window();
-        if (!(m_window[1] != m_window[0]) || !(m_window[3] != m_window[2]))
-            throw ValueError("ScreenWindow has no area");
-        if (cam.perspective && !(cam.fov > 0.0 && cam.fov < 180.0))
-            throw ValueError("perspective fov must lie in (0, 180) degrees, got " +
-                             std::to_string(cam.fov));
-        if (!(cam.near_clip >= 0.0) || !(cam.far_clip > cam.near_clip))
-            throw ValueError("Clipping: far must be beyond near");
-        m_tan_half = cam.perspective ? std::tan(cam.fov * kPi / 360.0) : 1.0;
-        const double det = glm::determinant(cam.world_to_camera);
-        if (!(std::abs(det) > 0.0) || !std::isfinite(det))
-            throw ValueError("the camera transform is singular");
-        m_to_world = glm::inverse(cam.world_to_camera);
-        m_affine = m_to_world[0][3] == 0.0 && m_to_world[1][3] == 0.0 &&
-                   m_to_world[2][3] == 0.0 && m_to_world[3][3] == 1.0;
-        if (cam.depth_of_field()) {
-            if (!(cam.focal_distance > cam.focal_length) || !(cam.fstop > 0.0))
-                throw ValueError("DepthOfField needs fstop > 0 and focaldistance > "
-                                 "focallength > 0");
-            m_lens_radius = cam.lens_radius();
-        }
-    }
+    /// Checks the camera (check_camera: errors name its RIB statements).
+    explicit CameraRays(const Camera& cam) : m_projection((check_camera(cam), cam)) {}
 
     /// The ray through raster point (x, y) (pixels, y down), clipped to
-    /// [hither, yon] along the camera's z; *units is the ray length per unit
-    /// of camera z (the depth of a hit at t is t / *units). With
-    /// DepthOfField the ray starts at `lens` (a point of the unit disk) times
-    /// the lens radius, in the plane z = 0 of camera space, and goes through
-    /// the point where the pinhole ray meets the focal plane z =
-    /// focaldistance (orthographic cameras: the same, around the pinhole
-    /// ray's origin).
+    /// [hither, yon] along the camera's z (CameraProjection::ray); *units is
+    /// the ray length per unit of camera z (the depth of a hit at t is t /
+    /// *units). Intervals beyond float range become infinite; a ray that is
+    /// not valid (a projective camera transform can make one between valid
+    /// corners) is passed on: the ray tracer counts it as a miss.
     ShadowRay ray(double x, double y, const glm::dvec2& lens, double* units) const {
-        const double sx = m_window[0] + (x / m_cam.xres) * (m_window[1] - m_window[0]);
-        const double sy = m_window[3] - (y / m_cam.yres) * (m_window[3] - m_window[2]);
-        glm::dvec4 origin(0.0, 0.0, 0.0, 1.0), ahead(0.0, 0.0, 1.0, 0.0);
-        if (m_cam.perspective) {
-            ahead = glm::dvec4(sx * m_tan_half, sy * m_tan_half, 1.0, 0.0);
-        } else {
-            origin = glm::dvec4(sx, sy, 0.0, 1.0);
-        }
-        if (m_lens_radius > 0.0) {
-            // ahead.z = 1: the focal point is origin + D * ahead; from the
-            // lens point origin + L the direction to it is ahead - L / D.
-            const glm::dvec2 l = lens * m_lens_radius;
-            origin.x += l.x;
-            origin.y += l.y;
-            ahead.x -= l.x / m_cam.focal_distance;
-            ahead.y -= l.y / m_cam.focal_distance;
-        }
-        const glm::dvec4 o4 = m_to_world * origin;
-        const glm::dvec3 o = glm::dvec3(o4) / o4.w;
-        // The direction is transformed as a vector, not as the difference of
-        // two points one camera unit apart: that difference lost the
-        // direction's low bits to the camera's distance from the origin in
-        // large scenes (1e-9 of it at 1e6 units), so a scaled scene's rays
-        // were not the same. Projective camera transforms keep the points.
-        glm::dvec3 d;
-        if (m_affine) {
-            d = glm::dvec3(m_to_world * ahead);
-        } else {
-            const glm::dvec4 a4 = m_to_world * (origin + ahead); // a point
-            d = glm::dvec3(a4) / a4.w - o;
-        }
-        const double len = glm::length(d);
-        *units = len;
-        ShadowRay r;
-        r.origin = glm::vec3(o);
-        r.direction = glm::vec3(d / len);
-        r.tnear = static_cast<float>(m_cam.near_clip * len);
-        r.tfar = m_cam.far_clip >= 1e30 ? std::numeric_limits<float>::infinity()
-                                        : static_cast<float>(m_cam.far_clip * len);
-        return r;
+        const CameraProjection::Ray r = m_projection.ray(x, y, lens);
+        *units = r.units;
+        ShadowRay out;
+        out.origin = to_float(r.origin);
+        out.direction = to_float(r.direction);
+        out.tnear = to_float(r.tnear);
+        out.tfar = to_float(r.tfar);
+        return out;
     }
 
 private:
-    Camera m_cam;
-    std::array<double, 4> m_window{};
-    double m_tan_half = 1.0;
-    Matrix4 m_to_world{1.0};
-    bool m_affine = true;       ///< m_to_world's last row is (0, 0, 0, 1)
-    double m_lens_radius = 0.0; ///< DepthOfField (camera units); 0: pinhole
+    /// Converts with overflow to infinity (a plain conversion of a double
+    /// beyond float range is undefined behaviour).
+    static float to_float(double v) {
+        constexpr double kMax = std::numeric_limits<float>::max();
+        if (v > kMax) return std::numeric_limits<float>::infinity();
+        if (v < -kMax) return -std::numeric_limits<float>::infinity();
+        return static_cast<float>(v);
+    }
+    static glm::vec3 to_float(const glm::dvec3& v) {
+        return {to_float(v.x), to_float(v.y), to_float(v.z)};
+    }
+
+    CameraProjection m_projection;
 };
 
 /// A primitive as the renderer uses it.
@@ -777,10 +729,53 @@ std::vector<std::size_t> plan_surfaces(Renderer& job, bool any_shadows,
     return to_dice;
 }
 
+// Memory beyond the diced surfaces (DiceEstimate::surface_bytes), measured
+// with the peak resident size of the teapot scene at 600 x 450 to 4800 x
+// 3600 pixels (docs/render.md, "Memory").
+/// Per estimated triangle in one Embree tracer (vertex and index copies,
+/// BVH with spatial splits, the builder's peak).
+constexpr double kTracedTriangleBytes = 80.0;
+/// Per pixel and value of a pixel (RGBA, the AOVs, filter weights): the
+/// filter sums, the image and its copy for the output file.
+constexpr double kPixelValueBytes = 12.0;
+
+/// Estimates the dicing before it allocates anything: Limit::
+/// PrimitiveMicropolygons and Limit::SceneMicropolygons (LimitError), then
+/// the memory the diced surfaces, their colours and the ray tracers holding
+/// them need (OutOfMemoryError naming what reduces it).
+void check_dicing(const Renderer& job, const std::vector<DiceRequest>& requests,
+                  bool separate_shadows) {
+    const Scene& scene = *job.scene;
+    const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
+    const std::vector<DiceEstimate> estimates = estimate_dicing(scene, requests, name);
+    double triangles = 0.0, bytes = 0.0;
+    for (std::size_t k = 0; k < requests.size(); ++k) {
+        const std::size_t i = requests[k].primitive;
+        const Surface& s = job.surfaces[i];
+        const DiceEstimate& e = estimates[k];
+        const bool colors = scene.primitives[i].params.has("Cs");
+        triangles += e.triangles;
+        bytes += e.surface_bytes(colors, requests[k].control.grids);
+        if (colors) bytes += 12.0 * e.triangles;
+        const int tracers = (s.camera ? 1 : 0) + (separate_shadows && s.shadows ? 1 : 0) +
+                            (job.any_rays && (s.shadows || s.secondary) ? 1 : 0);
+        bytes += tracers * kTracedTriangleBytes * e.triangles;
+    }
+    const double pixels = static_cast<double>(job.camera.xres) * job.camera.yres;
+    bytes += pixels * kPixelValueBytes * (job.values + 2);
+    char what[160];
+    std::snprintf(what, sizeof what,
+                  "rendering %s (about %.3g triangles, %d x %d pixels)", name.c_str(),
+                  triangles, job.camera.xres, job.camera.yres);
+    check_memory(static_cast<uint64_t>(std::min(bytes, 1.8e19)), what,
+                 "render a smaller image (-res) or raise ShadingRate above 16 (render "
+                 "dices triangles of max(4, sqrt(ShadingRate)) pixels)");
+}
+
 /// Dices the primitives `to_dice` into triangles of about kEdgePixels, with
 /// unit vertex normals and per-triangle colours.
 void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
-                   RenderReport& report) {
+                   bool separate_shadows, RenderReport& report) {
     const Scene& scene = *job.scene;
     // Displacement shaders run while dicing, before the ray tracers are
     // built: camera and shadow rays see the displaced surfaces.
@@ -809,6 +804,9 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
         control.grids = job.parametric[to_dice[k]] != 0;
         requests[k] = {to_dice[k], control};
     }
+    ScopedStage stage("dicing " +
+                      (scene.path.empty() ? std::string("the scene") : scene.path));
+    check_dicing(job, requests, separate_shadows);
     std::vector<DicedSurface> diced =
         dice_all(scene, requests, [&](std::size_t i, DicedSurface& d) {
             for (glm::vec3& n : d.vertex_normals) {
@@ -1121,6 +1119,10 @@ void report_rays(const Renderer& job, RenderReport& report) {
         report.warnings.push_back(
             std::to_string(nan_points) +
             " shading points gave NaN or infinite values, written as 0");
+    uint64_t invalid = job.camera_tracer ? job.camera_tracer->invalid_rays() : 0;
+    if (job.shadow_tracer) invalid += job.shadow_tracer->invalid_rays();
+    if (job.scene_rays) invalid += job.scene_rays->invalid_rays();
+    if (invalid > 0) report.warnings.push_back(invalid_rays_warning(invalid));
 }
 
 /// The point clouds bake3d calls made during the render (a bake RIB
@@ -1162,7 +1164,7 @@ Image render_image(const Scene& scene, const RenderJobOptions& options,
         plan_surfaces(job, any_shadows, &separate_shadows);
     {
         ScopedStage stage("dicing " + name);
-        dice_surfaces(job, to_dice, report);
+        dice_surfaces(job, to_dice, separate_shadows, report);
     }
     ScopedStage building("building the ray tracer for " + name);
     build_tracers(job, to_dice, any_shadows, separate_shadows, report);

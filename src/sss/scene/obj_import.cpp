@@ -11,6 +11,7 @@
 
 #include "rib_lexer.h"
 #include "sss/scene/rib.h"
+#include "sss/util/limits.h"
 
 namespace sss::detail {
 
@@ -137,6 +138,12 @@ private:
         if (words.size() < 4)
             fail("a face needs at least 3 vertices, got " +
                  std::to_string(words.size() - 1));
+        // Limit::PrimitiveVertices: for the face, and for the mesh's corners
+        // so far (the mesh is one primitive), before they are stored.
+        const std::string here = m_path + ":" + std::to_string(m_start_line) + ": f";
+        check_limit(Limit::PrimitiveVertices, words.size() - 1, here);
+        check_limit(Limit::PrimitiveVertices, m_verts.size() + words.size() - 1,
+                    here + " (the mesh's face corners so far)");
         if (!m_first_face_line) m_first_face_line = m_start_line;
         const long nv_now = static_cast<long>(m_positions.size() / 3);
         const long nn_now = static_cast<long>(m_normals.size() / 3);

@@ -25,7 +25,9 @@ struct ObjMesh {
 /// nothing for us). `path` names the file in messages. Each other statement
 /// adds one warning "path:line: ..." to `warnings`; a file without faces adds
 /// "path: no faces, nothing imported" and gives nullopt. Throws RibError
-/// (path, line, keyword) for a malformed line or an index out of range.
+/// (path, line, keyword) for a malformed line or an index out of range, and
+/// LimitError "path:line: f: ..." when a face, or the face corners of the
+/// mesh so far, exceed Limit::PrimitiveVertices.
 std::optional<ObjMesh> import_obj(std::string_view text, const std::string& path,
                                   std::vector<std::string>& warnings);
 

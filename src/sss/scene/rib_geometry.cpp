@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "rib_args.h"
+#include "sss/util/limits.h"
 
 namespace sss::rib {
 
@@ -39,6 +40,12 @@ std::size_t vertex_count(const std::vector<int>& verts) {
     int m = -1;
     for (int v : verts) m = std::max(m, v);
     return static_cast<std::size_t>(m + 1);
+}
+
+/// Limit::PrimitiveVertices: a primitive's points and its face corners
+/// (vertex indices) may not exceed it; LimitError naming the statement.
+void check_vertices(const Statement& s, std::size_t count) {
+    check_limit(Limit::PrimitiveVertices, count, where(s) + ": " + s.name);
 }
 
 /// The sum of counts (nvertices, nloops).
@@ -184,6 +191,7 @@ void Reader::do_polygon(const Statement& s) {
     std::size_t n = P ? P->element_count() : Pw ? Pw->element_count() : 0;
     if (n < 3)
         fail(s, "a polygon needs \"P\" with at least 3 points, got " + std::to_string(n));
+    check_vertices(s, n);
     resolve_positions(s, params, n);
     check_counts(s, params, counts(1, n, n, n));
     Primitive p;
@@ -201,6 +209,7 @@ void Reader::do_general_polygon(const Statement& s) {
     if (p.nverts.empty()) fail(s, "no loops");
     p.params = take_params(s, i, false);
     std::size_t n = sum(p.nverts);
+    check_vertices(s, n);
     resolve_positions(s, p.params, n);
     check_counts(s, p.params, counts(1, n, n, n));
     add_primitive(s, std::move(p));
@@ -214,6 +223,7 @@ void Reader::do_points_polygons(const Statement& s) {
     p.verts = take_ints(s, i, "vertices", 0);
     p.params = take_params(s, i, false);
     if (p.nverts.empty()) fail(s, "no polygons");
+    check_vertices(s, p.verts.size());
     check_indices(s, p.verts, sum(p.nverts));
     std::size_t nv = vertex_count(p.verts);
     resolve_positions(s, p.params, nv);
@@ -233,6 +243,7 @@ void Reader::do_points_general_polygons(const Statement& s) {
     if (p.nverts.size() != sum(p.nloops))
         fail(s, "nvertices has " + std::to_string(p.nverts.size()) +
                     " loops, nloops adds up to " + std::to_string(sum(p.nloops)));
+    check_vertices(s, p.verts.size());
     check_indices(s, p.verts, sum(p.nverts));
     std::size_t nv = vertex_count(p.verts);
     resolve_positions(s, p.params, nv);
@@ -255,6 +266,7 @@ void Reader::do_subdivision_mesh(const Statement& s) {
     }
     p.params = take_params(s, i, false);
     if (p.nverts.empty()) fail(s, "no faces");
+    check_vertices(s, p.verts.size());
     check_indices(s, p.verts, sum(p.nverts));
     std::size_t nv = vertex_count(p.verts);
     if (p.tag_nargs.size() != 2 * p.tags.size())
@@ -352,6 +364,7 @@ void Reader::do_patch_mesh(const Statement& s) {
     patch_dir(s, "nu", p.nu, p.uwrap, bicubic, m_attr.attrs.u_basis.step, pu, vu);
     patch_dir(s, "nv", p.nv, p.vwrap, bicubic, m_attr.attrs.v_basis.step, pv, vv);
     std::size_t nvert = static_cast<std::size_t>(p.nu) * static_cast<std::size_t>(p.nv);
+    check_vertices(s, nvert);
     resolve_positions(s, p.params, nvert, p.nu, p.nv, p.uwrap, p.vwrap);
     check_counts(s, p.params, counts(pu * pv, vu * vv, nvert, 4 * pu * pv));
     add_primitive(s, std::move(p));

@@ -38,6 +38,7 @@ void Reader::do_format(const Statement& s) {
     m_scene.options.camera.xres = xres;
     m_scene.options.camera.yres = yres;
     m_scene.options.camera.pixel_aspect = n[2];
+    m_scene.options.camera.sources.format = where(s) + ": " + s.name;
 }
 
 void Reader::do_frame_aspect(const Statement& s) {
@@ -45,7 +46,9 @@ void Reader::do_frame_aspect(const Statement& s) {
     double a = take_number(s, i);
     no_more_args(s, i);
     if (!(a > 0.0)) fail(s, "frame aspect ratio must be positive, got " + fmt(a));
-    if (option_allowed(s)) m_frame_aspect = a;
+    if (!option_allowed(s)) return;
+    m_frame_aspect = a;
+    m_scene.options.camera.sources.frame_aspect = where(s) + ": " + s.name;
 }
 
 void Reader::do_screen_window(const Statement& s) {
@@ -53,8 +56,9 @@ void Reader::do_screen_window(const Statement& s) {
     auto n = take_numbers(s, i, 4);
     no_more_args(s, i);
     if (n[0] == n[1] || n[2] == n[3]) fail(s, "empty screen window");
-    if (option_allowed(s))
-        m_scene.options.camera.screen_window = {n[0], n[1], n[2], n[3]};
+    if (!option_allowed(s)) return;
+    m_scene.options.camera.screen_window = {n[0], n[1], n[2], n[3]};
+    m_scene.options.camera.sources.screen_window = where(s) + ": " + s.name;
 }
 
 void Reader::do_crop_window(const Statement& s) {
@@ -84,6 +88,7 @@ void Reader::do_projection(const Statement& s) {
         fail(s, "unsupported projection " + sss::quoted(name) +
                     " (perspective or orthographic)");
     }
+    cam.sources.projection = where(s) + ": " + s.name;
     // RI: the projection marks camera space; the CTM restarts from identity.
     if (m_ctm != Matrix4(1.0))
         warn(s, "transformations before Projection are part of the screen "
@@ -100,6 +105,7 @@ void Reader::do_clipping(const Statement& s) {
     if (!option_allowed(s)) return;
     m_scene.options.camera.near_clip = n[0];
     m_scene.options.camera.far_clip = n[1];
+    m_scene.options.camera.sources.clipping = where(s) + ": " + s.name;
 }
 
 void Reader::do_pixel_samples(const Statement& s) {
@@ -120,6 +126,7 @@ void Reader::do_depth_of_field(const Statement& s) {
         if (!option_allowed(s)) return;
         cam.fstop = std::numeric_limits<double>::infinity();
         cam.focal_length = cam.focal_distance = 0.0;
+        cam.sources.depth_of_field.clear();
         return;
     }
     auto n = take_numbers(s, i, 3);
@@ -134,6 +141,7 @@ void Reader::do_depth_of_field(const Statement& s) {
     cam.fstop = n[0] >= 1e30 ? std::numeric_limits<double>::infinity() : n[0];
     cam.focal_length = n[1];
     cam.focal_distance = n[2];
+    cam.sources.depth_of_field = where(s) + ": " + s.name;
 }
 
 void Reader::do_pixel_filter(const Statement& s) {

@@ -116,6 +116,7 @@ void Reader::do_world_begin(const Statement& s) {
     m_world_to_camera = m_ctm;
     Camera& cam = m_scene.options.camera;
     cam.world_to_camera = m_ctm;
+    cam.sources.world_begin = where(s) + ": " + s.name;
     if (m_frame_aspect && !cam.screen_window) {
         double a = *m_frame_aspect;
         cam.screen_window = a >= 1.0

@@ -673,6 +673,19 @@ uint64_t SceneRays::rays_traced() const {
 uint64_t SceneRays::nonfinite_points() const {
     return m_impl->nonfinite.load();
 }
+std::string invalid_rays_warning(uint64_t count) {
+    return std::to_string(count) + (count == 1 ? " ray" : " rays") +
+           " with a NaN, infinite or out-of-range origin or direction (from a "
+           "shader's arithmetic, or a light beyond +-1e18) were not traced and "
+           "count as misses";
+}
+
+uint64_t SceneRays::invalid_rays() const {
+    uint64_t n = 0;
+    for (const auto& t : m_impl->tracers)
+        if (t) n += t->invalid_rays();
+    return n;
+}
 std::size_t SceneRays::triangles() const {
     return m_impl->triangle_count;
 }
