@@ -438,6 +438,56 @@ TEST(ReaderSweep, HugeCountsFailFastWithoutAllocating) {
                                                : "truncated point data"))
             << what;
     }
+    // gzip whose size allows the claim (400 KB of trailing bytes, which zlib
+    // ignores, raise the bound to 8.9 million points of 48 bytes) but whose
+    // data ends after the sample's points: the arrays grow with the data, so
+    // the end of the data is reached (a FormatError) long before 8 million
+    // points (450 MB of arrays) would have been reserved under the 256 MB
+    // limit. The same for a binary and an ASCII PLY.
+    {
+        const auto gzip_padded = [&](const Bytes& plain, const std::string& name) {
+            const std::string path = dir.file(name);
+            {
+                sss::detail::ByteSink sink(path, path, true);
+                sink.write(plain.data(), plain.size());
+                sink.close();
+            }
+            Bytes b = read_bytes(path);
+            b.resize(b.size() + (400u << 10), 0);
+            write_bytes(path, b);
+            return path;
+        };
+        Bytes plain = s.ptc;
+        put_f64(plain, 8, 8e6);
+        std::string what;
+        EXPECT_EQ(read_as(Format::Ptc, gzip_padded(plain, "padded_gz.ptc"), "padded ptc",
+                          &what),
+                  Outcome::Error);
+        EXPECT_TRUE(contains(what, "header claims 8000000 points, data ends after " +
+                                       std::to_string(n)))
+            << what;
+        std::string text(s.ply.begin(), s.ply.end());
+        const std::string key = "element vertex " + std::to_string(n);
+        // 5 million vertices of 56 bytes (420 MB of arrays) fit the bound.
+        text.replace(text.find(key), key.size(), "element vertex 5000000");
+        what.clear();
+        EXPECT_EQ(read_as(Format::Ply,
+                          gzip_padded(Bytes(text.begin(), text.end()), "padded_gz.ply"),
+                          "padded ply", &what),
+                  Outcome::Error);
+        EXPECT_TRUE(contains(what, "header claims 5000000 vertices, data ends after " +
+                                       std::to_string(n)))
+            << what;
+        std::string ascii = "ply\nformat ascii 1.0\nelement vertex 20000000\n"
+                            "property float x\nproperty float y\nproperty float z\n"
+                            "end_header\n0 0 0\n1 1 1\n";
+        what.clear();
+        EXPECT_EQ(read_as(Format::Ply,
+                          gzip_padded(Bytes(ascii.begin(), ascii.end()), "ascii_gz.ply"),
+                          "padded ascii ply", &what),
+                  Outcome::Error);
+        EXPECT_TRUE(contains(what, "data ends after 2 (point 2)")) << what;
+    }
     // .ply: the vertex count on the element line.
     for (const char* count :
          {"1000000000000", "9007199254740992", "99999999999999999999"}) {
