@@ -5,8 +5,8 @@
 //
 // ReadArchive reads files: the text is named "<empty temp folder>/fuzz.rib",
 // so relative archive names find nothing, and inputs that could name a file
-// elsewhere (an archive statement together with a '/') are skipped, so that
-// the fuzzer never reads /dev/zero, a FIFO or the project's own files.
+// elsewhere (an archive statement together with a '/' or a backslash escape)
+// are skipped, so that the fuzzer never reads the project's own files.
 
 #include <cmath>
 #include <cstdlib>
@@ -18,20 +18,6 @@
 #include "sss/scene/rib.h"
 
 namespace {
-
-std::string empty_folder() {
-    const char* dir = std::getenv("SSS_FUZZ_TMP");
-    std::string pattern =
-        std::string(dir && *dir ? dir : "/dev/shm") + "/sss_fuzz_rib_XXXXXX";
-    if (!::mkdtemp(pattern.data()))
-        sss::fuzz::finding("cannot create a temporary folder");
-    return pattern;
-}
-
-struct Folder {
-    std::string path = empty_folder();
-    ~Folder() { ::rmdir(path.c_str()); }
-};
 
 void exercise(const sss::Scene& scene) {
     const sss::Camera& cam = scene.options.camera;
@@ -63,12 +49,13 @@ void exercise(const sss::Scene& scene) {
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    static const Folder folder;
+    static const sss::fuzz::ScratchFolder folder("rib", false);
     const std::string text(reinterpret_cast<const char*>(data), size);
-    if (text.find("Archive") != std::string::npos && text.find('/') != std::string::npos)
+    if (text.find("Archive") != std::string::npos &&
+        sss::fuzz::may_name_outside_files(text))
         return 0;
     sss::fuzz::run_expecting_errors([&] {
-        const sss::Scene scene = sss::parse_rib(text, folder.path + "/fuzz.rib");
+        const sss::Scene scene = sss::parse_rib(text, folder.file("fuzz.rib"));
         exercise(scene);
     });
     return 0;

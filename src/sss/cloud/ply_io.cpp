@@ -27,7 +27,8 @@ using namespace detail;
 
 constexpr std::size_t kMaxHeaderLine = 1 << 16;
 constexpr std::size_t kMaxHeaderBytes = 1 << 24;
-constexpr std::size_t kMaxUpFrontPoints = 1 << 16;
+// Position, normal and radius, then at most 16 floats per channel.
+constexpr std::size_t kMaxProperties = 7 + 16 * static_cast<std::size_t>(kMaxChannels);
 constexpr const char* kChannelComment = "sss_channel";
 
 enum class PlyScalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
@@ -276,6 +277,10 @@ PlyHeader read_header(ByteSource& in) {
             if (!prop_names.insert(w[2]).second) {
                 throw fail("duplicate vertex property '" + w[2] + "'");
             }
+            if (h.props.size() >= kMaxProperties) {
+                throw fail("more than " + std::to_string(kMaxProperties) +
+                           " vertex properties");
+            }
             h.props.push_back({w[2], *t, h.stride});
             h.stride += scalar_size(*t);
         } else {
@@ -373,6 +378,11 @@ Mapping map_properties(const std::string& path, const PlyHeader& h, PointCloud& 
     std::stable_sort(
         pending.begin(), pending.end(),
         [](const Pending& a, const Pending& b) { return a.first < b.first; });
+    if (pending.size() > static_cast<std::size_t>(kMaxChannels)) {
+        throw FormatError(path,
+                          std::to_string(pending.size()) + " channels, more than the " +
+                              std::to_string(kMaxChannels) + " a point cloud may have");
+    }
     for (Pending& p : pending) {
         cloud.channels.push_back(std::move(p.channel));
         m.channel_props.push_back(std::move(p.props));
@@ -420,23 +430,26 @@ PointCloud read_ply(const std::string& path) {
         throw FormatError(path, "truncated vertex data: " + what,
                           static_cast<int64_t>(*left / min_vertex_bytes));
     }
-    const bool exact = left.has_value() && !in.compressed();
-    const std::size_t reserve =
-        exact ? static_cast<std::size_t>(h.count)
-              : static_cast<std::size_t>(std::min<uint64_t>(h.count, kMaxUpFrontPoints));
-    cloud.positions.reserve(reserve);
-    cloud.normals.reserve(reserve);
-    cloud.radii.reserve(reserve);
-    for (Channel& c : cloud.channels) c.data.reserve(reserve * c.components());
-
+    // A binary plain file has been checked exactly; otherwise (gzip, or ASCII,
+    // whose values may be far longer than the minimum) grow as data arrives.
+    CloudReserve reserve(cloud, path, h.count,
+                         left.has_value() && !in.compressed() && !h.ascii);
+    const auto truncated = [&](uint64_t i) {
+        return FormatError(path,
+                           "truncated vertex data: header claims " +
+                               std::to_string(h.count) + " vertices, data ends after " +
+                               std::to_string(i),
+                           static_cast<int64_t>(i));
+    };
     std::vector<double> values(nprops);
     std::vector<unsigned char> rec(h.stride);
     for (uint64_t i = 0; i < h.count; ++i) {
         const int64_t index = static_cast<int64_t>(i);
+        reserve.room_for(1);
         if (h.ascii) {
             for (std::size_t q = 0; q < nprops; ++q) {
                 const std::string word = next_word(in);
-                if (word.empty()) throw FormatError(path, "truncated vertex data", index);
+                if (word.empty()) throw truncated(i);
                 float v = 0.0f;
                 if (!parse_float(word, v)) {
                     throw FormatError(
@@ -445,9 +458,7 @@ PointCloud read_ply(const std::string& path) {
                 values[q] = v;
             }
         } else {
-            if (!in.read_exact(rec.data(), rec.size())) {
-                throw FormatError(path, "truncated vertex data", index);
-            }
+            if (!in.read_exact(rec.data(), rec.size())) throw truncated(i);
             for (std::size_t q = 0; q < nprops; ++q) {
                 values[q] = load_scalar(h.props[q].type, rec.data() + h.props[q].offset);
             }

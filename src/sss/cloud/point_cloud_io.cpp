@@ -15,6 +15,7 @@
 
 #include "point_cloud_io_detail.h"
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 namespace detail {
@@ -79,6 +80,59 @@ void check_writable(const PointCloud& cloud) {
             }
         }
     }
+}
+
+namespace {
+
+// Points reserved at first when the count is unverified: about 1 MB of arrays.
+constexpr uint64_t kFirstReserveBytes = 1 << 20;
+// Reservations smaller than this are not checked against the memory budget
+// (reading /proc and the cgroup files for every small cloud is wasted work).
+constexpr uint64_t kCheckedReserveBytes = 4 << 20;
+
+} // namespace
+
+CloudReserve::CloudReserve(PointCloud& cloud, const std::string& path, uint64_t claimed,
+                           bool verified)
+    : m_cloud(cloud), m_path(path), m_claimed(claimed),
+      m_point_bytes(sizeof(glm::vec3) * 2 + sizeof(float) +
+                    sizeof(float) * static_cast<uint64_t>(cloud.data_size())) {
+    if (verified) reserve(claimed);
+}
+
+void CloudReserve::grow(uint64_t needed) {
+    if (needed > m_claimed) {
+        // The readers never append more than the header's count.
+        throw FormatError(m_path, "more points than the header's count " +
+                                      std::to_string(m_claimed));
+    }
+    const uint64_t first = std::max<uint64_t>(1, kFirstReserveBytes / m_point_bytes);
+    reserve(std::min(m_claimed, std::max({needed, 2 * m_capacity, first})));
+}
+
+void CloudReserve::reserve(uint64_t capacity) {
+    if (capacity <= m_capacity) return;
+    const uint64_t points = capacity - m_cloud.size();
+    const uint64_t more = points > std::numeric_limits<uint64_t>::max() / m_point_bytes
+                              ? std::numeric_limits<uint64_t>::max()
+                              : points * m_point_bytes;
+    if (more >= kCheckedReserveBytes) {
+        const std::string what =
+            capacity == m_claimed
+                ? m_path + ": reading its " + std::to_string(m_claimed) + " points"
+                : m_path + ": holding " + std::to_string(capacity) + " of the " +
+                      std::to_string(m_claimed) + " points its header claims";
+        check_memory(more, what,
+                     "read it where more memory is available, or check that the file "
+                     "is not damaged");
+    }
+    const std::size_t n = static_cast<std::size_t>(capacity);
+    m_cloud.positions.reserve(n);
+    m_cloud.normals.reserve(n);
+    m_cloud.radii.reserve(n);
+    for (Channel& c : m_cloud.channels)
+        c.data.reserve(n * static_cast<std::size_t>(c.components()));
+    m_capacity = capacity;
 }
 
 bool has_extension(const std::string& path, const std::string& ext) {

@@ -24,13 +24,8 @@ using namespace detail;
 
 constexpr int32_t kPtcMagic = 0x63747070; // bytes on disk: "pptc"
 constexpr int kMaxVersion = 2;
-// Far more than any real cloud has; keeps a corrupt header from driving huge loops.
-constexpr int32_t kMaxChannels = 4096;
 constexpr std::size_t kMaxSpecLine = 4096;
 constexpr std::size_t kRecordBase = 20; // 3 f32 position + 2 u16 normal + f32 radius
-// Points reserved up front when the real count cannot be checked against the
-// file size (gzip, pipes): the rest grows as data actually arrives.
-constexpr std::size_t kMaxUpFrontPoints = 1 << 16;
 constexpr uint16_t kZeroNormalCode = 65535;
 constexpr uint32_t kPadWord = 0xDEADBEEFu;
 constexpr int kV2PadWords = 32;
@@ -245,17 +240,7 @@ PointCloud read_ptc(const std::string& path) {
                           static_cast<int64_t>(*left / record));
     }
     // A plain file has been checked exactly; otherwise grow as data arrives.
-    const bool exact = left.has_value() && !in.compressed();
-    const std::size_t reserve =
-        exact ? static_cast<std::size_t>(npoints)
-              : static_cast<std::size_t>(std::min<uint64_t>(npoints, kMaxUpFrontPoints));
-    cloud.positions.reserve(reserve);
-    cloud.normals.reserve(reserve);
-    cloud.radii.reserve(reserve);
-    for (Channel& c : cloud.channels) {
-        c.data.reserve(reserve * static_cast<std::size_t>(c.components()));
-    }
-
+    CloudReserve reserve(cloud, path, npoints, left.has_value() && !in.compressed());
     const std::size_t chunk_points = std::max<std::size_t>(1, (1 << 20) / record);
     std::vector<unsigned char> buf(chunk_points * record);
     uint64_t done = 0;
@@ -264,11 +249,14 @@ PointCloud read_ptc(const std::string& path) {
             static_cast<std::size_t>(std::min<uint64_t>(chunk_points, npoints - done));
         const std::size_t got = in.read(buf.data(), k * record);
         if (got < k * record) {
+            const uint64_t complete = done + got / record;
             throw FormatError(path,
                               "truncated point data: header claims " +
-                                  std::to_string(npoints) + " points, data ends",
-                              static_cast<int64_t>(done + got / record));
+                                  std::to_string(npoints) + " points, data ends after " +
+                                  std::to_string(complete),
+                              static_cast<int64_t>(complete));
         }
+        reserve.room_for(k);
         for (std::size_t j = 0; j < k; ++j) {
             const unsigned char* r = buf.data() + j * record;
             const int64_t index = static_cast<int64_t>(done + j);
