@@ -146,10 +146,11 @@ SSS_MEMORY_LIMIT=64M refused "memory: 10000 teapots at -spacing 0.05" ptbake \
     fail "memory (-spacing): $err"
 SSS_MEMORY_LIMIT=64M refused "memory: ShadingRate" ptbake "baking pots10k.rib (about " pots10k.rib
 [[ "$err" == *"raise ShadingRate"* ]] || fail "memory (ShadingRate): $err"
-SSS_MEMORY_LIMIT=64M refused "memory: render" render "rendering teapot.rib (about " \
+# The image buffers are checked first (docs/limits.md), then the dicing.
+SSS_MEMORY_LIMIT=1G refused "memory: render image" render "needs about " \
     -res 4000 3000 teapot.rib
-[[ "$err" == *"this process may use 64.0 MB (SSS_MEMORY_LIMIT); render a smaller image (-res)"* ]] ||
-    fail "memory (render): $err"
+[[ "$err" == *"this process may use 1.0 GB (SSS_MEMORY_LIMIT); lower the resolution"* ]] ||
+    fail "memory (render image): $err"
 
 # --- many-sided polygons: O(n log n) triangulation -------------------------
 # points N FORMAT: N points on the unit circle.
