@@ -242,7 +242,8 @@ PointCloud read_ptc(const std::string& path) {
     // A plain file has been checked exactly; otherwise grow as data arrives.
     CloudReserve reserve(cloud, path, npoints, left.has_value() && !in.compressed());
     const std::size_t chunk_points = std::max<std::size_t>(1, (1 << 20) / record);
-    std::vector<unsigned char> buf(chunk_points * record);
+    std::vector<unsigned char> buf(
+        static_cast<std::size_t>(std::min<uint64_t>(chunk_points, npoints)) * record);
     uint64_t done = 0;
     while (done < npoints) {
         const std::size_t k =
