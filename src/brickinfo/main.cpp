@@ -17,9 +17,9 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
-#include "sss/util/job_files.h"
 
 namespace {
 

@@ -671,8 +671,8 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     BakeServices dice_services(scene, nullptr, frame, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
-    const std::vector<DiceRequest> requests =
-        dice_requests(scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
+    const std::vector<DiceRequest> requests = dice_requests(
+        scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
     std::optional<ScopedStage> stage(std::in_place, "dicing " + name);
     check_dicing(scene, options, plan, requests, report);
     const std::vector<DicedSurface> diced = dice_all(scene, requests);

@@ -81,7 +81,8 @@ BrickMapBuildReport make_brick_map_from_files(const std::vector<std::string>& in
     {
         // Before any work: a folder, or an output that is one of the clouds.
         JobFiles files;
-        for (const std::string& in : inputs) files.input(in, "the input cloud \"" + in + "\"");
+        for (const std::string& in : inputs)
+            files.input(in, "the input cloud \"" + in + "\"");
         files.output(output, "the output brick map \"" + output + "\"");
         check_output_target(output);
     }

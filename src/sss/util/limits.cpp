@@ -40,7 +40,9 @@ constexpr std::array<LimitInfo, static_cast<size_t>(Limit::Count_)> kLimits{{
     {"BRICKS", "bricks in one brick map", 64'000'000},
 }};
 
-const LimitInfo& info(Limit which) { return kLimits.at(static_cast<size_t>(which)); }
+const LimitInfo& info(Limit which) {
+    return kLimits.at(static_cast<size_t>(which));
+}
 
 std::array<std::atomic<uint64_t>, static_cast<size_t>(Limit::Count_)> g_overrides{};
 
@@ -77,7 +79,9 @@ uint64_t env_amount(const std::string& variable) {
     return v;
 }
 
-std::string format_count(uint64_t n) { return std::to_string(n); }
+std::string format_count(uint64_t n) {
+    return std::to_string(n);
+}
 
 // --- memory ----------------------------------------------------------------
 
@@ -130,7 +134,8 @@ CgroupMemory cgroup_memory() {
             std::string full = base + (dir == "/" ? "" : dir);
             uint64_t max = read_number_file(full + "/" + max_file);
             // v1 reports "no limit" as a huge page-rounded number.
-            if (max > 0 && max < (uint64_t(1) << 60) && (best.max == 0 || max < best.max)) {
+            if (max > 0 && max < (uint64_t(1) << 60) &&
+                (best.max == 0 || max < best.max)) {
                 best.max = max;
                 best.current = read_number_file(full + "/" + cur_file);
             }
@@ -178,13 +183,22 @@ std::string& failure_stage_ref() {
 
 } // namespace
 
-const char* limit_name(Limit which) { return info(which).name; }
-std::string limit_variable(Limit which) { return std::string("SSS_LIMIT_") + info(which).name; }
-const char* limit_what(Limit which) { return info(which).what; }
-uint64_t limit_default(Limit which) { return info(which).default_value; }
+const char* limit_name(Limit which) {
+    return info(which).name;
+}
+std::string limit_variable(Limit which) {
+    return std::string("SSS_LIMIT_") + info(which).name;
+}
+const char* limit_what(Limit which) {
+    return info(which).what;
+}
+uint64_t limit_default(Limit which) {
+    return info(which).default_value;
+}
 
 uint64_t limit(Limit which) {
-    uint64_t v = g_overrides.at(static_cast<size_t>(which)).load(std::memory_order_relaxed);
+    uint64_t v =
+        g_overrides.at(static_cast<size_t>(which)).load(std::memory_order_relaxed);
     if (v) return v;
     v = env_amount(limit_variable(which));
     return v ? v : limit_default(which);
@@ -197,10 +211,10 @@ void set_limit(Limit which, uint64_t value) {
 void check_limit(Limit which, uint64_t needed, const std::string& where) {
     uint64_t allowed = limit(which);
     if (needed <= allowed) return;
-    throw LimitError(which, (where.empty() ? std::string() : where + ": ") + format_count(needed) +
-                                " " + limit_what(which) + " exceeds the limit of " +
-                                format_count(allowed) + " (set " + limit_variable(which) +
-                                " to raise it)");
+    throw LimitError(which, (where.empty() ? std::string() : where + ": ") +
+                                format_count(needed) + " " + limit_what(which) +
+                                " exceeds the limit of " + format_count(allowed) +
+                                " (set " + limit_variable(which) + " to raise it)");
 }
 
 MemoryBudget usable_memory() {
@@ -240,13 +254,15 @@ std::string format_bytes(uint64_t bytes) {
     while (v >= 1024.0 && u < 5) v /= 1024.0, ++u;
     char text[64];
     if (u == 0)
-        std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
+        std::snprintf(text, sizeof text, "%llu bytes",
+                      static_cast<unsigned long long>(bytes));
     else
         std::snprintf(text, sizeof text, v < 100 ? "%.1f %s" : "%.0f %s", v, units[u]);
     return text;
 }
 
-void check_memory(uint64_t needed_bytes, const std::string& what, const std::string& remedy) {
+void check_memory(uint64_t needed_bytes, const std::string& what,
+                  const std::string& remedy) {
     MemoryBudget budget = usable_memory();
     if (budget.bytes == 0) return;
     // RLIMIT_AS counts address space, not residency: compare the whole
