@@ -1,6 +1,9 @@
 // ptfilter: PRMan-compatible point-cloud filter. Only ssdiffusion is offered:
 //   ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc
-// Option parsing only; the work is sss::ssdiffusion().
+//   ptfilter -ssdiffusion [options] -part K/N in.ptc [more.ptc ...] out.ptpart
+//   ptfilter -merge part.ptpart ... out.ptc
+// Option parsing only; the work is sss::ssdiffusion(), sss::ssdiffusion_part()
+// and sss::merge_cloud_parts().
 
 #include <algorithm>
 #include <cstdio>
@@ -9,11 +12,13 @@
 #include <vector>
 
 #include "sss/cli/tool.h"
+#include "sss/cloud/cloud_part.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/hash.h"
 #include "sss/util/job_files.h"
 #include "sss/util/limits.h"
 #include "sss/util/parse.h"
@@ -27,6 +32,9 @@ std::string usage() {
     std::snprintf(
         buf, sizeof buf,
         "usage: ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc\n"
+        "       ptfilter -ssdiffusion [options] -part K/N in.ptc [...] out.ptpart\n"
+        "       ptfilter -merge [-newer 1] [-progress 1] p1.ptpart ... pN.ptpart "
+        "out.ptc\n"
         "       (also: -filter ssdiffusion)\n"
         "Subsurface diffusion of baked irradiance (Jensen dipole, hierarchical).\n"
         "Input .ptc/.ply clouds are merged; the output holds P, N, radius and\n"
@@ -51,6 +59,12 @@ std::string usage() {
         "  -keepchannels 0|1         copy input channels to the output (default 0)\n"
         "  -compress 0|1             gzip the output .ptc (default 0)\n"
         "  -ptcversion 0|1|2         .ptc version written (default 0)\n"
+        "Splitting one cloud across machines (docs/farm.md):\n"
+        "  -part K/N                 evaluate part K of N (1 <= K <= N) of the points\n"
+        "                            (a compact region) against the whole cloud;\n"
+        "                            writes a part file (.ptpart)\n"
+        "  -merge                    join the N part files of one job (any order)\n"
+        "                            into the cloud a single run writes, byte for byte\n"
         "Running:\n"
         "  -threads N                0 = all usable cores (default), <0 = all but N\n"
         "  -frame N                  expands %%04d, #### and $F4 in the file names\n"
@@ -78,6 +92,76 @@ const char* channel_option(sss::MissingChannelError::Role role) {
     return "?";
 }
 
+/// "K/N" with 1 <= K <= N.
+std::pair<uint32_t, uint32_t> parse_part(const std::string& text) {
+    constexpr unsigned long kMaxParts = 1000000;
+    auto bad = [&]() {
+        return sss::UsageError("option -part: expected K/N with 1 <= K <= N <= " +
+                               std::to_string(kMaxParts) + " (e.g. 2/4), got '" + text +
+                               "'");
+    };
+    const std::size_t slash = text.find('/');
+    if (slash == std::string::npos) throw bad();
+    auto number = [&](const std::string& digits) {
+        if (digits.empty() || digits.size() > 7 ||
+            digits.find_first_not_of("0123456789") != std::string::npos)
+            throw bad();
+        return std::stoul(digits);
+    };
+    const unsigned long k = number(text.substr(0, slash));
+    const unsigned long n = number(text.substr(slash + 1));
+    if (k < 1 || n > kMaxParts || k > n) throw bad();
+    return {uint32_t(k), uint32_t(n)};
+}
+
+/// What ties the parts of one job together: the input cloud's content, every
+/// option that changes the output and the number of parts.
+uint64_t part_fingerprint(const sss::PointCloud& cloud,
+                          const sss::SsDiffusionOptions& opt,
+                          const sss::PointCloudWriteOptions& wopt, uint32_t parts) {
+    const std::string job = sss::ssdiffusion_signature(opt) +
+                            "; compress=" + std::to_string(wopt.compress) +
+                            "; ptcversion=" + std::to_string(wopt.ptc_version) +
+                            "; parts=" + std::to_string(parts);
+    return sss::cloud_fingerprint(cloud, sss::detail::hash_bytes(job.data(), job.size()));
+}
+
+/// ptfilter -merge part... out: joins the parts of one -part job.
+int run_merge(std::vector<std::string> files, const sss::RunOptions& running) {
+    if (files.size() < 2)
+        throw sss::UsageError("-merge needs the part files and an output file");
+    for (std::string& f : files)
+        f = sss::expand_frame_pattern(f, running.frame, "file name");
+    const std::string out_path = files.back();
+    files.pop_back();
+    if (!sss::has_extension_in(out_path, sss::point_cloud_extensions()) &&
+        !sss::writes_into_existing(out_path))
+        throw sss::UsageError("output " +
+                              sss::unknown_extension_text(out_path, "a point cloud file",
+                                                          sss::point_cloud_extensions()));
+    sss::Job job(kTool, running);
+    if (job.up_to_date({out_path}, files)) return 0;
+    sss::check_output_target(out_path);
+    sss::PointCloudWriteOptions wopt;
+    sss::PointCloud whole;
+    {
+        sss::ScopedStage stage("joining " + std::to_string(files.size()) + " parts");
+        whole = sss::merge_cloud_parts(files, wopt);
+    }
+    double join_s = job.seconds();
+    {
+        sss::ScopedStage stage("writing " + out_path);
+        sss::write_point_cloud(whole, out_path, wopt);
+    }
+    if (job.progress()) job.progress()->finish();
+    if (job.verbose()) {
+        std::printf("ptfilter: joined %zu parts, %zu points: read %.3f s, write %.3f s\n",
+                    files.size(), whole.size(), join_s, job.seconds() - join_s);
+        sss::flush_standard_output();
+    }
+    return 0;
+}
+
 int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::SsDiffusionOptions opt;
@@ -85,10 +169,20 @@ int run(const std::vector<std::string>& argv) {
     std::vector<std::string> files;
     bool have_filter = false;
     sss::RunOptions running;
+    bool merge = false;
+    std::optional<std::pair<uint32_t, uint32_t>> part; // K, N
+    std::string filter_option;                         // the first one given
     std::string o;
     while (args.next_option(o, files)) {
+        if (o != "merge" && o != "part" && o != "newer" && o != "threads" &&
+            o != "progress" && o != "Progress" && o != "frame" && filter_option.empty())
+            filter_option = o;
         if (sss::standard_option(kTool, o, usage())) {
             return 0;
+        } else if (o == "merge") {
+            merge = true;
+        } else if (o == "part") {
+            part = parse_part(args.value(o));
         } else if (o == "ssdiffusion") {
             have_filter = true;
         } else if (o == "filter") {
@@ -131,6 +225,13 @@ int run(const std::vector<std::string>& argv) {
             throw sss::UsageError("unknown option -" + o);
         }
     }
+    if (merge) {
+        if (!filter_option.empty() || part)
+            throw sss::UsageError("-merge joins part files and takes no -" +
+                                  (part ? std::string("part") : filter_option) +
+                                  ": filter options belong to the -part runs");
+        return run_merge(files, running);
+    }
     if (!have_filter)
         throw sss::UsageError(
             "no filter given (use -ssdiffusion or -filter ssdiffusion)");
@@ -145,8 +246,14 @@ int run(const std::vector<std::string>& argv) {
     files.pop_back();
     // The output may be one of the inputs (in place): every input is read
     // whole before the output replaces it.
-    if (!sss::has_extension_in(out_path, sss::point_cloud_extensions()) &&
-        !sss::writes_into_existing(out_path))
+    if (part) {
+        if (!sss::has_extension_in(out_path, {sss::kCloudPartExtension}) &&
+            !sss::writes_into_existing(out_path))
+            throw sss::UsageError("with -part the output is a part file: name it *" +
+                                  std::string(sss::kCloudPartExtension) + ", not " +
+                                  out_path);
+    } else if (!sss::has_extension_in(out_path, sss::point_cloud_extensions()) &&
+               !sss::writes_into_existing(out_path))
         throw sss::UsageError("output " +
                               sss::unknown_extension_text(out_path, "a point cloud file",
                                                           sss::point_cloud_extensions()));
@@ -172,9 +279,24 @@ int run(const std::vector<std::string>& argv) {
 
     sss::SsDiffusionReport report;
     sss::PointCloud out;
+    sss::CloudPart piece;
     try {
         sss::ScopedStage stage("filtering " + sss::join(files));
-        out = sss::ssdiffusion(cloud, opt, &report);
+        if (part) {
+            sss::SsDiffusionPart p =
+                sss::ssdiffusion_part(cloud, opt, part->first - 1, part->second, &report);
+            piece.info.part = part->first;
+            piece.info.parts = part->second;
+            piece.info.fingerprint = part_fingerprint(cloud, opt, wopt, part->second);
+            piece.info.total = p.total;
+            piece.info.first = p.first;
+            piece.info.count = p.points.size();
+            piece.info.write_options = wopt;
+            piece.indices = std::move(p.indices);
+            piece.points = std::move(p.points);
+        } else {
+            out = sss::ssdiffusion(cloud, opt, &report);
+        }
     } catch (const sss::MissingChannelError& e) {
         throw sss::ValueError(sss::join(files) + ": input has no channel '" +
                               e.channel() + "' (set it with " + channel_option(e.role()) +
@@ -188,9 +310,17 @@ int run(const std::vector<std::string>& argv) {
 
     {
         sss::ScopedStage stage("writing " + out_path);
-        sss::write_point_cloud(out, out_path, wopt);
+        if (part)
+            sss::write_cloud_part(piece, out_path);
+        else
+            sss::write_point_cloud(out, out_path, wopt);
     }
     if (job.verbose()) {
+        if (part)
+            std::printf("ptfilter: part %u/%u: points %llu to %llu of %zu\n", part->first,
+                        part->second, (unsigned long long)piece.info.first,
+                        (unsigned long long)(piece.info.first + piece.info.count),
+                        cloud.size());
         std::printf(
             "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
             cloud.size(), job.threads(), opt.diffusion.max_solid_angle,

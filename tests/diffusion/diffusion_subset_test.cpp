@@ -1,13 +1,15 @@
 /// \file diffusion_subset_test.cpp
-/// Tests of evaluate_diffusion_at and the tolerance reference: any subset of
-/// the receivers, evaluated against the whole cloud, gets bit for bit the
-/// numbers of the whole run, for every criterion, path (block, per receiver,
-/// coincident points) and thread count.
+/// Tests of evaluate_diffusion_at, evaluate_diffusion_part and the tolerance
+/// reference: any subset of the receivers (or any part of a split run),
+/// evaluated against the whole cloud, gets bit for bit the numbers of the
+/// whole run, for every criterion, path (block, per receiver, coincident
+/// points) and thread count.
 ///
 /// Suite names all contain "Diffusion" so `ctest -R Diffusion` selects them.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstring>
 #include <numeric>
@@ -92,8 +94,99 @@ void expect_subsets_match(const sss::DiffusionProblem& pb, const std::string& wh
     }
 }
 
+/// Splits the run into 1, 2, 3, 7 and 64 parts at 1 and 2 threads: the parts
+/// tile the space-filling order, hold every point once, and their results are
+/// the whole run's bit for bit.
+void expect_parts_match(const sss::DiffusionProblem& pb, const std::string& what,
+                        double max_solid_angle = 1.0) {
+    const std::size_t n = pb.positions.size();
+    const std::vector<uint32_t> order = sss::space_filling_order(pb);
+    ASSERT_EQ(order.size(), n);
+    for (sss::Criterion crit : kCriteria) {
+        sss::DiffusionOptions opt;
+        opt.criterion = crit;
+        opt.max_solid_angle = max_solid_angle;
+        std::vector<glm::vec3> whole = sss::evaluate_diffusion(pb, opt);
+        for (std::size_t parts : {1u, 2u, 3u, 7u, 64u}) {
+            for (int threads : {1, 2}) {
+                sss::ThreadLimit limit(threads);
+                std::vector<int> seen(n, 0);
+                std::size_t next = 0, differ = 0;
+                for (std::size_t k = 0; k < parts; ++k) {
+                    sss::DiffusionPart part =
+                        sss::evaluate_diffusion_part(pb, opt, k, parts);
+                    ASSERT_EQ(part.first, next) << what << " part " << k << "/" << parts;
+                    ASSERT_EQ(part.result.size(), part.receivers.size());
+                    // Contiguous in the space-filling order, sizes within one.
+                    EXPECT_LE(part.receivers.size(), n / parts + 1);
+                    EXPECT_GE(part.receivers.size(), n / parts);
+                    for (std::size_t j = 0; j < part.receivers.size(); ++j) {
+                        ASSERT_EQ(part.receivers[j], order[next + j]);
+                        ++seen[part.receivers[j]];
+                        if (!same_bits(part.result[j], whole[part.receivers[j]]))
+                            ++differ;
+                    }
+                    next += part.receivers.size();
+                }
+                EXPECT_EQ(next, n);
+                EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), std::ptrdiff_t(n));
+                EXPECT_EQ(differ, 0u) << what << ", " << sss::criterion_name(crit) << ", "
+                                      << parts << " parts, " << threads << " threads";
+            }
+        }
+    }
+}
+
 TEST(DiffusionSubset, Sphere) {
     expect_subsets_match(sphere_problem(), "sphere");
+}
+
+TEST(DiffusionPart, SphereParts) {
+    expect_parts_match(sphere_problem(), "sphere");
+}
+
+TEST(DiffusionPart, PerPointMaterialsAndCoincidentParts) {
+    sss::DiffusionProblem pb = problem_from(
+        synthetic(sss::SyntheticShape::Plane, 4000, 10.0), material_profiles("marble"));
+    for (std::size_t i = 0; i < 300; ++i) {
+        pb.positions[i] = pb.positions[0];
+        pb.normals[i] = pb.normals[0];
+    }
+    std::vector<sss::Profile> more = material_profiles("ketchup");
+    pb.profiles.insert(pb.profiles.end(), more.begin(), more.end());
+    pb.profile_index.resize(pb.positions.size());
+    for (std::size_t i = 0; i < pb.positions.size(); ++i)
+        pb.profile_index[i] = i % 7 == 0 ? glm::u32vec3(3, 4, 5) : glm::u32vec3(0, 1, 2);
+    expect_parts_match(pb, "per point, coincident", 0.5);
+}
+
+TEST(DiffusionPart, EdgeCases) {
+    sss::DiffusionProblem pb = sphere_problem();
+    EXPECT_THROW(sss::evaluate_diffusion_part(pb, {}, 4, 4), sss::ValueError);
+    EXPECT_THROW(sss::evaluate_diffusion_part(pb, {}, 0, 0), sss::ValueError);
+    EXPECT_THROW(sss::part_range(10, 3, 3), sss::ValueError);
+    // More parts than points: empty parts, and the others one point each.
+    EXPECT_EQ(sss::part_range(3, 0, 5), std::make_pair(std::size_t(0), std::size_t(0)));
+    EXPECT_EQ(sss::part_range(3, 4, 5), std::make_pair(std::size_t(2), std::size_t(3)));
+    EXPECT_EQ(sss::part_range(4000000000u, 1, 2).first, 2000000000u);
+    sss::DiffusionProblem tiny = pb;
+    tiny.positions.resize(3);
+    tiny.normals.resize(3);
+    tiny.areas.resize(3);
+    tiny.irradiance.resize(3);
+    std::size_t total = 0;
+    for (std::size_t k = 0; k < 5; ++k)
+        total += sss::evaluate_diffusion_part(tiny, {}, k, 5).receivers.size();
+    EXPECT_EQ(total, 3u);
+    sss::DiffusionProblem empty;
+    empty.profiles = material_profiles("marble");
+    EXPECT_TRUE(sss::evaluate_diffusion_part(empty, {}, 0, 2).receivers.empty());
+    // A part's work is about its share of the whole run's.
+    sss::DiffusionStats quarter, all;
+    sss::evaluate_diffusion_part(pb, {}, 1, 4, &quarter);
+    sss::evaluate_diffusion(pb, {}, &all);
+    EXPECT_LT(quarter.far_terms + quarter.near_terms,
+              (all.far_terms + all.near_terms) / 3);
 }
 
 TEST(DiffusionSubset, ThinBoxOtherSettings) {

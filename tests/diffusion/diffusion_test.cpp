@@ -989,3 +989,63 @@ TEST(DiffusionSsdiffusion, InputChannelErrors) {
         EXPECT_THROW(sss::ssdiffusion(cloud, o), sss::ValueError);
     }
 }
+
+// A split run's parts hold, at their indices, exactly the records of the
+// whole output (every channel, keep_channels, per-point materials, -exact),
+// and the signature changes with every option that changes numbers.
+TEST(DiffusionSsdiffusion, PartsEqualTheWholeOutput) {
+    sss::PointCloud cloud = lit_plane(20.0, 3000);
+    cloud.world_to_eye[3] = 7.0f;
+    add_color(cloud, "_albedo", glm::vec3(0.6f, 0.4f, 0.2f));
+    std::vector<sss::SsDiffusionOptions> variants(3);
+    variants[0].material.preset = "skin1";
+    variants[1].keep_channels = true;
+    variants[1].material.albedo_from_file = true;
+    variants[2].exact = true;
+    for (const sss::SsDiffusionOptions& o : variants) {
+        sss::PointCloud whole = sss::ssdiffusion(cloud, o);
+        for (std::size_t parts : {1u, 3u}) {
+            std::size_t next = 0;
+            for (std::size_t k = 0; k < parts; ++k) {
+                sss::SsDiffusionPart p = sss::ssdiffusion_part(cloud, o, k, parts);
+                EXPECT_EQ(p.total, cloud.size());
+                EXPECT_EQ(p.first, next);
+                next += p.points.size();
+                ASSERT_EQ(p.indices.size(), p.points.size());
+                ASSERT_EQ(p.points.channels.size(), whole.channels.size());
+                EXPECT_EQ(p.points.world_to_eye, whole.world_to_eye);
+                for (std::size_t j = 0; j < p.indices.size(); ++j) {
+                    const std::size_t i = p.indices[j];
+                    ASSERT_EQ(p.points.positions[j], whole.positions[i]);
+                    ASSERT_EQ(p.points.normals[j], whole.normals[i]);
+                    ASSERT_EQ(p.points.radii[j], whole.radii[i]);
+                    for (std::size_t c = 0; c < whole.channels.size(); ++c) {
+                        const std::size_t w = std::size_t(whole.channels[c].components());
+                        for (std::size_t q = 0; q < w; ++q)
+                            ASSERT_EQ(p.points.channels[c].data[w * j + q],
+                                      whole.channels[c].data[w * i + q])
+                                << whole.channels[c].name << " point " << i;
+                    }
+                }
+            }
+            EXPECT_EQ(next, cloud.size());
+        }
+    }
+    EXPECT_THROW(sss::ssdiffusion_part(cloud, variants[0], 3, 3), sss::ValueError);
+
+    // The signature: equal for equal options, different for each change.
+    sss::SsDiffusionOptions base;
+    const std::string sig = sss::ssdiffusion_signature(base);
+    EXPECT_EQ(sss::ssdiffusion_signature(base), sig);
+    std::vector<sss::SsDiffusionOptions> changed(8, base);
+    changed[0].material.preset = "skin1";
+    changed[1].material.unitlength = 0.1;
+    changed[2].diffusion.max_solid_angle = 0.5;
+    changed[3].diffusion.criterion = sss::Criterion::SolidAngleBox;
+    changed[4].profile = sss::ProfileKind::Better;
+    changed[5].exact = true;
+    changed[6].keep_channels = true;
+    changed[7].radiance_channel = "_irradiance";
+    for (std::size_t k = 0; k < changed.size(); ++k)
+        EXPECT_NE(sss::ssdiffusion_signature(changed[k]), sig) << "change " << k;
+}

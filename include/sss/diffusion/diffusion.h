@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <glm/ext/vector_uint3.hpp>
@@ -111,6 +112,38 @@ std::vector<glm::vec3> evaluate_diffusion_at(const DiffusionProblem& problem,
                                              const DiffusionOptions& options,
                                              const std::vector<std::size_t>& receivers,
                                              DiffusionStats* stats = nullptr);
+
+/// One part of an evaluation split across machines (ptfilter -part K/N).
+struct DiffusionPart {
+    /// Position of the part's first receiver in the space-filling order.
+    std::size_t first = 0;
+    /// The part's receivers (indices into the problem's points), in the
+    /// space-filling order.
+    std::vector<uint32_t> receivers;
+    /// result[k] is the diffusion at receivers[k].
+    std::vector<glm::vec3> result;
+};
+
+/// The positions [first, end) of part `part` (0-based) of `parts` in an order
+/// of n points: floor(n part / parts) to floor(n (part + 1) / parts), so the
+/// parts cover every point once and differ in size by at most one. Throws
+/// ValueError unless part < parts.
+std::pair<std::size_t, std::size_t> part_range(std::size_t n, std::size_t part,
+                                               std::size_t parts);
+
+/// The receivers of part `part` (0-based) of `parts`: a contiguous range
+/// (part_range()) of the octree's Morton order, so each part is a compact
+/// region of space, evaluated against the whole cloud. result is bit for bit
+/// what evaluate_diffusion() gives at those receivers, whatever the thread
+/// count; memory for results is the part's, not the cloud's. Progress counts
+/// the part's receivers. Throws ValueError for part >= parts.
+DiffusionPart evaluate_diffusion_part(const DiffusionProblem& problem,
+                                      const DiffusionOptions& options, std::size_t part,
+                                      std::size_t parts, DiffusionStats* stats = nullptr);
+
+/// The points' space-filling (Morton) order, as evaluate_diffusion_part()
+/// splits it: order[s] is the index of the point at position s.
+std::vector<uint32_t> space_filling_order(const DiffusionProblem& problem);
 
 /// Exact evaluation in double precision, all pairs, at the given receivers
 /// (all points when empty). The same point model as the hierarchical path:

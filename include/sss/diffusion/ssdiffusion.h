@@ -69,4 +69,32 @@ private:
 PointCloud ssdiffusion(const PointCloud& input, const SsDiffusionOptions& options,
                        SsDiffusionReport* report = nullptr);
 
+/// Part `part` (0-based) of `parts` of a ptfilter run split across machines
+/// (ptfilter -part K/N): the output records of the part's receivers.
+struct SsDiffusionPart {
+    std::size_t total = 0; ///< points of the whole output
+    std::size_t first = 0; ///< the part's first point in the space-filling order
+    /// indices[k]: the index in the whole output of points' point k.
+    std::vector<uint64_t> indices;
+    /// The part's points, exactly as the whole output holds them (same
+    /// channels, same header).
+    PointCloud points;
+};
+
+/// Runs the diffusion of part `part` of `parts` of the receivers (a
+/// contiguous range of the space-filling order, see evaluate_diffusion_part())
+/// against the whole cloud. The part's records are bit for bit those of
+/// ssdiffusion() for the same options, at any thread count (with -exact too).
+/// Throws as ssdiffusion(), and ValueError for part >= parts.
+SsDiffusionPart ssdiffusion_part(const PointCloud& input,
+                                 const SsDiffusionOptions& options, std::size_t part,
+                                 std::size_t parts, SsDiffusionReport* report = nullptr);
+
+/// A text naming every option that can change the output's values (the
+/// resolved material and how it was given, profile, criterion, maxsolidangle,
+/// exact, channel names, keep_channels), numbers written exactly: the parts of
+/// one split job record a fingerprint of it, so parts made with other options
+/// are refused when joined.
+std::string ssdiffusion_signature(const SsDiffusionOptions& options);
+
 } // namespace sss

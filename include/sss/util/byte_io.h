@@ -93,6 +93,10 @@ private:
     std::size_t m_used = 0;
 };
 
+/// CRC-32 (zlib's, the gzip/PNG polynomial) of `size` bytes, continuing
+/// from `crc` (0 to start).
+uint32_t crc32(uint32_t crc, const void* bytes, std::size_t size);
+
 // Little-endian loads and stores, independent of the host byte order.
 inline uint16_t load_u16(const unsigned char* p) {
     return static_cast<uint16_t>(p[0] | (p[1] << 8));

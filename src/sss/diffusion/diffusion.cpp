@@ -48,11 +48,17 @@ namespace {
 
 using namespace diffusion_detail;
 
-// Evaluates into result[original index]: every receiver (receivers null) or
-// the listed ones against the whole cloud.
+// Which receivers one evaluation computes.
+struct Selection {
+    const std::vector<std::size_t>* receivers = nullptr; // these (result[original])
+    std::size_t part = 0, parts = 0; // with parts > 0: this part (result[s - first])
+};
+
+// Evaluates the selected receivers (all by default) against the whole cloud.
+// For a part, also sets its first position and receivers in `part_out`.
 void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
-              const std::vector<std::size_t>* receivers, std::vector<glm::vec3>& result,
-              DiffusionStats* stats_out) {
+              const Selection& selection, std::vector<glm::vec3>& result,
+              DiffusionStats* stats_out, DiffusionPart* part_out = nullptr) {
     if (pb.profiles.size() < 3 && pb.profile_index.empty())
         throw ValueError("diffusion needs three channel profiles");
     Stopwatch watch;
@@ -68,13 +74,13 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
     std::vector<uint32_t> buckets = choose_buckets(tree);
     EvaluationContext cx{pb, options, tables, tree, tolerance};
     std::vector<uint8_t> wanted;
-    if (receivers) {
+    if (selection.receivers) {
         // Wanted receivers by sorted position; only their buckets are evaluated.
         std::vector<uint32_t> position(tree.order.size());
         for (std::size_t s = 0; s < tree.order.size(); ++s)
             position[tree.order[s]] = uint32_t(s);
         wanted.assign(tree.order.size(), 0);
-        for (std::size_t i : *receivers) wanted[position[i]] = 1;
+        for (std::size_t i : *selection.receivers) wanted[position[i]] = 1;
         cx.wanted = wanted.data();
         cx.wanted_count =
             std::size_t(std::count(wanted.begin(), wanted.end(), uint8_t(1)));
@@ -83,6 +89,22 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
             return std::none_of(wanted.begin() + b.first,
                                 wanted.begin() + b.first + b.count,
                                 [](uint8_t w) { return w != 0; });
+        });
+    } else if (selection.parts > 0) {
+        const auto [first, end] =
+            part_range(tree.order.size(), selection.part, selection.parts);
+        part_out->first = first;
+        part_out->receivers.assign(tree.order.begin() + first, tree.order.begin() + end);
+        result.assign(end - first, glm::vec3(0.0f));
+        if (end == first) {
+            if (stats_out) *stats_out = stats;
+            return;
+        }
+        cx.range_first = uint32_t(first);
+        cx.range_end = uint32_t(end);
+        std::erase_if(buckets, [&](uint32_t k) {
+            const Node& b = tree.nodes[k];
+            return b.first + b.count <= first || b.first >= end;
         });
     }
     stage.emplace("evaluating the diffusion");
@@ -99,7 +121,7 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& pb,
     const std::size_t n = pb.positions.size();
     std::vector<glm::vec3> result(n, glm::vec3(0.0f));
     if (n == 0) return result;
-    evaluate(pb, options, nullptr, result, stats_out);
+    evaluate(pb, options, Selection{}, result, stats_out);
     return result;
 }
 
@@ -117,10 +139,39 @@ std::vector<glm::vec3> evaluate_diffusion_at(const DiffusionProblem& pb,
         return {};
     }
     std::vector<glm::vec3> all(n, glm::vec3(0.0f));
-    evaluate(pb, options, &receivers, all, stats_out);
+    evaluate(pb, options, Selection{&receivers}, all, stats_out);
     std::vector<glm::vec3> out(receivers.size());
     for (std::size_t k = 0; k < receivers.size(); ++k) out[k] = all[receivers[k]];
     return out;
+}
+
+std::pair<std::size_t, std::size_t> part_range(std::size_t n, std::size_t part,
+                                               std::size_t parts) {
+    if (parts == 0 || part >= parts)
+        throw ValueError("part " + std::to_string(part + 1) + " of " +
+                         std::to_string(parts) + " does not exist");
+    // n * part fits in 64 bits: n < 2^32 (the octree's indices), parts < 2^32.
+    auto bound = [&](std::size_t k) {
+        return std::size_t((unsigned __int128)(n)*k / parts);
+    };
+    return {bound(part), bound(part + 1)};
+}
+
+DiffusionPart evaluate_diffusion_part(const DiffusionProblem& pb,
+                                      const DiffusionOptions& options, std::size_t part,
+                                      std::size_t parts, DiffusionStats* stats_out) {
+    DiffusionPart out;
+    part_range(pb.positions.size(), part, parts); // validates part and parts
+    if (pb.positions.empty()) {
+        if (stats_out) *stats_out = DiffusionStats{};
+        return out;
+    }
+    evaluate(pb, options, Selection{nullptr, part, parts}, out.result, stats_out, &out);
+    return out;
+}
+
+std::vector<uint32_t> space_filling_order(const DiffusionProblem& pb) {
+    return sorted_sources(pb).order;
 }
 
 } // namespace sss

@@ -90,13 +90,15 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
     local.far_terms += (w.lists.far.size() + w.lists.mono.size()) * bucket.count;
     for (uint32_t r = 0; r < bucket.count; ++r) {
         uint32_t s = bucket.first + r;
+        if (!cx.wants(s)) continue;
         uint32_t original = tree.order[s];
         double rho = std::sqrt(double(tree.pos_rho2[s].w));
+        glm::vec3& out = result[cx.slot(s, original)];
         for (int ch = 0; ch < 3; ++ch) {
             // Self term: the receiver's own disk, integrated exactly.
             double v = double(block.acc[ch][r]) + double(pb.irradiance[original][ch]) *
                                                       first_rc.profile[ch]->disk(rho);
-            result[original][ch] = std::isfinite(v) ? float(v) : 0.0f;
+            out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
 }
@@ -154,7 +156,7 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
     // (FMA) in far_node, and mixed-material results change in the last bits.
     const bool quadrupole = cx.options.criterion == Criterion::Error;
     for (uint32_t s = bucket.first; s < bucket.first + bucket.count; ++s) {
-        if (cx.wanted && !cx.wanted[s]) continue;
+        if (!cx.wants(s)) continue;
         uint32_t original = tree.order[s];
         ReceiverChannels rc =
             pb.profile_index.empty() ? first_rc : receiver_channels(pb, tables, original);
@@ -178,9 +180,10 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
                 if (j != s) near_source(tree, tables, rc, x, j, acc, w.local, w.memo);
         }
         w.local.far_terms += lists.far.size() + lists.mono.size();
+        glm::vec3& out = result[cx.slot(s, original)];
         for (int ch = 0; ch < 3; ++ch) {
             double v = acc[ch];
-            result[original][ch] = std::isfinite(v) ? float(v) : 0.0f;
+            out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
 }
@@ -210,6 +213,11 @@ void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch&
 
 // How many of the bucket's receivers are wanted.
 std::size_t wanted_in(const EvaluationContext& cx, const Node& bucket) {
+    if (cx.ranged()) {
+        const uint32_t lo = std::max(bucket.first, cx.range_first);
+        const uint32_t hi = std::min(bucket.first + bucket.count, cx.range_end);
+        return hi > lo ? hi - lo : 0;
+    }
     if (!cx.wanted) return bucket.count;
     return std::size_t(std::count_if(cx.wanted + bucket.first,
                                      cx.wanted + bucket.first + bucket.count,
@@ -237,7 +245,9 @@ std::vector<uint32_t> choose_buckets(const Tree& tree) {
 
 void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& buckets,
                       std::vector<glm::vec3>& result, DiffusionStats& stats) {
-    const std::size_t n = cx.wanted ? cx.wanted_count : cx.pb.positions.size();
+    const std::size_t n = cx.ranged() ? std::size_t(cx.range_end - cx.range_first)
+                          : cx.wanted ? cx.wanted_count
+                                      : cx.pb.positions.size();
     std::atomic<std::size_t> done{0};
     std::atomic<std::size_t> far_total{0}, near_total{0}, quad_total{0};
     oneapi::tbb::parallel_for(

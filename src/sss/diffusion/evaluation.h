@@ -33,10 +33,25 @@ struct EvaluationContext {
     // all of them. A bucket on the block path is evaluated whole either way.
     const uint8_t* wanted = nullptr;
     std::size_t wanted_count = 0; // receivers wanted in all (progress total)
+    // A part (range_end > range_first): only the receivers at sorted positions
+    // [range_first, range_end), written to result[s - range_first], so that a
+    // part's result is the size of the part, not of the cloud.
+    uint32_t range_first = 0, range_end = 0;
+
+    bool ranged() const { return range_end > range_first; }
+    // Whether the receiver at sorted position s is evaluated.
+    bool wants(uint32_t s) const {
+        if (ranged()) return s >= range_first && s < range_end;
+        return !wanted || wanted[s];
+    }
+    // Where its result goes (original: its index in the problem).
+    std::size_t slot(uint32_t s, uint32_t original) const {
+        return ranged() ? std::size_t(s - range_first) : std::size_t(original);
+    }
 };
 
 // Evaluates the (wanted) receivers of the given buckets in parallel into
-// result[original index]; sets the term counts of stats.
+// result[cx.slot(...)]; sets the term counts of stats.
 void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& buckets,
                       std::vector<glm::vec3>& result, DiffusionStats& stats);
 

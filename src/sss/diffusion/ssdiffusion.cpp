@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <tuple>
 
 #include "sss/util/error.h"
@@ -314,6 +315,42 @@ PointCloud output_cloud(const PointCloud& in, const SsDiffusionOptions& o,
     return out;
 }
 
+// The output records of some points (points[k] gets result[k]): what
+// output_cloud() holds at those indices, with the same header and channels.
+PointCloud output_points(const PointCloud& in, const SsDiffusionOptions& o,
+                         const std::vector<uint32_t>& points,
+                         const std::vector<glm::vec3>& result) {
+    const std::size_t m = points.size();
+    PointCloud out;
+    out.positions.resize(m);
+    out.normals.resize(m);
+    out.radii.resize(m);
+    for (std::size_t k = 0; k < m; ++k) {
+        out.positions[k] = in.positions[points[k]];
+        out.normals[k] = in.normals[points[k]];
+        out.radii[k] = in.radii[points[k]];
+    }
+    out.world_to_eye = in.world_to_eye;
+    out.world_to_ndc = in.world_to_ndc;
+    out.format = in.format;
+    if (o.keep_channels)
+        for (const Channel& c : in.channels) {
+            if (c.name == o.output_channel) continue;
+            Channel kept{c.name, c.type, {}};
+            const std::size_t w = std::size_t(c.components());
+            kept.data.resize(w * m);
+            for (std::size_t k = 0; k < m; ++k)
+                std::copy_n(c.data.begin() + std::ptrdiff_t(w * points[k]), w,
+                            kept.data.begin() + std::ptrdiff_t(w * k));
+            out.channels.push_back(std::move(kept));
+        }
+    Channel& dst = out.add_channel(o.output_channel, ChannelType::Color);
+    dst.data.resize(3 * m);
+    for (std::size_t k = 0; k < m; ++k)
+        for (int ch = 0; ch < 3; ++ch) dst.data[3 * k + ch] = result[k][ch];
+    return out;
+}
+
 } // namespace
 
 PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
@@ -328,6 +365,86 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     PointCloud out = output_cloud(in, o, result);
     rep.seconds = watch.seconds();
     return out;
+}
+
+SsDiffusionPart ssdiffusion_part(const PointCloud& in, const SsDiffusionOptions& o,
+                                 std::size_t part, std::size_t parts,
+                                 SsDiffusionReport* report) {
+    Stopwatch watch;
+    SsDiffusionReport local;
+    SsDiffusionReport& rep = report ? *report : local;
+    rep.material_lines = describe_material(o);
+    part_range(in.size(), part, parts); // validates part and parts first
+    DiffusionProblem pb = read_points(in, o, rep);
+    assign_profiles(in, o, pb, rep);
+    SsDiffusionPart out;
+    out.total = in.size();
+    DiffusionPart dp;
+    if (o.exact) {
+        // The same split of the same order as the octree path.
+        std::vector<uint32_t> order = space_filling_order(pb);
+        const auto [first, end] = part_range(order.size(), part, parts);
+        dp.first = first;
+        dp.receivers.assign(order.begin() + std::ptrdiff_t(first),
+                            order.begin() + std::ptrdiff_t(end));
+        std::vector<std::size_t> receivers(dp.receivers.begin(), dp.receivers.end());
+        ScopedStage stage("evaluating the diffusion (all pairs)");
+        std::vector<glm::dvec3> exact =
+            receivers.empty()
+                ? std::vector<glm::dvec3>{}
+                : evaluate_diffusion_exact(pb, receivers, o.diffusion.progress);
+        dp.result.resize(exact.size());
+        for (std::size_t k = 0; k < exact.size(); ++k)
+            for (int ch = 0; ch < 3; ++ch)
+                dp.result[k][ch] =
+                    std::isfinite(exact[k][ch]) ? float(exact[k][ch]) : 0.0f;
+    } else {
+        dp = evaluate_diffusion_part(pb, o.diffusion, part, parts, &rep.stats);
+    }
+    if (o.diffusion.progress) o.diffusion.progress->finish();
+    out.first = dp.first;
+    out.indices.assign(dp.receivers.begin(), dp.receivers.end());
+    out.points = output_points(in, o, dp.receivers, dp.result);
+    rep.seconds = watch.seconds();
+    return out;
+}
+
+std::string ssdiffusion_signature(const SsDiffusionOptions& o) {
+    // Every value as exact text (%a): two runs with the same signature compute
+    // the same numbers from the same cloud.
+    const MaterialSpec& m = o.material;
+    std::string s = "ssdiffusion 1";
+    auto add = [&](const char* key, const std::string& value) {
+        s += std::string("; ") + key + "=" + value;
+    };
+    auto num = [](double v) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%a", v);
+        return std::string(buf);
+    };
+    auto vec = [&](const std::optional<glm::dvec3>& v) {
+        return v ? num(v->x) + " " + num(v->y) + " " + num(v->z) : std::string("-");
+    };
+    // The resolved material (whatever way it was given) and how it was given.
+    for (const std::string& line : describe_material(o)) add("material", line);
+    add("preset", m.preset);
+    add("scattering", vec(m.scattering));
+    add("absorption", vec(m.absorption));
+    add("albedo", m.albedo_from_file ? "fromfile" : vec(m.albedo));
+    add("dmfp", m.dmfp_from_file ? "fromfile" : vec(m.dmfp));
+    add("ior", m.ior ? num(*m.ior) : "-");
+    add("unitlength", num(m.unitlength));
+    add("profile", profile_kind_name(o.profile));
+    add("maxsolidangle", num(o.diffusion.max_solid_angle));
+    add("criterion", criterion_name(o.diffusion.criterion));
+    add("exact", o.exact ? "1" : "0");
+    add("areachannel", o.area_channel);
+    add("radiancechannel", o.radiance_channel);
+    add("albedochannel", o.albedo_channel);
+    add("dmfpchannel", o.dmfp_channel);
+    add("outputchannel", o.output_channel);
+    add("keepchannels", o.keep_channels ? "1" : "0");
+    return s;
 }
 
 MissingChannelError::MissingChannelError(Role role, std::string channel,

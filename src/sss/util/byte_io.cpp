@@ -216,4 +216,9 @@ void ByteSink::close() {
     }
 }
 
+uint32_t crc32(uint32_t crc, const void* bytes, std::size_t size) {
+    return static_cast<uint32_t>(
+        ::crc32_z(crc, static_cast<const Bytef*>(bytes), static_cast<z_size_t>(size)));
+}
+
 } // namespace sss::detail
