@@ -119,6 +119,18 @@ echo "$dry"
 grep -q -- "--dependency=aftercorr:<filter-part1-jobid>:<filter-part2-jobid>:<filter-part3-jobid>" <<<"$dry" ||
     fail "the dry run's filter array does not wait for the 3 part arrays"
 [[ ! -e "$work/dry" ]] || fail "the dry run wrote $work/dry"
+# The frames are array task ids: 0 to MaxArraySize - 1 (1001 in cluster.sh).
+set +e
+limit_err="$("${farm[@]}" submit --frames 999-1001 --workdir "$work/dry" --render "$render_args" 2>&1)"
+limit_rc=$?
+negative_err="$("${farm[@]}" submit --frames -2-3 --workdir "$work/dry" --render "$render_args" 2>&1)"
+negative_rc=$?
+set -e
+[[ "$limit_rc" == 1 && "$limit_err" == *"frame 1001 is above Slurm's array limit"*"MaxArraySize - 1 = 1000;"* ]] ||
+    fail "frames above MaxArraySize: exit $limit_rc, '$limit_err'"
+[[ "$negative_rc" == 2 && "$negative_err" == "sss-farm ERROR: --frames -2-3: "*"cannot be negative"* ]] ||
+    fail "negative frames: exit $negative_rc, '$negative_err'"
+[[ -z "$(squeue -h -o %i)" ]] || fail "a refused submission queued jobs"
 
 phase "submitting the orbit chain, whole (orbit) and split (--splitpoints 1000 --parts 3)"
 submit_orbit "$work/orbit" orbit
@@ -172,7 +184,25 @@ fix() {
         --brick "-maxerror 0.002 fix_ssd.####.ptc fix_ssd.####.bkm"
 }
 fix
+# Meanwhile, a split submission whose clouds are small enough: not split.
+"${farm[@]}" submit --frames 1-2 --workdir "$work/split" --name small -c 1 --mem 1024 \
+    --filter "-ssdiffusion -material marble -unitlength 0.1 orbit.####.ptc small_ssd.####.ptc" \
+    --splitpoints 100000 --parts 2
 wait_for_queue 200
+status="$("${farm[@]}" status --workdir "$work/split" --name small)" || fail "small: status exited $?"
+echo "$status"
+for stage in filter-part1 filter-part2 filter; do
+    grep -Eq "^  $stage +job [0-9]+ +done 1-2" <<<"$status" || fail "small: $stage is not done for 1-2"
+done
+for f in "${frames[@]}"; do
+    cmp "$work/split/small_ssd.000$f.ptc" "$work/ref/orbit_ssd.000$f.ptc" ||
+        fail "small: small_ssd.000$f.ptc differs from the local run"
+    grep -q "points <= 100000: not split" "$work/split/logs/small-filter-part1.000$f.log" ||
+        fail "small: part task 1 of frame $f did not skip"
+    grep -q -- "-merge\|-part" "$work/split/logs/small-filter.000$f.log" &&
+        fail "small: the filter of frame $f used -part or -merge"
+done
+
 status="$("${farm[@]}" status --workdir "$work/orbit" --name fix)" || fail "fix: status exited $?"
 echo "$status"
 grep -Eq "^  filter +job [0-9]+ +done 1-2; failed \(exit 1\) 3; outputs exist: 1-2$" <<<"$status" ||
