@@ -31,7 +31,7 @@ cluster_free_port() {
 cluster_start() {
     local dir="$1"
     mkdir -p "$dir"/{munge,state,spool,log,run}
-    chmod 700 "$dir" "$dir/munge"
+    chmod 755 "$dir" "$dir/munge" # the socket is for everyone; the key is 0400
     local node cpus mem ctld_port d_port
     node="$(hostname -s)"
     cpus="$(nproc)"
@@ -70,6 +70,7 @@ SchedulerType=sched/backfill
 AccountingStorageType=accounting_storage/none
 JobAcctGatherType=jobacct_gather/none
 JobCompType=jobcomp/none
+MailProg=/bin/true
 StateSaveLocation=$dir/state
 SlurmdSpoolDir=$dir/spool/%n
 SlurmctldPidFile=$dir/run/slurmctld.pid
@@ -81,7 +82,6 @@ SlurmdDebug=info
 ReturnToService=2
 MaxArraySize=1001
 MinJobAge=300
-SchedulerParameters=defer_batch=0
 MessageTimeout=30
 NodeName=$node CPUs=$cpus RealMemory=$mem State=UNKNOWN
 PartitionName=test Nodes=$node Default=YES MaxTime=INFINITE State=UP

@@ -113,9 +113,14 @@ submit_orbit() { # DIR NAME [sss-farm options...]
 # --- 1 + 2: the chain, whole and split, submitted together ---------------------
 phase "dry run"
 dry="$("${farm[@]}" submit --dry-run --frames 1-2 --workdir "$work/dry" --name dry --bake "$bake_args" \
-    --filter "$filter_args" --brick "$brick_args" --render "$render_args" --splitpoints 1000 --parts 3)"
+    --filter "$filter_args" --brick "$brick_args" --render "$render_args" --render "$nosss_args" \
+    --splitpoints 1000 --parts 3 -c 3 -c render=5 --mem part=777)"
 echo "$dry"
-[[ "$(grep -c '^sbatch ' <<<"$dry")" == 7 ]] || fail "the dry run does not print 7 sbatch lines"
+[[ "$(grep -c '^sbatch ' <<<"$dry")" == 8 ]] || fail "the dry run does not print 8 sbatch lines"
+[[ "$(grep -c -- '--cpus-per-task=5 .*render' <<<"$dry")" == 2 ]] || fail "-c render=5 is not on both renders"
+[[ "$(grep -c -- '--cpus-per-task=3 ' <<<"$dry")" == 6 ]] || fail "-c 3 is not on the other stages"
+[[ "$(grep -c -- '--mem=777 .*filter --part' <<<"$dry")" == 3 ]] || fail "--mem part=777 is not on the part tasks"
+grep -q -- "--output=$work/dry/logs/dry-render2.%4a.log" <<<"$dry" || fail "the dry run's render2 log name"
 grep -q -- "--dependency=aftercorr:<filter-part1-jobid>:<filter-part2-jobid>:<filter-part3-jobid>" <<<"$dry" ||
     fail "the dry run's filter array does not wait for the 3 part arrays"
 [[ ! -e "$work/dry" ]] || fail "the dry run wrote $work/dry"
