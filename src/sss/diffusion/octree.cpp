@@ -202,4 +202,11 @@ Tree sorted_sources(const DiffusionProblem& pb) {
     return tree;
 }
 
+std::vector<uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
+    MortonKeys keys = sorted_morton_keys(positions);
+    std::vector<uint32_t> order(keys.size());
+    for (std::size_t s = 0; s < keys.size(); ++s) order[s] = keys[s].second;
+    return order;
+}
+
 } // namespace sss::diffusion_detail

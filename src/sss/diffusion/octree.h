@@ -59,6 +59,10 @@ Tree build_tree(const DiffusionProblem& pb);
 // without the nodes.
 Tree sorted_sources(const DiffusionProblem& pb);
 
+// The tree's order alone (sorted position -> original index): what
+// build_tree() sorts the points into, at the cost of the sort only.
+std::vector<uint32_t> morton_order(const std::vector<glm::vec3>& positions);
+
 // Squared distance between two boxes (0 when they overlap).
 inline float box_distance2(const glm::vec3& alo, const glm::vec3& ahi,
                            const glm::vec3& blo, const glm::vec3& bhi) {
