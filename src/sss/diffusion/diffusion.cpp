@@ -69,17 +69,12 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
     DiffusionStats stats;
     std::optional<ScopedStage> stage(std::in_place, "building the octree");
     Tables tables = build_tables(pb.profiles);
-    Tree tree = build_tree(pb);
+    Tree tree = build_tree(pb, release); // frees pb's geometry with `release`
     stats.nodes = tree.nodes.size();
     stats.build_seconds = watch.seconds();
     const DiffusionReference reference =
         options.reference ? *options.reference : reference_of(tree.power_area);
     ToleranceModel tolerance = tolerance_model(pb, reference, options.max_solid_angle);
-    if (release) {
-        std::vector<glm::vec3>().swap(release->positions);
-        std::vector<glm::vec3>().swap(release->normals);
-        std::vector<float>().swap(release->areas);
-    }
     std::vector<uint32_t> buckets = choose_buckets(tree);
     EvaluationContext cx{pb, options, tables, tree, tolerance};
     std::vector<uint8_t> wanted;

@@ -53,7 +53,10 @@ struct Tree {
 // Sorts the sources into Morton order and builds the nodes (breadth first,
 // leaves of at most kLeafSize points) and their moments. Deterministic: the
 // tree does not depend on the thread count.
-Tree build_tree(const DiffusionProblem& pb);
+// With `release` (the problem pb itself), its positions, normals and areas are
+// freed as soon as the tree holds their sorted copies: the caller must not
+// need them any more.
+Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release = nullptr);
 
 // The sources in the tree's order (order, pos_rho2, power_area, normal),
 // without the nodes.
