@@ -276,6 +276,7 @@ int run(const std::vector<std::string>& argv) {
             cloud.append(sss::read_point_cloud(files[i]));
     }
     double read_s = job.seconds();
+    const std::size_t points = cloud.size();
 
     sss::SsDiffusionReport report;
     sss::PointCloud out;
@@ -283,11 +284,12 @@ int run(const std::vector<std::string>& argv) {
     try {
         sss::ScopedStage stage("filtering " + sss::join(files));
         if (part) {
-            sss::SsDiffusionPart p =
-                sss::ssdiffusion_part(cloud, opt, part->first - 1, part->second, &report);
+            piece.info.fingerprint = part_fingerprint(cloud, opt, wopt, part->second);
+            // The cloud is moved in: the part frees it early (less memory).
+            sss::SsDiffusionPart p = sss::ssdiffusion_part(
+                std::move(cloud), opt, part->first - 1, part->second, &report);
             piece.info.part = part->first;
             piece.info.parts = part->second;
-            piece.info.fingerprint = part_fingerprint(cloud, opt, wopt, part->second);
             piece.info.total = p.total;
             piece.info.first = p.first;
             piece.info.count = p.points.size();
@@ -320,20 +322,19 @@ int run(const std::vector<std::string>& argv) {
             std::printf("ptfilter: part %u/%u: points %llu to %llu of %zu\n", part->first,
                         part->second, (unsigned long long)piece.info.first,
                         (unsigned long long)(piece.info.first + piece.info.count),
-                        cloud.size());
+                        points);
         std::printf(
             "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
-            cloud.size(), job.threads(), opt.diffusion.max_solid_angle,
+            points, job.threads(), opt.diffusion.max_solid_angle,
             sss::criterion_name(opt.diffusion.criterion), opt.exact ? " (exact)" : "");
         if (job.detailed() && !opt.exact)
             std::printf(
                 "ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
                 "terms, %.2f disk integrals\n",
                 report.stats.nodes,
-                double(report.stats.far_terms) / std::max<std::size_t>(1, cloud.size()),
-                double(report.stats.near_terms) / std::max<std::size_t>(1, cloud.size()),
-                double(report.stats.quadrature_terms) /
-                    std::max<std::size_t>(1, cloud.size()));
+                double(report.stats.far_terms) / std::max<std::size_t>(1, points),
+                double(report.stats.near_terms) / std::max<std::size_t>(1, points),
+                double(report.stats.quadrature_terms) / std::max<std::size_t>(1, points));
         std::printf(
             "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
             read_s, filter_s, job.seconds() - read_s - filter_s, job.seconds());

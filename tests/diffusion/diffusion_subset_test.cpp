@@ -181,6 +181,16 @@ TEST(DiffusionPart, EdgeCases) {
     sss::DiffusionProblem empty;
     empty.profiles = material_profiles("marble");
     EXPECT_TRUE(sss::evaluate_diffusion_part(empty, {}, 0, 2).receivers.empty());
+    // The overload that frees the problem's geometry gives the same part.
+    sss::DiffusionPart kept = sss::evaluate_diffusion_part(pb, {}, 2, 3);
+    sss::DiffusionProblem copy = pb;
+    sss::DiffusionPart freed = sss::evaluate_diffusion_part(std::move(copy), {}, 2, 3);
+    EXPECT_TRUE(copy.positions.empty() && copy.areas.empty());
+    EXPECT_EQ(freed.receivers, kept.receivers);
+    ASSERT_EQ(freed.result.size(), kept.result.size());
+    EXPECT_EQ(std::memcmp(freed.result.data(), kept.result.data(),
+                          kept.result.size() * sizeof(glm::vec3)),
+              0);
     // A part's work is about its share of the whole run's.
     sss::DiffusionStats quarter, all;
     sss::evaluate_diffusion_part(pb, {}, 1, 4, &quarter);

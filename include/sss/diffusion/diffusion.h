@@ -140,6 +140,12 @@ std::pair<std::size_t, std::size_t> part_range(std::size_t n, std::size_t part,
 DiffusionPart evaluate_diffusion_part(const DiffusionProblem& problem,
                                       const DiffusionOptions& options, std::size_t part,
                                       std::size_t parts, DiffusionStats* stats = nullptr);
+/// The same, freeing the problem's positions, normals and areas as soon as
+/// the octree holds them (28 bytes per point less at the peak); the problem
+/// is left with its irradiance and materials only.
+DiffusionPart evaluate_diffusion_part(DiffusionProblem&& problem,
+                                      const DiffusionOptions& options, std::size_t part,
+                                      std::size_t parts, DiffusionStats* stats = nullptr);
 
 /// The points' space-filling (Morton) order, as evaluate_diffusion_part()
 /// splits it: order[s] is the index of the point at position s.

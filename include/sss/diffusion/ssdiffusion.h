@@ -85,10 +85,12 @@ struct SsDiffusionPart {
 /// contiguous range of the space-filling order, see evaluate_diffusion_part())
 /// against the whole cloud. The part's records are bit for bit those of
 /// ssdiffusion() for the same options, at any thread count (with -exact too).
-/// Throws as ssdiffusion(), and ValueError for part >= parts.
-SsDiffusionPart ssdiffusion_part(const PointCloud& input,
-                                 const SsDiffusionOptions& options, std::size_t part,
-                                 std::size_t parts, SsDiffusionReport* report = nullptr);
+/// Throws as ssdiffusion(), and ValueError for part >= parts. The input is
+/// taken by value and freed once the part's records are out of it: pass it
+/// with std::move to keep the peak memory of a part below the whole run's.
+SsDiffusionPart ssdiffusion_part(PointCloud input, const SsDiffusionOptions& options,
+                                 std::size_t part, std::size_t parts,
+                                 SsDiffusionReport* report = nullptr);
 
 /// A text naming every option that can change the output's values (the
 /// resolved material and how it was given, profile, criterion, maxsolidangle,

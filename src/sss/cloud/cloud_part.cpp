@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <optional>
@@ -141,6 +142,12 @@ struct PartHeader {
     std::vector<ChannelSpec> channels;
     uint64_t header_bytes = 0; // up to and including the header CRC
 };
+
+std::string hex(uint64_t v) {
+    char buf[20];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+    return buf;
+}
 
 std::string part_name(const CloudPartInfo& info) {
     return "part " + std::to_string(info.part) + "/" + std::to_string(info.parts);
@@ -365,12 +372,11 @@ PointCloud merge_cloud_parts(const std::vector<std::string>& paths,
         const CloudPartInfo& info = headers[i].info;
         if (info.fingerprint != h0.info.fingerprint || info.parts != parts ||
             info.total != h0.info.total)
-            throw ValueError(paths[i] + " (" + part_name(info) +
-                             ") is not from the job of " + paths[0] + " (" +
-                             part_name(h0.info) +
-                             "): other input, options or number of parts (fingerprint " +
-                             std::to_string(info.fingerprint) + " vs " +
-                             std::to_string(h0.info.fingerprint) + ")");
+            throw ValueError(
+                paths[i] + " (" + part_name(info) + ") is not from the job of " +
+                paths[0] + " (" + part_name(h0.info) +
+                "): other input, options or number of parts (fingerprint " +
+                hex(info.fingerprint) + ", not " + hex(h0.info.fingerprint) + ")");
         if (!same_shape(headers[i], h0))
             throw ValueError(paths[i] + ": channels or header differ from " + paths[0]);
         auto [it, fresh] = by_part.try_emplace(info.part, i);

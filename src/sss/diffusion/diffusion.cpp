@@ -56,16 +56,20 @@ struct Selection {
 
 // Evaluates the selected receivers (all by default) against the whole cloud.
 // For a part, also sets its first position and receivers in `part_out`.
+// `release`: the problem itself (pb), whose positions, normals and areas are
+// freed once the octree holds them (the evaluation reads only the octree, the
+// irradiance and the materials).
 void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
               const Selection& selection, std::vector<glm::vec3>& result,
-              DiffusionStats* stats_out, DiffusionPart* part_out = nullptr) {
+              DiffusionStats* stats_out, DiffusionPart* part_out = nullptr,
+              DiffusionProblem* release = nullptr) {
     if (pb.profiles.size() < 3 && pb.profile_index.empty())
         throw ValueError("diffusion needs three channel profiles");
     Stopwatch watch;
     DiffusionStats stats;
     std::optional<ScopedStage> stage(std::in_place, "building the octree");
     Tables tables = build_tables(pb.profiles);
-    Tree tree = build_tree(pb);
+    Tree tree = build_tree(pb, release); // frees pb's geometry with `release`
     stats.nodes = tree.nodes.size();
     stats.build_seconds = watch.seconds();
     const DiffusionReference reference =
@@ -157,21 +161,38 @@ std::pair<std::size_t, std::size_t> part_range(std::size_t n, std::size_t part,
     return {bound(part), bound(part + 1)};
 }
 
-DiffusionPart evaluate_diffusion_part(const DiffusionProblem& pb,
-                                      const DiffusionOptions& options, std::size_t part,
-                                      std::size_t parts, DiffusionStats* stats_out) {
+namespace {
+
+DiffusionPart evaluate_part(const DiffusionProblem& pb, const DiffusionOptions& options,
+                            std::size_t part, std::size_t parts,
+                            DiffusionStats* stats_out, DiffusionProblem* release) {
     DiffusionPart out;
     part_range(pb.positions.size(), part, parts); // validates part and parts
     if (pb.positions.empty()) {
         if (stats_out) *stats_out = DiffusionStats{};
         return out;
     }
-    evaluate(pb, options, Selection{nullptr, part, parts}, out.result, stats_out, &out);
+    evaluate(pb, options, Selection{nullptr, part, parts}, out.result, stats_out, &out,
+             release);
     return out;
 }
 
+} // namespace
+
+DiffusionPart evaluate_diffusion_part(const DiffusionProblem& pb,
+                                      const DiffusionOptions& options, std::size_t part,
+                                      std::size_t parts, DiffusionStats* stats_out) {
+    return evaluate_part(pb, options, part, parts, stats_out, nullptr);
+}
+
+DiffusionPart evaluate_diffusion_part(DiffusionProblem&& pb,
+                                      const DiffusionOptions& options, std::size_t part,
+                                      std::size_t parts, DiffusionStats* stats_out) {
+    return evaluate_part(pb, options, part, parts, stats_out, &pb);
+}
+
 std::vector<uint32_t> space_filling_order(const DiffusionProblem& pb) {
-    return sorted_sources(pb).order;
+    return morton_order(pb.positions);
 }
 
 } // namespace sss

@@ -187,11 +187,18 @@ void compute_moments(Tree& tree) {
 
 } // namespace
 
-Tree build_tree(const DiffusionProblem& pb) {
+Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release) {
     Tree tree;
     MortonKeys keys = sorted_morton_keys(pb.positions);
     sort_sources(pb, keys, tree);
+    if (release) {
+        // The tree holds sorted copies now.
+        std::vector<glm::vec3>().swap(release->positions);
+        std::vector<glm::vec3>().swap(release->normals);
+        std::vector<float>().swap(release->areas);
+    }
     split_nodes(keys, tree);
+    MortonKeys().swap(keys); // before the moments allocate the expansions
     compute_moments(tree);
     return tree;
 }
@@ -200,6 +207,13 @@ Tree sorted_sources(const DiffusionProblem& pb) {
     Tree tree;
     sort_sources(pb, sorted_morton_keys(pb.positions), tree);
     return tree;
+}
+
+std::vector<uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
+    MortonKeys keys = sorted_morton_keys(positions);
+    std::vector<uint32_t> order(keys.size());
+    for (std::size_t s = 0; s < keys.size(); ++s) order[s] = keys[s].second;
+    return order;
 }
 
 } // namespace sss::diffusion_detail

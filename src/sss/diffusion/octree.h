@@ -53,11 +53,18 @@ struct Tree {
 // Sorts the sources into Morton order and builds the nodes (breadth first,
 // leaves of at most kLeafSize points) and their moments. Deterministic: the
 // tree does not depend on the thread count.
-Tree build_tree(const DiffusionProblem& pb);
+// With `release` (the problem pb itself), its positions, normals and areas are
+// freed as soon as the tree holds their sorted copies: the caller must not
+// need them any more.
+Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release = nullptr);
 
 // The sources in the tree's order (order, pos_rho2, power_area, normal),
 // without the nodes.
 Tree sorted_sources(const DiffusionProblem& pb);
+
+// The tree's order alone (sorted position -> original index): what
+// build_tree() sorts the points into, at the cost of the sort only.
+std::vector<uint32_t> morton_order(const std::vector<glm::vec3>& positions);
 
 // Squared distance between two boxes (0 when they overlap).
 inline float box_distance2(const glm::vec3& alo, const glm::vec3& ahi,

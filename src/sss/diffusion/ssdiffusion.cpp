@@ -367,7 +367,7 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     return out;
 }
 
-SsDiffusionPart ssdiffusion_part(const PointCloud& in, const SsDiffusionOptions& o,
+SsDiffusionPart ssdiffusion_part(PointCloud in, const SsDiffusionOptions& o,
                                  std::size_t part, std::size_t parts,
                                  SsDiffusionReport* report) {
     Stopwatch watch;
@@ -379,32 +379,45 @@ SsDiffusionPart ssdiffusion_part(const PointCloud& in, const SsDiffusionOptions&
     assign_profiles(in, o, pb, rep);
     SsDiffusionPart out;
     out.total = in.size();
-    DiffusionPart dp;
-    if (o.exact) {
-        // The same split of the same order as the octree path.
+    // The part's receivers in the octree's order; their output records are
+    // taken now, so that the input cloud is freed before the octree is built
+    // (a part holds the whole cloud once, in the problem and the octree).
+    std::vector<uint32_t> receivers;
+    {
+        ScopedStage stage("sorting the points");
         std::vector<uint32_t> order = space_filling_order(pb);
         const auto [first, end] = part_range(order.size(), part, parts);
-        dp.first = first;
-        dp.receivers.assign(order.begin() + std::ptrdiff_t(first),
-                            order.begin() + std::ptrdiff_t(end));
-        std::vector<std::size_t> receivers(dp.receivers.begin(), dp.receivers.end());
+        out.first = first;
+        receivers.assign(order.begin() + std::ptrdiff_t(first),
+                         order.begin() + std::ptrdiff_t(end));
+    }
+    out.points =
+        output_points(in, o, receivers, std::vector<glm::vec3>(receivers.size()));
+    in = PointCloud{};
+    std::vector<glm::vec3> result;
+    if (o.exact) {
         ScopedStage stage("evaluating the diffusion (all pairs)");
+        std::vector<std::size_t> wanted(receivers.begin(), receivers.end());
         std::vector<glm::dvec3> exact =
-            receivers.empty()
-                ? std::vector<glm::dvec3>{}
-                : evaluate_diffusion_exact(pb, receivers, o.diffusion.progress);
-        dp.result.resize(exact.size());
+            wanted.empty() ? std::vector<glm::dvec3>{}
+                           : evaluate_diffusion_exact(pb, wanted, o.diffusion.progress);
+        result.resize(exact.size());
         for (std::size_t k = 0; k < exact.size(); ++k)
             for (int ch = 0; ch < 3; ++ch)
-                dp.result[k][ch] =
-                    std::isfinite(exact[k][ch]) ? float(exact[k][ch]) : 0.0f;
+                result[k][ch] = std::isfinite(exact[k][ch]) ? float(exact[k][ch]) : 0.0f;
     } else {
-        dp = evaluate_diffusion_part(pb, o.diffusion, part, parts, &rep.stats);
+        DiffusionPart dp =
+            evaluate_diffusion_part(std::move(pb), o.diffusion, part, parts, &rep.stats);
+        // The octree's order is the one computed above.
+        if (dp.first != out.first || dp.receivers != receivers)
+            throw Error("internal error: the part's receivers changed order");
+        result = std::move(dp.result);
     }
     if (o.diffusion.progress) o.diffusion.progress->finish();
-    out.first = dp.first;
-    out.indices.assign(dp.receivers.begin(), dp.receivers.end());
-    out.points = output_points(in, o, dp.receivers, dp.result);
+    out.indices.assign(receivers.begin(), receivers.end());
+    Channel* dst = out.points.find_channel(o.output_channel);
+    for (std::size_t k = 0; k < result.size(); ++k)
+        for (int ch = 0; ch < 3; ++ch) dst->data[3 * k + ch] = result[k][ch];
     rep.seconds = watch.seconds();
     return out;
 }
