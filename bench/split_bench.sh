@@ -52,11 +52,12 @@ for n in $sizes; do
     measure "$n" "single run" "$bin/ptfilter" -ssdiffusion -threads "$threads" "$cloud" whole.ptc
     single="$secs"
     for parts in $part_counts; do
-        total=0 peak=0 files=()
+        total=0 peak=0 slowest=0 files=()
         for ((k = 1; k <= parts; k++)); do
             measure "$n" "part $k/$parts" "$bin/ptfilter" -ssdiffusion -threads "$threads" \
                 -part "$k/$parts" "$cloud" "part$k.ptpart" >/dev/null
             total="$(awk -v a="$total" -v b="$secs" 'BEGIN { print a + b }')"
+            slowest="$(awk -v a="$slowest" -v b="$secs" 'BEGIN { print (b > a ? b : a) }')"
             ((kb > peak)) && peak="$kb"
             files+=("part$k.ptpart")
         done
@@ -64,9 +65,10 @@ for n in $sizes; do
             printf "| %d | %d parts, one after another (largest peak) | %.2f | %.0f | %.0f |\n",
                 n, p, s, k / 1024, k * 1024 / n }'
         measure "$n" "merge of $parts parts" "$bin/ptfilter" -merge "${files[@]}" merged.ptc
-        awk -v n="$n" -v p="$parts" -v s="$total" -v m="$secs" -v one="$single" 'BEGIN {
-            printf "| %d | %d parts + merge: %.2fx the single run, merge %.1f %% of it |  |  |  |\n",
-                n, p, (s + m) / one, 100 * m / (s + m) }'
+        awk -v n="$n" -v p="$parts" -v s="$total" -v m="$secs" -v one="$single" \
+            -v w="$slowest" 'BEGIN {
+            printf "| %d | %d parts + merge: %.2fx the single run, merge %.1f %% of it; on %d machines: slowest part %.2f s + merge = %.2f s, %.2fx faster |  |  |  |\n",
+                n, p, (s + m) / one, 100 * m / (s + m), p, w, w + m, one / (w + m) }'
         cmp -s whole.ptc merged.ptc || { echo "split_bench: merged cloud differs from the single run" >&2; exit 1; }
         rm -f "${files[@]}" merged.ptc
     done

@@ -329,9 +329,9 @@ int run(const std::vector<std::string>& argv) {
             sss::criterion_name(opt.diffusion.criterion), opt.exact ? " (exact)" : "");
         if (job.detailed() && !opt.exact)
             std::printf(
-                "ptfilter: octree %zu nodes, per point %.1f node terms, %.1f point "
-                "terms, %.2f disk integrals\n",
-                report.stats.nodes,
+                "ptfilter: octree %zu nodes (built in %.3f s, evaluated in %.3f s), per "
+                "point %.1f node terms, %.1f point terms, %.2f disk integrals\n",
+                report.stats.nodes, report.stats.build_seconds, report.stats.eval_seconds,
                 double(report.stats.far_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.near_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.quadrature_terms) / std::max<std::size_t>(1, points));
