@@ -27,6 +27,7 @@ namespace {
 
 struct Errors {
     double rms = 0, max = 0;
+    double bias = 0; ///< mean signed (h - e) / mean(e), the channel farthest from 0
 };
 
 Errors compare(const sss::PointCloud& out, const std::vector<std::size_t>& samples,
@@ -36,15 +37,18 @@ Errors compare(const sss::PointCloud& out, const std::vector<std::size_t>& sampl
     for (int ch = 0; ch < 3; ++ch) {
         double mean = 0;
         for (const glm::dvec3& e : exact) mean += e[ch] / double(exact.size());
-        double se = 0, mx = 0;
+        double se = 0, mx = 0, sum = 0;
         for (std::size_t k = 0; k < samples.size(); ++k) {
-            double d =
-                std::abs(double(c->data[3 * samples[k] + ch]) - exact[k][ch]) / mean;
+            double signed_d =
+                (double(c->data[3 * samples[k] + ch]) - exact[k][ch]) / mean;
+            double d = std::abs(signed_d);
+            sum += signed_d / double(samples.size());
             se += d * d / double(samples.size());
             mx = std::max(mx, d);
         }
         worst.rms = std::max(worst.rms, std::sqrt(se));
         worst.max = std::max(worst.max, mx);
+        if (std::abs(sum) > std::abs(worst.bias)) worst.bias = sum;
     }
     return worst;
 }
@@ -116,8 +120,9 @@ int run(const std::vector<std::string>& argv) {
                 sss::resolve_thread_count(threads));
     std::printf("# exact reference at %zu points: %.1f s\n", nsamples,
                 exact_watch.seconds());
-    std::printf("%-10s %14s %10s %10s %10s %12s %12s\n", "criterion", "maxsolidangle",
-                "wall_s", "diff_s", "rms_%", "max_%", "points/s");
+    std::printf("%-10s %14s %10s %10s %10s %12s %10s %12s\n", "criterion",
+                "maxsolidangle", "wall_s", "diff_s", "rms_%", "max_%", "bias_%",
+                "points/s");
 
     std::vector<sss::Criterion> crits = {sss::Criterion::Error};
     if (criteria) {
@@ -136,9 +141,9 @@ int run(const std::vector<std::string>& argv) {
             sss::write_point_cloud(out, out_path);
             double wall = watch.seconds();
             Errors e = compare(out, samples, exact);
-            std::printf("%-10s %14g %10.3f %10.3f %10.3f %12.3f %12.0f\n",
+            std::printf("%-10s %14g %10.3f %10.3f %10.3f %12.3f %10.3f %12.0f\n",
                         sss::criterion_name(c), eps, wall, rep.seconds, 100 * e.rms,
-                        100 * e.max, double(in.size()) / rep.seconds);
+                        100 * e.max, 100 * e.bias, double(in.size()) / rep.seconds);
             std::fflush(stdout);
         }
     }

@@ -37,7 +37,7 @@ DiffusionReference reference_of(const std::vector<glm::vec4>& power_area);
 struct BucketTolerance {
     std::vector<const ChannelTable*> tables[3];
     double tol[3] = {0, 0, 0};  // largest error accepted from one node
-    double skip[3] = {0, 0, 0}; // largest contribution dropped as negligible
+    double skip[3] = {0, 0, 0}; // largest contribution taken as a monopole untested
 };
 
 // first_rc: the channels of the bucket's first receiver.

@@ -64,28 +64,31 @@ void traverse_error(const Tree& tree, const Tables& tables, const BucketToleranc
         // needs the receivers well outside the node.
         if (!(node.count > 1 && d2 > 2.25f * r * r)) return Verdict::Open;
         Tables::Lookup l = tables.locate(d2);
-        bool accept = true, drop = true, mono = true;
+        // Beyond the tables every profile has lost all but 1e-7: nothing.
+        if (!l.valid) return Verdict::Drop;
+        bool accept = true, negligible = true, mono = true;
         // Farthest receiver from the centroid bounds |w|.
         glm::vec3 far_corner = glm::max(glm::abs(blo - ex.c), glm::abs(bhi - ex.c));
         double wmax = glm::length(far_corner);
-        if (l.valid) {
-            for (int ch = 0; ch < 3; ++ch) {
-                for (const ChannelTable* ct : tol.tables[ch]) {
-                    double ap = ex.abs_phi[ch];
-                    uint32_t i = l.index;
-                    if (ap * r * r * r * ct->error_bound[i] > tol.tol[ch]) accept = false;
-                    if (ap * ct->max_value[i] > tol.skip[ch]) drop = false;
-                    // Error of dropping the dipole and
-                    // quadrupole terms.
-                    double m2 = ap * r * r;
-                    double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
-                                      2.0 * ct->max_d2[i] * wmax * wmax * m2;
-                    if (mono_err > 0.1 * tol.tol[ch]) mono = false;
-                }
+        for (int ch = 0; ch < 3; ++ch) {
+            for (const ChannelTable* ct : tol.tables[ch]) {
+                double ap = ex.abs_phi[ch];
+                uint32_t i = l.index;
+                if (ap * r * r * r * ct->error_bound[i] > tol.tol[ch]) accept = false;
+                if (ap * ct->max_value[i] > tol.skip[ch]) negligible = false;
+                // Error of dropping the dipole and
+                // quadrupole terms.
+                double m2 = ap * r * r;
+                double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
+                                  2.0 * ct->max_d2[i] * wmax * wmax * m2;
+                if (mono_err > 0.1 * tol.tol[ch]) mono = false;
             }
         }
-        if (accept && !drop && mono) return Verdict::Mono;
-        if (drop) return Verdict::Drop;
+        // A negligible node is still counted, as its monopole (one table
+        // lookup): dropping it lost a term of the sign of the light every
+        // time, which biased the result low (-0.43 % on average at 1M points,
+        // most of the default's error; issue 17).
+        if (negligible || (accept && mono)) return Verdict::Mono;
         return accept ? Verdict::Far : Verdict::Open;
     });
 }

@@ -1,8 +1,8 @@
 #pragma once
 /// \file traversal.h
 /// Walks the octree for a box of receivers and sorts its nodes into far
-/// (expanded), monopole-only, near (leaves, point by point) and dropped, with
-/// one function per criterion.
+/// (expanded), monopole-only, near (leaves, point by point) and dropped
+/// (beyond every profile's reach), with one function per criterion.
 
 #include <cstdint>
 #include <vector>
@@ -24,8 +24,10 @@ struct NodeLists {
 };
 
 // Ours: a node is used whole when the error bound of its quadrupole expansion
-// is within the bucket's tolerance for every receiver in [blo, bhi], and
-// dropped when it cannot contribute more than the tolerance's skip level.
+// is within the bucket's tolerance for every receiver in [blo, bhi], and as its
+// monopole when that is accurate enough or when it cannot contribute more than
+// the tolerance's skip level (never dropped: that biased results towards 0);
+// dropped only beyond the profile tables (where every profile is ~0).
 void traverse_error(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
                     const glm::vec3& blo, const glm::vec3& bhi, NodeLists& lists);
 
