@@ -126,19 +126,31 @@ uint64_t part_fingerprint(const sss::PointCloud& cloud,
     return sss::cloud_fingerprint(cloud, sss::detail::hash_bytes(job.data(), job.size()));
 }
 
+/// Expands the frame patterns of every file name and takes the last one (the
+/// output) off `files`.
+std::string take_output(std::vector<std::string>& files, const sss::RunOptions& running) {
+    for (std::string& f : files)
+        f = sss::expand_frame_pattern(f, running.frame, "file name");
+    std::string out = files.back();
+    files.pop_back();
+    return out;
+}
+
+/// UsageError unless `out` names a point cloud (or an existing device or FIFO).
+void require_cloud_output(const std::string& out) {
+    if (!sss::has_extension_in(out, sss::point_cloud_extensions()) &&
+        !sss::writes_into_existing(out))
+        throw sss::UsageError("output " +
+                              sss::unknown_extension_text(out, "a point cloud file",
+                                                          sss::point_cloud_extensions()));
+}
+
 /// ptfilter -merge part... out: joins the parts of one -part job.
 int run_merge(std::vector<std::string> files, const sss::RunOptions& running) {
     if (files.size() < 2)
         throw sss::UsageError("-merge needs the part files and an output file");
-    for (std::string& f : files)
-        f = sss::expand_frame_pattern(f, running.frame, "file name");
-    const std::string out_path = files.back();
-    files.pop_back();
-    if (!sss::has_extension_in(out_path, sss::point_cloud_extensions()) &&
-        !sss::writes_into_existing(out_path))
-        throw sss::UsageError("output " +
-                              sss::unknown_extension_text(out_path, "a point cloud file",
-                                                          sss::point_cloud_extensions()));
+    const std::string out_path = take_output(files, running);
+    require_cloud_output(out_path);
     sss::Job job(kTool, running);
     if (job.up_to_date({out_path}, files)) return 0;
     sss::check_output_target(out_path);
@@ -240,10 +252,7 @@ int run(const std::vector<std::string>& argv) {
     // Check the whole material before reading anything.
     std::vector<std::string> material = sss::describe_material(opt);
 
-    for (std::string& f : files)
-        f = sss::expand_frame_pattern(f, running.frame, "file name");
-    const std::string out_path = files.back();
-    files.pop_back();
+    const std::string out_path = take_output(files, running);
     // The output may be one of the inputs (in place): every input is read
     // whole before the output replaces it.
     if (part) {
@@ -252,11 +261,9 @@ int run(const std::vector<std::string>& argv) {
             throw sss::UsageError("with -part the output is a part file: name it *" +
                                   std::string(sss::kCloudPartExtension) + ", not " +
                                   out_path);
-    } else if (!sss::has_extension_in(out_path, sss::point_cloud_extensions()) &&
-               !sss::writes_into_existing(out_path))
-        throw sss::UsageError("output " +
-                              sss::unknown_extension_text(out_path, "a point cloud file",
-                                                          sss::point_cloud_extensions()));
+    } else {
+        require_cloud_output(out_path);
+    }
     sss::Job job(kTool, running);
     if (job.up_to_date({out_path}, files)) return 0;
     opt.diffusion.progress = job.progress();

@@ -13,7 +13,6 @@
 #include <set>
 
 #include <unistd.h>
-#include <zlib.h>
 
 #include "brickmap_format.h"
 #include "sss/util/byte_io.h"
@@ -200,8 +199,7 @@ std::vector<unsigned char> bkm_encode_head(const BkmContents& contents) {
 }
 
 uint32_t bkm_crc32(uint32_t crc, const unsigned char* bytes, std::size_t size) {
-    return static_cast<uint32_t>(::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes),
-                                           static_cast<z_size_t>(size)));
+    return detail::crc32(crc, bytes, size);
 }
 
 void bkm_check_brick_crc(const unsigned char* bytes, const BkmNode& node, int tree,

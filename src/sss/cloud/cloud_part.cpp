@@ -47,6 +47,19 @@ uint64_t floats_per_point(const std::vector<ChannelSpec>& channels) {
     return w;
 }
 
+void store_le(unsigned char* p, float v) {
+    store_f32(p, v);
+}
+void store_le(unsigned char* p, uint64_t v) {
+    store_u64(p, v);
+}
+void load_le(const unsigned char* p, float& v) {
+    v = load_f32(p);
+}
+void load_le(const unsigned char* p, uint64_t& v) {
+    v = load_u64(p);
+}
+
 // Writes arrays through a sink, counting their CRC.
 class CrcSink {
 public:
@@ -60,21 +73,14 @@ public:
         store_u32(b, v);
         bytes(b, 4);
     }
-    void floats(const float* v, std::size_t n) {
+    // Arrays of floats or u64, little-endian, through a chunk buffer.
+    template <class T>
+    void values(const T* v, std::size_t n) {
         unsigned char buf[kChunk];
         while (n > 0) {
-            std::size_t k = std::min(n, kChunk / 4);
-            for (std::size_t i = 0; i < k; ++i) store_f32(buf + 4 * i, v[i]);
-            bytes(buf, 4 * k);
-            v += k, n -= k;
-        }
-    }
-    void u64s(const uint64_t* v, std::size_t n) {
-        unsigned char buf[kChunk];
-        while (n > 0) {
-            std::size_t k = std::min(n, kChunk / 8);
-            for (std::size_t i = 0; i < k; ++i) store_u64(buf + 8 * i, v[i]);
-            bytes(buf, 8 * k);
+            std::size_t k = std::min(n, kChunk / sizeof(T));
+            for (std::size_t i = 0; i < k; ++i) store_le(buf + sizeof(T) * i, v[i]);
+            bytes(buf, sizeof(T) * k);
             v += k, n -= k;
         }
     }
@@ -101,21 +107,13 @@ public:
         bytes(b, 4);
         return load_u32(b);
     }
-    void floats(float* v, std::size_t n) {
+    template <class T>
+    void values(T* v, std::size_t n) {
         unsigned char buf[kChunk];
         while (n > 0) {
-            std::size_t k = std::min(n, kChunk / 4);
-            bytes(buf, 4 * k);
-            for (std::size_t i = 0; i < k; ++i) v[i] = load_f32(buf + 4 * i);
-            v += k, n -= k;
-        }
-    }
-    void u64s(uint64_t* v, std::size_t n) {
-        unsigned char buf[kChunk];
-        while (n > 0) {
-            std::size_t k = std::min(n, kChunk / 8);
-            bytes(buf, 8 * k);
-            for (std::size_t i = 0; i < k; ++i) v[i] = load_u64(buf + 8 * i);
+            std::size_t k = std::min(n, kChunk / sizeof(T));
+            bytes(buf, sizeof(T) * k);
+            for (std::size_t i = 0; i < k; ++i) load_le(buf + sizeof(T) * i, v[i]);
             v += k, n -= k;
         }
     }
@@ -247,14 +245,14 @@ void read_data(ByteSource& src, const PartHeader& ph, CloudPart& part) {
     CrcSource in(src);
     part.info = ph.info;
     part.indices.resize(m);
-    in.u64s(part.indices.data(), m);
+    in.values(part.indices.data(), m);
     PointCloud& pts = part.points;
     pts = ph.shape;
     pts.resize(m);
-    in.floats(reinterpret_cast<float*>(pts.positions.data()), 3 * m);
-    in.floats(reinterpret_cast<float*>(pts.normals.data()), 3 * m);
-    in.floats(pts.radii.data(), m);
-    for (Channel& c : pts.channels) in.floats(c.data.data(), c.data.size());
+    in.values(reinterpret_cast<float*>(pts.positions.data()), 3 * m);
+    in.values(reinterpret_cast<float*>(pts.normals.data()), 3 * m);
+    in.values(pts.radii.data(), m);
+    for (Channel& c : pts.channels) in.values(c.data.data(), c.data.size());
     if (in.raw_u32() != in.crc())
         throw FormatError(src.path(), "part file data is damaged (checksum)");
     src.finish();
@@ -331,11 +329,11 @@ void write_cloud_part(const CloudPart& part, const std::string& path) {
     store_u32(b, header_crc);
     sink.write(b, 4);
     o.restart();
-    o.u64s(part.indices.data(), m);
-    o.floats(reinterpret_cast<const float*>(pts.positions.data()), 3 * m);
-    o.floats(reinterpret_cast<const float*>(pts.normals.data()), 3 * m);
-    o.floats(pts.radii.data(), m);
-    for (const Channel& c : pts.channels) o.floats(c.data.data(), c.data.size());
+    o.values(part.indices.data(), m);
+    o.values(reinterpret_cast<const float*>(pts.positions.data()), 3 * m);
+    o.values(reinterpret_cast<const float*>(pts.normals.data()), 3 * m);
+    o.values(pts.radii.data(), m);
+    for (const Channel& c : pts.channels) o.values(c.data.data(), c.data.size());
     store_u32(b, o.crc());
     sink.write(b, 4);
     sink.close();
