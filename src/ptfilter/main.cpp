@@ -19,6 +19,7 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/hash.h"
+#include "sss/util/isa.h"
 #include "sss/util/job_files.h"
 #include "sss/util/limits.h"
 #include "sss/util/parse.h"
@@ -67,6 +68,9 @@ std::string usage() {
         "                            into the cloud a single run writes, byte for byte\n"
         "Running:\n"
         "  -threads N                0 = all usable cores (default), <0 = all but N\n"
+        "  -isa NAME                 kernels' instruction set: auto (default: SSS_ISA,\n"
+        "                            else the best this CPU has), x86-64, avx2, avx512;\n"
+        "                            all give identical results\n"
         "  -frame N                  expands %%04d, #### and $F4 in the file names\n"
         "  -progress 0|1|2           1: material values and timings, ALF_PROGRESS "
         "lines;\n"
@@ -187,7 +191,8 @@ int run(const std::vector<std::string>& argv) {
     std::string o;
     while (args.next_option(o, files)) {
         if (o != "merge" && o != "part" && o != "newer" && o != "threads" &&
-            o != "progress" && o != "Progress" && o != "frame" && filter_option.empty())
+            o != "progress" && o != "Progress" && o != "frame" && o != "isa" &&
+            filter_option.empty())
             filter_option = o;
         if (sss::standard_option(kTool, o, usage())) {
             return 0;
@@ -217,6 +222,8 @@ int run(const std::vector<std::string>& argv) {
             if (!sss::parse_criterion(c.c_str(), opt.diffusion.criterion))
                 throw sss::UsageError("option -criterion: unknown criterion '" + c +
                                       "' (error, bbox, centroid)");
+        } else if (o == "isa") {
+            opt.diffusion.isa = sss::parse_isa(args.value(o), "option -isa");
         } else if (o == "exact") {
             opt.exact = true;
         } else if (o == "areachannel") {
@@ -249,6 +256,8 @@ int run(const std::vector<std::string>& argv) {
             "no filter given (use -ssdiffusion or -filter ssdiffusion)");
     if (files.size() < 2)
         throw sss::UsageError("need at least one input file and an output file");
+    // The kernels' path: a farm that asked for one must get it or stop.
+    opt.diffusion.isa = sss::resolve_isa(opt.diffusion.isa);
     // Check the whole material before reading anything.
     std::vector<std::string> material = sss::describe_material(opt);
 
@@ -330,15 +339,18 @@ int run(const std::vector<std::string>& argv) {
                         part->second, (unsigned long long)piece.info.first,
                         (unsigned long long)(piece.info.first + piece.info.count),
                         points);
-        std::printf(
-            "ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s\n",
-            points, job.threads(), opt.diffusion.max_solid_angle,
-            sss::criterion_name(opt.diffusion.criterion), opt.exact ? " (exact)" : "");
+        std::printf("ptfilter: %zu points, threads %d, maxsolidangle %g, criterion %s%s, "
+                    "kernels %s\n",
+                    points, job.threads(), opt.diffusion.max_solid_angle,
+                    sss::criterion_name(opt.diffusion.criterion),
+                    opt.exact ? " (exact)" : "", sss::isa_name(opt.diffusion.isa));
         if (job.detailed() && !opt.exact)
             std::printf(
                 "ptfilter: octree %zu nodes (built in %.3f s, evaluated in %.3f s), per "
-                "point %.1f node terms, %.1f point terms, %.2f disk integrals\n",
+                "point %.1f shared node terms, %.1f node terms, %.1f point terms, %.2f "
+                "disk integrals\n",
                 report.stats.nodes, report.stats.build_seconds, report.stats.eval_seconds,
+                double(report.stats.local_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.far_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.near_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.quadrature_terms) / std::max<std::size_t>(1, points));

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -389,8 +390,13 @@ TEST(DiffusionHierarchy, NoBias) {
                 for (std::size_t k = 0; k < rec.size(); ++k)
                     bias += (double(h[rec[k]][ch]) - e[k][ch]) / mean_abs;
                 bias /= double(rec.size());
-                // Before the change: -0.16 % (sphere, red) at 1.
-                EXPECT_LT(std::abs(bias), 0.0005 * std::max(1.0, eps / 0.5))
+                // Dropped nodes: -0.16 % (sphere, red) at 1; monopoles for
+                // the negligible nodes: -0.07 %; local expansions: ~-0.01 %.
+                // Issue 17: within +-0.05 % at every maxsolidangle up to 1.
+                if (std::getenv("SSS_TEST_VERBOSE"))
+                    std::printf("%s eps %g ch %d bias %.4f %%\n", c.label, eps, ch,
+                                100 * bias);
+                EXPECT_LT(std::abs(bias), 0.0005)
                     << c.label << " maxsolidangle " << eps << " channel " << ch
                     << ": mean signed error " << 100 * bias << " %";
             }
@@ -1091,4 +1097,31 @@ TEST(DiffusionSsdiffusion, PartsEqualTheWholeOutput) {
     changed[7].radiance_channel = "_irradiance";
     for (std::size_t k = 0; k < changed.size(); ++k)
         EXPECT_NE(sss::ssdiffusion_signature(changed[k]), sig) << "change " << k;
+}
+
+// Every instruction-set path of the block kernels gives the baseline's result
+// bit for bit (they are compiled without fused multiply-adds), with one
+// material (block path), per-point materials (receiver path, baseline code)
+// and a part.
+TEST(DiffusionIsa, PathsGiveIdenticalResults) {
+    sss::PointCloud cloud = sphere_cloud(20000, 50.0);
+    sss::DiffusionProblem pb = problem_from(cloud, material_profiles("marble"));
+    for (double eps : {0.25, 1.0, 8.0}) {
+        sss::DiffusionOptions opt;
+        opt.max_solid_angle = eps;
+        opt.isa = sss::Isa::X86_64;
+        sss::DiffusionStats st;
+        const std::vector<glm::vec3> base = sss::evaluate_diffusion(pb, opt, &st);
+        EXPECT_EQ(st.isa, sss::Isa::X86_64);
+        for (sss::Isa isa : sss::supported_isas()) {
+            opt.isa = isa;
+            const std::vector<glm::vec3> h = sss::evaluate_diffusion(pb, opt, &st);
+            EXPECT_EQ(st.isa, isa);
+            ASSERT_EQ(h.size(), base.size());
+            std::size_t differ = 0;
+            for (std::size_t i = 0; i < h.size(); ++i)
+                differ += std::memcmp(&h[i], &base[i], sizeof(glm::vec3)) != 0;
+            EXPECT_EQ(differ, 0u) << sss::isa_name(isa) << " eps " << eps;
+        }
+    }
 }

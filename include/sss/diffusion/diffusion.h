@@ -18,6 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include "sss/diffusion/profile.h"
+#include "sss/util/isa.h"
 
 namespace sss {
 
@@ -83,6 +84,9 @@ struct DiffusionOptions {
     Progress* progress = nullptr; ///< optional ALF_PROGRESS reporter
     /// The tolerance reference; unset: the problem's own (diffusion_reference()).
     std::optional<DiffusionReference> reference;
+    /// The kernels' instruction-set path (sss/util/isa.h); all paths give
+    /// identical results. Auto: SSS_ISA, else the best the CPU has.
+    Isa isa = Isa::Auto;
 };
 
 /// Counters of one hierarchical evaluation.
@@ -91,8 +95,12 @@ struct DiffusionStats {
     std::size_t far_terms = 0;        ///< node expansions evaluated (sum over receivers)
     std::size_t near_terms = 0;       ///< point-point terms evaluated
     std::size_t quadrature_terms = 0; ///< near sources integrated as disks
+    /// node expansions re-expanded once for a whole bucket of receivers (sum
+    /// over buckets; each serves every receiver of its bucket)
+    std::size_t local_terms = 0;
     double build_seconds = 0;
     double eval_seconds = 0;
+    Isa isa = Isa::Auto; ///< the kernels' path that ran
 };
 
 /// Hierarchical evaluation at every point. Deterministic: the result does not

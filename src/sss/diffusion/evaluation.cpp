@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <deque>
 #include <memory>
 
 #include <oneapi/tbb/blocked_range.h>
@@ -16,12 +17,87 @@
 
 #include "sss/util/progress.h"
 
+#include "block.h"
 #include "kernels.h"
 #include "traversal.h"
 
 namespace sss::diffusion_detail {
 
 namespace {
+
+// A bucket's local expansion per channel about its box centre: the sum of
+// its local list's node expansions re-expanded to second order, evaluated as
+// l0 + l1 . d + d^T L2 d at d = x - centre.
+struct LocalExpansion {
+    glm::dvec3 centre{0.0};
+    double l0[3] = {0, 0, 0};
+    double l1[3][3] = {};
+    double l2[3][6] = {}; // xx xy xz yy yz zz
+};
+
+// Re-expands each node of `nodes` about the centre: with w = centre - c,
+// G(w) = F(|w|^2), grad G = 2 F' w, H = 4 F'' w w^T + 2 F' I, the node's
+// sum phi G(w + d - delta) over its points (moments phi, D, Q) is to second
+// order: phi G - grad G . D + tr(H Q) / 2 + (phi grad G - H D) . d + d^T (phi H / 2) d.
+void local_expansion(const Tables& tables, const TableEntry* const t[3], const Tree& tree,
+                     const std::vector<uint32_t>& nodes, LocalExpansion& le) {
+    for (uint32_t k : nodes) {
+        const Expansion& ex = tree.expansions[k];
+        const glm::vec3 wf = glm::vec3(le.centre) - ex.c;
+        Tables::Lookup l = tables.locate(glm::dot(wf, wf));
+        if (!l.valid) continue;
+        const glm::dvec3 w(wf);
+        for (int ch = 0; ch < 3; ++ch) {
+            const TableEntry* e = t[ch] + l.index;
+            const double frac = l.frac;
+            const double f = e[0].f + frac * (double(e[1].f) - e[0].f);
+            const double df = e[0].df + frac * (double(e[1].df) - e[0].df);
+            const double d2f = e[0].d2f + frac * (double(e[1].d2f) - e[0].d2f);
+            const double phi = ex.phi[ch];
+            const float* Q = ex.q[ch];
+            const glm::dvec3 D(ex.d[ch][0], ex.d[ch][1], ex.d[ch][2]);
+            const double wd = glm::dot(w, D);
+            const glm::dvec3 qw(Q[0] * w.x + Q[1] * w.y + Q[2] * w.z,
+                                Q[1] * w.x + Q[3] * w.y + Q[4] * w.z,
+                                Q[2] * w.x + Q[4] * w.y + Q[5] * w.z);
+            const double tr = double(Q[0]) + Q[3] + Q[5];
+            le.l0[ch] += phi * f - 2.0 * df * wd + 2.0 * d2f * glm::dot(w, qw) + df * tr;
+            const glm::dvec3 g = 2.0 * df * phi * w - 4.0 * d2f * wd * w - 2.0 * df * D;
+            for (int a = 0; a < 3; ++a) le.l1[ch][a] += g[a];
+            const double h = 2.0 * d2f * phi;
+            le.l2[ch][0] += h * w.x * w.x + df * phi;
+            le.l2[ch][1] += h * w.x * w.y;
+            le.l2[ch][2] += h * w.x * w.z;
+            le.l2[ch][3] += h * w.y * w.y + df * phi;
+            le.l2[ch][4] += h * w.y * w.z;
+            le.l2[ch][5] += h * w.z * w.z + df * phi;
+        }
+    }
+}
+
+// `from` moved to a new centre: the same quadratic, exactly.
+void translate(const LocalExpansion& from, const glm::dvec3& centre, LocalExpansion& to) {
+    const glm::dvec3 s = centre - from.centre;
+    to.centre = centre;
+    for (int ch = 0; ch < 3; ++ch) {
+        const double* L2 = from.l2[ch];
+        const glm::dvec3 l1(from.l1[ch][0], from.l1[ch][1], from.l1[ch][2]);
+        const glm::dvec3 l2s(L2[0] * s.x + L2[1] * s.y + L2[2] * s.z,
+                             L2[1] * s.x + L2[3] * s.y + L2[4] * s.z,
+                             L2[2] * s.x + L2[4] * s.y + L2[5] * s.z);
+        to.l0[ch] = from.l0[ch] + glm::dot(l1, s) + glm::dot(s, l2s);
+        for (int a = 0; a < 3; ++a) to.l1[ch][a] = l1[a] + 2.0 * l2s[a];
+        std::copy(L2, L2 + 6, to.l2[ch]);
+    }
+}
+
+double local_value(const LocalExpansion& le, int ch, const glm::dvec3& d) {
+    const double* L2 = le.l2[ch];
+    const double* L1 = le.l1[ch];
+    return le.l0[ch] + L1[0] * d.x + L1[1] * d.y + L1[2] * d.z +
+           d.x * (L2[0] * d.x + 2.0 * (L2[1] * d.y + L2[2] * d.z)) +
+           d.y * (L2[3] * d.y + 2.0 * L2[4] * d.z) + L2[5] * d.z * d.z;
+}
 
 // The sum over the last big leaf of identical points, for one material.
 struct CoincidentSum {
@@ -36,6 +112,7 @@ struct Scratch {
     std::unique_ptr<BucketBlock> block = std::make_unique<BucketBlock>();
     DiskMemo memo[3];
     CoincidentSum coincident;
+    LocalExpansion local_expansion;
     DiffusionStats local;
 };
 
@@ -43,9 +120,10 @@ struct Scratch {
 // bucket, then the vectorised block loops over its receivers. Always the whole
 // bucket, wanted or not: each receiver then keeps its place in the vector
 // loops, so a subset gets the whole run's numbers bit for bit.
+// `inherited`: the local expansion of the bucket's receiver group, or null.
 void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                     const ReceiverChannels& first_rc, Scratch& w,
-                    std::vector<glm::vec3>& result) {
+                    std::vector<glm::vec3>& result, const LocalExpansion* inherited) {
     const Tree& tree = cx.tree;
     const Tables& tables = cx.tables;
     const DiffusionProblem& pb = cx.pb;
@@ -60,18 +138,23 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         block.sorted[r] = int32_t(bucket.first + r);
         for (int ch = 0; ch < 3; ++ch) block.acc[ch][r] = 0.0f;
     }
-    const TableEntry* t[3] = {first_rc.table[0]->entries.data(),
-                              first_rc.table[1]->entries.data(),
-                              first_rc.table[2]->entries.data()};
-    for (uint32_t k : w.lists.far) block_far<true>(tables, t, tree.expansions[k], block);
-    for (uint32_t k : w.lists.mono)
-        block_far<false>(tables, t, tree.expansions[k], block);
+    const BlockTables t{{first_rc.table[0]->entries.data(),
+                         first_rc.table[1]->entries.data(),
+                         first_rc.table[2]->entries.data()},
+                        int32_t(tables.bits0),
+                        int32_t(tables.count) - 1};
+    const BlockKernels& kernels = cx.kernels;
+    const float* pos_rho2 = &tree.pos_rho2.data()->x;
+    const float* power_area = &tree.power_area.data()->x;
+    kernels.far(t, tree.expansions.data(), w.lists.far.data(), w.lists.far.size(), block);
+    kernels.mono(t, tree.expansions.data(), w.lists.mono.data(), w.lists.mono.size(),
+                 block);
     std::size_t plain = 0;
     for (uint32_t k : w.lists.near) {
         const Node& leaf = tree.nodes[k];
         float d2 = box_distance2(bucket.lo, bucket.hi, leaf.lo, leaf.hi);
         if (leaf.max_rho * leaf.max_rho <= kNearKappa2 * (d2 + first_rc.near_core2)) {
-            block_near(tables, t, tree, leaf.first, leaf.count, block);
+            kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block);
             plain += leaf.count;
             continue;
         }
@@ -88,6 +171,14 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
     }
     local.near_terms += plain * bucket.count;
     local.far_terms += (w.lists.far.size() + w.lists.mono.size()) * bucket.count;
+    local.local_terms += w.lists.local.size();
+    LocalExpansion& le = w.local_expansion;
+    const glm::dvec3 centre = 0.5 * (glm::dvec3(bucket.lo) + glm::dvec3(bucket.hi));
+    if (inherited)
+        translate(*inherited, centre, le);
+    else
+        le = LocalExpansion{centre};
+    local_expansion(tables, t.t, tree, w.lists.local, le);
     for (uint32_t r = 0; r < bucket.count; ++r) {
         uint32_t s = bucket.first + r;
         if (!cx.wants(s)) continue;
@@ -96,8 +187,11 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         glm::vec3& out = result[cx.slot(s, original)];
         for (int ch = 0; ch < 3; ++ch) {
             // Self term: the receiver's own disk, integrated exactly.
-            double v = double(block.acc[ch][r]) + double(pb.irradiance[original][ch]) *
-                                                      first_rc.profile[ch]->disk(rho);
+            double v =
+                double(block.acc[ch][r]) +
+                local_value(le, ch,
+                            glm::dvec3(block.x[r], block.y[r], block.z[r]) - le.centre) +
+                double(pb.irradiance[original][ch]) * first_rc.profile[ch]->disk(rho);
             out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
@@ -188,11 +282,14 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
     }
 }
 
-// One bucket: with the error criterion, one traversal for the bucket, then the
-// vectorised block loops when its receivers share one material; otherwise
-// receiver by receiver.
+// One bucket: with the error criterion, one traversal for the bucket (from
+// the nodes its receiver group left to it, with the group's local expansion),
+// then the vectorised block loops when its receivers share one material;
+// otherwise receiver by receiver, from the root.
 void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch& w,
-                     std::vector<glm::vec3>& result) {
+                     std::vector<glm::vec3>& result,
+                     const std::vector<uint32_t>* start = nullptr,
+                     const LocalExpansion* inherited = nullptr) {
     const Tree& tree = cx.tree;
     const Node& bucket = tree.nodes[bucket_node];
     ReceiverChannels first_rc =
@@ -200,13 +297,16 @@ void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch&
     if (cx.options.criterion == Criterion::Error) {
         BucketTolerance tol =
             bucket_tolerance(cx.tolerance, cx.pb, cx.tables, tree, bucket_node, first_rc);
-        traverse_error(tree, cx.tables, tol, bucket.lo, bucket.hi, w.lists);
-        bool uniform = bucket.count <= kMaxBucket && tol.tables[0].size() == 1 &&
-                       tol.tables[1].size() == 1 && tol.tables[2].size() == 1;
+        const bool uniform = bucket.count <= kMaxBucket && tol.tables[0].size() == 1 &&
+                             tol.tables[1].size() == 1 && tol.tables[2].size() == 1;
         if (uniform) {
-            evaluate_block(cx, bucket, first_rc, w, result);
+            traverse_error(tree, cx.tables, tol, bucket.lo, bucket.hi, true, w.lists,
+                           start);
+            evaluate_block(cx, bucket, first_rc, w, result, inherited);
             return;
         }
+        // Every node from the root: what the group shared is not used here.
+        traverse_error(tree, cx.tables, tol, bucket.lo, bucket.hi, false, w.lists);
     }
     evaluate_each(cx, bucket, first_rc, w, result);
 }
@@ -222,6 +322,67 @@ std::size_t wanted_in(const EvaluationContext& cx, const Node& bucket) {
     return std::size_t(std::count_if(cx.wanted + bucket.first,
                                      cx.wanted + bucket.first + bucket.count,
                                      [](uint8_t w) { return w != 0; }));
+}
+
+// Receiver groups: nodes above the buckets whose tolerance is the one of every
+// bucket below (one material, narrower than the tolerance's region, see
+// reference_node() in tolerance.cpp), at most kMaxGroup points.
+constexpr uint32_t kMaxGroup = 4096;
+
+bool groups_allowed(const EvaluationContext& cx) {
+    return cx.options.criterion == Criterion::Error && cx.pb.profile_index.empty();
+}
+
+bool is_group(const EvaluationContext& cx, const Node& node) {
+    return node.count <= kMaxGroup &&
+           double(glm::length(node.hi - node.lo)) < 2.0 * cx.tolerance.region;
+}
+
+// The group evaluation's scratch per depth below the group's root.
+struct GroupLevel {
+    std::vector<uint32_t> start;
+    LocalExpansion le;
+};
+
+// Node k of a receiver group, holding the (sorted, wanted) buckets
+// [b0, b1): the nodes its local expansion can take go into it (on top of
+// the parent's, moved to k's centre); the rest is left to the children, down
+// to the buckets. `done(bucket)` counts progress.
+template <class Done>
+void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
+                    const std::vector<uint32_t>& start, const LocalExpansion& parent,
+                    const uint32_t* b0, const uint32_t* b1, Scratch& w,
+                    std::deque<GroupLevel>& levels, std::vector<glm::vec3>& result,
+                    Done&& done) {
+    const Tree& tree = cx.tree;
+    const Node& node = tree.nodes[k];
+    if (b1 - b0 == 1 && *b0 == k) {
+        evaluate_bucket(cx, k, w, result, &start, &parent);
+        done(k);
+        return;
+    }
+    if (levels.size() <= depth) levels.resize(depth + 1);
+    GroupLevel& lv = levels[depth];
+    ReceiverChannels rc = receiver_channels(cx.pb, cx.tables, tree.order[node.first]);
+    BucketTolerance tol = bucket_tolerance(cx.tolerance, cx.pb, cx.tables, tree, k, rc);
+    traverse_group(tree, cx.tables, tol, node.lo, node.hi, start, w.lists);
+    lv.start.swap(w.lists.near);
+    translate(parent, 0.5 * (glm::dvec3(node.lo) + glm::dvec3(node.hi)), lv.le);
+    const TableEntry* t[3] = {rc.table[0]->entries.data(), rc.table[1]->entries.data(),
+                              rc.table[2]->entries.data()};
+    local_expansion(cx.tables, t, tree, w.lists.local, lv.le);
+    w.local.local_terms += w.lists.local.size();
+    for (uint32_t c = node.child_first; c < node.child_first + node.child_count; ++c) {
+        const Node& child = tree.nodes[c];
+        auto in_child = [&](uint32_t b) { return tree.nodes[b].first < child.first; };
+        const uint32_t* c0 = std::partition_point(b0, b1, in_child);
+        const uint32_t* c1 = std::partition_point(c0, b1, [&](uint32_t b) {
+            return tree.nodes[b].first < child.first + child.count;
+        });
+        if (c1 > c0)
+            evaluate_group(cx, c, depth + 1, levels[depth].start, levels[depth].le, c0,
+                           c1, w, levels, result, done);
+    }
 }
 
 } // namespace
@@ -243,30 +404,66 @@ std::vector<uint32_t> choose_buckets(const Tree& tree) {
     return buckets;
 }
 
+const BlockKernels& block_kernels(Isa isa) {
+    switch (resolve_isa(isa)) {
+    case Isa::Avx512:
+        return isa_avx512::kernels;
+    case Isa::Avx2:
+        return isa_avx2::kernels;
+    default:
+        return isa_x86_64::kernels;
+    }
+}
+
 void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& buckets,
                       std::vector<glm::vec3>& result, DiffusionStats& stats) {
     const std::size_t n = cx.ranged() ? std::size_t(cx.range_end - cx.range_first)
                           : cx.wanted ? cx.wanted_count
                                       : cx.pb.positions.size();
+    const Tree& tree = cx.tree;
+    // Each bucket's receiver group: its highest ancestor that is a group
+    // (itself when there is none). The buckets are in depth-first order, so a
+    // group's buckets are contiguous: groups[g] = {root, first bucket}.
+    std::vector<std::pair<uint32_t, std::size_t>> groups;
+    for (std::size_t bi = 0; bi < buckets.size(); ++bi) {
+        uint32_t root = buckets[bi];
+        if (groups_allowed(cx))
+            while (tree.nodes[root].parent != kNone &&
+                   is_group(cx, tree.nodes[tree.nodes[root].parent]))
+                root = tree.nodes[root].parent;
+        if (groups.empty() || groups.back().first != root) groups.push_back({root, bi});
+    }
+    const std::vector<uint32_t> from_root{0};
+    const LocalExpansion none;
     std::atomic<std::size_t> done{0};
-    std::atomic<std::size_t> far_total{0}, near_total{0}, quad_total{0};
+    std::atomic<std::size_t> far_total{0}, near_total{0}, quad_total{0}, local_total{0};
     oneapi::tbb::parallel_for(
-        oneapi::tbb::blocked_range<std::size_t>(0, buckets.size(), 1),
+        oneapi::tbb::blocked_range<std::size_t>(0, groups.size(), 1),
         [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
             Scratch w;
-            for (std::size_t bi = range.begin(); bi != range.end(); ++bi) {
-                evaluate_bucket(cx, buckets[bi], w, result);
-                const std::size_t count = wanted_in(cx, cx.tree.nodes[buckets[bi]]);
+            std::deque<GroupLevel> levels; // a deque: growing keeps references
+            auto count_done = [&](uint32_t bucket) {
+                const std::size_t count = wanted_in(cx, tree.nodes[bucket]);
                 std::size_t now = done.fetch_add(count) + count;
                 if (cx.options.progress) cx.options.progress->update(now, n);
+            };
+            for (std::size_t g = range.begin(); g != range.end(); ++g) {
+                const std::size_t end =
+                    g + 1 < groups.size() ? groups[g + 1].second : buckets.size();
+                evaluate_group(cx, groups[g].first, 0, from_root, none,
+                               buckets.data() + groups[g].second, buckets.data() + end, w,
+                               levels, result, count_done);
             }
             far_total += w.local.far_terms;
             near_total += w.local.near_terms;
             quad_total += w.local.quadrature_terms;
+            local_total += w.local.local_terms;
         });
     stats.far_terms = far_total;
     stats.near_terms = near_total;
     stats.quadrature_terms = quad_total;
+    stats.local_terms = local_total;
+    stats.isa = cx.kernels.isa;
 }
 
 } // namespace sss::diffusion_detail

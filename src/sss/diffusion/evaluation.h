@@ -12,6 +12,7 @@
 
 #include "sss/diffusion/diffusion.h"
 
+#include "block.h"
 #include "octree.h"
 #include "profile_tables.h"
 #include "tolerance.h"
@@ -29,6 +30,8 @@ struct EvaluationContext {
     const Tables& tables;
     const Tree& tree;
     const ToleranceModel& tolerance;
+    // The block kernels of the options' instruction-set path.
+    const BlockKernels& kernels = block_kernels(options.isa);
     // The receivers to evaluate, by sorted position (non-zero: wanted); null:
     // all of them. A bucket on the block path is evaluated whole either way.
     const uint8_t* wanted = nullptr;

@@ -13,21 +13,29 @@ namespace {
 
 // What a criterion makes of one node.
 enum class Verdict {
-    Far,  // use the node's expansion
-    Mono, // use its monopole only
-    Drop, // negligible
-    Open  // too close: a leaf goes to the near list, a node to its children
+    Far,   // use the node's expansion
+    Mono,  // use its monopole only
+    Local, // use its expansion re-expanded about the receivers' centre
+    Defer, // (receiver groups) leave it to the group's children
+    Drop,  // negligible
+    Open   // too close: a leaf goes to the near list, a node to its children
 };
 
-// Depth-first walk from the root; judge(node, expansion) -> Verdict.
+// Depth-first walk from the start nodes (null: the root); judge(node,
+// expansion) -> Verdict. Deferred nodes are kept in lists.near.
 template <class Judge>
-void walk(const Tree& tree, NodeLists& lists, Judge&& judge) {
+void walk(const Tree& tree, NodeLists& lists, Judge&& judge,
+          const std::vector<uint32_t>* start = nullptr) {
     lists.far.clear();
     lists.mono.clear();
+    lists.local.clear();
     lists.near.clear();
     std::vector<uint32_t>& stack = lists.stack;
     stack.clear();
-    stack.push_back(0);
+    if (start)
+        stack.assign(start->rbegin(), start->rend());
+    else
+        stack.push_back(0);
     while (!stack.empty()) {
         uint32_t k = stack.back();
         stack.pop_back();
@@ -39,7 +47,13 @@ void walk(const Tree& tree, NodeLists& lists, Judge&& judge) {
         case Verdict::Mono:
             lists.mono.push_back(k);
             break;
+        case Verdict::Local:
+            lists.local.push_back(k);
+            break;
         case Verdict::Drop:
+            break;
+        case Verdict::Defer:
+            lists.near.push_back(k);
             break;
         case Verdict::Open:
             if (node.child_count == 0) {
@@ -56,41 +70,86 @@ void walk(const Tree& tree, NodeLists& lists, Judge&& judge) {
 } // namespace
 
 void traverse_error(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
-                    const glm::vec3& blo, const glm::vec3& bhi, NodeLists& lists) {
-    walk(tree, lists, [&](const Node& node, const Expansion& ex) {
-        float d2 = box_distance2(blo, bhi, node.lo, node.hi);
-        float r = node.radius;
-        // Single points are exact as near terms; the expansion
-        // needs the receivers well outside the node.
-        if (!(node.count > 1 && d2 > 2.25f * r * r)) return Verdict::Open;
-        Tables::Lookup l = tables.locate(d2);
-        // Beyond the tables every profile has lost all but 1e-7: nothing.
-        if (!l.valid) return Verdict::Drop;
-        bool accept = true, negligible = true, mono = true;
-        // Farthest receiver from the centroid bounds |w|.
-        glm::vec3 far_corner = glm::max(glm::abs(blo - ex.c), glm::abs(bhi - ex.c));
-        double wmax = glm::length(far_corner);
-        for (int ch = 0; ch < 3; ++ch) {
-            for (const ChannelTable* ct : tol.tables[ch]) {
-                double ap = ex.abs_phi[ch];
-                uint32_t i = l.index;
-                if (ap * r * r * r * ct->error_bound[i] > tol.tol[ch]) accept = false;
-                if (ap * ct->max_value[i] > tol.skip[ch]) negligible = false;
-                // Error of dropping the dipole and
-                // quadrupole terms.
-                double m2 = ap * r * r;
-                double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
-                                  2.0 * ct->max_d2[i] * wmax * wmax * m2;
-                if (mono_err > 0.1 * tol.tol[ch]) mono = false;
+                    const glm::vec3& blo, const glm::vec3& bhi, bool local,
+                    NodeLists& lists, const std::vector<uint32_t>* start) {
+    // Radius of the receivers' box about its centre (where a local expansion
+    // is made); 0 without local expansions, so the test below never passes.
+    const float rb = local ? 0.5f * glm::length(bhi - blo) : -1.0f;
+    walk(
+        tree, lists,
+        [&](const Node& node, const Expansion& ex) {
+            float d2 = box_distance2(blo, bhi, node.lo, node.hi);
+            float r = node.radius;
+            // Single points are exact as near terms; the expansion
+            // needs the receivers well outside the node.
+            if (!(node.count > 1 && d2 > 2.25f * r * r)) return Verdict::Open;
+            Tables::Lookup l = tables.locate(d2);
+            // Beyond the tables every profile has lost all but 1e-7: nothing.
+            if (!l.valid) return Verdict::Drop;
+            bool accept = true, negligible = true, mono = true;
+            // The local expansion's remainder: third order in the displacement
+            // from the node's centroid plus the one from the box centre.
+            const float rl = r + rb;
+            bool shared = rb >= 0.0f && d2 > 2.25f * rl * rl;
+            // Farthest receiver from the centroid bounds |w|.
+            glm::vec3 far_corner = glm::max(glm::abs(blo - ex.c), glm::abs(bhi - ex.c));
+            double wmax = glm::length(far_corner);
+            for (int ch = 0; ch < 3; ++ch) {
+                for (const ChannelTable* ct : tol.tables[ch]) {
+                    double ap = ex.abs_phi[ch];
+                    uint32_t i = l.index;
+                    if (ap * r * r * r * ct->error_bound[i] > tol.tol[ch]) accept = false;
+                    if (ap * rl * rl * rl * ct->error_bound[i] > tol.tol[ch])
+                        shared = false;
+                    if (ap * ct->max_value[i] > tol.skip[ch]) negligible = false;
+                    // Error of dropping the dipole and
+                    // quadrupole terms.
+                    double m2 = ap * r * r;
+                    double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
+                                      2.0 * ct->max_d2[i] * wmax * wmax * m2;
+                    if (mono_err > 0.1 * tol.tol[ch]) mono = false;
+                }
             }
-        }
-        // A negligible node is still counted, as its monopole (one table
-        // lookup): dropping it lost a term of the sign of the light every
-        // time, which biased the result low (-0.43 % on average at 1M points,
-        // most of the default's error; issue 17).
-        if (negligible || (accept && mono)) return Verdict::Mono;
-        return accept ? Verdict::Far : Verdict::Open;
-    });
+            // A negligible node is still counted, as its monopole (one table
+            // lookup): dropping it lost a term of the sign of the light every
+            // time, which biased the result low (-0.43 % on average at 1M points,
+            // most of the default's error; issue 17).
+            if (shared) return Verdict::Local; // implies accept
+            if (negligible || (accept && mono)) return Verdict::Mono;
+            return accept ? Verdict::Far : Verdict::Open;
+        },
+        start);
+}
+
+void traverse_group(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
+                    const glm::vec3& glo, const glm::vec3& ghi,
+                    const std::vector<uint32_t>& start, NodeLists& lists) {
+    const float rg = 0.5f * glm::length(ghi - glo);
+    walk(
+        tree, lists,
+        [&](const Node& node, const Expansion& ex) {
+            float d2 = box_distance2(glo, ghi, node.lo, node.hi);
+            float r = node.radius;
+            const float rl = r + rg;
+            if (node.count > 1 && d2 > 2.25f * rl * rl) {
+                Tables::Lookup l = tables.locate(d2);
+                if (!l.valid) return Verdict::Drop;
+                bool shared = true;
+                for (int ch = 0; ch < 3 && shared; ++ch)
+                    for (const ChannelTable* ct : tol.tables[ch])
+                        if (double(ex.abs_phi[ch]) * rl * rl * rl *
+                                ct->error_bound[l.index] >
+                            tol.tol[ch])
+                            shared = false;
+                if (shared) return Verdict::Local;
+            }
+            // Open the larger of the two: a source node bigger than the group
+            // may have children the group can share; a smaller one is left to
+            // the group's children.
+            if (node.child_count > 0 && r > rg) return Verdict::Open;
+            return Verdict::Defer;
+        },
+        &start);
 }
 
 void traverse_solid_angle_box(const Tree& tree, double eps, const glm::vec3& blo,

@@ -19,6 +19,8 @@ namespace sss::diffusion_detail {
 struct NodeLists {
     std::vector<uint32_t> far;   // expansions (quadrupole with the error criterion)
     std::vector<uint32_t> mono;  // expansions whose dipole and quadrupole are negligible
+    std::vector<uint32_t> local; // expansions taken once for the whole bucket (a local
+                                 // expansion about the bucket's centre)
     std::vector<uint32_t> near;  // leaves, summed source by source
     std::vector<uint32_t> stack; // the walk's own scratch
 };
@@ -28,8 +30,23 @@ struct NodeLists {
 // monopole when that is accurate enough or when it cannot contribute more than
 // the tolerance's skip level (never dropped: that biased results towards 0);
 // dropped only beyond the profile tables (where every profile is ~0).
+// With `local` (receivers that share one material), a node whose expansion
+// re-expanded about the box centre is still within the tolerance everywhere in
+// the box goes to the local list instead: its work is shared by the bucket.
+// The walk starts at `start` (null: the root): the nodes a receiver group
+// left to this bucket (traverse_group).
 void traverse_error(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
-                    const glm::vec3& blo, const glm::vec3& bhi, NodeLists& lists);
+                    const glm::vec3& blo, const glm::vec3& bhi, bool local,
+                    NodeLists& lists, const std::vector<uint32_t>* start = nullptr);
+
+// A receiver group (a node above the buckets, one material): from `start`, the
+// nodes whose local expansion about the group box's centre is within the
+// tolerance for every receiver in [glo, ghi] go to lists.local (shared by all
+// the group's buckets); the others, opened while larger than the group, are
+// left to the group's children in lists.near.
+void traverse_group(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
+                    const glm::vec3& glo, const glm::vec3& ghi,
+                    const std::vector<uint32_t>& start, NodeLists& lists);
 
 // PRMan's: area / squared distance to the node's box (grown by its largest
 // source disk) <= eps for receivers in [blo, bhi].

@@ -1,0 +1,68 @@
+#pragma once
+/// \file block.h
+/// The vectorised block kernels: one source or node against all receivers of
+/// a bucket. They are compiled once per instruction-set path
+/// (isa/block_kernels.inl, see sss/util/isa.h) and reached through a table of
+/// function pointers, so the library itself stays baseline x86-64.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "sss/util/isa.h"
+
+#include "octree.h"
+#include "profile_tables.h"
+
+namespace sss::diffusion_detail {
+
+// Receivers of one bucket in structure-of-arrays form, so the loops over
+// receivers vectorise (one source or node against all receivers at once).
+constexpr uint32_t kMaxBucket = 64;
+struct BucketBlock {
+    uint32_t count = 0;
+    alignas(64) float x[kMaxBucket], y[kMaxBucket], z[kMaxBucket];
+    alignas(64) int32_t sorted[kMaxBucket];
+    alignas(64) float acc[3][kMaxBucket];
+};
+
+// The three channel tables every receiver of a block reads, and the table
+// range (plain data: the kernels call no shared inline code, see
+// isa/block_kernels.inl).
+struct BlockTables {
+    const TableEntry* t[3];
+    int32_t bits0; // float bits of the tables' first q
+    int32_t last;  // index of the last entry
+};
+
+struct BlockKernels {
+    Isa isa;
+    // Adds the expansions of nodes[0..n) to every receiver: second order
+    // (far) or the monopole alone (mono).
+    void (*far)(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
+                std::size_t n, BucketBlock& b);
+    void (*mono)(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
+                 std::size_t n, BucketBlock& b);
+    // Adds point sources [first, first + count) to every receiver, skipping
+    // each receiver's own point; pos_rho2 and power_area are the tree's
+    // sorted arrays as floats (4 per point). Only for pairs that need no disk
+    // quadrature.
+    void (*near)(const BlockTables& t, const float* pos_rho2, const float* power_area,
+                 uint32_t first, uint32_t count, BucketBlock& b);
+};
+
+// The kernels of one path (Auto: resolve_isa()); throws UsageError when the
+// CPU lacks it.
+const BlockKernels& block_kernels(Isa isa);
+
+// Per path (isa/block_kernels.inl compiled with the path's flags).
+namespace isa_x86_64 {
+extern const BlockKernels kernels;
+}
+namespace isa_avx2 {
+extern const BlockKernels kernels;
+}
+namespace isa_avx512 {
+extern const BlockKernels kernels;
+}
+
+} // namespace sss::diffusion_detail
