@@ -464,7 +464,7 @@ struct Settings {
     std::size_t samples = 2000;
     std::vector<std::size_t> scaling = {100000, 1000000, 4000000};
     std::size_t scaling_samples = 200;
-    std::vector<double> eps = {0.03, 0.06, 0.125, 0.25, 0.5, 1, 2, 4};
+    std::vector<double> eps = {0.03, 0.06, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16};
     std::vector<double> model_spacings = {0.25, 0.5, 1, 2, 4, 8};
     std::vector<double> max_errors = {0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05};
     std::vector<std::string> cases; ///< empty: all

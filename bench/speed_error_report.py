@@ -174,7 +174,15 @@ def plain_log_ticks(ax, x=True, y=True):
             axis.set_minor_formatter(FuncFormatter(_major if narrow else _minor))
 
 
-def plot_sweep_axes(ax, sweep, case, title, annotate=True):
+def plot_sweep_axes(ax, sweep, case, title, annotate=True, before=None):
+    b = curve(before or [], case, DEFAULT_CRITERION)
+    if b:
+        ax.plot([r["seconds"] for r in b], [r["rms_pct"] for r in b], "x:", color="0.45",
+                ms=4, lw=1, label="error criterion before issue 17, RMS")
+        bd = at_eps(b, DEFAULT_EPS)
+        if bd:
+            ax.plot([bd["seconds"]], [bd["rms_pct"]], "*", mfc="none", mec="0.3", ms=12,
+                    zorder=5, label="default before issue 17")
     for crit in CRITERIA:
         c = curve(sweep, case, crit)
         if not c:
@@ -206,13 +214,14 @@ def plot_sweep_axes(ax, sweep, case, title, annotate=True):
     ax.grid(True, which="both", alpha=0.3)
 
 
-def plot_sweep(sweep, cases, plot_dir):
+def plot_sweep(sweep, cases, plot_dir, before=None):
     files = {}
     for case in cases:
         name = case["case"]
         fig, ax = plt.subplots(figsize=(7, 5))
         plot_sweep_axes(ax, sweep, name,
-                        f"{name}: {fn(case['points'])} points (labels: -maxsolidangle)")
+                        f"{name}: {fn(case['points'])} points (labels: -maxsolidangle)",
+                        before=before)
         ax.legend(fontsize=7, loc="upper right")
         fig.tight_layout()
         f = f"sweep-{name}.png"
@@ -226,7 +235,7 @@ def plot_sweep(sweep, cases, plot_dir):
     fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows), squeeze=False)
     for i, case in enumerate(cases):
         ax = axes[i // cols][i % cols]
-        plot_sweep_axes(ax, sweep, case["case"], case["case"], annotate=False)
+        plot_sweep_axes(ax, sweep, case["case"], case["case"], annotate=False, before=before)
         ax.set_xlabel("time (s)", fontsize=8)
         ax.set_ylabel("RMS / p99 error (%)", fontsize=8)
         ax.tick_params(labelsize=7)
@@ -440,6 +449,57 @@ def compare_default(sweep, case):
     return out
 
 
+def not_reached(c, ob):
+    """The old default's error lies beyond the current curve's ends."""
+    fastest = max(c, key=lambda r: r["maxsolidangle"])
+    if ob["rms_pct"] > fastest["rms_pct"]:
+        return (f"every setting is more accurate (fastest measured, "
+                f"{feps(fastest['maxsolidangle'])}: {fs(fastest['seconds'])} s, "
+                f"{fp(fastest['rms_pct'])} %)")
+    return "-"
+
+
+def before_text(before, before_machine, sweep, cases):
+    """The error criterion now against the same criterion before issue 17."""
+    md = ["## Against the evaluation before issue 17", "",
+          "The grey dotted curves in the plots are the `error` criterion as it was before "
+          "issue 17 (measured by this script at commit "
+          f"{before_machine.get('commit', '?')}, {before_machine.get('date', '?')}, "
+          f"{before_machine.get('cpu', '?')}, {before_machine.get('nproc', '?')} cores; "
+          "the data is kept in `docs/speed-vs-error/before-issue-17/`). Since then: "
+          "negligible nodes are monopoles instead of being dropped (that was a bias "
+          "towards 0), well separated nodes go into local expansions shared by a whole "
+          "receiver group (the fast multipole method's M2L/L2L), the kernels are chosen "
+          "at run time per instruction set, and the knob's scale was doubled (tau "
+          "4e-3 -> 8e-3 per unit of `-maxsolidangle`). *Now at equal error*: the time "
+          "the current curve needs for the old default's RMS error; *now at equal time*: "
+          "the current RMS error at the old default's time (interpolated; '-' when "
+          "outside the measured range).", ""]
+    rows = []
+    for case in cases:
+        name = case["case"]
+        ob = at_eps(curve(before, name, DEFAULT_CRITERION), DEFAULT_EPS)
+        c = curve(sweep, name, DEFAULT_CRITERION)
+        nd = at_eps(c, DEFAULT_EPS)
+        if not ob or not nd:
+            continue
+        t_eq = time_at_error(c, ob["rms_pct"])
+        e_eq = error_at_time(c, ob["seconds"])
+        rows.append([
+            name,
+            f"{fs(ob['seconds'])} s, {fp(ob['rms_pct'])} % (p99 {fp(ob['p99_pct'])} %)",
+            f"{fs(nd['seconds'])} s, {fp(nd['rms_pct'])} % (p99 {fp(nd['p99_pct'])} %)",
+            f"speed {ob['seconds'] / nd['seconds']:.2f}x, error "
+            f"{fx(ob['rms_pct'] / nd['rms_pct'])} lower",
+            (f"{fs(t_eq)} s ({fx(ob['seconds'] / t_eq)} faster)" if t_eq else
+             not_reached(c, ob)),
+            (f"{fp(e_eq)} % ({fx(ob['rms_pct'] / e_eq)} less)" if e_eq else "-"),
+        ])
+    md.append(table(["cloud", "default before", "default now", "default: now against before",
+                     "now at equal error", "now at equal time"], rows))
+    return "\n".join(md)
+
+
 def equal_time_cell(x, d):
     if x is None:
         return "-"
@@ -477,10 +537,14 @@ def main():
     brick = read_tsv(os.path.join(data_dir, "brick.tsv"))
     meta = read_kv(os.path.join(data_dir, "meta.tsv"))
     machine = read_kv(os.path.join(data_dir, "machine.tsv"))
+    # The error criterion as it was before issue 17 (kept, never regenerated).
+    before_dir = os.path.join(os.path.dirname(os.path.abspath(data_dir)), "before-issue-17")
+    before = read_tsv(os.path.join(before_dir, "sweep.tsv"))
+    before_machine = read_kv(os.path.join(before_dir, "machine.tsv"))
 
     rel = os.path.relpath(plot_dir, os.path.dirname(os.path.abspath(report)))
     data_rel = os.path.relpath(data_dir, os.path.dirname(os.path.abspath(report)))
-    sweep_png = plot_sweep(sweep, cases, plot_dir)
+    sweep_png = plot_sweep(sweep, cases, plot_dir, before)
     prof_png = plot_profiles(profiles, sweep, plot_dir)
     scal_png = plot_scaling(scaling, plot_dir)
     brick_png = plot_brick(brick, plot_dir)
@@ -549,6 +613,9 @@ def main():
       "dashed: 99th percentile. Per-cloud plots with the `-maxsolidangle` values are in "
       "[Evaluation error against time](#evaluation-error-against-time).")
     w("")
+    if before:
+        w(before_text(before, before_machine, sweep, cases))
+        w("")
 
     # ------------------------------------------------------------------ why
     w("## Why these defaults")
