@@ -383,9 +383,17 @@ void PtcWriter::write(const PointCloud& cloud) {
     if (m_written + n > m_count)
         throw ValueError("point cloud writer: more than the " + std::to_string(m_count) +
                          " points announced");
-    if (m_rec.size() != m_record) m_rec.resize(m_record);
+    // Records go to the sink a batch at a time (about 256 KB).
+    const std::size_t batch = std::max<std::size_t>(1, (std::size_t(1) << 18) / m_record);
+    if (m_rec.size() < std::min(batch, n) * m_record)
+        m_rec.resize(std::min(batch, n) * m_record);
+    std::size_t filled = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        unsigned char* r = m_rec.data();
+        if (filled == batch) {
+            m_sink->write(m_rec.data(), filled * m_record);
+            filled = 0;
+        }
+        unsigned char* r = m_rec.data() + filled * m_record;
         store_f32(r, cloud.positions[i].x);
         store_f32(r + 4, cloud.positions[i].y);
         store_f32(r + 8, cloud.positions[i].z);
@@ -398,8 +406,9 @@ void PtcWriter::write(const PointCloud& cloud) {
             const std::size_t k = static_cast<std::size_t>(c.components());
             for (std::size_t q = 0; q < k; ++q, d += 4) store_f32(d, c.data[i * k + q]);
         }
-        m_sink->write(m_rec.data(), m_rec.size());
+        ++filled;
     }
+    if (filled > 0) m_sink->write(m_rec.data(), filled * m_record);
     m_written += n;
 }
 

@@ -12,6 +12,7 @@
 #include <limits>
 #include <utility>
 
+#include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/parallel_sort.h>
 
@@ -62,18 +63,23 @@ void sort_sources(const DiffusionProblem& pb, const MortonKeys& keys, Tree& tree
                   bool normals = true) {
     const std::size_t n = keys.size();
     tree.order.resize(n);
-    for (std::size_t i = 0; i < n; ++i) tree.order[i] = keys[i].second;
-
     tree.pos_rho2.resize(n);
     tree.power_area.resize(n);
     if (normals) tree.normal.resize(n);
-    for (std::size_t s = 0; s < n; ++s) {
-        uint32_t i = tree.order[s];
-        float a = pb.areas[i];
-        tree.pos_rho2[s] = glm::vec4(pb.positions[i], float(a / kPi));
-        tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
-        if (normals) tree.normal[s] = pb.normals.empty() ? glm::vec3(0) : pb.normals[i];
-    }
+    // A gather: each sorted position is written once, in parallel.
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t s = range.begin(); s != range.end(); ++s) {
+                const uint32_t i = keys[s].second;
+                tree.order[s] = i;
+                float a = pb.areas[i];
+                tree.pos_rho2[s] = glm::vec4(pb.positions[i], float(a / kPi));
+                tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
+                if (normals)
+                    tree.normal[s] = pb.normals.empty() ? glm::vec3(0) : pb.normals[i];
+            }
+        });
 }
 
 // Breadth-first construction: children are appended contiguously after
