@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include "sss/cli/tool.h"
 #include "sss/cloud/cloud_part.h"
 #include "sss/cloud/point_cloud_io.h"
@@ -283,19 +285,24 @@ int run(const std::vector<std::string>& argv) {
         sss::flush_standard_output();
     }
 
+    // Without -part the inputs are streamed (sss::SsDiffusionFiles: read for
+    // the channels the filter needs, read again while the output is written),
+    // so that no whole cloud is held next to the octree. A part needs the
+    // whole cloud for its fingerprint.
     sss::PointCloud cloud;
-    for (std::size_t i = 0; i < files.size(); ++i) {
+    std::optional<sss::SsDiffusionFiles> streamed;
+    for (std::size_t i = 0; i < files.size() && part; ++i) {
         sss::ScopedStage stage("reading " + files[i]);
         if (i == 0)
             cloud = sss::read_point_cloud(files[i]);
         else
             cloud.append(sss::read_point_cloud(files[i]));
     }
+    if (!part) streamed.emplace(files, opt); // the headers
     double read_s = job.seconds();
-    const std::size_t points = cloud.size();
+    std::size_t points = cloud.size();
 
     sss::SsDiffusionReport report;
-    sss::PointCloud out;
     sss::CloudPart piece;
     try {
         sss::ScopedStage stage("filtering " + sss::join(files));
@@ -313,7 +320,9 @@ int run(const std::vector<std::string>& argv) {
             piece.indices = std::move(p.indices);
             piece.points = std::move(p.points);
         } else {
-            out = sss::ssdiffusion(cloud, opt, &report);
+            streamed->filter(&report);
+            read_s += streamed->read_seconds();
+            points = streamed->size();
         }
     } catch (const sss::MissingChannelError& e) {
         throw sss::ValueError(sss::join(files) + ": input has no channel '" +
@@ -331,7 +340,7 @@ int run(const std::vector<std::string>& argv) {
         if (part)
             sss::write_cloud_part(piece, out_path);
         else
-            sss::write_point_cloud(out, out_path, wopt);
+            streamed->write(out_path, wopt);
     }
     if (job.verbose()) {
         if (part)
@@ -357,6 +366,14 @@ int run(const std::vector<std::string>& argv) {
         std::printf(
             "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
             read_s, filter_s, job.seconds() - read_s - filter_s, job.seconds());
+        if (job.detailed()) {
+            // The peak resident memory of the whole process so far (Linux: KB).
+            struct rusage usage {};
+            getrusage(RUSAGE_SELF, &usage);
+            const double peak = double(usage.ru_maxrss) * 1024.0;
+            std::printf("ptfilter: peak memory %.1f MB, %.1f bytes per point\n",
+                        peak / 1e6, peak / double(std::max<std::size_t>(1, points)));
+        }
         sss::flush_standard_output();
     }
     return 0;

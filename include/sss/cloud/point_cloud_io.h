@@ -4,6 +4,8 @@
 /// and binary little-endian .ply. The format is chosen by file extension.
 
 #include <array>
+#include <cstdint>
+#include <memory>
 #include <string>
 
 #include "sss/cloud/point_cloud.h"
@@ -32,6 +34,63 @@ void write_ptc(const PointCloud& cloud, const std::string& path,
                const PointCloudWriteOptions& options = {});
 PointCloud read_ply(const std::string& path);
 void write_ply(const PointCloud& cloud, const std::string& path);
+
+/// Reads a point cloud a chunk of points at a time, so that a job that needs
+/// only some of its channels, or reads it twice, never holds it whole. A .ptc
+/// file is streamed; a .ply file is read whole when opened and handed out in
+/// chunks. The checks and errors are read_point_cloud()'s.
+class PointCloudReader {
+public:
+    /// Opens the file and reads its header (throws as read_point_cloud).
+    explicit PointCloudReader(const std::string& path);
+    ~PointCloudReader();
+    PointCloudReader(const PointCloudReader&) = delete;
+    PointCloudReader& operator=(const PointCloudReader&) = delete;
+
+    /// The cloud without its points: channels (no data), header matrices,
+    /// image format, file version and compression.
+    const PointCloud& header() const;
+    /// The number of points the file holds (its header's count).
+    uint64_t size() const;
+    /// Whether size() was checked against the file's length (a plain .ptc
+    /// file, or a .ply file read whole), so that memory can be reserved for
+    /// it: a gzip stream may claim far more points than it holds.
+    bool size_verified() const;
+    /// Replaces chunk's points with the next (up to) `max` points, its
+    /// channels with the header's; returns how many (0: all were read).
+    std::size_t read(PointCloud& chunk, std::size_t max);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// Writes a point cloud a chunk of points at a time, atomically (the target
+/// is replaced on commit() only). The .ptc header holds the bounding box and
+/// largest radius of all the points, so the caller gives them ahead. A .ply
+/// target is gathered in memory and written on commit().
+class PointCloudWriter {
+public:
+    /// `header`: the channels (names and types; data ignored), matrices and
+    /// image format of the output. Throws ValueError for options or channels
+    /// the format cannot hold, IoError when the target cannot be written.
+    PointCloudWriter(const std::string& path, const PointCloud& header, uint64_t count,
+                     const Bounds3& bounds, float max_radius,
+                     const PointCloudWriteOptions& options = {});
+    ~PointCloudWriter();
+    PointCloudWriter(const PointCloudWriter&) = delete;
+    PointCloudWriter& operator=(const PointCloudWriter&) = delete;
+
+    /// Appends the chunk's points (channels as the header's, in that order).
+    /// Throws ValueError as write_point_cloud does for values it cannot write.
+    void write(const PointCloud& chunk);
+    /// Puts the file in place; ValueError unless `count` points were written.
+    void commit();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
 
 /// Per-channel statistics, as printed by ptinfo.
 struct ChannelStats {

@@ -109,6 +109,16 @@ std::vector<glm::vec3> evaluate_diffusion(const DiffusionProblem& problem,
                                           const DiffusionOptions& options,
                                           DiffusionStats* stats = nullptr);
 
+/// The same evaluation, bit for bit, consuming the problem to keep the peak
+/// memory low: its positions, normals and areas are freed as soon as the
+/// octree holds sorted copies of them, and the result is written over its
+/// irradiance (each receiver's irradiance is read once, by its own self
+/// term, before its result replaces it) and returned. At the peak the process
+/// holds the octree and 13 bytes per point besides.
+std::vector<glm::vec3> evaluate_diffusion(DiffusionProblem&& problem,
+                                          const DiffusionOptions& options,
+                                          DiffusionStats* stats = nullptr);
+
 /// Hierarchical evaluation at the given receivers (indices into the problem's
 /// points, repeats allowed) against the whole cloud: result[k] is bit for bit
 /// what evaluate_diffusion(problem, options) gives at receivers[k], whatever

@@ -3,10 +3,12 @@
 /// The ptfilter -ssdiffusion job as one library call: channels in, material
 /// resolved, diffusion evaluated, output cloud built.
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "sss/cloud/point_cloud.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/diffusion.h"
 #include "sss/diffusion/material.h"
 #include "sss/diffusion/profile.h"
@@ -68,6 +70,51 @@ private:
 /// channels, negative areas or impossible per-point material values.
 PointCloud ssdiffusion(const PointCloud& input, const SsDiffusionOptions& options,
                        SsDiffusionReport* report = nullptr);
+
+/// ptfilter -ssdiffusion from files to a file, in little memory: the inputs
+/// are read a chunk at a time for the channels the diffusion reads, the
+/// evaluation consumes its problem (evaluate_diffusion(DiffusionProblem&&)),
+/// and the output is written from the results while the inputs are read a
+/// second time for the channels it copies, so that no whole cloud is held
+/// (about 130 bytes per point at the peak, the octree's). The output is byte
+/// for byte what ssdiffusion() of the merged inputs, written with
+/// write_point_cloud(), gives. Three steps, so that a caller can tell errors
+/// of the inputs from errors of the filter.
+class SsDiffusionFiles {
+public:
+    /// Opens the inputs and reads their headers. Throws as read_point_cloud(),
+    /// and ValueError when two inputs have a channel of one name and two types.
+    SsDiffusionFiles(std::vector<std::string> inputs, SsDiffusionOptions options);
+    ~SsDiffusionFiles();
+    SsDiffusionFiles(const SsDiffusionFiles&) = delete;
+    SsDiffusionFiles& operator=(const SsDiffusionFiles&) = delete;
+
+    /// Reads the points (FormatError, IoError as read_point_cloud()) and then
+    /// evaluates the diffusion (throws as ssdiffusion()). Timings and
+    /// statistics go to the report; read_seconds() is the reading's share.
+    void filter(SsDiffusionReport* report = nullptr);
+    /// Writes the output atomically (extension as write_point_cloud()).
+    /// Throws IoError when an input changed since filter() read it.
+    void write(const std::string& path, const PointCloudWriteOptions& options = {});
+
+    /// Points of the merged inputs (known after filter()).
+    std::size_t size() const { return m_points; }
+    /// Seconds filter() spent reading the inputs.
+    double read_seconds() const { return m_read_seconds; }
+
+private:
+    struct Input;
+    std::vector<std::string> m_paths;
+    SsDiffusionOptions m_options;
+    std::vector<Input> m_inputs;
+    PointCloud m_merged; ///< the merged inputs' header: channels without data
+    std::vector<glm::vec3> m_result;
+    Bounds3 m_bounds;
+    float m_max_radius = 0.0f;
+    std::size_t m_points = 0;
+    double m_read_seconds = 0;
+    bool m_filtered = false;
+};
 
 /// Part `part` (0-based) of `parts` of a ptfilter run split across machines
 /// (ptfilter -part K/N): the output records of the part's receivers.

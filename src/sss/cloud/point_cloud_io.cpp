@@ -166,6 +166,110 @@ void write_point_cloud(const PointCloud& cloud, const std::string& path,
     }
 }
 
+struct PointCloudReader::Impl {
+    std::unique_ptr<detail::PtcReader> ptc;
+    PointCloud whole; // .ply: the whole cloud, handed out in chunks
+    PointCloud header;
+    uint64_t next = 0;
+};
+
+PointCloudReader::PointCloudReader(const std::string& path)
+    : m_impl(std::make_unique<Impl>()) {
+    if (detail::has_extension(path, ".ply")) {
+        m_impl->whole = read_ply(path);
+        m_impl->header = m_impl->whole;
+        m_impl->header.resize(0);
+    } else {
+        m_impl->ptc = std::make_unique<detail::PtcReader>(path);
+        m_impl->header = m_impl->ptc->header();
+    }
+}
+
+PointCloudReader::~PointCloudReader() = default;
+
+const PointCloud& PointCloudReader::header() const {
+    return m_impl->header;
+}
+
+uint64_t PointCloudReader::size() const {
+    return m_impl->ptc ? m_impl->ptc->size() : m_impl->whole.size();
+}
+
+bool PointCloudReader::size_verified() const {
+    return m_impl->ptc ? m_impl->ptc->verified() : true;
+}
+
+std::size_t PointCloudReader::read(PointCloud& chunk, std::size_t max) {
+    Impl& m = *m_impl;
+    bool same = chunk.channels.size() == m.header.channels.size();
+    for (std::size_t c = 0; same && c < chunk.channels.size(); ++c)
+        same = chunk.channels[c].name == m.header.channels[c].name &&
+               chunk.channels[c].type == m.header.channels[c].type;
+    if (!same) chunk.channels = m.header.channels;
+    chunk.resize(0);
+    if (m.ptc) return m.ptc->read_into(chunk, max, nullptr);
+    const std::size_t first = static_cast<std::size_t>(m.next);
+    const std::size_t k = std::min<std::size_t>(max, m.whole.size() - first);
+    const auto at = [first](auto& v, std::size_t w) {
+        return v.begin() + static_cast<std::ptrdiff_t>(first * w);
+    };
+    chunk.positions.assign(at(m.whole.positions, 1), at(m.whole.positions, 1) + k);
+    chunk.normals.assign(at(m.whole.normals, 1), at(m.whole.normals, 1) + k);
+    chunk.radii.assign(at(m.whole.radii, 1), at(m.whole.radii, 1) + k);
+    for (std::size_t c = 0; c < chunk.channels.size(); ++c) {
+        const std::size_t w = static_cast<std::size_t>(chunk.channels[c].components());
+        auto& src = m.whole.channels[c].data;
+        chunk.channels[c].data.assign(at(src, w), at(src, w) + std::ptrdiff_t(k * w));
+    }
+    m.next += k;
+    return k;
+}
+
+struct PointCloudWriter::Impl {
+    std::unique_ptr<detail::PtcWriter> ptc;
+    PointCloud whole; // .ply: gathered, written on commit
+    std::string path;
+    uint64_t count = 0;
+};
+
+PointCloudWriter::PointCloudWriter(const std::string& path, const PointCloud& header,
+                                   uint64_t count, const Bounds3& bounds,
+                                   float max_radius,
+                                   const PointCloudWriteOptions& options)
+    : m_impl(std::make_unique<Impl>()) {
+    m_impl->path = path;
+    m_impl->count = count;
+    if (detail::has_extension(path, ".ply")) {
+        m_impl->whole = header;
+        m_impl->whole.resize(0);
+    } else {
+        m_impl->ptc = std::make_unique<detail::PtcWriter>(path, header, count, bounds,
+                                                          max_radius, options);
+    }
+}
+
+PointCloudWriter::~PointCloudWriter() = default;
+
+void PointCloudWriter::write(const PointCloud& chunk) {
+    detail::check_writable(chunk);
+    if (m_impl->ptc)
+        m_impl->ptc->write(chunk);
+    else
+        m_impl->whole.append(chunk);
+}
+
+void PointCloudWriter::commit() {
+    if (m_impl->ptc) {
+        m_impl->ptc->commit();
+        return;
+    }
+    if (m_impl->whole.size() != m_impl->count)
+        throw ValueError("point cloud writer: " + std::to_string(m_impl->whole.size()) +
+                         " of the " + std::to_string(m_impl->count) +
+                         " points announced were written");
+    write_ply(m_impl->whole, m_impl->path);
+}
+
 std::vector<ChannelStats> channel_stats(const PointCloud& cloud) {
     const std::size_t n = cloud.size();
     auto compute = [n](const std::string& name, ChannelType type, const float* data,

@@ -8,12 +8,18 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "sss/cloud/point_cloud.h"
+#include "sss/cloud/point_cloud_io.h"
 #include "sss/util/byte_io.h"
+
+namespace sss {
+class AtomicOutput;
+} // namespace sss
 
 namespace sss::detail {
 
@@ -48,6 +54,59 @@ private:
     uint64_t m_claimed;
     uint64_t m_point_bytes; ///< memory per point: position, normal, radius, channels
     uint64_t m_capacity = 0;
+};
+
+/// A .ptc file read a chunk of points at a time: the header on construction
+/// (every check read_ptc makes), the records on demand.
+class PtcReader {
+public:
+    explicit PtcReader(const std::string& path);
+    ~PtcReader();
+    /// Channels (without data), matrices, format, version, compression.
+    const PointCloud& header() const { return m_header; }
+    /// Points the header claims.
+    uint64_t size() const { return m_npoints; }
+    /// Whether size() was checked against the size of a plain file.
+    bool verified() const { return m_verified; }
+    /// Appends the next (up to) `max` points to `cloud`, whose channels are
+    /// the header's; returns how many. With `reserve`, asks it for room before
+    /// each batch is appended. Throws FormatError as read_ptc does. The stream
+    /// is finished (gzip trailer checked) with the last point.
+    std::size_t read_into(PointCloud& cloud, std::size_t max, CloudReserve* reserve);
+
+private:
+    std::unique_ptr<ByteSource> m_in;
+    PointCloud m_header;
+    uint64_t m_npoints = 0;
+    uint64_t m_done = 0;
+    std::size_t m_record = 0;
+    bool m_verified = false;
+    bool m_finished = false;
+    std::vector<unsigned char> m_buf;
+};
+
+/// A .ptc file written a chunk of points at a time, atomically: the header
+/// (with the bounds and largest radius of all the points, which the caller
+/// knows ahead) on construction, the records by write(), the rename by commit().
+class PtcWriter {
+public:
+    PtcWriter(const std::string& path, const PointCloud& header, uint64_t count,
+              const Bounds3& bounds, float max_radius,
+              const PointCloudWriteOptions& options);
+    ~PtcWriter();
+    /// Writes the chunk's records (its channels must be the header's).
+    void write(const PointCloud& chunk);
+    /// Throws ValueError unless exactly `count` points were written.
+    void commit();
+
+private:
+    std::unique_ptr<AtomicOutput> m_out;
+    std::unique_ptr<ByteSink> m_sink;
+    uint64_t m_count = 0;
+    uint64_t m_written = 0;
+    std::size_t m_record = 0;
+    int m_data_size = 0;
+    std::vector<unsigned char> m_rec;
 };
 
 /// Throws ValueError unless the cloud can be written: consistent array sizes,

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <set>
 
@@ -136,8 +137,10 @@ Channel parse_spec_line(const std::string& path, const std::string& line, int in
 
 } // namespace
 
-PointCloud read_ptc(const std::string& path) {
-    ByteSource in(path);
+namespace detail {
+
+PtcReader::PtcReader(const std::string& path) : m_in(std::make_unique<ByteSource>(path)) {
+    ByteSource& in = *m_in;
     const auto fail = [&](const std::string& what) { return FormatError(path, what); };
 
     unsigned char head[8];
@@ -174,7 +177,7 @@ PointCloud read_ptc(const std::string& path) {
     }
     const uint64_t npoints = static_cast<uint64_t>(npoints_d);
 
-    PointCloud cloud;
+    PointCloud& cloud = m_header;
     cloud.file_version = version;
     cloud.file_compressed = in.compressed();
     for (int i = 0; i < 16; ++i) {
@@ -239,28 +242,37 @@ PointCloud read_ptc(const std::string& path) {
                               std::to_string(*left) + " bytes remain",
                           static_cast<int64_t>(*left / record));
     }
-    // A plain file has been checked exactly; otherwise grow as data arrives.
-    CloudReserve reserve(cloud, path, npoints, left.has_value() && !in.compressed());
+    m_npoints = npoints;
+    m_record = record;
+    m_verified = left.has_value() && !in.compressed();
+}
+
+PtcReader::~PtcReader() = default;
+
+std::size_t PtcReader::read_into(PointCloud& cloud, std::size_t max,
+                                 CloudReserve* reserve) {
+    const std::string& path = m_in->path();
+    const std::size_t record = m_record;
     const std::size_t chunk_points = std::max<std::size_t>(1, (1 << 20) / record);
-    std::vector<unsigned char> buf(
-        static_cast<std::size_t>(std::min<uint64_t>(chunk_points, npoints)) * record);
-    uint64_t done = 0;
-    while (done < npoints) {
-        const std::size_t k =
-            static_cast<std::size_t>(std::min<uint64_t>(chunk_points, npoints - done));
-        const std::size_t got = in.read(buf.data(), k * record);
+    const std::size_t want =
+        static_cast<std::size_t>(std::min<uint64_t>(max, m_npoints - m_done));
+    std::size_t taken = 0;
+    while (taken < want) {
+        const std::size_t k = std::min(chunk_points, want - taken);
+        if (m_buf.size() < k * record) m_buf.resize(k * record);
+        const std::size_t got = m_in->read(m_buf.data(), k * record);
         if (got < k * record) {
-            const uint64_t complete = done + got / record;
+            const uint64_t complete = m_done + got / record;
             throw FormatError(path,
                               "truncated point data: header claims " +
-                                  std::to_string(npoints) + " points, data ends after " +
-                                  std::to_string(complete),
+                                  std::to_string(m_npoints) +
+                                  " points, data ends after " + std::to_string(complete),
                               static_cast<int64_t>(complete));
         }
-        reserve.room_for(k);
+        if (reserve) reserve->room_for(k);
         for (std::size_t j = 0; j < k; ++j) {
-            const unsigned char* r = buf.data() + j * record;
-            const int64_t index = static_cast<int64_t>(done + j);
+            const unsigned char* r = m_buf.data() + j * record;
+            const int64_t index = static_cast<int64_t>(m_done + j);
             const glm::vec3 p(load_f32(r), load_f32(r + 4), load_f32(r + 8));
             if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
                 throw FormatError(path, "non-finite position", index);
@@ -284,67 +296,104 @@ PointCloud read_ptc(const std::string& path) {
                 }
             }
         }
-        done += k;
+        m_done += k;
+        taken += k;
     }
-    in.finish();
+    if (m_done == m_npoints && !m_finished) {
+        m_in->finish();
+        m_finished = true;
+    }
+    return taken;
+}
+
+} // namespace detail
+
+PointCloud read_ptc(const std::string& path) {
+    PtcReader reader(path);
+    PointCloud cloud = reader.header();
+    // A plain file has been checked exactly; otherwise grow as data arrives.
+    CloudReserve reserve(cloud, path, reader.size(), reader.verified());
+    while (reader.read_into(cloud, std::size_t(1) << 20, &reserve) > 0) {
+    }
     return cloud;
 }
 
-void write_ptc(const PointCloud& cloud, const std::string& path,
-               const PointCloudWriteOptions& options) {
+namespace detail {
+
+PtcWriter::PtcWriter(const std::string& path, const PointCloud& header, uint64_t count,
+                     const Bounds3& bounds, float max_radius,
+                     const PointCloudWriteOptions& options) {
     if (options.ptc_version < 0 || options.ptc_version > kMaxVersion) {
         throw ValueError("cannot write .ptc version " +
                          std::to_string(options.ptc_version) + " (0, 1 or 2)");
     }
-    check_writable(cloud);
-    if (cloud.channels.size() > static_cast<std::size_t>(kMaxChannels)) {
+    if (header.channels.size() > static_cast<std::size_t>(kMaxChannels)) {
         throw ValueError("too many channels for a .ptc file (" +
-                         std::to_string(cloud.channels.size()) + ")");
+                         std::to_string(header.channels.size()) + ")");
     }
     const int version = options.ptc_version;
     const PtcLayout lay = layout_for(version);
-    const std::size_t n = cloud.size();
 
-    std::vector<unsigned char> header(lay.specs, 0);
-    unsigned char* h = header.data();
+    std::vector<unsigned char> head(lay.specs, 0);
+    unsigned char* h = head.data();
     store_i32(h, kPtcMagic);
     store_i32(h + 4, version);
-    store_f64(h + 8, static_cast<double>(n));
-    const Bounds3 b = cloud.bounds();
+    store_f64(h + 8, static_cast<double>(count));
+    const Bounds3& b = bounds;
     const float box[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
     for (int i = 0; i < 6; ++i) store_f32(h + 16 + 4 * i, box[i]);
     // v1's four unknown floats stay zero.
     if (version >= 2) {
-        float max_radius = 0.0f;
-        for (float r : cloud.radii) max_radius = std::max(max_radius, r);
         store_f32(h + lay.max_radius, max_radius);
         for (int i = 0; i < kV2PadWords; ++i) {
             store_u32(h + lay.max_radius + 4 + 4 * i, kPadWord);
         }
     }
     for (int i = 0; i < 16; ++i) {
-        store_f32(h + lay.world2eye + 4 * i, cloud.world_to_eye[i]);
-        store_f32(h + lay.world2ndc + 4 * i, cloud.world_to_ndc[i]);
+        store_f32(h + lay.world2eye + 4 * i, header.world_to_eye[i]);
+        store_f32(h + lay.world2ndc + 4 * i, header.world_to_ndc[i]);
     }
-    for (int i = 0; i < 3; ++i) store_f32(h + lay.format + 4 * i, cloud.format[i]);
-    store_i32(h + lay.nvars, static_cast<int32_t>(cloud.channels.size()));
-    store_i32(h + lay.nvars + 4, cloud.data_size());
+    for (int i = 0; i < 3; ++i) store_f32(h + lay.format + 4 * i, header.format[i]);
+    store_i32(h + lay.nvars, static_cast<int32_t>(header.channels.size()));
+    store_i32(h + lay.nvars + 4, header.data_size());
 
-    AtomicOutput out(path);
-    ByteSink sink(out.temp_path(), path, options.compress);
-    sink.write(header.data(), header.size());
-    for (const Channel& c : cloud.channels) {
-        sink.write(std::string(channel_type_name(c.type)) + " " + c.name + "\n");
+    m_out = std::make_unique<AtomicOutput>(path);
+    m_sink = std::make_unique<ByteSink>(m_out->temp_path(), path, options.compress);
+    m_sink->write(head.data(), head.size());
+    for (const Channel& c : header.channels) {
+        m_sink->write(std::string(channel_type_name(c.type)) + " " + c.name + "\n");
     }
     if (version >= 1) {
         const unsigned char zeros[8] = {};
-        sink.write(zeros, sizeof zeros);
+        m_sink->write(zeros, sizeof zeros);
     }
-    const std::size_t record =
-        kRecordBase + 4 * static_cast<std::size_t>(cloud.data_size());
-    std::vector<unsigned char> rec(record);
+    m_count = count;
+    m_record = kRecordBase + 4 * static_cast<std::size_t>(header.data_size());
+    m_data_size = header.data_size();
+}
+
+PtcWriter::~PtcWriter() = default;
+
+void PtcWriter::write(const PointCloud& cloud) {
+    const std::size_t n = cloud.size();
+    if (cloud.data_size() != m_data_size)
+        throw ValueError("point cloud writer: chunk of " +
+                         std::to_string(cloud.data_size()) + " floats per point, not " +
+                         std::to_string(m_data_size));
+    if (m_written + n > m_count)
+        throw ValueError("point cloud writer: more than the " + std::to_string(m_count) +
+                         " points announced");
+    // Records go to the sink a batch at a time (about 256 KB).
+    const std::size_t batch = std::max<std::size_t>(1, (std::size_t(1) << 18) / m_record);
+    if (m_rec.size() < std::min(batch, n) * m_record)
+        m_rec.resize(std::min(batch, n) * m_record);
+    std::size_t filled = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        unsigned char* r = rec.data();
+        if (filled == batch) {
+            m_sink->write(m_rec.data(), filled * m_record);
+            filled = 0;
+        }
+        unsigned char* r = m_rec.data() + filled * m_record;
         store_f32(r, cloud.positions[i].x);
         store_f32(r + 4, cloud.positions[i].y);
         store_f32(r + 8, cloud.positions[i].z);
@@ -357,10 +406,34 @@ void write_ptc(const PointCloud& cloud, const std::string& path,
             const std::size_t k = static_cast<std::size_t>(c.components());
             for (std::size_t q = 0; q < k; ++q, d += 4) store_f32(d, c.data[i * k + q]);
         }
-        sink.write(rec.data(), rec.size());
+        ++filled;
     }
-    sink.close();
-    out.commit();
+    if (filled > 0) m_sink->write(m_rec.data(), filled * m_record);
+    m_written += n;
+}
+
+void PtcWriter::commit() {
+    if (m_written != m_count)
+        throw ValueError("point cloud writer: " + std::to_string(m_written) + " of the " +
+                         std::to_string(m_count) + " points announced were written");
+    m_sink->close();
+    m_out->commit();
+}
+
+} // namespace detail
+
+void write_ptc(const PointCloud& cloud, const std::string& path,
+               const PointCloudWriteOptions& options) {
+    if (options.ptc_version < 0 || options.ptc_version > kMaxVersion) {
+        throw ValueError("cannot write .ptc version " +
+                         std::to_string(options.ptc_version) + " (0, 1 or 2)");
+    }
+    check_writable(cloud);
+    float max_radius = 0.0f;
+    for (float r : cloud.radii) max_radius = std::max(max_radius, r);
+    PtcWriter writer(path, cloud, cloud.size(), cloud.bounds(), max_radius, options);
+    writer.write(cloud);
+    writer.commit();
 }
 
 } // namespace sss

@@ -4,12 +4,15 @@
 
 #include "octree.h"
 
+#include "disk_quadrature.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
 #include <utility>
 
+#include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/parallel_sort.h>
 
@@ -56,21 +59,27 @@ MortonKeys sorted_morton_keys(const std::vector<glm::vec3>& positions) {
 }
 
 // The sources in Morton order: tree.order and the sorted source arrays.
-void sort_sources(const DiffusionProblem& pb, const MortonKeys& keys, Tree& tree) {
+void sort_sources(const DiffusionProblem& pb, const MortonKeys& keys, Tree& tree,
+                  bool normals = true) {
     const std::size_t n = keys.size();
     tree.order.resize(n);
-    for (std::size_t i = 0; i < n; ++i) tree.order[i] = keys[i].second;
-
     tree.pos_rho2.resize(n);
     tree.power_area.resize(n);
-    tree.normal.resize(n);
-    for (std::size_t s = 0; s < n; ++s) {
-        uint32_t i = tree.order[s];
-        float a = pb.areas[i];
-        tree.pos_rho2[s] = glm::vec4(pb.positions[i], float(a / kPi));
-        tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
-        tree.normal[s] = pb.normals.empty() ? glm::vec3(0) : pb.normals[i];
-    }
+    if (normals) tree.normal.resize(n);
+    // A gather: each sorted position is written once, in parallel.
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t s = range.begin(); s != range.end(); ++s) {
+                const uint32_t i = keys[s].second;
+                tree.order[s] = i;
+                float a = pb.areas[i];
+                tree.pos_rho2[s] = glm::vec4(pb.positions[i], float(a / kPi));
+                tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
+                if (normals)
+                    tree.normal[s] = pb.normals.empty() ? glm::vec3(0) : pb.normals[i];
+            }
+        });
 }
 
 // Breadth-first construction: children are appended contiguously after
@@ -187,10 +196,24 @@ void compute_moments(Tree& tree) {
 
 } // namespace
 
-Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release) {
+bool normals_needed(const DiffusionProblem& pb, const Tables& tables) {
+    if (tables.channels.empty()) return true;
+    float max_area = 0.0f;
+    for (float a : pb.areas) max_area = std::max(max_area, a);
+    // Tree::pos_rho2's w, rounded as sort_sources() rounds it (monotonic).
+    const float max_rho2 = float(max_area / kPi);
+    float min_core2 = std::numeric_limits<float>::max();
+    for (const ChannelTable& t : tables.channels)
+        min_core2 = std::min(min_core2, t.core2);
+    // near_source(): rho^2 > kNearKappa2 * (q + near_core2) in double, with
+    // float(q + near_core2) >= near_core2 >= min_core2 for q >= 0.
+    return !(double(max_rho2) <= kNearKappa2 * double(min_core2));
+}
+
+Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release, bool normals) {
     Tree tree;
     MortonKeys keys = sorted_morton_keys(pb.positions);
-    sort_sources(pb, keys, tree);
+    sort_sources(pb, keys, tree, normals);
     if (release) {
         // The tree holds sorted copies now.
         std::vector<glm::vec3>().swap(release->positions);

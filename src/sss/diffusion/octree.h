@@ -13,6 +13,8 @@
 
 #include "sss/diffusion/diffusion.h"
 
+#include "profile_tables.h"
+
 namespace sss::diffusion_detail {
 
 // Octree over Morton-sorted points.
@@ -47,6 +49,8 @@ struct Tree {
     // Sorted source data.
     std::vector<glm::vec4> pos_rho2;   // x y z rho^2
     std::vector<glm::vec4> power_area; // A E (rgb), A
+    // Empty when no source disk can need the disk quadrature, the only reader
+    // of the normals (see build_tree()).
     std::vector<glm::vec3> normal;
 };
 
@@ -56,7 +60,17 @@ struct Tree {
 // With `release` (the problem pb itself), its positions, normals and areas are
 // freed as soon as the tree holds their sorted copies: the caller must not
 // need them any more.
-Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release = nullptr);
+// Without `normals`, Tree::normal stays empty (12 bytes per point less): the
+// caller has checked that no source disk is large enough for near_source()'s
+// disk quadrature (normals_needed()).
+Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release = nullptr,
+                bool normals = true);
+
+// Whether some source disk of the problem may be integrated by the disk
+// quadrature, the only reader of the sources' normals: near_source() does so
+// when rho^2 > kNearKappa2 (r^2 + near_core2), and r^2 >= 0, near_core2 >= the
+// smallest core^2 of all tables. False is a guarantee; true may be pessimistic.
+bool normals_needed(const DiffusionProblem& pb, const Tables& tables);
 
 // The sources in the tree's order (order, pos_rho2, power_area, normal),
 // without the nodes.

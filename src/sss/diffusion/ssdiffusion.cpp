@@ -12,6 +12,10 @@
 #include <optional>
 #include <tuple>
 
+#include <sys/stat.h>
+
+#include <glm/common.hpp>
+
 #include "sss/util/error.h"
 #include "sss/util/limits.h"
 #include "sss/util/math.h"
@@ -259,11 +263,13 @@ void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
 }
 
 // Material: constant, or per point from the _albedo / _diffusemeanfreepath channels.
-void assign_profiles(const PointCloud& in, const SsDiffusionOptions& o,
+// `in` holds the channels (the per-point material channels with their data);
+// n is the number of points.
+void assign_profiles(const PointCloud& in, std::size_t n, const SsDiffusionOptions& o,
                      DiffusionProblem& pb, SsDiffusionReport& rep) {
     const MaterialSpec& m = o.material;
     const std::vector<Profile> constant = constant_profiles(o, 1.0); // in mm
-    if ((m.albedo_from_file || m.dmfp_from_file) && in.size() > 0) {
+    if ((m.albedo_from_file || m.dmfp_from_file) && n > 0) {
         per_point_profiles(in, o, pb, rep);
     } else {
         pb.profiles = constant;
@@ -351,7 +357,233 @@ PointCloud output_points(const PointCloud& in, const SsDiffusionOptions& o,
     return out;
 }
 
+// What stays fixed while a file is the same: compared before it is read again.
+struct FileIdentity {
+    dev_t device = 0;
+    ino_t inode = 0;
+    off_t size = 0;
+    int64_t mtime_ns = 0;
+    bool operator==(const FileIdentity&) const = default;
+};
+
+FileIdentity identify(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) throw IoError(path, "cannot stat the input");
+    return {st.st_dev, st.st_ino, st.st_size,
+            int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
+}
+
+// Points per chunk of the streamed reads and writes (a few MB of buffers).
+constexpr std::size_t kChunkPoints = std::size_t(1) << 16;
+
+// Appends the values of channel `name` of a chunk of `points` points to `out`
+// (`width` zeros per point when the chunk's input lacks it, as
+// PointCloud::append fills).
+void append_channel(const PointCloud& chunk, std::size_t points, const std::string& name,
+                    std::size_t width, std::vector<float>& out) {
+    const Channel* c = chunk.find_channel(name);
+    if (c) {
+        out.insert(out.end(), c->data.begin(), c->data.end());
+    } else {
+        out.resize(out.size() + width * points, 0.0f);
+    }
+}
+
 } // namespace
+
+struct SsDiffusionFiles::Input {
+    std::string path;
+    std::unique_ptr<PointCloudReader> reader; // open from the constructor to filter()
+    FileIdentity identity;
+    std::size_t points = 0;
+};
+
+SsDiffusionFiles::SsDiffusionFiles(std::vector<std::string> inputs,
+                                   SsDiffusionOptions options)
+    : m_paths(std::move(inputs)), m_options(std::move(options)) {
+    for (std::size_t i = 0; i < m_paths.size(); ++i) {
+        ScopedStage stage("reading " + m_paths[i]);
+        Input in;
+        in.path = m_paths[i];
+        in.identity = identify(in.path);
+        in.reader = std::make_unique<PointCloudReader>(in.path);
+        const PointCloud& h = in.reader->header();
+        if (i == 0) {
+            m_merged = h;
+        } else {
+            // PointCloud::append's channel rules: matched by name and type.
+            PointCloud other = h;
+            m_merged.append(other);
+        }
+        m_inputs.push_back(std::move(in));
+    }
+}
+
+SsDiffusionFiles::~SsDiffusionFiles() = default;
+
+void SsDiffusionFiles::filter(SsDiffusionReport* report) {
+    Stopwatch watch;
+    const SsDiffusionOptions& o = m_options;
+    SsDiffusionReport local;
+    SsDiffusionReport& rep = report ? *report : local;
+    rep.material_lines = describe_material(o);
+    const double to_mm = 1.0 / o.material.unitlength; // see read_points()
+    const MaterialSpec& m = o.material;
+
+    // The channels the diffusion reads, as the merged cloud has them.
+    const Channel* area = m_merged.find_channel(o.area_channel);
+    const Channel* radiance = m_merged.find_channel(o.radiance_channel);
+    const bool area_ok = area && area->components() == 1;
+    const bool radiance_ok = radiance && radiance->components() == 3;
+    // Per-point materials: their channels with data, the others without.
+    PointCloud materials = m_merged;
+    std::vector<Channel*> material_channels;
+    if (m.albedo_from_file || m.dmfp_from_file)
+        for (Channel& c : materials.channels)
+            if (((m.albedo_from_file && c.name == o.albedo_channel) ||
+                 (m.dmfp_from_file && c.name == o.dmfp_channel)) &&
+                c.components() == 3)
+                material_channels.push_back(&c);
+
+    DiffusionProblem pb;
+    bool verified = true;
+    uint64_t claimed = 0;
+    for (const Input& in : m_inputs) {
+        verified = verified && in.reader->size_verified();
+        claimed += in.reader->size();
+    }
+    if (verified) {
+        const std::size_t n = std::size_t(claimed);
+        pb.positions.reserve(n);
+        pb.normals.reserve(n);
+        pb.areas.reserve(n);
+        pb.irradiance.reserve(n);
+    }
+    // The first impossible area, reported once every input is read (as when
+    // the cloud was read whole first).
+    std::optional<std::pair<std::size_t, float>> bad_area;
+    PointCloud chunk;
+    for (Input& in : m_inputs) {
+        ScopedStage stage("reading " + in.path);
+        in.points = 0;
+        while (std::size_t k = in.reader->read(chunk, kChunkPoints)) {
+            const std::size_t base = pb.positions.size();
+            for (std::size_t j = 0; j < k; ++j) {
+                const glm::vec3& p = chunk.positions[j];
+                if (base + j == 0) m_bounds.lo = m_bounds.hi = p;
+                m_bounds.lo = glm::min(m_bounds.lo, p);
+                m_bounds.hi = glm::max(m_bounds.hi, p);
+                m_max_radius = std::max(m_max_radius, chunk.radii[j]);
+                pb.positions.push_back(glm::vec3(glm::dvec3(p) * to_mm));
+            }
+            pb.normals.insert(pb.normals.end(), chunk.normals.begin(),
+                              chunk.normals.end());
+            if (area_ok) {
+                const Channel* a = chunk.find_channel(o.area_channel);
+                for (std::size_t j = 0; j < k; ++j) {
+                    const float v = a ? a->data[j] : 0.0f;
+                    if ((!(v >= 0.0f) || !std::isfinite(v)) && !bad_area)
+                        bad_area.emplace(base + j, v);
+                    pb.areas.push_back(float(v * to_mm * to_mm));
+                }
+            } else if (!area) {
+                for (std::size_t j = 0; j < k; ++j) {
+                    const float r = chunk.radii[j];
+                    pb.areas.push_back(float(kPi * (r * to_mm) * (r * to_mm)));
+                }
+            }
+            if (radiance_ok) {
+                const Channel* e = chunk.find_channel(o.radiance_channel);
+                for (std::size_t j = 0; j < k; ++j)
+                    pb.irradiance.push_back(e ? glm::vec3(e->data[3 * j],
+                                                          e->data[3 * j + 1],
+                                                          e->data[3 * j + 2])
+                                              : glm::vec3(0.0f));
+            }
+            for (Channel* c : material_channels)
+                append_channel(chunk, k, c->name, 3, c->data);
+            in.points += k;
+        }
+    }
+    chunk = PointCloud{};
+    for (Input& in : m_inputs) in.reader.reset(); // close the inputs
+    const std::size_t n = pb.positions.size();
+    m_points = n;
+    m_read_seconds = watch.seconds();
+
+    // The checks of read_points(), in its order.
+    if (area || n == 0) {
+        if (area && area->components() != 1)
+            throw ValueError("channel '" + o.area_channel + "' is " +
+                             channel_type_name(area->type) + ", expected float");
+        if (bad_area)
+            throw ValueError("channel '" + o.area_channel +
+                             "': negative or invalid area " +
+                             std::to_string(bad_area->second) + " at point " +
+                             std::to_string(bad_area->first));
+    } else {
+        rep.warnings.push_back("no '" + o.area_channel +
+                               "' channel: using pi * radius^2 as each point's area");
+    }
+    if (n > 0)
+        require_channel(m_merged, o.radiance_channel, 3,
+                        MissingChannelError::Role::Radiance);
+    pb.areas.resize(n);      // n == 0: the unread area channel
+    pb.irradiance.resize(n); // n == 0 only: the channel is required otherwise
+    assign_profiles(materials, n, o, pb, rep);
+    materials = PointCloud{};
+
+    if (o.exact) {
+        m_result = evaluate(pb, o, rep);
+    } else {
+        m_result = evaluate_diffusion(std::move(pb), o.diffusion, &rep.stats);
+        if (o.diffusion.progress) o.diffusion.progress->finish();
+    }
+    m_filtered = true;
+    rep.seconds = watch.seconds();
+}
+
+void SsDiffusionFiles::write(const std::string& path,
+                             const PointCloudWriteOptions& options) {
+    if (!m_filtered) throw Error("internal error: SsDiffusionFiles::write before filter");
+    const SsDiffusionOptions& o = m_options;
+    // The output's header: output_cloud()'s channels.
+    PointCloud header = m_merged;
+    header.channels.clear();
+    if (o.keep_channels)
+        for (const Channel& c : m_merged.channels)
+            if (c.name != o.output_channel) header.channels.push_back(c);
+    header.add_channel(o.output_channel, ChannelType::Color);
+    PointCloudWriter writer(path, header, m_points, m_bounds, m_max_radius, options);
+    PointCloud chunk, out = header;
+    std::size_t done = 0;
+    for (const Input& in : m_inputs) {
+        if (identify(in.path) != in.identity)
+            throw IoError(in.path, "the input changed while it was being filtered");
+        PointCloudReader reader(in.path);
+        if (reader.size() != in.points)
+            throw IoError(in.path, "the input changed while it was being filtered");
+        while (std::size_t k = reader.read(chunk, kChunkPoints)) {
+            out.positions.swap(chunk.positions);
+            out.normals.swap(chunk.normals);
+            out.radii.swap(chunk.radii);
+            for (Channel& c : out.channels) {
+                c.data.clear();
+                if (c.name == o.output_channel) {
+                    c.data.resize(3 * k);
+                    for (std::size_t j = 0; j < k; ++j)
+                        for (int ch = 0; ch < 3; ++ch)
+                            c.data[3 * j + ch] = m_result[done + j][ch];
+                } else {
+                    append_channel(chunk, k, c.name, std::size_t(c.components()), c.data);
+                }
+            }
+            writer.write(out);
+            done += k;
+        }
+    }
+    writer.commit();
+}
 
 PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
                        SsDiffusionReport* report) {
@@ -360,8 +592,14 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     SsDiffusionReport& rep = report ? *report : local;
     rep.material_lines = describe_material(o);
     DiffusionProblem pb = read_points(in, o, rep);
-    assign_profiles(in, o, pb, rep);
-    std::vector<glm::vec3> result = evaluate(pb, o, rep);
+    assign_profiles(in, in.size(), o, pb, rep);
+    std::vector<glm::vec3> result;
+    if (o.exact) {
+        result = evaluate(pb, o, rep);
+    } else {
+        result = evaluate_diffusion(std::move(pb), o.diffusion, &rep.stats);
+        if (o.diffusion.progress) o.diffusion.progress->finish();
+    }
     PointCloud out = output_cloud(in, o, result);
     rep.seconds = watch.seconds();
     return out;
@@ -376,7 +614,7 @@ SsDiffusionPart ssdiffusion_part(PointCloud in, const SsDiffusionOptions& o,
     rep.material_lines = describe_material(o);
     part_range(in.size(), part, parts); // validates part and parts first
     DiffusionProblem pb = read_points(in, o, rep);
-    assign_profiles(in, o, pb, rep);
+    assign_profiles(in, in.size(), o, pb, rep);
     SsDiffusionPart out;
     out.total = in.size();
     // The part's receivers in the octree's order; their output records are
