@@ -25,7 +25,7 @@ trap 'rm -rf "$work"' EXIT
 cd "$work"
 
 # At its peak (the evaluation) ptfilter holds the octree's nodes and their
-# expansions, 212 bytes per node (Node 56 + Expansion 156; 0.3 to 0.5 nodes
+# expansions, 200 bytes per node (Node 56 + Expansion 144; 0.3 to 0.5 nodes
 # per point, depending on the cloud), and 49 bytes per point: the sorted
 # sources (pos_rho2, power_area: 32), their order (4), the irradiance that the
 # result overwrites (12) and the receivers' marks (1); 12 more for the
@@ -33,7 +33,7 @@ cd "$work"
 # spheres). A regression that holds one more float per point exceeds the
 # budget below; one more array of vectors (a copy of the positions, a second
 # output cloud) far exceeds it.
-BYTES_PER_NODE=212
+BYTES_PER_NODE=200
 MAX_BYTES_PER_POINT=53
 
 # run POINTS SIZE: runs ptfilter on a sphere of POINTS points and radius SIZE

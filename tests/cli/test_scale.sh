@@ -144,23 +144,27 @@ problems = []
 POS_TOL, SIZE_TOL, NORMAL_TOL = 1e-6, 1e-5, 1e-5
 
 # Values, relative to the channel's mean |value| at s = 1. The chain does the
-# same computation at every scale up to rounding, except where a ray grazes an
-# edge: a camera ray at a silhouette, or a shadow ray at an occluder's edge,
-# can flip between hit and miss under a rounding change (the same happens
-# between two s = 1 scenes a rounding apart), and then its pixel or point
-# changes by up to a light's share. So an item (point or pixel) whose values
+# same computation at every scale up to rounding, except where a decision
+# sits on its boundary: a camera ray at a silhouette, or a shadow ray at an
+# occluder's edge, can flip between hit and miss under a rounding change (the
+# same happens between two s = 1 scenes a rounding apart), and then its pixel
+# or point changes by up to a light's share; ptfilter's choice of how a source
+# node enters a receiver group (shared local expansion, per-receiver
+# expansion, monopole) can flip too, and changes the points near it by at most
+# that node's error bound, a fraction of the tolerance (the default's RMS error
+# against the exact sum is ~5e-4). So an item (point or pixel) whose values
 # are off by more than `tight` is an outlier; outliers are allowed up to a
 # fraction of the items, and the RMS over all values is bounded.
 #   values           tight  outliers  rms   measured, 1e-6..1e6
 #   _radiance_t      1e-5   0.1 %     1e-4  max 2e-7, no outlier
-#   _ssdiffusion     1e-4   1 %       1e-3  max 3e-6, rms 5e-7, no outlier (a
-#                    flipped point changes its neighbours within about a mean
-#                    free path too)
-#   image, 19 ch.    1e-4   0.2 %     1e-2  max 1.4e-5, rms 3e-7, but for one
-#                    flipped camera sample at a silhouette at some scales (it
-#                    makes 4 outlier pixels off by up to 0.5, rms 5e-3)
-LIMITS = {"_radiance_t": (1e-5, 0.001, 1e-4), "_ssdiffusion": (1e-4, 0.01, 1e-3),
-          "image": (1e-4, 0.002, 1e-2)}
+#   _ssdiffusion     1e-3   1 %       1e-3  max 2.6e-4, rms 8e-6 (one node's
+#                    flipped choice, the same at every scale; 3e-6 before
+#                    the receiver groups, issue 17)
+#   image, 19 ch.    5e-4   0.2 %     1e-2  max 1.9e-4 (the ssd flip), rms 5e-6,
+#                    but for one flipped camera sample at a silhouette at some
+#                    scales (it makes 4 outlier pixels off by up to 0.5, rms 5e-3)
+LIMITS = {"_radiance_t": (1e-5, 0.001, 1e-4), "_ssdiffusion": (1e-3, 0.01, 1e-3),
+          "image": (5e-4, 0.002, 1e-2)}
 
 def read_ply(path):
     with open(path, "rb") as f:

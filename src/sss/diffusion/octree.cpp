@@ -181,8 +181,6 @@ void compute_moments(Tree& tree) {
             ex.phi[ch] = float(phi[ch]);
             ex.abs_phi[ch] = float(aphi[ch]);
             for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(d[ch][i]);
-            ex.d_norm[ch] = float(std::sqrt(d[ch][0] * d[ch][0] + d[ch][1] * d[ch][1] +
-                                            d[ch][2] * d[ch][2]));
             for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(q[ch][i]);
         }
         tree.expansions[k] = ex;

@@ -37,9 +37,9 @@ struct Expansion {
     glm::vec3 c;
     float phi[3];
     float abs_phi[3];
-    float d[3][3];   // sum A E (p - c)
-    float q[3][6];   // sum A E (p - c)(p - c)^T: xx xy xz yy yz zz
-    float d_norm[3]; // |d[ch]|
+    float d[3][3]; // sum A E (p - c)
+    float q[3][6]; // sum A E (p - c)(p - c)^T: xx xy xz yy yz zz
+    // (|d| is computed where needed: 12 bytes less per node, issue 17.)
 };
 
 struct Tree {

@@ -4,6 +4,7 @@
 #include "traversal.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -113,7 +114,11 @@ void traverse_error(const Tree& tree, const Tables& tables, const BucketToleranc
                     if (!mono) continue;
                     // Error of dropping the dipole and quadrupole terms.
                     double m2 = ap * r * r;
-                    double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * ex.d_norm[ch]) +
+                    const float* dv = ex.d[ch];
+                    const double d_norm =
+                        std::sqrt(double(dv[0]) * dv[0] + double(dv[1]) * dv[1] +
+                                  double(dv[2]) * dv[2]);
+                    double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * d_norm) +
                                       2.0 * ct->max_d2[i] * wmax * wmax * m2;
                     if (mono_err > 0.1 * tol.tol[ch]) mono = false;
                 }
