@@ -3,19 +3,27 @@
 /// loads bricks on demand into a bounded cache and answers texture3d-style
 /// lookups.
 ///
+/// Bricks in memory keep only their present samples, as in the file (about a
+/// quarter of all 512 for surface data), with the presence bits and per-word
+/// ranks in front: one block per brick. A lookup finds its 8 corners' values
+/// by rank, without branches on which are present. Only the first load of a
+/// brick pays for reading, checking (CRC-32, mask, finite values) and
+/// unpacking it.
+///
 /// Cache: one atomic pointer per data brick. A lookup that finds its bricks
 /// loaded takes no lock and allocates nothing; it only "pins" itself (two
 /// atomic adds on a counter mostly private to its thread) so that a brick
-/// another thread evicts meanwhile is not freed under it. Eviction
-/// (least recently used, by a per-brick stamp) unlinks bricks at once and
-/// frees them after a grace period: epoch-based reclamation with two
-/// parities. Misses read the brick with pread outside the lock and install
-/// it under a mutex. Memory: live bricks stay within the budget (plus the
+/// another thread evicts meanwhile is not freed under it. Eviction (least
+/// recently used, by a stamp next to each brick's pointer) unlinks bricks at
+/// once and frees them after a grace period: epoch-based reclamation with
+/// two parities. Misses read the brick with pread outside the lock and
+/// install it under a mutex. Memory: live bricks stay within the budget (plus the
 /// brick being installed) and bricks awaiting their grace period within
 /// about another budget; past that, misses are served from a private copy
 /// that is not cached.
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <cerrno>
@@ -23,6 +31,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -59,21 +68,85 @@ unsigned thread_stripe() {
     return stripe;
 }
 
-/// A brick in memory: presence bits and all 512 samples (absent ones 0).
-struct CachedBrick {
+/// A brick in memory: one cache-line aligned block holding this header,
+/// then the present samples only (data_size floats each, in sample index
+/// order, as in the file) and one sample of zeros. Packed, a map's bricks
+/// take about a quarter of the memory of all 512 samples (surface data fills
+/// few of them), so more of them stay in the processor's caches, and a
+/// lookup's loads of the presence bits and of the samples depend only on the
+/// brick's address and go to memory together.
+struct alignas(64) CachedBrick {
+    /// Presence bits: bit s % 64 of word s / 64; byte j + 8 k is the row of
+    /// samples (0..7, j, k).
     uint64_t mask[8] = {};
-    std::atomic<uint64_t> stamp{0}; ///< last use, for LRU eviction
+    /// Present samples before word w: sample s's values are at index
+    /// rank[s / 64] + (present samples before s in its word).
+    uint16_t rank[8] = {};
     uint32_t id = 0;
-    std::size_t bytes = 0;
-    std::unique_ptr<float[]> data;
+    uint32_t count = 0;    ///< present samples
+    std::size_t bytes = 0; ///< of the whole block
+
+    float* data() { return reinterpret_cast<float*>(this + 1); }
+    const float* data() const { return reinterpret_cast<const float*>(this + 1); }
+
+    /// A block for count present samples of data_size floats, its last
+    /// sample zeroed.
+    static CachedBrick* create(uint32_t count, int data_size) {
+        const std::size_t floats = (std::size_t(count) + 1) * std::size_t(data_size);
+        const std::size_t bytes = sizeof(CachedBrick) + floats * sizeof(float);
+        void* raw = ::operator new(bytes, std::align_val_t(alignof(CachedBrick)));
+        CachedBrick* b = new (raw) CachedBrick;
+        b->count = count;
+        b->bytes = bytes;
+        std::fill(b->data() + floats - data_size, b->data() + floats, 0.0f);
+        return b;
+    }
+    static void destroy(CachedBrick* b) {
+        if (!b) return;
+        b->~CachedBrick();
+        ::operator delete(static_cast<void*>(b), std::align_val_t(alignof(CachedBrick)));
+    }
 };
 
-/// A data node, for descending: children with data only.
+struct CachedBrickDeleter {
+    void operator()(CachedBrick* b) const { CachedBrick::destroy(b); }
+};
+using CachedBrickPtr = std::unique_ptr<CachedBrick, CachedBrickDeleter>;
+
+/// A data brick's cache slot: the brick when it is loaded, and its last use
+/// (for LRU eviction) next to it, so that a hit touches one line.
+struct BrickSlot {
+    std::atomic<CachedBrick*> brick{nullptr};
+    std::atomic<uint64_t> stamp{0};
+};
+
+/// A data node, for descending: children with data only. Its brick id is
+/// the tree's first brick id plus its index in the tree's array.
 struct LookupNode {
     uint32_t first_child = 0; ///< index of the first data child in the tree's array
-    uint32_t brick = 0;       ///< brick id (cache slot)
     uint8_t child_mask = 0;
 };
+
+/// Set bits of a byte, by table: std::popcount is a library call in a
+/// baseline x86-64 build (no POPCNT instruction).
+constexpr std::array<uint8_t, 256> kPopcount8 = [] {
+    std::array<uint8_t, 256> t{};
+    for (int i = 0; i < 256; ++i) t[i] = static_cast<uint8_t>(std::popcount(unsigned(i)));
+    return t;
+}();
+
+/// Set bits of a word: the POPCNT instruction where the build has it, else
+/// a few shifts and adds (not a library call).
+inline unsigned popcount64(uint64_t x) {
+#ifdef __POPCNT__
+    return static_cast<unsigned>(std::popcount(x));
+#else
+    x = x - ((x >> 1) & 0x5555555555555555ull);
+    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+    x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    return static_cast<unsigned>((x * 0x0101010101010101ull) >> 56);
+#endif
+}
 
 /// Index of a node in a full node table, found by descending from the root;
 /// -1 if absent.
@@ -105,8 +178,9 @@ struct BrickMap::Impl {
     double side = 1.0;
     double inv_side = 1.0;
     std::array<std::vector<LookupNode>, kBkmTrees> trees;
+    std::array<uint32_t, kBkmTrees> first_brick{};      ///< brick id of each tree's root
     std::vector<std::pair<int, const BkmNode*>> bricks; ///< by id: tree, record
-    std::unique_ptr<std::atomic<CachedBrick*>[]> slots;
+    std::unique_ptr<BrickSlot[]> slots;
     std::size_t budget = 0;
     bool checksums = true;
 
@@ -131,11 +205,11 @@ struct BrickMap::Impl {
 
     ~Impl() {
         if (slots) {
-            for (std::size_t i = 0; i < bricks.size(); ++i) slots[i].store(nullptr);
+            for (std::size_t i = 0; i < bricks.size(); ++i) slots[i].brick.store(nullptr);
         }
-        for (CachedBrick* b : live) delete b;
-        for (CachedBrick* b : pending) delete b;
-        for (CachedBrick* b : waiting) delete b;
+        for (CachedBrick* b : live) CachedBrick::destroy(b);
+        for (CachedBrick* b : pending) CachedBrick::destroy(b);
+        for (CachedBrick* b : waiting) CachedBrick::destroy(b);
         if (fd >= 0) ::close(fd);
     }
 
@@ -179,7 +253,7 @@ struct BrickMap::Impl {
         if (!drained(static_cast<int>((e - 1) & 1))) return;
         for (CachedBrick* b : waiting) {
             retired_bytes -= b->bytes;
-            delete b;
+            CachedBrick::destroy(b);
         }
         waiting.clear();
         if (!pending.empty()) {
@@ -197,7 +271,8 @@ struct BrickMap::Impl {
         // comparator whose keys change under std::sort is undefined behaviour).
         order.clear();
         for (CachedBrick* b : live)
-            order.push_back({b->stamp.load(std::memory_order_relaxed), b->id, b});
+            order.push_back(
+                {slots[b->id].stamp.load(std::memory_order_relaxed), b->id, b});
         std::sort(order.begin(), order.end(), [](const Stamped& a, const Stamped& b) {
             return a.stamp != b.stamp ? a.stamp < b.stamp : a.id < b.id;
         });
@@ -205,7 +280,7 @@ struct BrickMap::Impl {
         for (std::size_t i = 0; i < order.size(); ++i) {
             CachedBrick* b = order[i].brick;
             if (live_bytes > target && b != keep) {
-                slots[b->id].store(nullptr, std::memory_order_release);
+                slots[b->id].brick.store(nullptr, std::memory_order_release);
                 live_bytes -= b->bytes;
                 retired_bytes += b->bytes;
                 pending.push_back(b);
@@ -216,17 +291,18 @@ struct BrickMap::Impl {
         live.resize(out); // survivors, oldest first
     }
 
-    void touch(CachedBrick* b) const {
+    void touch(uint32_t id) const {
         const uint64_t now = tick.load(std::memory_order_relaxed);
-        if (b->stamp.load(std::memory_order_relaxed) != now)
-            b->stamp.store(now, std::memory_order_relaxed);
+        std::atomic<uint64_t>& stamp = slots[id].stamp;
+        if (stamp.load(std::memory_order_relaxed) != now)
+            stamp.store(now, std::memory_order_relaxed);
     }
 
     /// The brick with this id, loading it on a miss. Caller is pinned.
     const CachedBrick* fetch(uint32_t id) const {
-        CachedBrick* b = slots[id].load(std::memory_order_acquire);
+        CachedBrick* b = slots[id].brick.load(std::memory_order_acquire);
         if (b) {
-            touch(b);
+            touch(id);
             return b;
         }
         return load(id);
@@ -238,18 +314,20 @@ struct BrickMap::Impl {
         std::vector<unsigned char> bytes(size);
         bkm_pread(fd, path, bytes.data(), size, node->offset);
         if (checksums) bkm_check_brick_crc(bytes.data(), *node, tree, ds, path);
-        auto fresh = std::make_unique<CachedBrick>();
-        const std::size_t floats = static_cast<std::size_t>(kBrickSamples) * ds;
-        fresh->data.reset(new float[floats]);
-        bkm_decode_brick(bytes.data(), *node, tree, ds, path, fresh->mask,
-                         fresh->data.get());
+        CachedBrickPtr fresh(CachedBrick::create(node->samples, ds));
+        bkm_decode_brick(bytes.data(), *node, tree, ds, path, fresh->mask, nullptr,
+                         fresh->data());
         fresh->id = id;
-        fresh->bytes = sizeof(CachedBrick) + floats * sizeof(float);
+        unsigned before = 0;
+        for (int w = 0; w < 8; ++w) {
+            fresh->rank[w] = static_cast<uint16_t>(before);
+            before += popcount64(fresh->mask[w]);
+        }
 
         loaded.fetch_add(1, std::memory_order_relaxed);
         std::lock_guard<std::mutex> lock(mutex);
-        if (CachedBrick* other = slots[id].load(std::memory_order_relaxed)) {
-            touch(other); // another thread loaded it meanwhile
+        if (CachedBrick* other = slots[id].brick.load(std::memory_order_relaxed)) {
+            touch(id); // another thread loaded it meanwhile
             return other;
         }
         reclaim();
@@ -258,17 +336,17 @@ struct BrickMap::Impl {
             // budget's worth of evicted bricks: rather than grow the cache,
             // serve this miss from a private copy, valid until this thread's
             // next private load (the caller uses it at once).
-            thread_local std::unique_ptr<CachedBrick> t_private;
+            thread_local CachedBrickPtr t_private;
             t_private = std::move(fresh);
             cached.store(live_bytes + retired_bytes, std::memory_order_relaxed);
             return t_private.get();
         }
         CachedBrick* b = fresh.release();
-        b->stamp.store(tick.fetch_add(1, std::memory_order_relaxed) + 1,
-                       std::memory_order_relaxed);
+        slots[id].stamp.store(tick.fetch_add(1, std::memory_order_relaxed) + 1,
+                              std::memory_order_relaxed);
         live.push_back(b);
         live_bytes += b->bytes;
-        slots[id].store(b, std::memory_order_release);
+        slots[id].brick.store(b, std::memory_order_release);
         evict(b);
         reclaim();
         cached.store(live_bytes + retired_bytes, std::memory_order_relaxed);
@@ -278,6 +356,12 @@ struct BrickMap::Impl {
     /// Trilinear value at lattice position x (in sample units of node's
     /// brick, each in [0, 7]) over the present corners, times weight, added
     /// to out. False if no corner with a positive weight has data.
+    ///
+    /// Branch-free over the corners: an absent corner gets weight +0, which
+    /// adds exactly nothing to the sum of weights (a sum of non-negative
+    /// terms starting at +0) nor to out (out starts at +0, so it is never -0,
+    /// and x + (+-0) == x for any other x; samples are finite). The values are
+    /// therefore bit for bit those of skipping the absent corners.
     bool eval_brick(const CachedBrick& b, const double x[3], double weight,
                     float* out) const {
         int i0[3];
@@ -286,29 +370,76 @@ struct BrickMap::Impl {
             i0[a] = std::min(static_cast<int>(x[a]), 6);
             f[a] = x[a] - i0[a];
         }
-        const int base = i0[0] + 8 * i0[1] + 64 * i0[2];
-        static constexpr int kOffset[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+        // The corners are bits i0, i0 + 1 of rows j0 and j0 + 1 of planes k0
+        // (word k0 of the mask) and k0 + 1. Their values: at their rank among
+        // the present samples. An absent corner reads the next present sample
+        // (or the block's zero sample) with weight 0.
+        const unsigned shift = static_cast<unsigned>(i0[0] + 8 * i0[1]);
+        uint64_t rows[2];
+        unsigned ranks[2][2]; // [plane][row]: rank of the row's corner i0
+        for (int p = 0; p < 2; ++p) {
+            const uint64_t word = b.mask[i0[2] + p];
+            rows[p] = word >> shift;
+            ranks[p][0] =
+                b.rank[i0[2] + p] + popcount64(word & ((uint64_t(1) << shift) - 1));
+            ranks[p][1] = ranks[p][0] + kPopcount8[rows[p] & 0xff];
+        }
+        const double g[3][2] = {
+            {1.0 - f[0], f[0]}, {1.0 - f[1], f[1]}, {1.0 - f[2], f[2]}};
         double w[8];
+        const float* v[8];
         double sum = 0.0;
         for (int c = 0; c < 8; ++c) {
-            const int s = base + kOffset[c];
-            if (!((b.mask[s >> 6] >> (s & 63)) & 1)) {
-                w[c] = 0.0;
-                continue;
-            }
-            w[c] = ((c & 1) ? f[0] : 1.0 - f[0]) * ((c & 2) ? f[1] : 1.0 - f[1]) *
-                   ((c & 4) ? f[2] : 1.0 - f[2]);
+            const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
+            const uint64_t row = rows[cz] >> (8 * cy);
+            const uint64_t bit = (row >> cx) & 1;
+            w[c] = g[0][cx] * g[1][cy] * g[2][cz] * double(bit);
             sum += w[c];
+            const unsigned rank = ranks[cz][cy] + (cx ? unsigned(row & 1) : 0u);
+            v[c] = b.data() + static_cast<std::size_t>(rank) * ds;
         }
         if (!(sum > 0.0)) return false;
         const double scale = weight / sum;
-        for (int c = 0; c < 8; ++c) {
-            if (w[c] == 0.0) continue;
-            const float* v = &b.data[static_cast<std::size_t>(base + kOffset[c]) * ds];
-            const float wc = static_cast<float>(w[c] * scale);
-            for (int k = 0; k < ds; ++k) out[k] += wc * v[k];
+        float wc[8];
+        for (int c = 0; c < 8; ++c) wc[c] = static_cast<float>(w[c] * scale);
+        switch (ds) {
+        case 1:
+            blend<1>(v, wc, out);
+            break;
+        case 2:
+            blend<2>(v, wc, out);
+            break;
+        case 3:
+            blend<3>(v, wc, out);
+            break;
+        case 4:
+            blend<4>(v, wc, out);
+            break;
+        default:
+            blend<0>(v, wc, out);
+            break;
         }
         return true;
+    }
+
+    /// out[k] += wc[c] * v[c][k], corner by corner in order c = 0..7 (the
+    /// order of the sums is part of the result). DS: floats per sample, or 0
+    /// for ds (the compiler keeps the sums of a small DS in registers).
+    template <int DS>
+    void blend(const float* const* v, const float* wc, float* out) const {
+        const int n = DS > 0 ? DS : ds;
+        if constexpr (DS > 0) {
+            float acc[DS];
+            for (int k = 0; k < DS; ++k) acc[k] = out[k];
+            for (int c = 0; c < 8; ++c) {
+                for (int k = 0; k < DS; ++k) acc[k] += wc[c] * v[c][k];
+            }
+            for (int k = 0; k < DS; ++k) out[k] = acc[k];
+        } else {
+            for (int c = 0; c < 8; ++c) {
+                for (int k = 0; k < n; ++k) out[k] += wc[c] * v[c][k];
+            }
+        }
     }
 
     /// Value of the level starting at depth `start` along path (falling back
@@ -316,9 +447,8 @@ struct BrickMap::Impl {
     /// Returns the depth used, or -1.
     int eval_level(int tree, const uint32_t* path, int start, const double u[3],
                    const uint32_t q[3], double weight, float* out) const {
-        const std::vector<LookupNode>& nodes = trees[tree];
         for (int d = start; d >= 0; --d) {
-            const CachedBrick& b = *fetch(nodes[path[d]].brick);
+            const CachedBrick& b = *fetch(first_brick[tree] + path[d]);
             const double scale = kBkmBrickEdge * double(1u << d);
             double x[3];
             for (int a = 0; a < 3; ++a) {
@@ -349,8 +479,7 @@ struct BrickMap::Impl {
             const unsigned o = ((q[0] >> shift) & 1) | (((q[1] >> shift) & 1) << 1) |
                                (((q[2] >> shift) & 1) << 2);
             if (!((n.child_mask >> o) & 1)) break;
-            path[d] =
-                n.first_child + std::popcount(unsigned(n.child_mask) & ((1u << o) - 1));
+            path[d] = n.first_child + kPopcount8[n.child_mask & ((1u << o) - 1)];
             deepest = d;
         }
         if (!(filter_radius > 0.0f))
@@ -407,13 +536,12 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
         const std::vector<BkmNode>& nodes = m.contents.trees[t];
         std::vector<int64_t> index(nodes.size(), -1);
         std::vector<LookupNode>& out = m.trees[t];
+        m.first_brick[t] = static_cast<uint32_t>(m.bricks.size());
         for (std::size_t i = 0; i < nodes.size(); ++i) {
             if (!nodes[i].has_data()) continue;
             index[i] = static_cast<int64_t>(out.size());
-            LookupNode n;
-            n.brick = static_cast<uint32_t>(m.bricks.size());
             m.bricks.emplace_back(t, &nodes[i]);
-            out.push_back(n);
+            out.push_back(LookupNode{});
         }
         // Data nodes are closed under "parent of" and in breadth-first order,
         // so the data children of a node stay contiguous and in octant order.
@@ -430,8 +558,7 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
             }
         }
     }
-    m.slots = std::make_unique<std::atomic<CachedBrick*>[]>(m.bricks.size());
-    for (std::size_t i = 0; i < m.bricks.size(); ++i) m.slots[i].store(nullptr);
+    m.slots = std::make_unique<BrickSlot[]>(m.bricks.size());
 }
 
 BrickMap::~BrickMap() = default;
