@@ -237,6 +237,17 @@ std::vector<Query> queries(const PointCloud& cloud, std::size_t count) {
         if (k % 3 == 0) q.radius = 0.0f;
         out.push_back(q);
     }
+    // Normals with two or three equal (or all but equal) largest components:
+    // which tree comes first then rests on the rounding of n / |n|.
+    const float one = 1.0f, above = std::nextafter(1.0f, 2.0f);
+    const glm::vec3 ties[] = {{one, one, 0.2f},     {-one, one, one},
+                              {one, above, 0.0f},   {above, -one, 0.5f},
+                              {0.3f, one, -above},  {one, one, one},
+                              {0.0f, -one, -above}, {1e-30f, 1e-30f, 0.0f}};
+    for (std::size_t k = 0; k < count / 4; ++k) {
+        const std::size_t i = next() % cloud.size();
+        out.push_back({cloud.positions[i], ties[k % 8], k % 2 ? 0.0f : 0.004f * extent});
+    }
     return out;
 }
 

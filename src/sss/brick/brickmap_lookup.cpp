@@ -127,6 +127,39 @@ struct LookupNode {
     uint8_t child_mask = 0;
 };
 
+/// The top depths of a tree are looked up in tables (8^d entries at depth
+/// d, by Morton code of the node) instead of descended node by node: their
+/// loads do not wait for each other.
+constexpr int kTableDepth = 4;
+constexpr uint32_t kNoNode = 0xffffffffu;
+
+/// A tree's data nodes for lookups.
+struct LookupTree {
+    std::vector<LookupNode> nodes; ///< breadth first, as in the file
+    int table_depth = 0;           ///< tables for depths 1..table_depth
+    /// Node index (or kNoNode) by Morton code, depth d's table at
+    /// table_offset(d).
+    std::vector<uint32_t> tables;
+
+    static std::size_t table_offset(int d) { return kOffsets[d]; }
+    /// 8 + 64 + ... + 8^(d - 1).
+    static constexpr std::array<std::size_t, kTableDepth + 2> kOffsets = [] {
+        std::array<std::size_t, kTableDepth + 2> o{};
+        for (int d = 2; d < kTableDepth + 2; ++d)
+            o[d] = o[d - 1] + (std::size_t(1) << (3 * (d - 1)));
+        return o;
+    }();
+};
+
+/// Bits 0..3 of i spread to bits 0, 3, 6, 9 (Morton codes of the top depths).
+constexpr std::array<uint32_t, 16> kSpread4 = [] {
+    std::array<uint32_t, 16> t{};
+    for (uint32_t i = 0; i < 16; ++i)
+        t[i] = (i & 1) | ((i & 2) << 2) | ((i & 4) << 4) | ((i & 8) << 6);
+    return t;
+}();
+static_assert(kTableDepth == 4, "kSpread4 spreads kTableDepth bits");
+
 /// Set bits of a byte, by table: std::popcount is a library call in a
 /// baseline x86-64 build (no POPCNT instruction).
 constexpr std::array<uint8_t, 256> kPopcount8 = [] {
@@ -167,6 +200,47 @@ int64_t find_node(const std::vector<BkmNode>& nodes, int depth, uint32_t ix, uin
     return static_cast<int64_t>(i);
 }
 
+/// Trees to try for a lookup with normal n, into order; returns how many:
+/// the tree of n's dominant axis, the others whose axis is within 55 degrees
+/// of n (closest first), then the no-normal tree.
+int tree_order(const glm::vec3& n, bool ignore_normals, int order[4]) {
+    int count = 0;
+    const double nx = n.x, ny = n.y, nz = n.z;
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!ignore_normals && len > 0.0 && std::isfinite(len)) {
+        const double c[3] = {nx / len, ny / len, nz / len};
+        const double m[3] = {std::abs(c[0]), std::abs(c[1]), std::abs(c[2])};
+        int axes[3] = {0, 1, 2}; // by decreasing |component|
+        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
+        if (m[axes[2]] > m[axes[1]]) std::swap(axes[1], axes[2]);
+        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
+        for (int k = 0; k < 3; ++k) {
+            const int a = axes[k];
+            if (k == 0 || std::abs(c[a]) >= kCos55)
+                order[count++] = 1 + 2 * a + (c[a] < 0.0 ? 1 : 0);
+        }
+    }
+    order[count++] = 0;
+    return count;
+}
+
+/// tree_order's first tree for a normal with finite components one of which
+/// is strictly the largest in magnitude, or -1, without tree_order's square
+/// root and divisions. Dividing by the length rounds each quotient by a
+/// relative 2^-53 at most, so a component larger than the others by more
+/// than a relative 2^-40 (any two different floats differ by 2^-24 or more)
+/// is still strictly the largest after it: the same tree.
+int dominant_tree(const glm::vec3& n) {
+    const double a[3] = {std::abs(double(n.x)), std::abs(double(n.y)),
+                         std::abs(double(n.z))};
+    if (!(a[0] + a[1] + a[2] < 1e300)) return -1; // NaN or infinite
+    const int i = a[1] > a[0] ? (a[2] > a[1] ? 2 : 1) : (a[2] > a[0] ? 2 : 0);
+    const double second = std::max(a[(i + 1) % 3], a[(i + 2) % 3]);
+    constexpr double kMargin = 1.0 + 0x1p-40;
+    if (!(a[i] > second * kMargin)) return -1; // no clear dominance (or n = 0)
+    return 1 + 2 * i + (n[i] < 0.0f ? 1 : 0);
+}
+
 } // namespace
 
 struct BrickMap::Impl {
@@ -177,7 +251,7 @@ struct BrickMap::Impl {
     double cube_min[3] = {0, 0, 0};
     double side = 1.0;
     double inv_side = 1.0;
-    std::array<std::vector<LookupNode>, kBkmTrees> trees;
+    std::array<LookupTree, kBkmTrees> trees;
     std::array<uint32_t, kBkmTrees> first_brick{};      ///< brick id of each tree's root
     std::vector<std::pair<int, const BkmNode*>> bricks; ///< by id: tree, record
     std::unique_ptr<BrickSlot[]> slots;
@@ -400,44 +474,45 @@ struct BrickMap::Impl {
         }
         if (!(sum > 0.0)) return false;
         const double scale = weight / sum;
-        float wc[8];
-        for (int c = 0; c < 8; ++c) wc[c] = static_cast<float>(w[c] * scale);
         switch (ds) {
         case 1:
-            blend<1>(v, wc, out);
+            blend<1>(v, w, scale, out);
             break;
         case 2:
-            blend<2>(v, wc, out);
+            blend<2>(v, w, scale, out);
             break;
         case 3:
-            blend<3>(v, wc, out);
+            blend<3>(v, w, scale, out);
             break;
         case 4:
-            blend<4>(v, wc, out);
+            blend<4>(v, w, scale, out);
             break;
         default:
-            blend<0>(v, wc, out);
+            blend<0>(v, w, scale, out);
             break;
         }
         return true;
     }
 
-    /// out[k] += wc[c] * v[c][k], corner by corner in order c = 0..7 (the
+    /// out[k] += float(w[c] * scale) * v[c][k], corner by corner in order c =
+    /// 0..7 (the
     /// order of the sums is part of the result). DS: floats per sample, or 0
     /// for ds (the compiler keeps the sums of a small DS in registers).
     template <int DS>
-    void blend(const float* const* v, const float* wc, float* out) const {
+    void blend(const float* const* v, const double* w, double scale, float* out) const {
         const int n = DS > 0 ? DS : ds;
         if constexpr (DS > 0) {
             float acc[DS];
             for (int k = 0; k < DS; ++k) acc[k] = out[k];
             for (int c = 0; c < 8; ++c) {
-                for (int k = 0; k < DS; ++k) acc[k] += wc[c] * v[c][k];
+                const float wc = static_cast<float>(w[c] * scale);
+                for (int k = 0; k < DS; ++k) acc[k] += wc * v[c][k];
             }
             for (int k = 0; k < DS; ++k) out[k] = acc[k];
         } else {
             for (int c = 0; c < 8; ++c) {
-                for (int k = 0; k < n; ++k) out[k] += wc[c] * v[c][k];
+                const float wc = static_cast<float>(w[c] * scale);
+                for (int k = 0; k < n; ++k) out[k] += wc * v[c][k];
             }
         }
     }
@@ -463,24 +538,38 @@ struct BrickMap::Impl {
 
     bool lookup_tree(int tree, const double u[3], float filter_radius, float* out,
                      float* scratch) const {
-        const std::vector<LookupNode>& nodes = trees[tree];
-        if (nodes.empty()) return false;
+        const LookupTree& t = trees[tree];
+        if (t.nodes.empty()) return false;
         uint32_t q[3];
         for (int a = 0; a < 3; ++a) {
             q[a] = static_cast<uint32_t>(std::min(u[a] * double(1u << kCoordBits),
                                                   double((1u << kCoordBits) - 1)));
         }
+        // The node at depth d containing p: its Morton code is that of q's
+        // top d bits.
+        const uint32_t top = kSpread4[q[0] >> (kCoordBits - kTableDepth)] |
+                             (kSpread4[q[1] >> (kCoordBits - kTableDepth)] << 1) |
+                             (kSpread4[q[2] >> (kCoordBits - kTableDepth)] << 2);
         uint32_t path[kBkmMaxDepth + 1];
         path[0] = 0;
         int deepest = 0;
-        for (int d = 1; d <= kBkmMaxDepth; ++d) {
-            const LookupNode& n = nodes[path[d - 1]];
-            const int shift = kCoordBits - d;
-            const unsigned o = ((q[0] >> shift) & 1) | (((q[1] >> shift) & 1) << 1) |
-                               (((q[2] >> shift) & 1) << 2);
-            if (!((n.child_mask >> o) & 1)) break;
-            path[d] = n.first_child + kPopcount8[n.child_mask & ((1u << o) - 1)];
+        for (int d = 1; d <= t.table_depth; ++d) {
+            const uint32_t i =
+                t.tables[LookupTree::table_offset(d) + (top >> (3 * (kTableDepth - d)))];
+            if (i == kNoNode) break;
+            path[d] = i;
             deepest = d;
+        }
+        if (deepest == t.table_depth) {
+            for (int d = deepest + 1; d <= kBkmMaxDepth; ++d) {
+                const LookupNode& n = t.nodes[path[d - 1]];
+                const int shift = kCoordBits - d;
+                const unsigned o = ((q[0] >> shift) & 1) | (((q[1] >> shift) & 1) << 1) |
+                                   (((q[2] >> shift) & 1) << 2);
+                if (!((n.child_mask >> o) & 1)) break;
+                path[d] = n.first_child + kPopcount8[n.child_mask & ((1u << o) - 1)];
+                deepest = d;
+            }
         }
         if (!(filter_radius > 0.0f))
             return eval_level(tree, path, deepest, u, q, 1.0, out) >= 0;
@@ -535,7 +624,7 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
     for (int t = 0; t < kBkmTrees; ++t) {
         const std::vector<BkmNode>& nodes = m.contents.trees[t];
         std::vector<int64_t> index(nodes.size(), -1);
-        std::vector<LookupNode>& out = m.trees[t];
+        std::vector<LookupNode>& out = m.trees[t].nodes;
         m.first_brick[t] = static_cast<uint32_t>(m.bricks.size());
         for (std::size_t i = 0; i < nodes.size(); ++i) {
             if (!nodes[i].has_data()) continue;
@@ -556,6 +645,21 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
                 if (n.child_mask == 0) n.first_child = static_cast<uint32_t>(index[c]);
                 n.child_mask |= uint8_t(1u << o);
             }
+        }
+    }
+    for (int t = 0; t < kBkmTrees; ++t) {
+        LookupTree& tree = m.trees[t];
+        if (tree.nodes.empty()) continue;
+        int depth = 0;
+        for (std::size_t i = 0; i < tree.nodes.size(); ++i)
+            depth = std::max<int>(depth, m.bricks[m.first_brick[t] + i].second->depth);
+        tree.table_depth = std::min(depth, kTableDepth);
+        tree.tables.assign(LookupTree::table_offset(tree.table_depth + 1), kNoNode);
+        for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+            const BkmNode& n = *m.bricks[m.first_brick[t] + i].second;
+            if (n.depth < 1 || n.depth > tree.table_depth) continue;
+            tree.tables[LookupTree::table_offset(n.depth) +
+                        bkm_morton(n.ix, n.iy, n.iz)] = static_cast<uint32_t>(i);
         }
     }
     m.slots = std::make_unique<BrickSlot[]>(m.bricks.size());
@@ -592,29 +696,21 @@ bool BrickMap::lookup(const glm::vec3& p, const glm::vec3& n, float filter_radiu
         u[a] = (double(p[a]) - m.cube_min[a]) * m.inv_side;
         if (!(u[a] >= 0.0 && u[a] <= 1.0)) return false; // outside the cube, or NaN
     }
-    // Trees to try: the dominant axis of n, the others within 55 degrees of
-    // n (closest first), then the no-normal tree.
-    int order[4];
-    int count = 0;
-    const double nx = n.x, ny = n.y, nz = n.z;
-    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-    if (!m.contents.info.ignore_normals && len > 0.0 && std::isfinite(len)) {
-        const double c[3] = {nx / len, ny / len, nz / len};
-        const double m[3] = {std::abs(c[0]), std::abs(c[1]), std::abs(c[2])};
-        int axes[3] = {0, 1, 2}; // by decreasing |component|
-        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
-        if (m[axes[2]] > m[axes[1]]) std::swap(axes[1], axes[2]);
-        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
-        for (int k = 0; k < 3; ++k) {
-            const int a = axes[k];
-            if (k == 0 || std::abs(c[a]) >= kCos55)
-                order[count++] = 1 + 2 * a + (c[a] < 0.0 ? 1 : 0);
-        }
-    }
-    order[count++] = 0;
+    // The tree of n's dominant axis first, found without tree_order's
+    // square root and divisions (which a random normal would also make the
+    // processor mispredict) when one axis clearly dominates; the other trees
+    // only if it has no data at p.
+    const int first = m.contents.info.ignore_normals ? 0 : dominant_tree(n);
     float scratch[kBkmMaxDataSize];
     const Impl::Pin pin(m);
+    if (first >= 0) {
+        if (m.lookup_tree(first, u, filter_radius, out, scratch)) return true;
+        std::fill(out, out + m.ds, 0.0f);
+    }
+    int order[4];
+    const int count = tree_order(n, m.contents.info.ignore_normals, order);
     for (int k = 0; k < count; ++k) {
+        if (order[k] == first) continue; // tried
         if (m.lookup_tree(order[k], u, filter_radius, out, scratch)) return true;
         std::fill(out, out + m.ds, 0.0f);
     }
