@@ -1,9 +1,16 @@
 // brickmake benchmark: a 1M-point _ssdiffusion cloud (a lit marble sphere of
 // radius 50 mm, diffused by ptfilter's library call) -> brick map, for a few
 // -maxerror values: build time, file size, bricks, lookups per second on one
-// core and with all threads, and the lookup error against the point values
-// at the points themselves (|lookup - value| in the channel's units and
-// relative to the channel mean).
+// core (in point order, in random order, in random order with the points'
+// filter radii, in random order with the points gathered first) and with all
+// threads, the memory of the cached bricks, and
+// the lookup error against the point values at the points themselves
+// (|lookup - value| in the channel's units and relative to the channel mean).
+//
+// The one-core rates divide by the thread's CPU time, so that other
+// processes on a shared machine do not count against them (the random-order
+// rate by the wall clock is printed too); the threaded rate is by the wall
+// clock.
 //
 // usage: brickmap_bench [-n POINTS] [-lookups N] [-maxerror E ...]
 
@@ -16,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include <time.h>
+
 #include <tbb/parallel_for.h>
 
 #include "sss/brick/brickmap.h"
@@ -27,6 +36,13 @@
 
 namespace {
 
+/// CPU time of the calling thread, in seconds.
+double thread_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
 struct Result {
     double max_error = 0;
     double build_s = 0;
@@ -34,6 +50,10 @@ struct Result {
     std::size_t bricks = 0;
     double lookups_per_s_1 = 0;
     double lookups_per_s_random = 0;
+    double lookups_per_s_random_wall = 0;
+    double lookups_per_s_filtered = 0;
+    double lookups_per_s_gathered = 0;
+    double cache_mb = 0;
     double lookups_per_s_all = 0;
     double rms = 0, p99 = 0, max = 0, mean = 0;
     std::size_t misses = 0;
@@ -83,11 +103,12 @@ int main(int argc, char** argv) {
     const std::string path =
         (std::filesystem::temp_directory_path() / "sss_brickmap_bench.bkm").string();
     std::printf(
-        "| maxerror | build s | file MB | bricks | lookups/s 1 core | random order "
-        "1 core | lookups/s %d threads | RMS err | 99%% err | max err | max / mean | "
-        "misses |\n",
+        "| maxerror | build s | file MB | bricks | lookups/s 1 core | random order 1 "
+        "core | random, wall clock | random, filter radius | random, points "
+        "gathered | lookups/s %d threads | cache MB | RMS err | 99%% err | max err | "
+        "max / mean | misses |\n",
         threads);
-    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (double e : errors) {
         Result r;
         r.max_error = e;
@@ -116,29 +137,60 @@ int main(int argc, char** argv) {
         {
             sss::ThreadLimit limit(1);
             for (std::size_t k = 0; k < m; ++k) one(k); // warm the cache
-            sss::Stopwatch t;
+            const double t0 = thread_seconds();
             for (std::size_t k = 0; k < m; ++k) one(k);
-            r.lookups_per_s_1 = double(m) / t.seconds();
+            r.lookups_per_s_1 = double(m) / (thread_seconds() - t0);
         }
-        {
-            // The same lookups in a scattered order (no locality between
-            // consecutive lookups): the cost of going to memory.
+        // The same lookups in a scattered order (no locality between
+        // consecutive lookups): the cost of going to memory. Then with each
+        // point's filter radius, which blends two levels (what a renderer's
+        // texture3d does with its ray differentials).
+        for (const bool filtered : {false, true}) {
             sss::ThreadLimit limit(1);
             std::vector<float> out(ds);
             uint64_t x = 88172645463325252ull;
-            sss::Stopwatch t;
+            sss::Stopwatch wall;
+            const double t0 = thread_seconds();
             for (std::size_t k = 0; k < m; ++k) {
                 x ^= x << 13, x ^= x >> 7, x ^= x << 17;
                 const std::size_t i = x % cloud.size();
-                map.lookup(cloud.positions[i], cloud.normals[i], 0.0f, out.data());
+                map.lookup(cloud.positions[i], cloud.normals[i],
+                           filtered ? cloud.radii[i] : 0.0f, out.data());
             }
-            r.lookups_per_s_random = double(m) / t.seconds();
+            const double cpu = thread_seconds() - t0;
+            if (filtered) {
+                r.lookups_per_s_filtered = double(m) / cpu;
+            } else {
+                r.lookups_per_s_random = double(m) / cpu;
+                r.lookups_per_s_random_wall = double(m) / wall.seconds();
+            }
+        }
+        {
+            // The random order again with the points copied out first, in
+            // that order: the lookups alone, without the bench's own cache
+            // miss on the cloud per lookup (a renderer has its hit points at
+            // hand).
+            sss::ThreadLimit limit(1);
+            std::vector<glm::vec3> positions(m), normals(m);
+            uint64_t x = 88172645463325252ull;
+            for (std::size_t k = 0; k < m; ++k) {
+                x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+                const std::size_t i = x % cloud.size();
+                positions[k] = cloud.positions[i];
+                normals[k] = cloud.normals[i];
+            }
+            std::vector<float> out(ds);
+            const double t0 = thread_seconds();
+            for (std::size_t k = 0; k < m; ++k)
+                map.lookup(positions[k], normals[k], 0.0f, out.data());
+            r.lookups_per_s_gathered = double(m) / (thread_seconds() - t0);
         }
         {
             sss::Stopwatch t;
             tbb::parallel_for(std::size_t(0), m, [&](std::size_t k) { one(k); });
             r.lookups_per_s_all = double(m) / t.seconds();
         }
+        r.cache_mb = double(map.cached_bytes()) / 1048576.0;
         std::vector<double> err;
         err.reserve(m);
         double sum2 = 0;
@@ -155,12 +207,14 @@ int main(int argc, char** argv) {
         r.rms = std::sqrt(sum2 / std::max<std::size_t>(1, err.size()));
         r.p99 = err.empty() ? 0 : err[std::size_t(0.99 * (err.size() - 1))];
         r.max = err.empty() ? 0 : err.back();
-        std::printf(
-            "| %g | %.2f | %.1f | %zu | %.2f M | %.2f M | %.2f M | %.5f | %.5f | %.5f | "
-            "%.2f %% | %zu |\n",
-            e, r.build_s, r.bytes / 1048576.0, r.bricks, r.lookups_per_s_1 * 1e-6,
-            r.lookups_per_s_random * 1e-6, r.lookups_per_s_all * 1e-6, r.rms, r.p99,
-            r.max, 100.0 * r.max / mean, r.misses);
+        std::printf("| %g | %.2f | %.1f | %zu | ", e, r.build_s, r.bytes / 1048576.0,
+                    r.bricks);
+        for (double rate :
+             {r.lookups_per_s_1, r.lookups_per_s_random, r.lookups_per_s_random_wall,
+              r.lookups_per_s_filtered, r.lookups_per_s_gathered, r.lookups_per_s_all})
+            std::printf("%.2f M | ", rate * 1e-6);
+        std::printf("%.1f | %.5f | %.5f | %.5f | %.2f %% | %zu |\n", r.cache_mb, r.rms,
+                    r.p99, r.max, 100.0 * r.max / mean, r.misses);
         std::fflush(stdout);
     }
     std::filesystem::remove(path);

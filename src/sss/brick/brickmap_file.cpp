@@ -548,7 +548,7 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
 
 void bkm_decode_brick(const unsigned char* bytes, const BkmNode& node, int tree,
                       int data_size, const std::string& path, uint64_t mask[8],
-                      float* dense) {
+                      float* dense, float* packed) {
     int count = 0;
     for (int w = 0; w < 8; ++w) {
         mask[w] = load_u64(bytes + 8 * w);
@@ -573,6 +573,7 @@ void bkm_decode_brick(const unsigned char* bytes, const BkmNode& node, int tree,
                                             std::to_string(s));
             }
             if (dense) dense[s * ds + k] = v;
+            if (packed) *packed++ = v;
         }
     }
 }

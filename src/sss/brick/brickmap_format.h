@@ -98,11 +98,13 @@ void bkm_check_brick_crc(const unsigned char* bytes, const BkmNode& node, int tr
 /// Validates and decodes one brick's bytes (bkm_brick_size(node) of them):
 /// mask gets the 512 presence bits (bit s % 64 of word s / 64), dense (if not
 /// null, 512 * data_size floats) the samples in index order with absent
-/// samples zero. FormatError naming path and the brick on a mask that
-/// disagrees with the node record or a non-finite value.
+/// samples zero, packed (if not null, node.samples * data_size floats) the
+/// present samples only, in index order (the file's order). FormatError
+/// naming path and the brick on a mask that disagrees with the node record
+/// or a non-finite value.
 void bkm_decode_brick(const unsigned char* bytes, const BkmNode& node, int tree,
                       int data_size, const std::string& path, uint64_t mask[8],
-                      float* dense);
+                      float* dense, float* packed = nullptr);
 
 /// Reads exactly size bytes at offset with pread; FormatError if the file
 /// ends first (it shrank after it was opened), IoError on a read error.

@@ -3,19 +3,27 @@
 /// loads bricks on demand into a bounded cache and answers texture3d-style
 /// lookups.
 ///
+/// Bricks in memory keep only their present samples, as in the file (about a
+/// quarter of all 512 for surface data), with the presence bits and per-word
+/// ranks in front: one block per brick. A lookup finds its 8 corners' values
+/// by rank, without branches on which are present. Only the first load of a
+/// brick pays for reading, checking (CRC-32, mask, finite values) and
+/// unpacking it.
+///
 /// Cache: one atomic pointer per data brick. A lookup that finds its bricks
 /// loaded takes no lock and allocates nothing; it only "pins" itself (two
 /// atomic adds on a counter mostly private to its thread) so that a brick
-/// another thread evicts meanwhile is not freed under it. Eviction
-/// (least recently used, by a per-brick stamp) unlinks bricks at once and
-/// frees them after a grace period: epoch-based reclamation with two
-/// parities. Misses read the brick with pread outside the lock and install
-/// it under a mutex. Memory: live bricks stay within the budget (plus the
+/// another thread evicts meanwhile is not freed under it. Eviction (least
+/// recently used, by a stamp next to each brick's pointer) unlinks bricks at
+/// once and frees them after a grace period: epoch-based reclamation with
+/// two parities. Misses read the brick with pread outside the lock and
+/// install it under a mutex. Memory: live bricks stay within the budget (plus the
 /// brick being installed) and bricks awaiting their grace period within
 /// about another budget; past that, misses are served from a private copy
 /// that is not cached.
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <cerrno>
@@ -23,6 +31,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -59,21 +68,118 @@ unsigned thread_stripe() {
     return stripe;
 }
 
-/// A brick in memory: presence bits and all 512 samples (absent ones 0).
-struct CachedBrick {
+/// A brick in memory: one cache-line aligned block holding this header,
+/// then the present samples only (data_size floats each, in sample index
+/// order, as in the file) and one sample of zeros. Packed, a map's bricks
+/// take about a quarter of the memory of all 512 samples (surface data fills
+/// few of them), so more of them stay in the processor's caches, and a
+/// lookup's loads of the presence bits and of the samples depend only on the
+/// brick's address and go to memory together.
+struct alignas(64) CachedBrick {
+    /// Presence bits: bit s % 64 of word s / 64; byte j + 8 k is the row of
+    /// samples (0..7, j, k).
     uint64_t mask[8] = {};
-    std::atomic<uint64_t> stamp{0}; ///< last use, for LRU eviction
+    /// Present samples before word w: sample s's values are at index
+    /// rank[s / 64] + (present samples before s in its word).
+    uint16_t rank[8] = {};
     uint32_t id = 0;
-    std::size_t bytes = 0;
-    std::unique_ptr<float[]> data;
+    uint32_t count = 0;    ///< present samples
+    std::size_t bytes = 0; ///< of the whole block
+
+    float* data() { return reinterpret_cast<float*>(this + 1); }
+    const float* data() const { return reinterpret_cast<const float*>(this + 1); }
+
+    /// A block for count present samples of data_size floats, its last
+    /// sample zeroed.
+    static CachedBrick* create(uint32_t count, int data_size) {
+        const std::size_t floats = (std::size_t(count) + 1) * std::size_t(data_size);
+        const std::size_t bytes = sizeof(CachedBrick) + floats * sizeof(float);
+        void* raw = ::operator new(bytes, std::align_val_t(alignof(CachedBrick)));
+        CachedBrick* b = new (raw) CachedBrick;
+        b->count = count;
+        b->bytes = bytes;
+        std::fill(b->data() + floats - data_size, b->data() + floats, 0.0f);
+        return b;
+    }
+    static void destroy(CachedBrick* b) {
+        if (!b) return;
+        b->~CachedBrick();
+        ::operator delete(static_cast<void*>(b), std::align_val_t(alignof(CachedBrick)));
+    }
 };
 
-/// A data node, for descending: children with data only.
+struct CachedBrickDeleter {
+    void operator()(CachedBrick* b) const { CachedBrick::destroy(b); }
+};
+using CachedBrickPtr = std::unique_ptr<CachedBrick, CachedBrickDeleter>;
+
+/// A data brick's cache slot: the brick when it is loaded, and its last use
+/// (for LRU eviction) next to it, so that a hit touches one line.
+struct BrickSlot {
+    std::atomic<CachedBrick*> brick{nullptr};
+    std::atomic<uint64_t> stamp{0};
+};
+
+/// A data node, for descending: children with data only. Its brick id is
+/// the tree's first brick id plus its index in the tree's array.
 struct LookupNode {
     uint32_t first_child = 0; ///< index of the first data child in the tree's array
-    uint32_t brick = 0;       ///< brick id (cache slot)
     uint8_t child_mask = 0;
 };
+
+/// The top depths of a tree are looked up in tables (8^d entries at depth
+/// d, by Morton code of the node) instead of descended node by node: their
+/// loads do not wait for each other.
+constexpr int kTableDepth = 4;
+constexpr uint32_t kNoNode = 0xffffffffu;
+
+/// A tree's data nodes for lookups.
+struct LookupTree {
+    std::vector<LookupNode> nodes; ///< breadth first, as in the file
+    int table_depth = 0;           ///< tables for depths 1..table_depth
+    /// Node index (or kNoNode) by Morton code, depth d's table at
+    /// table_offset(d).
+    std::vector<uint32_t> tables;
+
+    static std::size_t table_offset(int d) { return kOffsets[d]; }
+    /// 8 + 64 + ... + 8^(d - 1).
+    static constexpr std::array<std::size_t, kTableDepth + 2> kOffsets = [] {
+        std::array<std::size_t, kTableDepth + 2> o{};
+        for (int d = 2; d < kTableDepth + 2; ++d)
+            o[d] = o[d - 1] + (std::size_t(1) << (3 * (d - 1)));
+        return o;
+    }();
+};
+
+/// Bits 0..3 of i spread to bits 0, 3, 6, 9 (Morton codes of the top depths).
+constexpr std::array<uint32_t, 16> kSpread4 = [] {
+    std::array<uint32_t, 16> t{};
+    for (uint32_t i = 0; i < 16; ++i)
+        t[i] = (i & 1) | ((i & 2) << 2) | ((i & 4) << 4) | ((i & 8) << 6);
+    return t;
+}();
+static_assert(kTableDepth == 4, "kSpread4 spreads kTableDepth bits");
+
+/// Set bits of a byte, by table: std::popcount is a library call in a
+/// baseline x86-64 build (no POPCNT instruction).
+constexpr std::array<uint8_t, 256> kPopcount8 = [] {
+    std::array<uint8_t, 256> t{};
+    for (int i = 0; i < 256; ++i) t[i] = static_cast<uint8_t>(std::popcount(unsigned(i)));
+    return t;
+}();
+
+/// Set bits of a word: the POPCNT instruction where the build has it, else
+/// a few shifts and adds (not a library call).
+inline unsigned popcount64(uint64_t x) {
+#ifdef __POPCNT__
+    return static_cast<unsigned>(std::popcount(x));
+#else
+    x = x - ((x >> 1) & 0x5555555555555555ull);
+    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+    x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    return static_cast<unsigned>((x * 0x0101010101010101ull) >> 56);
+#endif
+}
 
 /// Index of a node in a full node table, found by descending from the root;
 /// -1 if absent.
@@ -94,6 +200,47 @@ int64_t find_node(const std::vector<BkmNode>& nodes, int depth, uint32_t ix, uin
     return static_cast<int64_t>(i);
 }
 
+/// Trees to try for a lookup with normal n, into order; returns how many:
+/// the tree of n's dominant axis, the others whose axis is within 55 degrees
+/// of n (closest first), then the no-normal tree.
+int tree_order(const glm::vec3& n, bool ignore_normals, int order[4]) {
+    int count = 0;
+    const double nx = n.x, ny = n.y, nz = n.z;
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!ignore_normals && len > 0.0 && std::isfinite(len)) {
+        const double c[3] = {nx / len, ny / len, nz / len};
+        const double m[3] = {std::abs(c[0]), std::abs(c[1]), std::abs(c[2])};
+        int axes[3] = {0, 1, 2}; // by decreasing |component|
+        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
+        if (m[axes[2]] > m[axes[1]]) std::swap(axes[1], axes[2]);
+        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
+        for (int k = 0; k < 3; ++k) {
+            const int a = axes[k];
+            if (k == 0 || std::abs(c[a]) >= kCos55)
+                order[count++] = 1 + 2 * a + (c[a] < 0.0 ? 1 : 0);
+        }
+    }
+    order[count++] = 0;
+    return count;
+}
+
+/// tree_order's first tree for a normal with finite components one of which
+/// is strictly the largest in magnitude, or -1, without tree_order's square
+/// root and divisions. Dividing by the length rounds each quotient by a
+/// relative 2^-53 at most, so a component larger than the others by more
+/// than a relative 2^-40 (any two different floats differ by 2^-24 or more)
+/// is still strictly the largest after it: the same tree.
+int dominant_tree(const glm::vec3& n) {
+    const double a[3] = {std::abs(double(n.x)), std::abs(double(n.y)),
+                         std::abs(double(n.z))};
+    if (!(a[0] + a[1] + a[2] < 1e300)) return -1; // NaN or infinite
+    const int i = a[1] > a[0] ? (a[2] > a[1] ? 2 : 1) : (a[2] > a[0] ? 2 : 0);
+    const double second = std::max(a[(i + 1) % 3], a[(i + 2) % 3]);
+    constexpr double kMargin = 1.0 + 0x1p-40;
+    if (!(a[i] > second * kMargin)) return -1; // no clear dominance (or n = 0)
+    return 1 + 2 * i + (n[i] < 0.0f ? 1 : 0);
+}
+
 } // namespace
 
 struct BrickMap::Impl {
@@ -104,9 +251,10 @@ struct BrickMap::Impl {
     double cube_min[3] = {0, 0, 0};
     double side = 1.0;
     double inv_side = 1.0;
-    std::array<std::vector<LookupNode>, kBkmTrees> trees;
+    std::array<LookupTree, kBkmTrees> trees;
+    std::array<uint32_t, kBkmTrees> first_brick{};      ///< brick id of each tree's root
     std::vector<std::pair<int, const BkmNode*>> bricks; ///< by id: tree, record
-    std::unique_ptr<std::atomic<CachedBrick*>[]> slots;
+    std::unique_ptr<BrickSlot[]> slots;
     std::size_t budget = 0;
     bool checksums = true;
 
@@ -131,11 +279,11 @@ struct BrickMap::Impl {
 
     ~Impl() {
         if (slots) {
-            for (std::size_t i = 0; i < bricks.size(); ++i) slots[i].store(nullptr);
+            for (std::size_t i = 0; i < bricks.size(); ++i) slots[i].brick.store(nullptr);
         }
-        for (CachedBrick* b : live) delete b;
-        for (CachedBrick* b : pending) delete b;
-        for (CachedBrick* b : waiting) delete b;
+        for (CachedBrick* b : live) CachedBrick::destroy(b);
+        for (CachedBrick* b : pending) CachedBrick::destroy(b);
+        for (CachedBrick* b : waiting) CachedBrick::destroy(b);
         if (fd >= 0) ::close(fd);
     }
 
@@ -179,7 +327,7 @@ struct BrickMap::Impl {
         if (!drained(static_cast<int>((e - 1) & 1))) return;
         for (CachedBrick* b : waiting) {
             retired_bytes -= b->bytes;
-            delete b;
+            CachedBrick::destroy(b);
         }
         waiting.clear();
         if (!pending.empty()) {
@@ -197,7 +345,8 @@ struct BrickMap::Impl {
         // comparator whose keys change under std::sort is undefined behaviour).
         order.clear();
         for (CachedBrick* b : live)
-            order.push_back({b->stamp.load(std::memory_order_relaxed), b->id, b});
+            order.push_back(
+                {slots[b->id].stamp.load(std::memory_order_relaxed), b->id, b});
         std::sort(order.begin(), order.end(), [](const Stamped& a, const Stamped& b) {
             return a.stamp != b.stamp ? a.stamp < b.stamp : a.id < b.id;
         });
@@ -205,7 +354,7 @@ struct BrickMap::Impl {
         for (std::size_t i = 0; i < order.size(); ++i) {
             CachedBrick* b = order[i].brick;
             if (live_bytes > target && b != keep) {
-                slots[b->id].store(nullptr, std::memory_order_release);
+                slots[b->id].brick.store(nullptr, std::memory_order_release);
                 live_bytes -= b->bytes;
                 retired_bytes += b->bytes;
                 pending.push_back(b);
@@ -216,17 +365,18 @@ struct BrickMap::Impl {
         live.resize(out); // survivors, oldest first
     }
 
-    void touch(CachedBrick* b) const {
+    void touch(uint32_t id) const {
         const uint64_t now = tick.load(std::memory_order_relaxed);
-        if (b->stamp.load(std::memory_order_relaxed) != now)
-            b->stamp.store(now, std::memory_order_relaxed);
+        std::atomic<uint64_t>& stamp = slots[id].stamp;
+        if (stamp.load(std::memory_order_relaxed) != now)
+            stamp.store(now, std::memory_order_relaxed);
     }
 
     /// The brick with this id, loading it on a miss. Caller is pinned.
     const CachedBrick* fetch(uint32_t id) const {
-        CachedBrick* b = slots[id].load(std::memory_order_acquire);
+        CachedBrick* b = slots[id].brick.load(std::memory_order_acquire);
         if (b) {
-            touch(b);
+            touch(id);
             return b;
         }
         return load(id);
@@ -238,18 +388,20 @@ struct BrickMap::Impl {
         std::vector<unsigned char> bytes(size);
         bkm_pread(fd, path, bytes.data(), size, node->offset);
         if (checksums) bkm_check_brick_crc(bytes.data(), *node, tree, ds, path);
-        auto fresh = std::make_unique<CachedBrick>();
-        const std::size_t floats = static_cast<std::size_t>(kBrickSamples) * ds;
-        fresh->data.reset(new float[floats]);
-        bkm_decode_brick(bytes.data(), *node, tree, ds, path, fresh->mask,
-                         fresh->data.get());
+        CachedBrickPtr fresh(CachedBrick::create(node->samples, ds));
+        bkm_decode_brick(bytes.data(), *node, tree, ds, path, fresh->mask, nullptr,
+                         fresh->data());
         fresh->id = id;
-        fresh->bytes = sizeof(CachedBrick) + floats * sizeof(float);
+        unsigned before = 0;
+        for (int w = 0; w < 8; ++w) {
+            fresh->rank[w] = static_cast<uint16_t>(before);
+            before += popcount64(fresh->mask[w]);
+        }
 
         loaded.fetch_add(1, std::memory_order_relaxed);
         std::lock_guard<std::mutex> lock(mutex);
-        if (CachedBrick* other = slots[id].load(std::memory_order_relaxed)) {
-            touch(other); // another thread loaded it meanwhile
+        if (CachedBrick* other = slots[id].brick.load(std::memory_order_relaxed)) {
+            touch(id); // another thread loaded it meanwhile
             return other;
         }
         reclaim();
@@ -258,17 +410,17 @@ struct BrickMap::Impl {
             // budget's worth of evicted bricks: rather than grow the cache,
             // serve this miss from a private copy, valid until this thread's
             // next private load (the caller uses it at once).
-            thread_local std::unique_ptr<CachedBrick> t_private;
+            thread_local CachedBrickPtr t_private;
             t_private = std::move(fresh);
             cached.store(live_bytes + retired_bytes, std::memory_order_relaxed);
             return t_private.get();
         }
         CachedBrick* b = fresh.release();
-        b->stamp.store(tick.fetch_add(1, std::memory_order_relaxed) + 1,
-                       std::memory_order_relaxed);
+        slots[id].stamp.store(tick.fetch_add(1, std::memory_order_relaxed) + 1,
+                              std::memory_order_relaxed);
         live.push_back(b);
         live_bytes += b->bytes;
-        slots[id].store(b, std::memory_order_release);
+        slots[id].brick.store(b, std::memory_order_release);
         evict(b);
         reclaim();
         cached.store(live_bytes + retired_bytes, std::memory_order_relaxed);
@@ -278,6 +430,12 @@ struct BrickMap::Impl {
     /// Trilinear value at lattice position x (in sample units of node's
     /// brick, each in [0, 7]) over the present corners, times weight, added
     /// to out. False if no corner with a positive weight has data.
+    ///
+    /// Branch-free over the corners: an absent corner gets weight +0, which
+    /// adds exactly nothing to the sum of weights (a sum of non-negative
+    /// terms starting at +0) nor to out (out starts at +0, so it is never -0,
+    /// and x + (+-0) == x for any other x; samples are finite). The values are
+    /// therefore bit for bit those of skipping the absent corners.
     bool eval_brick(const CachedBrick& b, const double x[3], double weight,
                     float* out) const {
         int i0[3];
@@ -286,29 +444,77 @@ struct BrickMap::Impl {
             i0[a] = std::min(static_cast<int>(x[a]), 6);
             f[a] = x[a] - i0[a];
         }
-        const int base = i0[0] + 8 * i0[1] + 64 * i0[2];
-        static constexpr int kOffset[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+        // The corners are bits i0, i0 + 1 of rows j0 and j0 + 1 of planes k0
+        // (word k0 of the mask) and k0 + 1. Their values: at their rank among
+        // the present samples. An absent corner reads the next present sample
+        // (or the block's zero sample) with weight 0.
+        const unsigned shift = static_cast<unsigned>(i0[0] + 8 * i0[1]);
+        uint64_t rows[2];
+        unsigned ranks[2][2]; // [plane][row]: rank of the row's corner i0
+        for (int p = 0; p < 2; ++p) {
+            const uint64_t word = b.mask[i0[2] + p];
+            rows[p] = word >> shift;
+            ranks[p][0] =
+                b.rank[i0[2] + p] + popcount64(word & ((uint64_t(1) << shift) - 1));
+            ranks[p][1] = ranks[p][0] + kPopcount8[rows[p] & 0xff];
+        }
+        const double g[3][2] = {
+            {1.0 - f[0], f[0]}, {1.0 - f[1], f[1]}, {1.0 - f[2], f[2]}};
         double w[8];
+        const float* v[8];
         double sum = 0.0;
         for (int c = 0; c < 8; ++c) {
-            const int s = base + kOffset[c];
-            if (!((b.mask[s >> 6] >> (s & 63)) & 1)) {
-                w[c] = 0.0;
-                continue;
-            }
-            w[c] = ((c & 1) ? f[0] : 1.0 - f[0]) * ((c & 2) ? f[1] : 1.0 - f[1]) *
-                   ((c & 4) ? f[2] : 1.0 - f[2]);
+            const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
+            const uint64_t row = rows[cz] >> (8 * cy);
+            const uint64_t bit = (row >> cx) & 1;
+            w[c] = g[0][cx] * g[1][cy] * g[2][cz] * double(bit);
             sum += w[c];
+            const unsigned rank = ranks[cz][cy] + (cx ? unsigned(row & 1) : 0u);
+            v[c] = b.data() + static_cast<std::size_t>(rank) * ds;
         }
         if (!(sum > 0.0)) return false;
         const double scale = weight / sum;
-        for (int c = 0; c < 8; ++c) {
-            if (w[c] == 0.0) continue;
-            const float* v = &b.data[static_cast<std::size_t>(base + kOffset[c]) * ds];
-            const float wc = static_cast<float>(w[c] * scale);
-            for (int k = 0; k < ds; ++k) out[k] += wc * v[k];
+        switch (ds) {
+        case 1:
+            blend<1>(v, w, scale, out);
+            break;
+        case 2:
+            blend<2>(v, w, scale, out);
+            break;
+        case 3:
+            blend<3>(v, w, scale, out);
+            break;
+        case 4:
+            blend<4>(v, w, scale, out);
+            break;
+        default:
+            blend<0>(v, w, scale, out);
+            break;
         }
         return true;
+    }
+
+    /// out[k] += float(w[c] * scale) * v[c][k], corner by corner in order c =
+    /// 0..7 (the
+    /// order of the sums is part of the result). DS: floats per sample, or 0
+    /// for ds (the compiler keeps the sums of a small DS in registers).
+    template <int DS>
+    void blend(const float* const* v, const double* w, double scale, float* out) const {
+        const int n = DS > 0 ? DS : ds;
+        if constexpr (DS > 0) {
+            float acc[DS];
+            for (int k = 0; k < DS; ++k) acc[k] = out[k];
+            for (int c = 0; c < 8; ++c) {
+                const float wc = static_cast<float>(w[c] * scale);
+                for (int k = 0; k < DS; ++k) acc[k] += wc * v[c][k];
+            }
+            for (int k = 0; k < DS; ++k) out[k] = acc[k];
+        } else {
+            for (int c = 0; c < 8; ++c) {
+                const float wc = static_cast<float>(w[c] * scale);
+                for (int k = 0; k < n; ++k) out[k] += wc * v[c][k];
+            }
+        }
     }
 
     /// Value of the level starting at depth `start` along path (falling back
@@ -316,9 +522,8 @@ struct BrickMap::Impl {
     /// Returns the depth used, or -1.
     int eval_level(int tree, const uint32_t* path, int start, const double u[3],
                    const uint32_t q[3], double weight, float* out) const {
-        const std::vector<LookupNode>& nodes = trees[tree];
         for (int d = start; d >= 0; --d) {
-            const CachedBrick& b = *fetch(nodes[path[d]].brick);
+            const CachedBrick& b = *fetch(first_brick[tree] + path[d]);
             const double scale = kBkmBrickEdge * double(1u << d);
             double x[3];
             for (int a = 0; a < 3; ++a) {
@@ -333,25 +538,38 @@ struct BrickMap::Impl {
 
     bool lookup_tree(int tree, const double u[3], float filter_radius, float* out,
                      float* scratch) const {
-        const std::vector<LookupNode>& nodes = trees[tree];
-        if (nodes.empty()) return false;
+        const LookupTree& t = trees[tree];
+        if (t.nodes.empty()) return false;
         uint32_t q[3];
         for (int a = 0; a < 3; ++a) {
             q[a] = static_cast<uint32_t>(std::min(u[a] * double(1u << kCoordBits),
                                                   double((1u << kCoordBits) - 1)));
         }
+        // The node at depth d containing p: its Morton code is that of q's
+        // top d bits.
+        const uint32_t top = kSpread4[q[0] >> (kCoordBits - kTableDepth)] |
+                             (kSpread4[q[1] >> (kCoordBits - kTableDepth)] << 1) |
+                             (kSpread4[q[2] >> (kCoordBits - kTableDepth)] << 2);
         uint32_t path[kBkmMaxDepth + 1];
         path[0] = 0;
         int deepest = 0;
-        for (int d = 1; d <= kBkmMaxDepth; ++d) {
-            const LookupNode& n = nodes[path[d - 1]];
-            const int shift = kCoordBits - d;
-            const unsigned o = ((q[0] >> shift) & 1) | (((q[1] >> shift) & 1) << 1) |
-                               (((q[2] >> shift) & 1) << 2);
-            if (!((n.child_mask >> o) & 1)) break;
-            path[d] =
-                n.first_child + std::popcount(unsigned(n.child_mask) & ((1u << o) - 1));
+        for (int d = 1; d <= t.table_depth; ++d) {
+            const uint32_t i =
+                t.tables[LookupTree::table_offset(d) + (top >> (3 * (kTableDepth - d)))];
+            if (i == kNoNode) break;
+            path[d] = i;
             deepest = d;
+        }
+        if (deepest == t.table_depth) {
+            for (int d = deepest + 1; d <= kBkmMaxDepth; ++d) {
+                const LookupNode& n = t.nodes[path[d - 1]];
+                const int shift = kCoordBits - d;
+                const unsigned o = ((q[0] >> shift) & 1) | (((q[1] >> shift) & 1) << 1) |
+                                   (((q[2] >> shift) & 1) << 2);
+                if (!((n.child_mask >> o) & 1)) break;
+                path[d] = n.first_child + kPopcount8[n.child_mask & ((1u << o) - 1)];
+                deepest = d;
+            }
         }
         if (!(filter_radius > 0.0f))
             return eval_level(tree, path, deepest, u, q, 1.0, out) >= 0;
@@ -406,14 +624,13 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
     for (int t = 0; t < kBkmTrees; ++t) {
         const std::vector<BkmNode>& nodes = m.contents.trees[t];
         std::vector<int64_t> index(nodes.size(), -1);
-        std::vector<LookupNode>& out = m.trees[t];
+        std::vector<LookupNode>& out = m.trees[t].nodes;
+        m.first_brick[t] = static_cast<uint32_t>(m.bricks.size());
         for (std::size_t i = 0; i < nodes.size(); ++i) {
             if (!nodes[i].has_data()) continue;
             index[i] = static_cast<int64_t>(out.size());
-            LookupNode n;
-            n.brick = static_cast<uint32_t>(m.bricks.size());
             m.bricks.emplace_back(t, &nodes[i]);
-            out.push_back(n);
+            out.push_back(LookupNode{});
         }
         // Data nodes are closed under "parent of" and in breadth-first order,
         // so the data children of a node stay contiguous and in octant order.
@@ -430,8 +647,22 @@ BrickMap::BrickMap(const std::string& path, std::size_t cache_bytes,
             }
         }
     }
-    m.slots = std::make_unique<std::atomic<CachedBrick*>[]>(m.bricks.size());
-    for (std::size_t i = 0; i < m.bricks.size(); ++i) m.slots[i].store(nullptr);
+    for (int t = 0; t < kBkmTrees; ++t) {
+        LookupTree& tree = m.trees[t];
+        if (tree.nodes.empty()) continue;
+        int depth = 0;
+        for (std::size_t i = 0; i < tree.nodes.size(); ++i)
+            depth = std::max<int>(depth, m.bricks[m.first_brick[t] + i].second->depth);
+        tree.table_depth = std::min(depth, kTableDepth);
+        tree.tables.assign(LookupTree::table_offset(tree.table_depth + 1), kNoNode);
+        for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+            const BkmNode& n = *m.bricks[m.first_brick[t] + i].second;
+            if (n.depth < 1 || n.depth > tree.table_depth) continue;
+            tree.tables[LookupTree::table_offset(n.depth) +
+                        bkm_morton(n.ix, n.iy, n.iz)] = static_cast<uint32_t>(i);
+        }
+    }
+    m.slots = std::make_unique<BrickSlot[]>(m.bricks.size());
 }
 
 BrickMap::~BrickMap() = default;
@@ -465,29 +696,21 @@ bool BrickMap::lookup(const glm::vec3& p, const glm::vec3& n, float filter_radiu
         u[a] = (double(p[a]) - m.cube_min[a]) * m.inv_side;
         if (!(u[a] >= 0.0 && u[a] <= 1.0)) return false; // outside the cube, or NaN
     }
-    // Trees to try: the dominant axis of n, the others within 55 degrees of
-    // n (closest first), then the no-normal tree.
-    int order[4];
-    int count = 0;
-    const double nx = n.x, ny = n.y, nz = n.z;
-    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-    if (!m.contents.info.ignore_normals && len > 0.0 && std::isfinite(len)) {
-        const double c[3] = {nx / len, ny / len, nz / len};
-        const double m[3] = {std::abs(c[0]), std::abs(c[1]), std::abs(c[2])};
-        int axes[3] = {0, 1, 2}; // by decreasing |component|
-        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
-        if (m[axes[2]] > m[axes[1]]) std::swap(axes[1], axes[2]);
-        if (m[axes[1]] > m[axes[0]]) std::swap(axes[0], axes[1]);
-        for (int k = 0; k < 3; ++k) {
-            const int a = axes[k];
-            if (k == 0 || std::abs(c[a]) >= kCos55)
-                order[count++] = 1 + 2 * a + (c[a] < 0.0 ? 1 : 0);
-        }
-    }
-    order[count++] = 0;
+    // The tree of n's dominant axis first, found without tree_order's
+    // square root and divisions (which a random normal would also make the
+    // processor mispredict) when one axis clearly dominates; the other trees
+    // only if it has no data at p.
+    const int first = m.contents.info.ignore_normals ? 0 : dominant_tree(n);
     float scratch[kBkmMaxDataSize];
     const Impl::Pin pin(m);
+    if (first >= 0) {
+        if (m.lookup_tree(first, u, filter_radius, out, scratch)) return true;
+        std::fill(out, out + m.ds, 0.0f);
+    }
+    int order[4];
+    const int count = tree_order(n, m.contents.info.ignore_normals, order);
     for (int k = 0; k < count; ++k) {
+        if (order[k] == first) continue; // tried
         if (m.lookup_tree(order[k], u, filter_radius, out, scratch)) return true;
         std::fill(out, out + m.ds, 0.0f);
     }
