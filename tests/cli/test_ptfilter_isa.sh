@@ -41,6 +41,15 @@ for p in "${paths[@]}"; do
     grep -q "kernels $p\$" <<<"$out" || fail "-isa $p: -progress 1 does not say 'kernels $p': $out"
     cmp -s out_x86-64.ptc "out_$p.ptc" || fail "-isa $p writes other bytes than x86-64"
 done
+# An old CPU: glibc's math functions (exp, expm1, sincos, atan2: the profiles
+# and their tables) in their SSE2 variants, which glibc picks on a CPU
+# without AVX/FMA (masked here with GLIBC_TUNABLES), and the baseline kernels:
+# the same bytes as this CPU's best path.
+GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA,-AVX512F,-AVX run "$ptfilter" -ssdiffusion \
+    -isa x86-64 in.ptc old_cpu.ptc
+expect_rc 0 "old CPU (GLIBC_TUNABLES, -isa x86-64)" &&
+    { cmp -s "out_${paths[-1]}.ptc" old_cpu.ptc || fail "an old CPU's libm and kernels write other bytes"; }
+
 # SSS_ISA picks the path when -isa does not; -isa wins over it.
 last="${paths[-1]}"
 SSS_ISA=x86-64 run "$ptfilter" -ssdiffusion -progress 1 in.ptc env.ptc
