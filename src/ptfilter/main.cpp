@@ -11,8 +11,6 @@
 #include <string>
 #include <vector>
 
-#include <sys/resource.h>
-
 #include "sss/cli/tool.h"
 #include "sss/cloud/cloud_part.h"
 #include "sss/cloud/point_cloud_io.h"
@@ -367,10 +365,9 @@ int run(const std::vector<std::string>& argv) {
             "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
             read_s, filter_s, job.seconds() - read_s - filter_s, job.seconds());
         if (job.detailed()) {
-            // The peak resident memory of the whole process so far (Linux: KB).
-            struct rusage usage {};
-            getrusage(RUSAGE_SELF, &usage);
-            const double peak = double(usage.ru_maxrss) * 1024.0;
+            // The peak resident memory of this program so far (VmHWM: not
+            // the pages of a large parent that started it, as ru_maxrss).
+            const double peak = double(sss::peak_resident_memory());
             std::printf("ptfilter: peak memory %.1f MB, %.1f bytes per point\n",
                         peak / 1e6, peak / double(std::max<std::size_t>(1, points)));
         }

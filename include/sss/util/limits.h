@@ -82,6 +82,12 @@ MemoryBudget usable_memory();
 /// Memory the process uses now (resident set), in bytes; 0 if unknown.
 uint64_t resident_memory();
 
+/// The largest resident set of this program so far, in bytes (VmHWM; 0 if
+/// unknown). Unlike getrusage's ru_maxrss it starts at the program's exec: a
+/// tool started by a large process (a bench, a Python pipeline) does not
+/// report its parent's pages.
+uint64_t peak_resident_memory();
+
 /// The process would need more memory than it may use.
 class OutOfMemoryError : public Error {
 public:
@@ -93,7 +99,8 @@ public:
 /// "<what> needs about 12.3 GB; this process may use 8.0 GB (cgroup
 /// memory.max); <remedy>". remedy names the option that reduces the need,
 /// e.g. "raise -spacing".
-void check_memory(uint64_t needed_bytes, const std::string& what, const std::string& remedy);
+void check_memory(uint64_t needed_bytes, const std::string& what,
+                  const std::string& remedy);
 
 /// "12.3 GB", "850 MB", "4.0 KB": sizes in messages (powers of 1024).
 std::string format_bytes(uint64_t bytes);

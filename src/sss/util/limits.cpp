@@ -247,6 +247,18 @@ uint64_t resident_memory() {
     return resident * uint64_t(page > 0 ? page : 4096);
 }
 
+uint64_t peak_resident_memory() {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("VmHWM:", 0) == 0) {
+            unsigned long long kb = 0;
+            if (std::sscanf(line.c_str() + 6, "%llu", &kb) == 1)
+                return uint64_t(kb) * 1024;
+        }
+    return 0;
+}
+
 std::string format_bytes(uint64_t bytes) {
     const char* units[] = {"bytes", "KB", "MB", "GB", "TB", "PB"};
     double v = double(bytes);
