@@ -26,9 +26,9 @@ cd "$work"
 
 # At its peak (the evaluation) ptfilter holds the octree's nodes and their
 # expansions, 200 bytes per node (Node 56 + Expansion 144; 0.3 to 0.5 nodes
-# per point, depending on the cloud), and 49 bytes per point: the sorted
+# per point, depending on the cloud), and 48 bytes per point: the sorted
 # sources (pos_rho2, power_area: 32), their order (4), the irradiance that the
-# result overwrites (12) and the receivers' marks (1); 12 more for the
+# result overwrites (12); 12 more for the
 # sources' normals when a disk may need the quadrature (not on these
 # spheres). A regression that holds one more float per point exceeds the
 # budget below; one more array of vectors (a copy of the positions, a second

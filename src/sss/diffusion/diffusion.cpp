@@ -53,9 +53,6 @@ using namespace diffusion_detail;
 struct Selection {
     const std::vector<std::size_t>* receivers = nullptr; // these (result[original])
     std::size_t part = 0, parts = 0; // with parts > 0: this part (result[s - first])
-    // Every receiver, marked wanted one by one: the evaluation then counts its
-    // progress against the marks, not against pb.positions (freed by then).
-    bool all_marked = false;
 };
 
 // Evaluates the selected receivers (all by default) against the whole cloud.
@@ -84,13 +81,7 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
     std::vector<uint32_t> buckets = choose_buckets(tree);
     EvaluationContext cx{pb, options, tables, tree, tolerance};
     std::vector<uint8_t> wanted;
-    if (selection.all_marked) {
-        // Every receiver wanted: the same numbers as no selection (a block
-        // bucket is evaluated whole either way, the others point by point).
-        wanted.assign(tree.order.size(), 1);
-        cx.wanted = wanted.data();
-        cx.wanted_count = wanted.size();
-    } else if (selection.receivers) {
+    if (selection.receivers) {
         // Wanted receivers by sorted position; only their buckets are evaluated.
         std::vector<uint32_t> position(tree.order.size());
         for (std::size_t s = 0; s < tree.order.size(); ++s)
@@ -148,9 +139,7 @@ std::vector<glm::vec3> evaluate_diffusion(DiffusionProblem&& pb,
         return evaluate_diffusion(std::as_const(pb), options, stats_out);
     // The result is the irradiance's own memory: a receiver's irradiance is
     // read by its self term only, just before its result is stored there.
-    Selection all;
-    all.all_marked = true;
-    evaluate(pb, options, all, pb.irradiance, stats_out, nullptr, &pb);
+    evaluate(pb, options, Selection{}, pb.irradiance, stats_out, nullptr, &pb);
     return std::move(pb.irradiance);
 }
 

@@ -418,8 +418,9 @@ const BlockKernels& block_kernels(Isa isa) {
 void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& buckets,
                       std::vector<glm::vec3>& result, DiffusionStats& stats) {
     const std::size_t n = cx.ranged() ? std::size_t(cx.range_end - cx.range_first)
-                          : cx.wanted ? cx.wanted_count
-                                      : cx.pb.positions.size();
+                          : cx.wanted
+                              ? cx.wanted_count
+                              : cx.tree.order.size(); // (pb's positions may be freed)
     const Tree& tree = cx.tree;
     // Each bucket's receiver group: its highest ancestor that is a group
     // (itself when there is none). The buckets are in depth-first order, so a
