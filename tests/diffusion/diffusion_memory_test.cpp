@@ -38,22 +38,11 @@ namespace {
 
 using sss::test::material_profiles;
 using sss::test::problem_from;
+using sss::test::synthetic;
 
 constexpr sss::Criterion kCriteria[] = {sss::Criterion::Error,
                                         sss::Criterion::SolidAngleBox,
                                         sss::Criterion::SolidAngleCentroid};
-
-sss::PointCloud synthetic(sss::SyntheticShape shape, std::size_t n, double size,
-                          double ambient = 0.0) {
-    sss::SyntheticParams sp;
-    sp.shape = shape;
-    sp.count = n;
-    sp.size = size;
-    sp.thickness = 2.0;
-    sp.light_dir = {1, 0.5, 2};
-    sp.ambient = ambient;
-    return sss::make_synthetic_cloud(sp);
-}
 
 bool same_bits(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
     return a.size() == b.size() &&

@@ -29,20 +29,11 @@ namespace {
 
 using sss::test::material_profiles;
 using sss::test::problem_from;
+using sss::test::synthetic;
 
 constexpr sss::Criterion kCriteria[] = {sss::Criterion::Error,
                                         sss::Criterion::SolidAngleBox,
                                         sss::Criterion::SolidAngleCentroid};
-
-sss::PointCloud synthetic(sss::SyntheticShape shape, std::size_t n, double size) {
-    sss::SyntheticParams sp;
-    sp.shape = shape;
-    sp.count = n;
-    sp.size = size;
-    sp.thickness = 2.0;
-    sp.light_dir = {1, 0.5, 2};
-    return sss::make_synthetic_cloud(sp);
-}
 
 sss::DiffusionProblem sphere_problem() {
     return problem_from(synthetic(sss::SyntheticShape::Sphere, 20000, 20.0),

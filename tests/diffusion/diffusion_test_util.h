@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sss/cloud/point_cloud.h"
+#include "sss/cloud/synthetic.h"
 #include "sss/diffusion/diffusion.h"
 #include "sss/diffusion/material.h"
 #include "sss/diffusion/profile.h"
@@ -43,6 +44,20 @@ inline DiffusionProblem problem_from(const PointCloud& cloud,
         pb.irradiance[i] = {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]};
     pb.profiles = std::move(profiles);
     return pb;
+}
+
+/// A synthetic lit cloud (ptsynth's shapes): thickness 2 for boxes, light
+/// from (1, 0.5, 2).
+inline PointCloud synthetic(SyntheticShape shape, std::size_t n, double size,
+                            double ambient = 0.0) {
+    SyntheticParams sp;
+    sp.shape = shape;
+    sp.count = n;
+    sp.size = size;
+    sp.thickness = 2.0;
+    sp.light_dir = {1, 0.5, 2};
+    sp.ambient = ambient;
+    return make_synthetic_cloud(sp);
 }
 
 } // namespace sss::test

@@ -129,54 +129,108 @@ std::vector<std::string> describe_material(const SsDiffusionOptions& o) {
 
 namespace {
 
-// The cloud's points as a diffusion problem in mm: positions, normals, areas
-// and irradiance, the channels checked.
+// The points as a diffusion problem in mm (positions, normals, areas,
+// irradiance), a cloud or chunk of one at a time (the streamed job reads its
+// inputs in chunks); finish() checks the channels as a whole cloud.
+//
+// The diffusion is evaluated in mm, the material's own unit, not in scene
+// units: its profile tables are floats whose entries go as powers of the
+// material's lengths (R ~ 1/l^2, its r^2-derivatives up to ~1/l^8), which
+// overflowed or underflowed for marble (dmfp 4-8.5 mm) at -unitlength below
+// ~1e-6 or above ~1e5: a cm scene scaled by 1e-5 or 3e6. In mm, real
+// materials' lengths are 0.01 to 100 and sum R A E is the same (R A has no
+// unit), so the result does not depend on the scene's scale.
+class ProblemReader {
+public:
+    // `header`: the whole (merged) cloud's channels, with or without data.
+    ProblemReader(const PointCloud& header, const SsDiffusionOptions& o)
+        : m_o(o), m_to_mm(1.0 / o.material.unitlength),
+          m_area(header.find_channel(o.area_channel)),
+          m_radiance(header.find_channel(o.radiance_channel)) {}
+
+    void reserve(std::size_t n) {
+        m_pb.positions.reserve(n);
+        m_pb.normals.reserve(n);
+        m_pb.areas.reserve(n);
+        m_pb.irradiance.reserve(n);
+    }
+
+    // Appends the first k points of `chunk` (its channels as the header's, or
+    // absent: zeros).
+    void add(const PointCloud& chunk, std::size_t k) {
+        const std::size_t base = m_pb.positions.size();
+        for (std::size_t j = 0; j < k; ++j)
+            m_pb.positions.push_back(glm::vec3(glm::dvec3(chunk.positions[j]) * m_to_mm));
+        m_pb.normals.insert(m_pb.normals.end(), chunk.normals.begin(),
+                            chunk.normals.begin() + std::ptrdiff_t(k));
+        // Area: the explicit channel, else the disk of the stored radius.
+        if (m_area && m_area->components() == 1) {
+            const Channel* a = chunk.find_channel(m_o.area_channel);
+            for (std::size_t j = 0; j < k; ++j) {
+                const float v = a ? a->data[j] : 0.0f;
+                if ((!(v >= 0.0f) || !std::isfinite(v)) && !m_bad_area)
+                    m_bad_area.emplace(base + j, v);
+                m_pb.areas.push_back(float(v * m_to_mm * m_to_mm));
+            }
+        } else if (!m_area) {
+            for (std::size_t j = 0; j < k; ++j) {
+                const float r = chunk.radii[j];
+                m_pb.areas.push_back(float(kPi * (r * m_to_mm) * (r * m_to_mm)));
+            }
+        }
+        if (m_radiance && m_radiance->components() == 3) {
+            const Channel* e = chunk.find_channel(m_o.radiance_channel);
+            for (std::size_t j = 0; j < k; ++j)
+                m_pb.irradiance.push_back(
+                    e ? glm::vec3(e->data[3 * j], e->data[3 * j + 1], e->data[3 * j + 2])
+                      : glm::vec3(0.0f));
+        }
+    }
+
+    std::size_t size() const { return m_pb.positions.size(); }
+
+    // The channel checks, in the order they always had (type of the area
+    // channel, the first impossible area, the radiance channel), and the
+    // problem.
+    DiffusionProblem finish(const PointCloud& header, SsDiffusionReport& rep) {
+        const std::size_t n = size();
+        if (m_area || n == 0) {
+            if (m_area && m_area->components() != 1)
+                throw ValueError("channel '" + m_o.area_channel + "' is " +
+                                 channel_type_name(m_area->type) + ", expected float");
+            if (m_bad_area)
+                throw ValueError("channel '" + m_o.area_channel +
+                                 "': negative or invalid area " +
+                                 std::to_string(m_bad_area->second) + " at point " +
+                                 std::to_string(m_bad_area->first));
+        } else {
+            rep.warnings.push_back("no '" + m_o.area_channel +
+                                   "' channel: using pi * radius^2 as each point's area");
+        }
+        if (n > 0)
+            require_channel(header, m_o.radiance_channel, 3,
+                            MissingChannelError::Role::Radiance);
+        m_pb.areas.resize(n);      // n == 0: the unread area channel
+        m_pb.irradiance.resize(n); // n == 0 only: the channel is required otherwise
+        return std::move(m_pb);
+    }
+
+private:
+    const SsDiffusionOptions& m_o;
+    const double m_to_mm;
+    const Channel* m_area;     // in the header
+    const Channel* m_radiance; // in the header
+    DiffusionProblem m_pb;
+    std::optional<std::pair<std::size_t, float>> m_bad_area; // the first one
+};
+
+// A whole cloud's points as a diffusion problem in mm, the channels checked.
 DiffusionProblem read_points(const PointCloud& in, const SsDiffusionOptions& o,
                              SsDiffusionReport& rep) {
-    const std::size_t n = in.size();
-    // The diffusion is evaluated in mm, the material's own unit, not in scene
-    // units: its profile tables are floats whose entries go as powers of the
-    // material's lengths (R ~ 1/l^2, its r^2-derivatives up to ~1/l^8), which
-    // overflowed or underflowed for marble (dmfp 4-8.5 mm) at -unitlength
-    // below ~1e-6 or above ~1e5: a cm scene scaled by 1e-5 or 3e6. In mm,
-    // real materials' lengths are 0.01 to 100 and sum R A E is the same (R A
-    // has no unit), so the result does not depend on the scene's scale.
-    const double to_mm = 1.0 / o.material.unitlength;
-    DiffusionProblem pb;
-    pb.positions.resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-        pb.positions[i] = glm::vec3(glm::dvec3(in.positions[i]) * to_mm);
-    pb.normals = in.normals;
-    pb.areas.resize(n);
-    pb.irradiance.resize(n);
-
-    // Area: the explicit channel, else the disk of the stored radius.
-    if (const Channel* area = in.find_channel(o.area_channel); area || n == 0) {
-        if (area && area->components() != 1)
-            throw ValueError("channel '" + o.area_channel + "' is " +
-                             channel_type_name(area->type) + ", expected float");
-        for (std::size_t i = 0; i < n; ++i) {
-            float a = area->data[i];
-            if (!(a >= 0.0f) || !std::isfinite(a))
-                throw ValueError("channel '" + o.area_channel +
-                                 "': negative or invalid area " + std::to_string(a) +
-                                 " at point " + std::to_string(i));
-            pb.areas[i] = float(a * to_mm * to_mm);
-        }
-    } else {
-        rep.warnings.push_back("no '" + o.area_channel +
-                               "' channel: using pi * radius^2 as each point's area");
-        for (std::size_t i = 0; i < n; ++i)
-            pb.areas[i] = float(kPi * (in.radii[i] * to_mm) * (in.radii[i] * to_mm));
-    }
-    if (n > 0) {
-        const Channel& rad = require_channel(in, o.radiance_channel, 3,
-                                             MissingChannelError::Role::Radiance);
-        for (std::size_t i = 0; i < n; ++i)
-            pb.irradiance[i] = {rad.data[3 * i], rad.data[3 * i + 1],
-                                rad.data[3 * i + 2]};
-    }
-    return pb;
+    ProblemReader reader(in, o);
+    reader.reserve(in.size());
+    reader.add(in, in.size());
+    return reader.finish(in, rep);
 }
 
 // Where the per-point material values come from: a channel, else the
@@ -427,14 +481,8 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
     SsDiffusionReport local;
     SsDiffusionReport& rep = report ? *report : local;
     rep.material_lines = describe_material(o);
-    const double to_mm = 1.0 / o.material.unitlength; // see read_points()
     const MaterialSpec& m = o.material;
 
-    // The channels the diffusion reads, as the merged cloud has them.
-    const Channel* area = m_merged.find_channel(o.area_channel);
-    const Channel* radiance = m_merged.find_channel(o.radiance_channel);
-    const bool area_ok = area && area->components() == 1;
-    const bool radiance_ok = radiance && radiance->components() == 3;
     // Per-point materials: their channels with data, the others without.
     PointCloud materials = m_merged;
     std::vector<Channel*> material_channels;
@@ -445,61 +493,27 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
                 c.components() == 3)
                 material_channels.push_back(&c);
 
-    DiffusionProblem pb;
+    ProblemReader points(m_merged, o);
     bool verified = true;
     uint64_t claimed = 0;
     for (const Input& in : m_inputs) {
         verified = verified && in.reader->size_verified();
         claimed += in.reader->size();
     }
-    if (verified) {
-        const std::size_t n = std::size_t(claimed);
-        pb.positions.reserve(n);
-        pb.normals.reserve(n);
-        pb.areas.reserve(n);
-        pb.irradiance.reserve(n);
-    }
-    // The first impossible area, reported once every input is read (as when
-    // the cloud was read whole first).
-    std::optional<std::pair<std::size_t, float>> bad_area;
+    if (verified) points.reserve(std::size_t(claimed));
     PointCloud chunk;
     for (Input& in : m_inputs) {
         ScopedStage stage("reading " + in.path);
         in.points = 0;
         while (std::size_t k = in.reader->read(chunk, kChunkPoints)) {
-            const std::size_t base = pb.positions.size();
             for (std::size_t j = 0; j < k; ++j) {
                 const glm::vec3& p = chunk.positions[j];
-                if (base + j == 0) m_bounds.lo = m_bounds.hi = p;
+                if (points.size() + j == 0) m_bounds.lo = m_bounds.hi = p;
                 m_bounds.lo = glm::min(m_bounds.lo, p);
                 m_bounds.hi = glm::max(m_bounds.hi, p);
                 m_max_radius = std::max(m_max_radius, chunk.radii[j]);
-                pb.positions.push_back(glm::vec3(glm::dvec3(p) * to_mm));
             }
-            pb.normals.insert(pb.normals.end(), chunk.normals.begin(),
-                              chunk.normals.end());
-            if (area_ok) {
-                const Channel* a = chunk.find_channel(o.area_channel);
-                for (std::size_t j = 0; j < k; ++j) {
-                    const float v = a ? a->data[j] : 0.0f;
-                    if ((!(v >= 0.0f) || !std::isfinite(v)) && !bad_area)
-                        bad_area.emplace(base + j, v);
-                    pb.areas.push_back(float(v * to_mm * to_mm));
-                }
-            } else if (!area) {
-                for (std::size_t j = 0; j < k; ++j) {
-                    const float r = chunk.radii[j];
-                    pb.areas.push_back(float(kPi * (r * to_mm) * (r * to_mm)));
-                }
-            }
-            if (radiance_ok) {
-                const Channel* e = chunk.find_channel(o.radiance_channel);
-                for (std::size_t j = 0; j < k; ++j)
-                    pb.irradiance.push_back(e ? glm::vec3(e->data[3 * j],
-                                                          e->data[3 * j + 1],
-                                                          e->data[3 * j + 2])
-                                              : glm::vec3(0.0f));
-            }
+            points.add(chunk, k);
             for (Channel* c : material_channels)
                 append_channel(chunk, k, c->name, 3, c->data);
             in.points += k;
@@ -507,29 +521,10 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
     }
     chunk = PointCloud{};
     for (Input& in : m_inputs) in.reader.reset(); // close the inputs
-    const std::size_t n = pb.positions.size();
+    const std::size_t n = points.size();
     m_points = n;
     m_read_seconds = watch.seconds();
-
-    // The checks of read_points(), in its order.
-    if (area || n == 0) {
-        if (area && area->components() != 1)
-            throw ValueError("channel '" + o.area_channel + "' is " +
-                             channel_type_name(area->type) + ", expected float");
-        if (bad_area)
-            throw ValueError("channel '" + o.area_channel +
-                             "': negative or invalid area " +
-                             std::to_string(bad_area->second) + " at point " +
-                             std::to_string(bad_area->first));
-    } else {
-        rep.warnings.push_back("no '" + o.area_channel +
-                               "' channel: using pi * radius^2 as each point's area");
-    }
-    if (n > 0)
-        require_channel(m_merged, o.radiance_channel, 3,
-                        MissingChannelError::Role::Radiance);
-    pb.areas.resize(n);      // n == 0: the unread area channel
-    pb.irradiance.resize(n); // n == 0 only: the channel is required otherwise
+    DiffusionProblem pb = points.finish(m_merged, rep);
     assign_profiles(materials, n, o, pb, rep);
     materials = PointCloud{};
 
