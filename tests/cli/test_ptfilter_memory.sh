@@ -25,8 +25,9 @@ trap 'rm -rf "$work"' EXIT
 cd "$work"
 
 # At its peak (the evaluation) ptfilter holds the octree's nodes and their
-# expansions, 200 bytes per node (Node 56 + Expansion 144; 0.3 to 0.5 nodes
-# per point, depending on the cloud), and 48 bytes per point: the sorted
+# expansions, 200 bytes per node (Node 56 + Expansion 144; leaves of at most
+# 16 points: 0.14 to 0.27 nodes per point on these spheres, depending on how
+# the octree's levels fall on them), and 48 bytes per point: the sorted
 # sources (pos_rho2, power_area: 32), their order (4), the irradiance that the
 # result overwrites (12); 12 more for the
 # sources' normals when a disk may need the quadrature (not on these

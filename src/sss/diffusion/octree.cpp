@@ -32,11 +32,18 @@ uint64_t spread_bits(uint64_t x) {
     return x;
 }
 
-// (Morton code, original index), sorted.
-using MortonKeys = std::vector<std::pair<uint64_t, uint32_t>>;
+// A point's Morton code and original index; sorted by both, so that the
+// order does not depend on the thread count.
+struct MortonKey {
+    uint64_t code;
+    uint32_t index;
+    bool operator<(const MortonKey& o) const {
+        return code < o.code || (code == o.code && index < o.index);
+    }
+};
 
 // Morton codes on a 2^21 grid over the points' bounding cube, sorted.
-MortonKeys sorted_morton_keys(const std::vector<glm::vec3>& positions) {
+UninitVector<MortonKey> sorted_morton(const std::vector<glm::vec3>& positions) {
     const std::size_t n = positions.size();
     glm::dvec3 lo(std::numeric_limits<double>::max()),
         hi(-std::numeric_limits<double>::max());
@@ -46,45 +53,63 @@ MortonKeys sorted_morton_keys(const std::vector<glm::vec3>& positions) {
     }
     double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 1e-30});
     double scale = double((1u << 21) - 1) / extent;
-    MortonKeys keys(n);
-    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-        glm::dvec3 g = (glm::dvec3(positions[i]) - lo) * scale;
-        uint64_t code = spread_bits(uint64_t(g.x)) | spread_bits(uint64_t(g.y)) << 1 |
-                        spread_bits(uint64_t(g.z)) << 2;
-        keys[i] = {code, uint32_t(i)};
-    });
-    // Unique (code, index) keys make the order independent of the thread count.
+    UninitVector<MortonKey> keys(n);
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                glm::dvec3 g = (glm::dvec3(positions[i]) - lo) * scale;
+                uint64_t code = spread_bits(uint64_t(g.x)) |
+                                spread_bits(uint64_t(g.y)) << 1 |
+                                spread_bits(uint64_t(g.z)) << 2;
+                keys[i] = {code, uint32_t(i)};
+            }
+        });
     oneapi::tbb::parallel_sort(keys.begin(), keys.end());
     return keys;
 }
 
-// The sources in Morton order: tree.order and the sorted source arrays.
-void sort_sources(const DiffusionProblem& pb, const MortonKeys& keys, Tree& tree,
-                  bool normals = true) {
+// The sources in Morton order: tree.order and the sorted source arrays. With
+// `release`, each of the problem's arrays is freed as soon as its last sorted
+// copy is made, so that the problem and the tree are never held whole at once
+// (the peak of ptfilter's memory otherwise, issue 17).
+void sort_sources(const DiffusionProblem& pb, const UninitVector<MortonKey>& keys,
+                  Tree& tree, bool normals, DiffusionProblem* release) {
     const std::size_t n = keys.size();
+    // Gathers: each sorted position is written once, in parallel.
+    auto gather = [&](auto&& body) {
+        oneapi::tbb::parallel_for(
+            oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+            [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                for (std::size_t s = range.begin(); s != range.end(); ++s)
+                    body(s, keys[s].index);
+            });
+    };
     tree.order.resize(n);
+    gather([&](std::size_t s, uint32_t i) { tree.order[s] = i; });
     tree.pos_rho2.resize(n);
-    tree.power_area.resize(n);
-    if (normals) tree.normal.resize(n);
-    // A gather: each sorted position is written once, in parallel.
-    oneapi::tbb::parallel_for(
-        oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
-        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t s = range.begin(); s != range.end(); ++s) {
-                const uint32_t i = keys[s].second;
-                tree.order[s] = i;
-                float a = pb.areas[i];
-                tree.pos_rho2[s] = glm::vec4(pb.positions[i], float(a / kPi));
-                tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
-                if (normals)
-                    tree.normal[s] = pb.normals.empty() ? glm::vec3(0) : pb.normals[i];
-            }
+    gather([&](std::size_t s, uint32_t i) {
+        tree.pos_rho2[s] = glm::vec4(pb.positions[i], float(pb.areas[i] / kPi));
+    });
+    if (release) std::vector<glm::vec3>().swap(release->positions);
+    if (normals) {
+        tree.normal.resize(n);
+        gather([&](std::size_t s, uint32_t i) {
+            tree.normal[s] = pb.normals.empty() ? glm::vec3(0) : pb.normals[i];
         });
+    }
+    if (release) std::vector<glm::vec3>().swap(release->normals);
+    tree.power_area.resize(n);
+    gather([&](std::size_t s, uint32_t i) {
+        const float a = pb.areas[i];
+        tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
+    });
+    if (release) std::vector<float>().swap(release->areas);
 }
 
 // Breadth-first construction: children are appended contiguously after
 // their parents, so a reverse sweep is bottom-up. No recursion.
-void split_nodes(const MortonKeys& keys, Tree& tree) {
+void split_nodes(const UninitVector<MortonKey>& keys, Tree& tree) {
     const std::size_t n = keys.size();
     tree.nodes.reserve(n / 2 + 8);
     Node root;
@@ -94,7 +119,7 @@ void split_nodes(const MortonKeys& keys, Tree& tree) {
     for (std::size_t k = 0; k < tree.nodes.size(); ++k) {
         Node node = tree.nodes[k];
         if (node.count <= kLeafSize) continue;
-        uint64_t a = keys[node.first].first, b = keys[node.first + node.count - 1].first;
+        uint64_t a = keys[node.first].code, b = keys[node.first + node.count - 1].code;
         uint64_t diff = a ^ b;
         if (diff == 0) continue; // coincident at octree resolution: one big leaf
         int top = 63 - std::countl_zero(diff);
@@ -103,13 +128,12 @@ void split_nodes(const MortonKeys& keys, Tree& tree) {
         uint32_t begin = node.first, end = node.first + node.count;
         uint32_t children = 0;
         for (uint32_t s = begin; s < end;) {
-            uint64_t digit = (keys[s].first >> shift) & 7u;
+            uint64_t digit = (keys[s].code >> shift) & 7u;
             // Codes are sorted and share the bits above `shift`.
-            auto it = std::upper_bound(
-                keys.begin() + s, keys.begin() + end, digit,
-                [shift](uint64_t d, const std::pair<uint64_t, uint32_t>& kv) {
-                    return d < ((kv.first >> shift) & 7u);
-                });
+            auto it = std::upper_bound(keys.begin() + s, keys.begin() + end, digit,
+                                       [shift](uint64_t d, const MortonKey& key) {
+                                           return d < ((key.code >> shift) & 7u);
+                                       });
             uint32_t e = uint32_t(it - keys.begin());
             Node child;
             child.first = s;
@@ -124,72 +148,167 @@ void split_nodes(const MortonKeys& keys, Tree& tree) {
     }
 }
 
-// Moments from each node's own points (N log N work, in parallel, exact
-// in double about the node centroid).
+// A leaf's moments and bounds from its points, in double about its centroid.
+void leaf_moments(Tree& tree, uint32_t k) {
+    Node& node = tree.nodes[k];
+    const uint32_t b = node.first, e = node.first + node.count;
+    glm::dvec3 wsum_p(0), asum_p(0), psum(0);
+    double wsum = 0, asum = 0;
+    glm::dvec3 blo(std::numeric_limits<double>::max()),
+        bhi(-std::numeric_limits<double>::max());
+    float max_rho2 = 0;
+    for (uint32_t s = b; s < e; ++s) {
+        glm::dvec3 p(tree.pos_rho2[s]);
+        const glm::vec4& pa = tree.power_area[s];
+        // |power| weights keep the centroid inside the node even when
+        // irradiance is negative or cancels.
+        double w = std::abs(pa.x) + std::abs(pa.y) + std::abs(pa.z);
+        wsum += w;
+        wsum_p += w * p;
+        asum += pa.w;
+        asum_p += double(pa.w) * p;
+        psum += p;
+        blo = glm::min(blo, p);
+        bhi = glm::max(bhi, p);
+        max_rho2 = std::max(max_rho2, tree.pos_rho2[s].w);
+    }
+    glm::dvec3 c = wsum > 0   ? wsum_p / wsum
+                   : asum > 0 ? asum_p / asum
+                              : psum / double(e - b);
+    Expansion ex{};
+    ex.c = glm::vec3(c);
+    double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
+    double r2max = 0;
+    for (uint32_t s = b; s < e; ++s) {
+        glm::dvec3 dp = glm::dvec3(tree.pos_rho2[s]) - c;
+        r2max = std::max(r2max, glm::dot(dp, dp));
+        const glm::vec4& pa = tree.power_area[s];
+        for (int ch = 0; ch < 3; ++ch) {
+            double w = pa[ch];
+            phi[ch] += w;
+            aphi[ch] += std::abs(w);
+            d[ch][0] += w * dp.x;
+            d[ch][1] += w * dp.y;
+            d[ch][2] += w * dp.z;
+            q[ch][0] += w * dp.x * dp.x;
+            q[ch][1] += w * dp.x * dp.y;
+            q[ch][2] += w * dp.x * dp.z;
+            q[ch][3] += w * dp.y * dp.y;
+            q[ch][4] += w * dp.y * dp.z;
+            q[ch][5] += w * dp.z * dp.z;
+        }
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+        ex.phi[ch] = float(phi[ch]);
+        ex.abs_phi[ch] = float(aphi[ch]);
+        for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(d[ch][i]);
+        for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(q[ch][i]);
+    }
+    tree.expansions[k] = ex;
+    node.lo = glm::vec3(blo);
+    node.hi = glm::vec3(bhi);
+    node.area = float(asum);
+    node.radius = float(std::sqrt(r2max));
+    node.max_rho = std::sqrt(max_rho2);
+}
+
+// An inner node's moments from its children's (the parallel axis theorem, in
+// double): O(children), where summing its points again was O(points) per
+// level (issue 17). The centroid weights are the children's: sum |power| is
+// their abs_phi, then their area, then their point count, as leaf_moments()
+// falls back. The radius is exact: the farthest point from the centroid.
+void inner_moments(Tree& tree, uint32_t k) {
+    Node& node = tree.nodes[k];
+    const uint32_t c0 = node.child_first, c1 = node.child_first + node.child_count;
+    double wsum = 0, asum = 0;
+    glm::dvec3 wsum_p(0), asum_p(0), csum_p(0);
+    glm::vec3 lo = tree.nodes[c0].lo, hi = tree.nodes[c0].hi;
+    float max_rho = 0;
+    for (uint32_t c = c0; c < c1; ++c) {
+        const Node& child = tree.nodes[c];
+        const Expansion& ce = tree.expansions[c];
+        const glm::dvec3 cc(ce.c);
+        const double w = double(ce.abs_phi[0]) + ce.abs_phi[1] + ce.abs_phi[2];
+        wsum += w;
+        wsum_p += w * cc;
+        asum += child.area;
+        asum_p += double(child.area) * cc;
+        csum_p += double(child.count) * cc;
+        lo = glm::min(lo, child.lo);
+        hi = glm::max(hi, child.hi);
+        max_rho = std::max(max_rho, child.max_rho);
+    }
+    const glm::dvec3 c = wsum > 0   ? wsum_p / wsum
+                         : asum > 0 ? asum_p / asum
+                                    : csum_p / double(node.count);
+    double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
+    for (uint32_t ci = c0; ci < c1; ++ci) {
+        const Expansion& ce = tree.expansions[ci];
+        const glm::dvec3 sv = glm::dvec3(ce.c) - c;
+        const double s[3] = {sv.x, sv.y, sv.z};
+        for (int ch = 0; ch < 3; ++ch) {
+            const double p = ce.phi[ch];
+            const double dc[3] = {ce.d[ch][0], ce.d[ch][1], ce.d[ch][2]};
+            phi[ch] += p;
+            aphi[ch] += ce.abs_phi[ch];
+            for (int a = 0; a < 3; ++a) d[ch][a] += dc[a] + p * s[a];
+            // Q about c: sum w (dp + s)(dp + s)^T = Q_c + s D^T + D s^T + phi s s^T.
+            int i = 0;
+            for (int a = 0; a < 3; ++a)
+                for (int bb = a; bb < 3; ++bb, ++i)
+                    q[ch][i] +=
+                        ce.q[ch][i] + s[a] * dc[bb] + dc[a] * s[bb] + p * s[a] * s[bb];
+        }
+    }
+    double r2max = 0;
+    for (uint32_t s = node.first; s < node.first + node.count; ++s) {
+        const glm::dvec3 dp = glm::dvec3(tree.pos_rho2[s]) - c;
+        r2max = std::max(r2max, glm::dot(dp, dp));
+    }
+    Expansion ex{};
+    ex.c = glm::vec3(c);
+    for (int ch = 0; ch < 3; ++ch) {
+        ex.phi[ch] = float(phi[ch]);
+        ex.abs_phi[ch] = float(aphi[ch]);
+        for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(d[ch][i]);
+        for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(q[ch][i]);
+    }
+    tree.expansions[k] = ex;
+    node.lo = lo;
+    node.hi = hi;
+    node.area = float(asum);
+    node.radius = float(std::sqrt(r2max));
+    node.max_rho = max_rho;
+}
+
+// Moments bottom-up, a level at a time: the breadth-first order keeps each
+// depth contiguous, and a node's children are one level below it. In
+// parallel within a level; no node depends on the thread count.
 void compute_moments(Tree& tree) {
     tree.expansions.resize(tree.nodes.size());
-    oneapi::tbb::parallel_for(std::size_t(0), tree.nodes.size(), [&](std::size_t k) {
-        Node& node = tree.nodes[k];
-        const uint32_t b = node.first, e = node.first + node.count;
-        glm::dvec3 wsum_p(0), asum_p(0), psum(0);
-        double wsum = 0, asum = 0;
-        glm::dvec3 blo(std::numeric_limits<double>::max()),
-            bhi(-std::numeric_limits<double>::max());
-        float max_rho2 = 0;
-        for (uint32_t s = b; s < e; ++s) {
-            glm::dvec3 p(tree.pos_rho2[s]);
-            const glm::vec4& pa = tree.power_area[s];
-            // |power| weights keep the centroid inside the node even when
-            // irradiance is negative or cancels.
-            double w = std::abs(pa.x) + std::abs(pa.y) + std::abs(pa.z);
-            wsum += w;
-            wsum_p += w * p;
-            asum += pa.w;
-            asum_p += double(pa.w) * p;
-            psum += p;
-            blo = glm::min(blo, p);
-            bhi = glm::max(bhi, p);
-            max_rho2 = std::max(max_rho2, tree.pos_rho2[s].w);
-        }
-        glm::dvec3 c = wsum > 0   ? wsum_p / wsum
-                       : asum > 0 ? asum_p / asum
-                                  : psum / double(e - b);
-        Expansion ex{};
-        ex.c = glm::vec3(c);
-        double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
-        double r2max = 0;
-        for (uint32_t s = b; s < e; ++s) {
-            glm::dvec3 dp = glm::dvec3(tree.pos_rho2[s]) - c;
-            r2max = std::max(r2max, glm::dot(dp, dp));
-            const glm::vec4& pa = tree.power_area[s];
-            for (int ch = 0; ch < 3; ++ch) {
-                double w = pa[ch];
-                phi[ch] += w;
-                aphi[ch] += std::abs(w);
-                d[ch][0] += w * dp.x;
-                d[ch][1] += w * dp.y;
-                d[ch][2] += w * dp.z;
-                q[ch][0] += w * dp.x * dp.x;
-                q[ch][1] += w * dp.x * dp.y;
-                q[ch][2] += w * dp.x * dp.z;
-                q[ch][3] += w * dp.y * dp.y;
-                q[ch][4] += w * dp.y * dp.z;
-                q[ch][5] += w * dp.z * dp.z;
-            }
-        }
-        for (int ch = 0; ch < 3; ++ch) {
-            ex.phi[ch] = float(phi[ch]);
-            ex.abs_phi[ch] = float(aphi[ch]);
-            for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(d[ch][i]);
-            for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(q[ch][i]);
-        }
-        tree.expansions[k] = ex;
-        node.lo = glm::vec3(blo);
-        node.hi = glm::vec3(bhi);
-        node.area = float(asum);
-        node.radius = float(std::sqrt(r2max));
-        node.max_rho = std::sqrt(max_rho2);
-    });
+    // [begin, end) of each depth: the next depth is the children of this one.
+    std::vector<std::pair<uint32_t, uint32_t>> levels;
+    for (uint32_t begin = 0, end = 1; begin < end;) {
+        levels.push_back({begin, end});
+        uint32_t next = end;
+        for (uint32_t k = begin; k < end; ++k)
+            if (tree.nodes[k].child_count > 0)
+                next = tree.nodes[k].child_first + tree.nodes[k].child_count;
+        begin = end;
+        end = next;
+    }
+    for (std::size_t l = levels.size(); l-- > 0;) {
+        oneapi::tbb::parallel_for(
+            oneapi::tbb::blocked_range<uint32_t>(levels[l].first, levels[l].second, 256),
+            [&](const oneapi::tbb::blocked_range<uint32_t>& range) {
+                for (uint32_t k = range.begin(); k != range.end(); ++k) {
+                    if (tree.nodes[k].child_count == 0)
+                        leaf_moments(tree, k);
+                    else
+                        inner_moments(tree, k);
+                }
+            });
+    }
 }
 
 } // namespace
@@ -210,30 +329,24 @@ bool normals_needed(const DiffusionProblem& pb, const Tables& tables) {
 
 Tree build_tree(const DiffusionProblem& pb, DiffusionProblem* release, bool normals) {
     Tree tree;
-    MortonKeys keys = sorted_morton_keys(pb.positions);
-    sort_sources(pb, keys, tree, normals);
-    if (release) {
-        // The tree holds sorted copies now.
-        std::vector<glm::vec3>().swap(release->positions);
-        std::vector<glm::vec3>().swap(release->normals);
-        std::vector<float>().swap(release->areas);
-    }
+    UninitVector<MortonKey> keys = sorted_morton(pb.positions);
+    sort_sources(pb, keys, tree, normals, release);
     split_nodes(keys, tree);
-    MortonKeys().swap(keys); // before the moments allocate the expansions
+    UninitVector<MortonKey>().swap(keys); // before the moments allocate the expansions
     compute_moments(tree);
     return tree;
 }
 
 Tree sorted_sources(const DiffusionProblem& pb) {
     Tree tree;
-    sort_sources(pb, sorted_morton_keys(pb.positions), tree);
+    sort_sources(pb, sorted_morton(pb.positions), tree, true, nullptr);
     return tree;
 }
 
 std::vector<uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
-    MortonKeys keys = sorted_morton_keys(positions);
+    const UninitVector<MortonKey> keys = sorted_morton(positions);
     std::vector<uint32_t> order(keys.size());
-    for (std::size_t s = 0; s < keys.size(); ++s) order[s] = keys[s].second;
+    for (std::size_t s = 0; s < keys.size(); ++s) order[s] = keys[s].index;
     return order;
 }
 

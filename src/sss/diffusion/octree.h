@@ -12,13 +12,14 @@
 #include <glm/vec4.hpp>
 
 #include "sss/diffusion/diffusion.h"
+#include "sss/util/uninitialized.h"
 
 #include "profile_tables.h"
 
 namespace sss::diffusion_detail {
 
 // Octree over Morton-sorted points.
-constexpr uint32_t kLeafSize = 8;
+constexpr uint32_t kLeafSize = 16;
 constexpr uint32_t kNone = 0xffffffffu;
 
 struct Node {
@@ -42,16 +43,18 @@ struct Expansion {
     // (|d| is computed where needed: 12 bytes less per node, issue 17.)
 };
 
+// The large arrays are UninitVectors: filled in parallel right after their
+// allocation (see sss/util/uninitialized.h).
 struct Tree {
     std::vector<Node> nodes;
-    std::vector<Expansion> expansions;
-    std::vector<uint32_t> order; // sorted position -> original index
+    UninitVector<Expansion> expansions;
+    UninitVector<uint32_t> order; // sorted position -> original index
     // Sorted source data.
-    std::vector<glm::vec4> pos_rho2;   // x y z rho^2
-    std::vector<glm::vec4> power_area; // A E (rgb), A
+    UninitVector<glm::vec4> pos_rho2;   // x y z rho^2
+    UninitVector<glm::vec4> power_area; // A E (rgb), A
     // Empty when no source disk can need the disk quadrature, the only reader
     // of the normals (see build_tree()).
-    std::vector<glm::vec3> normal;
+    UninitVector<glm::vec3> normal;
 };
 
 // Sorts the sources into Morton order and builds the nodes (breadth first,

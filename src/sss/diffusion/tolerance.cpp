@@ -29,7 +29,7 @@ uint32_t reference_node(const Tree& tree, uint32_t bucket, double region) {
 
 } // namespace
 
-DiffusionReference reference_of(const std::vector<glm::vec4>& power_area) {
+DiffusionReference reference_of(const UninitVector<glm::vec4>& power_area) {
     double asum = 0, aphi[3] = {0, 0, 0};
     for (const glm::vec4& pa : power_area) {
         asum += pa.w;

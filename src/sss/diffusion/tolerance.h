@@ -30,7 +30,7 @@ ToleranceModel tolerance_model(const DiffusionProblem& pb,
 
 // The reference from the sources in the tree's order (Tree::power_area): the
 // same sums, in the same order, as the root node's area and abs_phi.
-DiffusionReference reference_of(const std::vector<glm::vec4>& power_area);
+DiffusionReference reference_of(const UninitVector<glm::vec4>& power_area);
 
 // One bucket's tolerance per channel, and the distinct tables of its receivers
 // (the error bounds hold for every one of them).
