@@ -75,6 +75,10 @@ public:
     std::size_t read_into(PointCloud& cloud, std::size_t max, CloudReserve* reserve);
 
 private:
+    /// Appends the k records in m_buf to `cloud` (in parallel); throws for
+    /// the first bad one.
+    void decode_records(PointCloud& cloud, std::size_t k);
+
     std::unique_ptr<ByteSource> m_in;
     PointCloud m_header;
     uint64_t m_npoints = 0;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -252,6 +253,69 @@ PtcReader::PtcReader(const std::string& path) : m_in(std::make_unique<ByteSource
 
 PtcReader::~PtcReader() = default;
 
+void PtcReader::decode_records(PointCloud& cloud, std::size_t k) {
+    const std::size_t record = m_record;
+    const unsigned char* buf = m_buf.data();
+    // Checks one record, throwing what the reader reports for it.
+    auto check = [&](std::size_t j) {
+        const unsigned char* r = buf + j * record;
+        const int64_t index = static_cast<int64_t>(m_done + j);
+        const glm::vec3 p(load_f32(r), load_f32(r + 4), load_f32(r + 8));
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            throw FormatError(m_in->path(), "non-finite position", index);
+        const float radius = load_f32(r + 16);
+        if (!std::isfinite(radius))
+            throw FormatError(m_in->path(), "non-finite radius", index);
+        if (radius < 0.0f) throw FormatError(m_in->path(), "negative radius", index);
+        const unsigned char* d = r + kRecordBase;
+        for (const Channel& c : cloud.channels)
+            for (int q = 0; q < c.components(); ++q, d += 4)
+                if (!std::isfinite(load_f32(d)))
+                    throw FormatError(m_in->path(),
+                                      "non-finite value in channel '" + c.name + "'",
+                                      index);
+    };
+    const std::size_t first = cloud.positions.size();
+    cloud.positions.resize(first + k);
+    cloud.normals.resize(first + k);
+    cloud.radii.resize(first + k);
+    for (Channel& c : cloud.channels)
+        c.data.resize((first + k) * std::size_t(c.components()));
+    // Decoded in parallel (the normals' sqrt and sincos are most of it); the
+    // first bad record, if any, is then checked again alone so that the error
+    // names it exactly as a record-by-record read would.
+    std::atomic<std::size_t> bad{k};
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, k, 4096),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t j = range.begin(); j != range.end(); ++j) {
+                const unsigned char* r = buf + j * record;
+                const glm::vec3 p(load_f32(r), load_f32(r + 4), load_f32(r + 8));
+                const float radius = load_f32(r + 16);
+                bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+                          std::isfinite(radius) && radius >= 0.0f;
+                cloud.positions[first + j] = p;
+                cloud.radii[first + j] = radius;
+                cloud.normals[first + j] = decode_normal(load_u16(r + 12), load_u16(r + 14));
+                const unsigned char* d = r + kRecordBase;
+                for (Channel& c : cloud.channels) {
+                    const std::size_t n = std::size_t(c.components());
+                    for (std::size_t q = 0; q < n; ++q, d += 4) {
+                        const float v = load_f32(d);
+                        ok = ok && std::isfinite(v);
+                        c.data[(first + j) * n + q] = v;
+                    }
+                }
+                if (!ok) {
+                    std::size_t seen = bad.load();
+                    while (j < seen && !bad.compare_exchange_weak(seen, j)) {
+                    }
+                }
+            }
+        });
+    if (bad.load() < k) check(bad.load());
+}
+
 std::size_t PtcReader::read_into(PointCloud& cloud, std::size_t max,
                                  CloudReserve* reserve) {
     const std::string& path = m_in->path();
@@ -273,44 +337,7 @@ std::size_t PtcReader::read_into(PointCloud& cloud, std::size_t max,
                               static_cast<int64_t>(complete));
         }
         if (reserve) reserve->room_for(k);
-        for (std::size_t j = 0; j < k; ++j) {
-            const unsigned char* r = m_buf.data() + j * record;
-            const int64_t index = static_cast<int64_t>(m_done + j);
-            const glm::vec3 p(load_f32(r), load_f32(r + 4), load_f32(r + 8));
-            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-                throw FormatError(path, "non-finite position", index);
-            }
-            const float radius = load_f32(r + 16);
-            if (!std::isfinite(radius))
-                throw FormatError(path, "non-finite radius", index);
-            if (radius < 0.0f) throw FormatError(path, "negative radius", index);
-            cloud.positions.push_back(p);
-            cloud.radii.push_back(radius);
-            const unsigned char* d = r + kRecordBase;
-            for (Channel& c : cloud.channels) {
-                for (int q = 0; q < c.components(); ++q, d += 4) {
-                    const float v = load_f32(d);
-                    if (!std::isfinite(v)) {
-                        throw FormatError(
-                            path, "non-finite value in channel '" + c.name + "'", index);
-                    }
-                    c.data.push_back(v);
-                }
-            }
-        }
-        // The normals (a sqrt and a sincos each, most of the decoding) in
-        // parallel: they cannot fail.
-        const std::size_t first = cloud.normals.size();
-        cloud.normals.resize(first + k);
-        oneapi::tbb::parallel_for(
-            oneapi::tbb::blocked_range<std::size_t>(0, k, 4096),
-            [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
-                for (std::size_t j = range.begin(); j != range.end(); ++j) {
-                    const unsigned char* r = m_buf.data() + j * record;
-                    cloud.normals[first + j] =
-                        decode_normal(load_u16(r + 12), load_u16(r + 14));
-                }
-            });
+        decode_records(cloud, k);
         m_done += k;
         taken += k;
     }

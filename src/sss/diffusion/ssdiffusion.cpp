@@ -5,6 +5,7 @@
 #include "sss/diffusion/ssdiffusion.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,8 @@
 #include <sys/stat.h>
 
 #include <glm/common.hpp>
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
 
 #include "sss/util/error.h"
 #include "sss/util/limits.h"
@@ -159,32 +162,46 @@ public:
     // absent: zeros).
     void add(const PointCloud& chunk, std::size_t k) {
         const std::size_t base = m_pb.positions.size();
-        for (std::size_t j = 0; j < k; ++j)
-            m_pb.positions.push_back(glm::vec3(glm::dvec3(chunk.positions[j]) * m_to_mm));
+        m_pb.positions.resize(base + k);
         m_pb.normals.insert(m_pb.normals.end(), chunk.normals.begin(),
                             chunk.normals.begin() + std::ptrdiff_t(k));
         // Area: the explicit channel, else the disk of the stored radius.
-        if (m_area && m_area->components() == 1) {
-            const Channel* a = chunk.find_channel(m_o.area_channel);
-            for (std::size_t j = 0; j < k; ++j) {
-                const float v = a ? a->data[j] : 0.0f;
-                if ((!(v >= 0.0f) || !std::isfinite(v)) && !m_bad_area)
-                    m_bad_area.emplace(base + j, v);
-                m_pb.areas.push_back(float(v * m_to_mm * m_to_mm));
-            }
-        } else if (!m_area) {
-            for (std::size_t j = 0; j < k; ++j) {
-                const float r = chunk.radii[j];
-                m_pb.areas.push_back(float(kPi * (r * m_to_mm) * (r * m_to_mm)));
-            }
-        }
-        if (m_radiance && m_radiance->components() == 3) {
-            const Channel* e = chunk.find_channel(m_o.radiance_channel);
-            for (std::size_t j = 0; j < k; ++j)
-                m_pb.irradiance.push_back(
-                    e ? glm::vec3(e->data[3 * j], e->data[3 * j + 1], e->data[3 * j + 2])
-                      : glm::vec3(0.0f));
-        }
+        const bool area_channel = m_area && m_area->components() == 1;
+        const Channel* a = area_channel ? chunk.find_channel(m_o.area_channel) : nullptr;
+        if (area_channel || !m_area) m_pb.areas.resize(base + k);
+        const bool radiance = m_radiance && m_radiance->components() == 3;
+        const Channel* e = radiance ? chunk.find_channel(m_o.radiance_channel) : nullptr;
+        if (radiance) m_pb.irradiance.resize(base + k);
+        // In parallel; the first impossible area is the one reported.
+        std::atomic<std::size_t> bad{k};
+        oneapi::tbb::parallel_for(
+            oneapi::tbb::blocked_range<std::size_t>(0, k, 4096),
+            [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                for (std::size_t j = range.begin(); j != range.end(); ++j) {
+                    m_pb.positions[base + j] =
+                        glm::vec3(glm::dvec3(chunk.positions[j]) * m_to_mm);
+                    if (area_channel) {
+                        const float v = a ? a->data[j] : 0.0f;
+                        if (!(v >= 0.0f) || !std::isfinite(v)) {
+                            std::size_t seen = bad.load();
+                            while (j < seen && !bad.compare_exchange_weak(seen, j)) {
+                            }
+                        }
+                        m_pb.areas[base + j] = float(v * m_to_mm * m_to_mm);
+                    } else if (!m_area) {
+                        const float r = chunk.radii[j];
+                        m_pb.areas[base + j] =
+                            float(kPi * (r * m_to_mm) * (r * m_to_mm));
+                    }
+                    if (radiance)
+                        m_pb.irradiance[base + j] =
+                            e ? glm::vec3(e->data[3 * j], e->data[3 * j + 1],
+                                          e->data[3 * j + 2])
+                              : glm::vec3(0.0f);
+                }
+            });
+        if (bad.load() < k && !m_bad_area)
+            m_bad_area.emplace(base + bad.load(), a->data[bad.load()]);
     }
 
     std::size_t size() const { return m_pb.positions.size(); }
