@@ -292,11 +292,12 @@ void PtcReader::decode_records(PointCloud& cloud, std::size_t k) {
                 const unsigned char* r = buf + j * record;
                 const glm::vec3 p(load_f32(r), load_f32(r + 4), load_f32(r + 8));
                 const float radius = load_f32(r + 16);
-                bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
-                          std::isfinite(radius) && radius >= 0.0f;
+                bool ok = std::isfinite(p.x) && std::isfinite(p.y) &&
+                          std::isfinite(p.z) && std::isfinite(radius) && radius >= 0.0f;
                 cloud.positions[first + j] = p;
                 cloud.radii[first + j] = radius;
-                cloud.normals[first + j] = decode_normal(load_u16(r + 12), load_u16(r + 14));
+                cloud.normals[first + j] =
+                    decode_normal(load_u16(r + 12), load_u16(r + 14));
                 const unsigned char* d = r + kRecordBase;
                 for (Channel& c : cloud.channels) {
                     const std::size_t n = std::size_t(c.components());

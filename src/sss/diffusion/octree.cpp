@@ -42,6 +42,70 @@ struct MortonKey {
     }
 };
 
+// Sorts the keys: one radix pass on the 12 highest bits in which the codes
+// differ (per chunk of the input, so the order within a bucket is the input's
+// whatever the thread count), then each bucket on its own, in parallel. About
+// twice as fast as a parallel quicksort of the whole array, whose upper levels
+// move every key through memory (16M points: 0.54 s; issue 17).
+void sort_keys(UninitVector<MortonKey>& keys) {
+    const std::size_t n = keys.size();
+    if (n < 2) return;
+    uint64_t lo = keys[0].code, hi = keys[0].code;
+    for (const MortonKey& k : keys) {
+        lo = std::min(lo, k.code);
+        hi = std::max(hi, k.code);
+    }
+    if (lo == hi) return; // one code: already in index order
+    constexpr int kBits = 12;
+    constexpr std::size_t kBuckets = std::size_t(1) << kBits;
+    const int top = 63 - std::countl_zero(lo ^ hi); // highest differing bit
+    const int shift = std::max(0, top + 1 - kBits);
+    auto bucket_of = [&](uint64_t code) {
+        return std::size_t((code >> shift) & (kBuckets - 1));
+    };
+    // Fixed chunks, not the thread count, decide where each key lands.
+    constexpr std::size_t kChunk = std::size_t(1) << 18;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::size_t> offset(chunks * kBuckets, 0); // [chunk][bucket]
+    oneapi::tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        std::size_t* count = &offset[c * kBuckets];
+        for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
+            ++count[bucket_of(keys[i].code)];
+    });
+    std::vector<std::size_t> bucket_begin(kBuckets + 1, 0);
+    std::size_t total = 0;
+    for (std::size_t b = 0; b < kBuckets; ++b) {
+        bucket_begin[b] = total;
+        for (std::size_t c = 0; c < chunks; ++c) {
+            const std::size_t count = offset[c * kBuckets + b];
+            offset[c * kBuckets + b] = total;
+            total += count;
+        }
+    }
+    bucket_begin[kBuckets] = total;
+    UninitVector<MortonKey> sorted(n);
+    oneapi::tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        std::size_t* next = &offset[c * kBuckets];
+        for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
+            sorted[next[bucket_of(keys[i].code)]++] = keys[i];
+    });
+    UninitVector<MortonKey>().swap(keys);
+    oneapi::tbb::parallel_for(
+        oneapi::tbb::blocked_range<std::size_t>(0, kBuckets, 16),
+        [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t b = range.begin(); b != range.end(); ++b) {
+                auto first = sorted.begin() + std::ptrdiff_t(bucket_begin[b]);
+                auto last = sorted.begin() + std::ptrdiff_t(bucket_begin[b + 1]);
+                // Unique keys: the sorted order is the same whichever sort.
+                if (last - first > (std::ptrdiff_t(1) << 16))
+                    oneapi::tbb::parallel_sort(first, last);
+                else
+                    std::sort(first, last);
+            }
+        });
+    keys.swap(sorted);
+}
+
 // Morton codes on a 2^21 grid over the points' bounding cube, sorted.
 UninitVector<MortonKey> sorted_morton(const std::vector<glm::vec3>& positions) {
     const std::size_t n = positions.size();
@@ -65,7 +129,7 @@ UninitVector<MortonKey> sorted_morton(const std::vector<glm::vec3>& positions) {
                 keys[i] = {code, uint32_t(i)};
             }
         });
-    oneapi::tbb::parallel_sort(keys.begin(), keys.end());
+    sort_keys(keys);
     return keys;
 }
 

@@ -190,8 +190,7 @@ public:
                         m_pb.areas[base + j] = float(v * m_to_mm * m_to_mm);
                     } else if (!m_area) {
                         const float r = chunk.radii[j];
-                        m_pb.areas[base + j] =
-                            float(kPi * (r * m_to_mm) * (r * m_to_mm));
+                        m_pb.areas[base + j] = float(kPi * (r * m_to_mm) * (r * m_to_mm));
                     }
                     if (radiance)
                         m_pb.irradiance[base + j] =
