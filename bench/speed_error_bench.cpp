@@ -406,6 +406,7 @@ Reference reference(const sss::PointCloud& cloud, const sss::SsDiffusionOptions&
 
 struct Errors {
     double rms = 0, p99 = 0, max = 0; ///< fractions of mean|e|, worst channel
+    double bias = 0; ///< mean signed (h - e) / mean|e|, the channel farthest from 0
 };
 
 Errors compare(const sss::PointCloud& out, const Reference& ref) {
@@ -413,12 +414,17 @@ Errors compare(const sss::PointCloud& out, const Reference& ref) {
     Errors worst;
     std::vector<double> d(ref.samples.size());
     for (int ch = 0; ch < 3; ++ch) {
-        double se = 0;
+        double se = 0, sum = 0;
         for (std::size_t k = 0; k < ref.samples.size(); ++k) {
-            d[k] = std::abs(double(c->data[3 * ref.samples[k] + ch]) - ref.exact[k][ch]) /
-                   ref.mean_abs[ch];
+            const double signed_d =
+                (double(c->data[3 * ref.samples[k] + ch]) - ref.exact[k][ch]) /
+                ref.mean_abs[ch];
+            d[k] = std::abs(signed_d);
+            sum += signed_d;
             se += d[k] * d[k];
         }
+        const double bias = sum / double(d.size());
+        if (std::abs(bias) > std::abs(worst.bias)) worst.bias = bias;
         std::sort(d.begin(), d.end());
         worst.rms = std::max(worst.rms, std::sqrt(se / double(d.size())));
         worst.p99 =
@@ -487,7 +493,8 @@ const std::vector<std::string> kSweepColumns = {"case",
                                                 "max_pct",
                                                 "peak_mb",
                                                 "far_terms_per_point",
-                                                "near_terms_per_point"};
+                                                "near_terms_per_point",
+                                                "bias_pct"};
 
 void sweep_row(Table& t, const Case& c, sss::ProfileKind profile, sss::Criterion crit,
                double eps, const sss::PointCloud& cloud, const Timed& r,
@@ -496,7 +503,7 @@ void sweep_row(Table& t, const Case& c, sss::ProfileKind profile, sss::Criterion
     t << c.name << sss::profile_kind_name(profile) << sss::criterion_name(crit) << eps
       << cloud.size() << r.seconds << n / r.seconds << 100 * e.rms << 100 * e.p99
       << 100 * e.max << r.peak_mb << double(r.report.stats.far_terms) / n
-      << double(r.report.stats.near_terms) / n;
+      << double(r.report.stats.near_terms) / n << 100 * e.bias;
     t.end_row();
 }
 
