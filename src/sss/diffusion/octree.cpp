@@ -212,6 +212,24 @@ void split_nodes(const UninitVector<MortonKey>& keys, Tree& tree) {
     }
 }
 
+// A node's moments per channel, summed in double about its centroid.
+struct Moments {
+    double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
+};
+
+// The moments about c as the node's (float) expansion.
+Expansion to_expansion(const glm::dvec3& c, const Moments& m) {
+    Expansion ex{};
+    ex.c = glm::vec3(c);
+    for (int ch = 0; ch < 3; ++ch) {
+        ex.phi[ch] = float(m.phi[ch]);
+        ex.abs_phi[ch] = float(m.aphi[ch]);
+        for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(m.d[ch][i]);
+        for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(m.q[ch][i]);
+    }
+    return ex;
+}
+
 // A leaf's moments and bounds from its points, in double about its centroid.
 void leaf_moments(Tree& tree, uint32_t k) {
     Node& node = tree.nodes[k];
@@ -239,9 +257,7 @@ void leaf_moments(Tree& tree, uint32_t k) {
     glm::dvec3 c = wsum > 0   ? wsum_p / wsum
                    : asum > 0 ? asum_p / asum
                               : psum / double(e - b);
-    Expansion ex{};
-    ex.c = glm::vec3(c);
-    double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
+    Moments m;
     double r2max = 0;
     for (uint32_t s = b; s < e; ++s) {
         glm::dvec3 dp = glm::dvec3(tree.pos_rho2[s]) - c;
@@ -249,26 +265,20 @@ void leaf_moments(Tree& tree, uint32_t k) {
         const glm::vec4& pa = tree.power_area[s];
         for (int ch = 0; ch < 3; ++ch) {
             double w = pa[ch];
-            phi[ch] += w;
-            aphi[ch] += std::abs(w);
-            d[ch][0] += w * dp.x;
-            d[ch][1] += w * dp.y;
-            d[ch][2] += w * dp.z;
-            q[ch][0] += w * dp.x * dp.x;
-            q[ch][1] += w * dp.x * dp.y;
-            q[ch][2] += w * dp.x * dp.z;
-            q[ch][3] += w * dp.y * dp.y;
-            q[ch][4] += w * dp.y * dp.z;
-            q[ch][5] += w * dp.z * dp.z;
+            m.phi[ch] += w;
+            m.aphi[ch] += std::abs(w);
+            m.d[ch][0] += w * dp.x;
+            m.d[ch][1] += w * dp.y;
+            m.d[ch][2] += w * dp.z;
+            m.q[ch][0] += w * dp.x * dp.x;
+            m.q[ch][1] += w * dp.x * dp.y;
+            m.q[ch][2] += w * dp.x * dp.z;
+            m.q[ch][3] += w * dp.y * dp.y;
+            m.q[ch][4] += w * dp.y * dp.z;
+            m.q[ch][5] += w * dp.z * dp.z;
         }
     }
-    for (int ch = 0; ch < 3; ++ch) {
-        ex.phi[ch] = float(phi[ch]);
-        ex.abs_phi[ch] = float(aphi[ch]);
-        for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(d[ch][i]);
-        for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(q[ch][i]);
-    }
-    tree.expansions[k] = ex;
+    tree.expansions[k] = to_expansion(c, m);
     node.lo = glm::vec3(blo);
     node.hi = glm::vec3(bhi);
     node.area = float(asum);
@@ -305,7 +315,7 @@ void inner_moments(Tree& tree, uint32_t k) {
     const glm::dvec3 c = wsum > 0   ? wsum_p / wsum
                          : asum > 0 ? asum_p / asum
                                     : csum_p / double(node.count);
-    double phi[3] = {0, 0, 0}, aphi[3] = {0, 0, 0}, d[3][3] = {}, q[3][6] = {};
+    Moments m;
     for (uint32_t ci = c0; ci < c1; ++ci) {
         const Expansion& ce = tree.expansions[ci];
         const glm::dvec3 sv = glm::dvec3(ce.c) - c;
@@ -313,14 +323,14 @@ void inner_moments(Tree& tree, uint32_t k) {
         for (int ch = 0; ch < 3; ++ch) {
             const double p = ce.phi[ch];
             const double dc[3] = {ce.d[ch][0], ce.d[ch][1], ce.d[ch][2]};
-            phi[ch] += p;
-            aphi[ch] += ce.abs_phi[ch];
-            for (int a = 0; a < 3; ++a) d[ch][a] += dc[a] + p * s[a];
+            m.phi[ch] += p;
+            m.aphi[ch] += ce.abs_phi[ch];
+            for (int a = 0; a < 3; ++a) m.d[ch][a] += dc[a] + p * s[a];
             // Q about c: sum w (dp + s)(dp + s)^T = Q_c + s D^T + D s^T + phi s s^T.
             int i = 0;
             for (int a = 0; a < 3; ++a)
                 for (int bb = a; bb < 3; ++bb, ++i)
-                    q[ch][i] +=
+                    m.q[ch][i] +=
                         ce.q[ch][i] + s[a] * dc[bb] + dc[a] * s[bb] + p * s[a] * s[bb];
         }
     }
@@ -329,15 +339,7 @@ void inner_moments(Tree& tree, uint32_t k) {
         const glm::dvec3 dp = glm::dvec3(tree.pos_rho2[s]) - c;
         r2max = std::max(r2max, glm::dot(dp, dp));
     }
-    Expansion ex{};
-    ex.c = glm::vec3(c);
-    for (int ch = 0; ch < 3; ++ch) {
-        ex.phi[ch] = float(phi[ch]);
-        ex.abs_phi[ch] = float(aphi[ch]);
-        for (int i = 0; i < 3; ++i) ex.d[ch][i] = float(d[ch][i]);
-        for (int i = 0; i < 6; ++i) ex.q[ch][i] = float(q[ch][i]);
-    }
-    tree.expansions[k] = ex;
+    tree.expansions[k] = to_expansion(c, m);
     node.lo = lo;
     node.hi = hi;
     node.area = float(asum);
