@@ -35,6 +35,7 @@
 #include "sss/util/hash.h"
 #include "sss/util/limits.h"
 #include "sss/util/progress.h"
+#include "sss/util/threads.h"
 
 namespace sss {
 
@@ -616,9 +617,7 @@ void scan_points(Input& in, const BrickMapBuildOptions& options) {
                     ok = false;
                 }
                 if (!ok) { // the first bad point of this range
-                    std::size_t cur = first_bad.load();
-                    while (i < cur && !first_bad.compare_exchange_weak(cur, i)) {
-                    }
+                    lower_to(first_bad, i);
                     return;
                 }
             }

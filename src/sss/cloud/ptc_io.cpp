@@ -20,6 +20,7 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/threads.h"
 
 namespace sss {
 
@@ -307,11 +308,7 @@ void PtcReader::decode_records(PointCloud& cloud, std::size_t k) {
                         c.data[(first + j) * n + q] = v;
                     }
                 }
-                if (!ok) {
-                    std::size_t seen = bad.load();
-                    while (j < seen && !bad.compare_exchange_weak(seen, j)) {
-                    }
-                }
+                if (!ok) lower_to(bad, j);
             }
         });
     if (bad.load() < k) check(bad.load());

@@ -23,6 +23,7 @@
 #include "sss/util/limits.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
+#include "sss/util/threads.h"
 
 namespace sss {
 
@@ -182,11 +183,7 @@ public:
                         glm::vec3(glm::dvec3(chunk.positions[j]) * m_to_mm);
                     if (area_channel) {
                         const float v = a ? a->data[j] : 0.0f;
-                        if (!(v >= 0.0f) || !std::isfinite(v)) {
-                            std::size_t seen = bad.load();
-                            while (j < seen && !bad.compare_exchange_weak(seen, j)) {
-                            }
-                        }
+                        if (!(v >= 0.0f) || !std::isfinite(v)) lower_to(bad, j);
                         m_pb.areas[base + j] = float(v * m_to_mm * m_to_mm);
                     } else if (!m_area) {
                         const float r = chunk.radii[j];
