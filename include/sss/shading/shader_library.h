@@ -10,8 +10,9 @@
 /// default). The default is the RIB's folder, then the standard shaders.
 /// The standard shaders are the compiled `shaders/` of the toolchain: the
 /// folder named by the environment variable SSS_SHADER_DIR when set, else
-/// `../shaders` next to the running executable (the build tree's and the
-/// install's layout).
+/// the one beside the running executable: an install's
+/// `<prefix>/share/sss/shaders`, or the build tree's `<build>/shaders`
+/// (sss/util/install_layout.h).
 
 #include <map>
 #include <memory>

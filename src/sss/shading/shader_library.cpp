@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "sss/shading/compiler.h"
+#include "sss/util/install_layout.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
 
@@ -17,12 +18,6 @@ namespace sss {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string executable_dir() {
-    std::error_code ec;
-    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-    return ec ? std::string() : exe.parent_path().string();
-}
 
 std::vector<std::string> split_path(const std::string& text) {
     std::vector<std::string> out;
@@ -49,11 +44,7 @@ std::string join_path(const std::vector<std::string>& dirs) {
 
 std::string standard_shader_dir() {
     if (const char* env = std::getenv("SSS_SHADER_DIR"); env && *env) return env;
-    const std::string exe = executable_dir();
-    if (exe.empty()) return {};
-    std::error_code ec;
-    const fs::path dir = fs::path(exe).parent_path() / "shaders";
-    return fs::is_directory(dir, ec) ? dir.lexically_normal().string() : std::string();
+    return data_folder(DataFolder::Shaders);
 }
 
 std::vector<std::string> shader_search_path(const Scene& scene) {

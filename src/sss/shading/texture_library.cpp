@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <dlfcn.h>
 
+#include "sss/util/install_layout.h"
 #include "sss/util/job_files.h"
 #include "texture2d_backend.h"
 #include "texture_library_impl.h"
@@ -28,13 +29,6 @@ bool readable_by_job(const std::string& file, const char* use, std::string* erro
     if (conflict.empty()) return true;
     if (error) *error = std::move(conflict);
     return false;
-}
-
-/// The directory of the running executable ("" when unknown).
-std::string executable_dir() {
-    std::error_code ec;
-    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-    return ec ? std::string() : exe.parent_path().string();
 }
 
 } // namespace
@@ -114,12 +108,13 @@ TextureLibrary::Impl::~Impl() = default;
 
 Texture2dBackend* TextureLibrary::Impl::textures(std::string* error) {
     std::call_once(plugin_once, [this] {
-        // SSS_PLUGIN_DIR, else <bin>/../lib next to the running tool.
+        // SSS_PLUGIN_DIR, else the plugin folder beside the running tool
+        // (the install's <libdir>/sss or the build tree's lib/).
         std::string dir;
         if (const char* env = std::getenv("SSS_PLUGIN_DIR"); env && *env)
             dir = env;
-        else if (const std::string exe = executable_dir(); !exe.empty())
-            dir = (std::filesystem::path(exe).parent_path() / "lib").string();
+        else
+            dir = data_folder(DataFolder::Plugins);
         const std::string path = (std::filesystem::path(dir) / kTexture2dPlugin).string();
         // Never closed: the backend's code must outlive it, up to exit.
         void* lib = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);

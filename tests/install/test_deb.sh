@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The Debian packages as a farm node gets them (docs/install.md): cpack makes
+# sss and sss-dev from the build tree; their dependencies must be Debian
+# packages this machine has; both are unpacked into a temporary root (dpkg -x:
+# the machine's own /usr is not touched) and the bundled teapot scene runs its
+# whole pipeline (ptbake -> ptfilter -> brickmake -> render) with the
+# installed tools, shaders and scene only.
+#
+#   test_deb.sh BUILD_DIR
+set -euo pipefail
+
+build="$(cd "${1:?usage: test_deb.sh BUILD_DIR}" && pwd)"
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+fail() {
+    echo "FAIL: $*" >&2
+    exit 1
+}
+
+(cd "$build" && cpack -B "$tmp/packages" >"$tmp/cpack.log" 2>&1) ||
+    { cat "$tmp/cpack.log" >&2; fail "cpack"; }
+version="$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "$build/CMakeCache.txt")"
+deb="$tmp/packages/sss_${version}_amd64.deb"
+dev="$tmp/packages/sss-dev_${version}_amd64.deb"
+[[ -f "$deb" && -f "$dev" ]] || { ls "$tmp/packages" >&2; fail "cpack made no sss/sss-dev $version"; }
+
+# Dependencies: the libraries the tools load (found by dpkg-shlibdeps), each
+# a package this machine has installed at a version that satisfies it.
+depends="$(dpkg-deb -f "$deb" Depends)"
+for lib in libembree3-3 libopenimageio2.4 libtbb12 libstdc++6 python3; do
+    [[ ",$depends," == *" $lib"[\ ,]* || ",$depends," == *",$lib"[\ ,]* ]] ||
+        fail "sss's Depends lacks $lib: $depends"
+done
+check_depends() { # check_depends "a (>= 1), b, ..."
+    local item name op ver have
+    IFS=',' read -ra items <<<"$1"
+    for item in "${items[@]}"; do
+        item="${item# }"
+        name="${item%% *}"
+        have="$(dpkg-query -W -f='${Version}' "$name" 2>/dev/null)" ||
+            fail "dependency $name is not installed here"
+        if [[ "$item" == *"("* ]]; then
+            op="$(sed 's/.*(\([<>=]*\) .*/\1/' <<<"$item")"
+            ver="$(sed 's/.*([<>=]* \(.*\))/\1/' <<<"$item")"
+            dpkg --compare-versions "$have" "$op" "$ver" || fail "$name $have does not satisfy $item"
+        fi
+    done
+}
+check_depends "$depends"
+[[ "$(dpkg-deb -f "$dev" Depends)" == *"sss (= $version)"* ]] || fail "sss-dev must depend on sss $version"
+dpkg-deb -c "$deb" >"$tmp/deb.txt"
+dpkg-deb -c "$dev" >"$tmp/dev.txt"
+grep -q '\./usr/share/man/man1/ptfilter\.1' "$tmp/deb.txt" || fail "no man page in $deb"
+grep -q '\./usr/share/sss/shaders/bake_radiance_t\.slo' "$tmp/deb.txt" || fail "no shaders in $deb"
+grep -q '\./usr/.*/cmake/sss/sssConfig\.cmake' "$tmp/dev.txt" || fail "no CMake package in $dev"
+
+root="$tmp/root"
+dpkg -x "$deb" "$root"
+dpkg -x "$dev" "$root"
+
+# The teapot pipeline (quick version) from the installed tree alone.
+unset SSS_SHADER_DIR SSS_PLUGIN_DIR
+PATH="/usr/bin:/bin" SSS_QUICK=1 SSS_BIN_DIR="$root/usr/bin" \
+    "$root/usr/share/sss/scenes/teapot/run" "$tmp/out" >"$tmp/run.log" 2>&1 ||
+    { cat "$tmp/run.log" >&2; fail "the teapot pipeline with the installed tools"; }
+for f in teapot.ptc teapot_ssd.ptc teapot_ssd.bkm teapot.exr; do
+    [[ -s "$tmp/out/$f" ]] || fail "the pipeline wrote no $f"
+done
+# The picture is lit and has subsurface scattering in it (its sss AOV).
+mean="$(oiiotool --stats "$tmp/out/teapot.exr" 2>/dev/null | sed -n 's/^ *Stats Avg: //p' | head -1)"
+awk -v m="${mean%% *}" 'BEGIN { exit !(m > 0.01) }' || fail "teapot.exr is dark (mean '$mean')"
+echo "deb: sss and sss-dev $version packaged; dependencies installed here; teapot pipeline ran from the unpacked packages"
