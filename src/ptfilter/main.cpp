@@ -178,6 +178,20 @@ int run_merge(std::vector<std::string> files, const sss::RunOptions& running) {
     return 0;
 }
 
+// -progress 2: the computed values at a glance, as PRMan's ptfilter prints a
+// sample of them (docs/ptfilter.md#progress).
+void print_values(const sss::ValueSummary& v, const std::string& channel) {
+    if (v.count == 0) return;
+    std::printf("ptfilter: %s of %zu points: min %.6g %.6g %.6g, mean %.6g %.6g %.6g, "
+                "max %.6g %.6g %.6g\n",
+                channel.c_str(), v.count, v.min.x, v.min.y, v.min.z, v.mean.x, v.mean.y,
+                v.mean.z, v.max.x, v.max.y, v.max.z);
+    for (const auto& [index, value] : v.sample)
+        std::printf("ptfilter: %s of point %llu: %.6g %.6g %.6g\n", channel.c_str(),
+                    (unsigned long long)index, double(value.x), double(value.y),
+                    double(value.z));
+}
+
 int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::SsDiffusionOptions opt;
@@ -361,6 +375,7 @@ int run(const std::vector<std::string>& argv) {
                 double(report.stats.far_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.near_terms) / std::max<std::size_t>(1, points),
                 double(report.stats.quadrature_terms) / std::max<std::size_t>(1, points));
+        if (job.detailed()) print_values(report.values, opt.output_channel);
         std::printf(
             "ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
             read_s, filter_s, job.seconds() - read_s - filter_s, job.seconds());

@@ -290,6 +290,22 @@ run "$ptfilter" -ssdiffusion -exact small.ptc exact.ptc
 expect_rc 0 "-exact" || true
 rm -f opts.ptc exact.ptc
 
+# -progress 2: also the values at a glance (min, mean, max and 8 points), as
+# PRMan's ptfilter prints a sample of them.
+run "$ptfilter" -ssdiffusion -progress 2 small.ptc sample.ptc
+if expect_rc 0 "-progress 2"; then
+    n="$(points small.ptc)"
+    grep -Eq "^ptfilter: _ssdiffusion of $n points: min [^,]+, mean [^,]+, max " "$work/stdout" ||
+        fail "-progress 2 prints no summary of the values: $out"
+    [[ "$(grep -Ec '^ptfilter: _ssdiffusion of point [0-9]+: [0-9.e+-]+ [0-9.e+-]+ [0-9.e+-]+$' "$work/stdout")" == 8 ]] ||
+        fail "-progress 2 prints no sample of 8 points: $out"
+    grep -q "^ptfilter: _ssdiffusion of point $((n - 1)): " "$work/stdout" ||
+        fail "-progress 2's sample does not end at the last point"
+fi
+run "$ptfilter" -ssdiffusion -progress 1 small.ptc sample.ptc
+grep -q '_ssdiffusion of' "$work/stdout" && fail "-progress 1 prints the sample of values"
+rm -f sample.ptc
+
 # -frame expands frame patterns in every file name.
 cp small.ptc small.0042.ptc
 run "$ptfilter" -ssdiffusion -frame 42 small.####.ptc 'framed.%04d.ptc'

@@ -1043,6 +1043,47 @@ TEST(DiffusionSsdiffusion, InputChannelErrors) {
     }
 }
 
+// The report's summary of the values (ptfilter -progress 2): min, mean and max
+// of every channel over the output, and eight points spread over it with their
+// values as written; a part summarises its own points, by whole-output index.
+TEST(DiffusionSsdiffusion, ReportSummarisesTheValues) {
+    const sss::PointCloud cloud = sphere_cloud(5000, 20.0);
+    sss::SsDiffusionOptions o;
+    sss::SsDiffusionReport report;
+    const sss::PointCloud out = sss::ssdiffusion(cloud, o, &report);
+    const sss::Channel* c = out.find_channel("_ssdiffusion");
+    ASSERT_NE(c, nullptr);
+    const sss::ValueSummary& v = report.values;
+    ASSERT_EQ(v.count, out.size());
+    for (int ch = 0; ch < 3; ++ch) {
+        double lo = 1e30, hi = -1e30, sum = 0;
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            lo = std::min(lo, double(c->data[3 * i + ch]));
+            hi = std::max(hi, double(c->data[3 * i + ch]));
+            sum += c->data[3 * i + ch];
+        }
+        EXPECT_EQ(v.min[ch], lo);
+        EXPECT_EQ(v.max[ch], hi);
+        EXPECT_NEAR(v.mean[ch], sum / double(out.size()), 1e-12 * hi);
+        EXPECT_LT(lo, hi); // a lit sphere: not one value
+    }
+    ASSERT_EQ(v.sample.size(), 8u);
+    EXPECT_EQ(v.sample.front().first, 0u);
+    EXPECT_EQ(v.sample.back().first, out.size() - 1);
+    for (const auto& [index, value] : v.sample)
+        for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(value[ch], c->data[3 * index + ch]);
+
+    sss::SsDiffusionReport part_report;
+    sss::SsDiffusionPart part = sss::ssdiffusion_part(cloud, o, 1, 3, &part_report);
+    EXPECT_EQ(part_report.values.count, part.points.size());
+    ASSERT_EQ(part_report.values.sample.size(), 8u);
+    for (std::size_t k = 1; k < 8; ++k)
+        EXPECT_LT(part_report.values.sample[k - 1].first,
+                  part_report.values.sample[k].first);
+    for (const auto& [index, value] : part_report.values.sample)
+        for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(value[ch], c->data[3 * index + ch]);
+}
+
 // A split run's parts hold, at their indices, exactly the records of the
 // whole output (every channel, keep_channels, per-point materials, -exact),
 // and the signature changes with every option that changes numbers.

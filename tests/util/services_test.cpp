@@ -136,6 +136,48 @@ TEST(Progress, ThreadSafe) {
     EXPECT_EQ(last, 100);
 }
 
+TEST(Progress, NoTerminalOffATerminal) {
+    // ctest's stderr is a file or a pipe: the terminal line stays off, and
+    // nothing reaches stderr.
+    testing::internal::CaptureStderr();
+    {
+        sss::Progress progress(false);
+        progress.show_on_terminal("tool");
+        EXPECT_FALSE(progress.on_terminal());
+        progress.update(5, 10);
+        progress.finish();
+    }
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
+TEST(Progress, TerminalLineText) {
+    EXPECT_EQ(sss::progress_line("ptfilter", "evaluating the diffusion", 43, 1234567.0,
+                                 "points", 65.4, 80),
+              "ptfilter: evaluating the diffusion   43%  1.23 M points/s  1:05 left");
+    // No unit: no rate; no estimate: no time left; hours.
+    EXPECT_EQ(sss::progress_line("render", "rendering", 7, 10.0, "", -1.0, 80),
+              "render: rendering    7%");
+    EXPECT_EQ(sss::progress_line("ptbake", "baking", 100, 512.0, "points", 3725.0, 80),
+              "ptbake: baking  100%  512 points/s  1:02:05 left");
+    EXPECT_EQ(sss::progress_line("brickmake", "b", 50, 2500.0, "lookups", 0.4, 80),
+              "brickmake: b   50%  2.5 k lookups/s  0:00 left");
+}
+
+TEST(Progress, TerminalLineNeverWraps) {
+    // The stage gives way first, then the whole line: \r only returns to the
+    // start of the last row, so a wrapped line would scroll the terminal.
+    const std::string stage =
+        "reading /a/very/long/path/to/a/point/cloud/that/goes/on.ptc";
+    const std::string line =
+        sss::progress_line("ptfilter", stage, 12, 1e6, "points", 30.0, 60);
+    EXPECT_LE(line.size(), 60u);
+    EXPECT_EQ(line.rfind("ptfilter: reading /a/", 0), 0u) << line;
+    EXPECT_NE(line.find("...   12%  1.00 M points/s  0:30 left"), std::string::npos)
+        << line;
+    EXPECT_LE(sss::progress_line("ptfilter", stage, 12, 1e6, "points", 30.0, 20).size(),
+              20u);
+}
+
 // ---------------------------------------------------------------------------
 // AtomicOutput
 // ---------------------------------------------------------------------------

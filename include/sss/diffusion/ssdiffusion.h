@@ -3,8 +3,10 @@
 /// The ptfilter -ssdiffusion job as one library call: channels in, material
 /// resolved, diffusion evaluated, output cloud built.
 
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sss/cloud/point_cloud.h"
@@ -30,6 +32,15 @@ struct SsDiffusionOptions {
     bool keep_channels = false; ///< copy the input channels to the output
 };
 
+/// The computed values at a glance (ptfilter -progress 2): per channel over
+/// every point, and a few points spread evenly over the output.
+struct ValueSummary {
+    std::size_t count = 0; ///< points summarised
+    glm::dvec3 min{0.0}, mean{0.0}, max{0.0};
+    /// (index in the whole output, value), indices in increasing order.
+    std::vector<std::pair<uint64_t, glm::vec3>> sample;
+};
+
 /// What happened, for -progress reports.
 struct SsDiffusionReport {
     std::vector<std::string> material_lines; ///< material values in scene units
@@ -37,6 +48,7 @@ struct SsDiffusionReport {
     std::size_t distinct_profiles = 0;
     DiffusionStats stats;
     double seconds = 0;
+    ValueSummary values; ///< the output channel's values (a part's: the part's)
 };
 
 /// Describes the constant material (albedo, dmfp, sigma_s', sigma_a, ior in

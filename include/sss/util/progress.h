@@ -1,29 +1,74 @@
 #pragma once
 /// \file progress.h
-/// Progress lines for render farms (ALF_PROGRESS) and a wall-clock stopwatch.
+/// Progress of a job: ALF_PROGRESS lines for render farms, one updating line
+/// for a person at a terminal, and a wall-clock stopwatch.
 
 #include <atomic>
 #include <cstdint>
 #include <mutex>
+#include <string>
 
 namespace sss {
 
-/// Thread-safe progress reporter for render farms: prints "ALF_PROGRESS NN%"
-/// on stdout, flushed, each time the integer percentage grows.
+/// Thread-safe progress reporter. Two displays, independent of each other:
+/// - farm lines (`enabled`, -progress): "ALF_PROGRESS NN%" on stdout,
+///   flushed, each time the integer percentage grows;
+/// - a terminal line (show_on_terminal()): when stderr is a terminal, one
+///   line rewritten in place, "<tool>: <stage>  43%  1.2 M points/s  0:05
+///   left", where the stage is current_stage() (sss/util/limits.h). It appears
+///   once a stage has run for half a second, is redrawn at most 8 times a
+///   second, and is erased when the stage reaches 100 %, by finish(), or
+///   before an error or warning is printed (clear_terminal_progress()).
+///   Farm logs are never terminals, so they keep only the ALF lines.
 class Progress {
 public:
     explicit Progress(bool enabled) : m_enabled(enabled) {}
-    /// Reports that `done` of `total` units are finished.
+    ~Progress();
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
+
+    /// Shows the terminal line, prefixed "<tool>: ", when stderr is a
+    /// terminal and the environment variable SSS_TTY_PROGRESS is not "0".
+    void show_on_terminal(const std::string& tool);
+    /// The unit of update()'s counts ("points"), for the terminal line's
+    /// rate; "" (the default) shows no rate. Set before the updates.
+    void set_unit(const std::string& unit);
+    /// Reports that `done` of `total` units are finished. A new `total`
+    /// starts a new stage of the terminal line (its rate and time left).
     void update(uint64_t done, uint64_t total);
-    /// Prints 100% if not printed yet.
+    /// Prints 100% if not printed yet; erases the terminal line.
     void finish();
     bool enabled() const { return m_enabled; }
+    /// Whether the terminal line is on (show_on_terminal() found a terminal).
+    bool on_terminal() const { return m_terminal; }
 
 private:
+    void draw(uint64_t done, uint64_t total, int64_t now_ns); // under m_mutex
+    void erase();                                             // under m_mutex
+
     bool m_enabled;
+    bool m_terminal = false;
+    std::string m_tool, m_unit;
     std::atomic<int> m_last{-1};
     std::mutex m_mutex;
+    // The terminal line's stage: its total, start time and first count.
+    std::atomic<uint64_t> m_stage_total{0};
+    uint64_t m_stage_done0 = 0;
+    int64_t m_stage_start_ns = 0;
+    std::atomic<int64_t> m_next_draw_ns{0};
+    bool m_shown = false;
 };
+
+/// Erases the terminal line of the job's Progress if one is shown (before a
+/// message is written to stderr or a terminal on stdout).
+void clear_terminal_progress();
+
+/// The terminal line's text: "<tool>: <stage>  43%  1.2 M points/s  0:05
+/// left", at most `width` columns (the stage is shortened with "..."). No
+/// rate without a unit or below 0; no time left when seconds_left < 0.
+std::string progress_line(const std::string& tool, const std::string& stage, int percent,
+                          double rate, const std::string& unit, double seconds_left,
+                          std::size_t width);
 
 /// Wall-clock stopwatch in seconds.
 class Stopwatch {

@@ -480,6 +480,7 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
         const DicedGrid* grid; ///< null: unrelated points
     };
     std::vector<Chunk> chunks;
+    if (options.progress) options.progress->set_unit("points");
     for (std::size_t j = 0; j < jobs.size(); ++j) {
         first_point[j] = total_points;
         const DicedSurface& d = diced[jobs[j].prim];

@@ -617,6 +617,7 @@ PointCloud lookup_brick_map_cloud(const BrickMap& map, const PointCloud& cloud,
 
     std::vector<uint8_t> hit(n, 0);
     std::atomic<uint64_t> done{0};
+    if (options.progress) options.progress->set_unit("lookups");
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n, 1024),
         [&](const tbb::blocked_range<std::size_t>& range) {

@@ -60,7 +60,9 @@ bool newer_option(ArgScanner& args, const std::string& o, RunOptions& run) {
 Job::Job(std::string tool, const RunOptions& run)
     : m_tool(std::move(tool)), m_threads(resolve_thread_count(run.threads)),
       m_level(run.progress), m_newer(run.newer), m_limit(m_threads),
-      m_progress(run.progress > 0) {}
+      m_progress(run.progress > 0) {
+    m_progress.show_on_terminal(m_tool);
+}
 
 bool Job::up_to_date(const std::vector<std::string>& outputs,
                      const std::vector<std::string>& inputs) const {

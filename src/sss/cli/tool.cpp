@@ -20,6 +20,7 @@
 #include "sss/util/frame_pattern.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
+#include "sss/util/progress.h"
 
 namespace sss {
 
@@ -60,8 +61,10 @@ std::string one_line(const std::string& what) {
 }
 
 void print_line(const std::string& tool, const char* kind, const std::string& what) {
-    // stdout first, so that merged logs keep their order.
+    // stdout first, so that merged logs keep their order; a terminal's
+    // progress line goes, so that the message starts a line of its own.
     flush_standard_output();
+    clear_terminal_progress();
     std::cerr << tool << kind << one_line(what) << "\n";
     std::cerr.flush();
 }

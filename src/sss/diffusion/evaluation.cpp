@@ -437,6 +437,7 @@ void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& 
     const std::vector<uint32_t> from_root{0};
     const LocalExpansion none;
     std::atomic<std::size_t> done{0};
+    if (cx.options.progress) cx.options.progress->set_unit("points");
     std::atomic<std::size_t> far_total{0}, near_total{0}, quad_total{0}, local_total{0};
     oneapi::tbb::parallel_for(
         oneapi::tbb::blocked_range<std::size_t>(0, groups.size(), 1),

@@ -35,6 +35,7 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
     }
     std::vector<glm::dvec3> out(rec.size(), glm::dvec3(0.0));
     std::atomic<std::size_t> done{0};
+    if (progress) progress->set_unit("points");
     oneapi::tbb::parallel_for(std::size_t(0), rec.size(), [&](std::size_t r) {
         const std::size_t i = rec[r];
         glm::u32vec3 idx =

@@ -488,6 +488,55 @@ SsDiffusionFiles::SsDiffusionFiles(std::vector<std::string> inputs,
 
 SsDiffusionFiles::~SsDiffusionFiles() = default;
 
+namespace {
+
+// The summary of values[k] (the output's point index(k)): min, mean and max
+// in fixed chunks combined in order (the same numbers at any thread count),
+// and kSample points spread evenly.
+template <class Index>
+ValueSummary summarize_values(const std::vector<glm::vec3>& values, Index index) {
+    constexpr std::size_t kSample = 8, kChunk = 1 << 16;
+    ValueSummary out;
+    const std::size_t n = values.size();
+    out.count = n;
+    if (n == 0) return out;
+    struct Part {
+        glm::dvec3 lo{0.0}, hi{0.0}, sum{0.0};
+    };
+    std::vector<Part> parts((n + kChunk - 1) / kChunk);
+    oneapi::tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
+        Part& p = parts[c];
+        const std::size_t b = c * kChunk, e = std::min(n, b + kChunk);
+        p.lo = p.hi = glm::dvec3(values[b]);
+        for (std::size_t k = b; k < e; ++k) {
+            const glm::dvec3 v(values[k]);
+            p.lo = glm::min(p.lo, v);
+            p.hi = glm::max(p.hi, v);
+            p.sum += v;
+        }
+    });
+    out.min = parts[0].lo;
+    out.max = parts[0].hi;
+    glm::dvec3 sum(0.0);
+    for (const Part& p : parts) {
+        out.min = glm::min(out.min, p.lo);
+        out.max = glm::max(out.max, p.hi);
+        sum += p.sum;
+    }
+    out.mean = sum / double(n);
+    const std::size_t m = std::min(n, kSample);
+    for (std::size_t i = 0; i < m; ++i) {
+        const std::size_t k = m == 1 ? 0 : i * (n - 1) / (m - 1);
+        out.sample.push_back({uint64_t(index(k)), values[k]});
+    }
+    // A part's points are in the octree's order: list them by index.
+    std::sort(out.sample.begin(), out.sample.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    return out;
+}
+
+} // namespace
+
 void SsDiffusionFiles::filter(SsDiffusionReport* report) {
     Stopwatch watch;
     const SsDiffusionOptions& o = m_options;
@@ -547,6 +596,7 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
         m_result = evaluate_diffusion(std::move(pb), o.diffusion, &rep.stats);
         if (o.diffusion.progress) o.diffusion.progress->finish();
     }
+    if (report) rep.values = summarize_values(m_result, [](std::size_t k) { return k; });
     m_filtered = true;
     rep.seconds = watch.seconds();
 }
@@ -608,6 +658,7 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
         result = evaluate_diffusion(std::move(pb), o.diffusion, &rep.stats);
         if (o.diffusion.progress) o.diffusion.progress->finish();
     }
+    if (report) rep.values = summarize_values(result, [](std::size_t k) { return k; });
     PointCloud out = output_cloud(in, o, result);
     rep.seconds = watch.seconds();
     return out;
@@ -661,6 +712,9 @@ SsDiffusionPart ssdiffusion_part(PointCloud in, const SsDiffusionOptions& o,
     }
     if (o.diffusion.progress) o.diffusion.progress->finish();
     out.indices.assign(receivers.begin(), receivers.end());
+    if (report)
+        rep.values =
+            summarize_values(result, [&](std::size_t k) { return out.indices[k]; });
     Channel* dst = out.points.find_channel(o.output_channel);
     for (std::size_t k = 0; k < result.size(); ++k)
         for (int ch = 0; ch < 3; ++ch) dst->data[3 * k + ch] = result[k][ch];

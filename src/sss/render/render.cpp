@@ -893,6 +893,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
         nearest.assign(std::size_t(width) * height * job.values, 0.0f);
     std::vector<std::vector<float>> tile_sums(tiles);
     std::atomic<std::size_t> tiles_done{0};
+    if (options.progress) options.progress->set_unit("tiles");
     tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
         [&] { return std::make_unique<ShadingContext>(*job.resources, *job.services); });
     job.tile_bakes.assign(tiles, {});
