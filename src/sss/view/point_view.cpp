@@ -336,6 +336,19 @@ std::string view_channel_text(const ViewChannel& channel) {
 std::vector<std::pair<std::size_t, ViewChannel>>
 view_tiles(const std::vector<LabelledCloud>& clouds,
            const std::vector<ViewChannel>& channels) {
+    // A channel no cloud has is named first, with the channels they have.
+    for (const ViewChannel& c : channels) {
+        bool found = false;
+        for (const LabelledCloud& l : clouds) found = found || cloud_has(*l.cloud, c);
+        if (found) continue;
+        if (clouds.size() == 1)
+            value_source(*clouds.front().cloud, c, clouds.front().label);
+        std::string have;
+        for (const LabelledCloud& l : clouds)
+            have += (have.empty() ? "" : "; ") + l.label + ": " + channel_names(*l.cloud);
+        throw ValueError("no cloud has a channel \"" + c.name + "\" (" + have +
+                         "; every cloud also has N and radius)");
+    }
     std::vector<std::pair<std::size_t, ViewChannel>> tiles;
     for (std::size_t i = 0; i < clouds.size(); ++i) {
         const PointCloud& cloud = *clouds[i].cloud;
@@ -354,12 +367,6 @@ view_tiles(const std::vector<LabelledCloud>& clouds,
                              " (its channels: " + channel_names(cloud) +
                              "; every cloud also has N and radius)");
         }
-    }
-    for (const ViewChannel& c : channels) {
-        bool found = false;
-        for (const LabelledCloud& l : clouds) found = found || cloud_has(*l.cloud, c);
-        if (!found)
-            value_source(*clouds.front().cloud, c, clouds.front().label); // throws
     }
     return tiles;
 }
@@ -581,8 +588,9 @@ PointViewImage render_point_view(const std::vector<LabelledCloud>& clouds,
                              magnitudes.end());
             image.exposure_reference = magnitudes[q];
         }
-        image.exposure =
-            image.exposure_reference > 0.0 ? -std::log2(image.exposure_reference) : 0.0;
+        image.exposure = image.exposure_reference > 0.0
+                             ? 0.0 - std::log2(image.exposure_reference)
+                             : 0.0;
     }
 
     const ContactSheetLayout& l = image.layout;
