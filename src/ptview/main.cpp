@@ -48,8 +48,9 @@ options:
                          (default 30)
   -res W H               size of each tile (default: 512 on the longer side,
                          the file camera's aspect, square for orbits)
-  -exposure STOPS        multiply values by 2^STOPS (default: automatic, the
-                         99.5th percentile of the drawn values becomes 1)
+  -exposure STOPS|auto|tile  multiply values by 2^STOPS; auto (default): the
+                         99.5th percentile of the drawn values becomes 1, one
+                         exposure for the sheet; tile: chosen for each tile
   -falsecolor 0|1        1 (default): negative values (blockers) in blue
   -background R G B      linear colour where no point is (default 0.05 0.05 0.05)
   -radiusscale S         multiply every point's radius (default 1)
@@ -135,6 +136,12 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
             r.width = args.integer(o, 1, 16384);
             r.height = args.integer(o, 1, 16384);
         } else if (o == "exposure") {
+            if (args.peek() == "auto" || args.peek() == "tile") {
+                r.view.exposure.reset();
+                r.view.exposure_per_tile = args.value(o) == "tile";
+                continue;
+            }
+            r.view.exposure_per_tile = false;
             const double e = args.number(o);
             if (e < -64.0 || e > 64.0)
                 throw sss::UsageError("option -exposure: " + sss::short_float(e) +
@@ -253,22 +260,31 @@ int run(const std::vector<std::string>& argv) {
     const double seconds = watch.seconds();
 
     std::string out;
-    append(out,
-           "ptview: wrote %s: %d x %d, %zu tile%s (%d x %d), %s, exposure %.4g stops",
-           r.output.c_str(), image.width, image.height, image.tiles.size(),
+    append(out, "ptview: wrote %s: %d x %d, %zu tile%s (%d x %d), %s, ", r.output.c_str(),
+           image.width, image.height, image.tiles.size(),
            image.tiles.size() == 1 ? "" : "s", camera.width, camera.height,
-           camera.description.c_str(), image.exposure);
-    if (image.auto_exposure)
-        append(out, " (auto: %.6g shown as 1; fix it with -exposure %.4g)",
-               image.exposure_reference, image.exposure);
+           camera.description.c_str());
+    if (r.view.exposure_per_tile && image.auto_exposure) {
+        out += "exposure per tile";
+        for (std::size_t t = 0; t < image.tiles.size(); ++t)
+            append(out, "%s%.4g", t ? ", " : " ", image.tiles[t].exposure);
+        out += " stops (auto: the 99.5th percentile of each tile shown as 1)";
+    } else {
+        append(out, "exposure %.4g stops", image.exposure);
+        if (image.auto_exposure)
+            append(out, " (auto: %.6g shown as 1; fix it with -exposure %.4g)",
+                   image.exposure_reference, image.exposure);
+    }
     out += "\n";
     if (job.verbose()) {
         for (std::size_t t = 0; t < image.tiles.size(); ++t) {
             const sss::PointViewTileInfo& info = image.tiles[t];
-            append(out, "ptview: tile %zu: %s %s: %zu of %zu points drawn, %zu pixels\n",
+            append(out,
+                   "ptview: tile %zu: %s %s: %zu of %zu points drawn, %zu pixels, "
+                   "exposure %.4g stops\n",
                    t + 1, r.inputs[info.cloud].c_str(),
                    sss::view_channel_text(info.channel).c_str(), info.points_drawn,
-                   clouds[info.cloud].size(), info.pixels_covered);
+                   clouds[info.cloud].size(), info.pixels_covered, info.exposure);
         }
         append(out, "ptview: drawn in %.3f s\n", seconds);
     }

@@ -105,6 +105,10 @@ grep -q '^ptview: tile 2: ssd.ptc _ssdiffusion: 5000 of 5000 points drawn' out.t
     { cat out.txt; fail "tile 2 line"; }
 # The 2-pixel gap between the tiles is grey 0.2 (sRGB 124/255).
 [ "$(pixel sheet.png 100 40)" = "0.486275 0.486275 0.486275" ] || fail "gap pixel $(pixel sheet.png 100 40)"
+# -exposure tile: each tile's own automatic exposure, listed.
+"$ptview" -res 100 80 -exposure tile -channel _radiance_t,_area bake.ptc tile.png >out.txt
+grep -Eq '^ptview: wrote tile.png: .*exposure per tile -?[0-9.]+, [0-9.]+ stops' out.txt ||
+    { cat out.txt; fail "-exposure tile summary"; }
 # Several channels of one cloud, in two columns.
 "$ptview" -res 30 20 -columns 2 -gap 0 -channel _radiance_t,_area,N,radius bake.ptc four.png >/dev/null
 [ "$(size four.png)" = "60 x 40" ] || fail "four.png is $(size four.png), expected 60 x 40"

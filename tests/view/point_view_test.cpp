@@ -210,6 +210,20 @@ TEST(PointView, ContactSheetPlacesTilesWithOneExposure) {
     EXPECT_FLOAT_EQ(img.rgb[10 * 44 + 21].x, 0.2f);      // the gap
     ASSERT_EQ(img.tiles.size(), 2u);
     EXPECT_EQ(img.tiles[1].cloud, 1u);
+    // One exposure per tile: each centre shows as 1.
+    opt.exposure_per_tile = true;
+    const sss::PointViewImage each =
+        sss::render_point_view({{&a, "a"}, {&b, "b"}}, pinhole(21, 21, 10.0), opt);
+    EXPECT_DOUBLE_EQ(each.tiles[0].exposure, -1.0);
+    EXPECT_DOUBLE_EQ(each.tiles[1].exposure, -2.0);
+    EXPECT_FLOAT_EQ(each.rgb[10 * 44 + 10].x, 1.0f);
+    EXPECT_FLOAT_EQ(each.rgb[10 * 44 + 23 + 10].x, 1.0f);
+    // A given exposure wins over both.
+    opt.exposure = 0.0;
+    const sss::PointViewImage fixed =
+        sss::render_point_view({{&a, "a"}, {&b, "b"}}, pinhole(21, 21, 10.0), opt);
+    EXPECT_FALSE(fixed.auto_exposure);
+    EXPECT_FLOAT_EQ(fixed.rgb[10 * 44 + 10].x, 2.0f);
 }
 
 TEST(PointView, SameImageAtAnyThreadCount) {

@@ -139,6 +139,9 @@ struct PointViewOptions {
     /// nullopt: automatic (the value at the 99.5th percentile of the largest
     /// |component| of the exposed pixels becomes 1).
     std::optional<double> exposure;
+    /// Automatic exposure chosen for each tile on its own (channels of
+    /// different scales side by side) instead of one for the sheet.
+    bool exposure_per_tile = false;
     bool false_color = true;     ///< negative values shown blue
     glm::vec3 background{0.05f}; ///< linear RGB of pixels without points
     float radius_scale = 1.0f;   ///< multiplies every point's radius
@@ -160,6 +163,8 @@ struct PointViewTileInfo {
     ViewValueKind kind = ViewValueKind::Grey;
     std::size_t points_drawn = 0;
     std::size_t pixels_covered = 0;
+    double exposure = 0.0;           ///< stops applied to this tile
+    double exposure_reference = 0.0; ///< auto: the value shown as 1
 };
 
 /// A finished picture: linear RGB, exposure and false colour applied,

@@ -173,6 +173,32 @@ ViewChannel default_channel(const PointCloud& cloud) {
     return {"N", false};
 }
 
+/// The automatic exposure's reference: the 99.5th percentile of the largest
+/// |component| of the covered pixels of the tiles (normals excluded); 0 when
+/// there are none.
+double exposure_reference(const std::vector<const ViewTile*>& tiles) {
+    std::vector<float> magnitudes;
+    for (const ViewTile* t : tiles) {
+        if (t->kind == ViewValueKind::Direction) continue;
+        for (std::size_t k = 0; k < t->value.size(); ++k)
+            if (t->covered(k))
+                magnitudes.push_back(
+                    std::max({std::abs(t->value[k].x), std::abs(t->value[k].y),
+                              std::abs(t->value[k].z)}));
+    }
+    if (magnitudes.empty()) return 0.0;
+    const std::size_t q = std::min(
+        magnitudes.size() - 1, std::size_t(0.995 * double(magnitudes.size() - 1) + 0.5));
+    std::nth_element(magnitudes.begin(), magnitudes.begin() + std::ptrdiff_t(q),
+                     magnitudes.end());
+    return magnitudes[q];
+}
+
+/// The stops that show `reference` as 1 (0 for no reference; never -0).
+double stops_for(double reference) {
+    return reference > 0.0 ? 0.0 - std::log2(reference) : 0.0;
+}
+
 double srgb_encode(double c) {
     return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
@@ -566,31 +592,29 @@ PointViewImage render_point_view(const std::vector<LabelledCloud>& clouds,
     }
     if (options.progress) options.progress->finish();
 
-    // One exposure for every tile, so that they compare.
+    // One exposure for every tile, so that they compare (or one per tile).
     if (options.exposure) {
         image.exposure = *options.exposure;
+        for (PointViewTileInfo& info : image.tiles) info.exposure = image.exposure;
     } else {
         image.auto_exposure = true;
-        std::vector<float> magnitudes;
-        for (const ViewTile& t : tiles) {
-            if (t.kind == ViewValueKind::Direction) continue;
-            for (std::size_t k = 0; k < t.value.size(); ++k)
-                if (t.covered(k))
-                    magnitudes.push_back(
-                        std::max({std::abs(t.value[k].x), std::abs(t.value[k].y),
-                                  std::abs(t.value[k].z)}));
+        if (options.exposure_per_tile) {
+            for (std::size_t t = 0; t < tiles.size(); ++t) {
+                image.tiles[t].exposure_reference = exposure_reference({&tiles[t]});
+                image.tiles[t].exposure = stops_for(image.tiles[t].exposure_reference);
+            }
+            image.exposure_reference = image.tiles.front().exposure_reference;
+            image.exposure = image.tiles.front().exposure;
+        } else {
+            std::vector<const ViewTile*> all;
+            for (const ViewTile& t : tiles) all.push_back(&t);
+            image.exposure_reference = exposure_reference(all);
+            image.exposure = stops_for(image.exposure_reference);
+            for (PointViewTileInfo& info : image.tiles) {
+                info.exposure = image.exposure;
+                info.exposure_reference = image.exposure_reference;
+            }
         }
-        if (!magnitudes.empty()) {
-            const std::size_t q =
-                std::min(magnitudes.size() - 1,
-                         std::size_t(0.995 * double(magnitudes.size() - 1) + 0.5));
-            std::nth_element(magnitudes.begin(), magnitudes.begin() + std::ptrdiff_t(q),
-                             magnitudes.end());
-            image.exposure_reference = magnitudes[q];
-        }
-        image.exposure = image.exposure_reference > 0.0
-                             ? 0.0 - std::log2(image.exposure_reference)
-                             : 0.0;
     }
 
     const ContactSheetLayout& l = image.layout;
@@ -607,8 +631,8 @@ PointViewImage render_point_view(const std::vector<LabelledCloud>& clouds,
                 glm::vec3& out =
                     image.rgb[std::size_t(oy + y) * std::size_t(l.width) + (ox + x)];
                 out = tile.covered(k)
-                          ? displayed_value(tile.value[k], tile.kind, image.exposure,
-                                            options.false_color)
+                          ? displayed_value(tile.value[k], tile.kind,
+                                            image.tiles[t].exposure, options.false_color)
                           : options.background;
             }
         });
@@ -618,9 +642,15 @@ PointViewImage render_point_view(const std::vector<LabelledCloud>& clouds,
     for (std::size_t t = 0; t < image.tiles.size(); ++t)
         d += std::string(t ? " |" : "") + " " + clouds[image.tiles[t].cloud].label + " " +
              view_channel_text(image.tiles[t].channel);
-    d += "; " + camera.description + "; exposure " + number_text(image.exposure) +
-         (image.auto_exposure ? " (auto)" : "") + "; false colour " +
-         (options.false_color ? "on" : "off");
+    d += "; " + camera.description + "; exposure ";
+    if (options.exposure_per_tile && image.auto_exposure) {
+        for (std::size_t t = 0; t < image.tiles.size(); ++t)
+            d += (t ? " | " : "") + number_text(image.tiles[t].exposure);
+        d += " (auto, per tile)";
+    } else {
+        d += number_text(image.exposure) + (image.auto_exposure ? " (auto)" : "");
+    }
+    d += std::string("; false colour ") + (options.false_color ? "on" : "off");
     image.description = d;
     return image;
 }
