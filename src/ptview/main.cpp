@@ -143,9 +143,9 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
             }
             r.view.exposure_per_tile = false;
             const double e = args.number(o);
-            if (e < -64.0 || e > 64.0)
+            if (e < -256.0 || e > 256.0)
                 throw sss::UsageError("option -exposure: " + sss::short_float(e) +
-                                      " is out of range [-64, 64]");
+                                      " is out of range [-256, 256]");
             r.view.exposure = e;
         } else if (o == "falsecolor") {
             r.view.false_color = args.integer(o, 0, 1) != 0;

@@ -92,6 +92,10 @@ right="$(pixel signed.exr 30 20)"
 "$ptview" -orbit 0 0 -res 40 40 -exposure 0 -falsecolor 0 -channel v signed.ply raw.exr >/dev/null
 [ "$(pixel raw.exr 10 20)" = "-0.500000 -0.500000 -0.500000" ] ||
     fail "-falsecolor 0 EXR keeps -0.5: $(pixel raw.exr 10 20)"
+# The largest exposure: values clamp to the float range, never Inf or NaN.
+"$ptview" -orbit 0 0 -res 40 40 -exposure 256 -falsecolor 0 -channel v signed.ply big.exr >/dev/null
+oiiotool big.exr --printstats 2>/dev/null | grep -q 'NanCount: 0 0 0' || fail "NaN in big.exr"
+oiiotool big.exr --printstats 2>/dev/null | grep -q 'InfCount: 0 0 0' || fail "Inf in big.exr"
 
 # --- a contact sheet: the bake next to its diffusion ------------------------
 "$bin/ptsynth" -shape sphere -n 5000 -size 1 -light 1 1 1 bake.ptc >/dev/null
@@ -137,7 +141,7 @@ expect_exit 1 "ERROR: .*is an input of this job" "$ptview" -o sheet.png sheet.pn
 # --- usage errors: exit 2 ----------------------------------------------------
 expect_exit 2 "option -res: 0 is out of range" "$ptview" -res 0 10 bake.ptc x.png
 expect_exit 2 "option -exposure: 'abc' is not a number" "$ptview" -exposure abc bake.ptc x.png
-expect_exit 2 "option -exposure: 100 is out of range" "$ptview" -exposure 100 bake.ptc x.png
+expect_exit 2 "option -exposure: 300 is out of range" "$ptview" -exposure 300 bake.ptc x.png
 expect_exit 2 "option -falsecolor: 2 is out of range" "$ptview" -falsecolor 2 bake.ptc x.png
 expect_exit 2 "option -orbit needs a value" "$ptview" bake.ptc x.png -orbit 10
 expect_exit 2 "option -orbit: elevation 95 is out of range" "$ptview" -orbit 0 95 bake.ptc x.png

@@ -163,6 +163,12 @@ TEST(PointView, FalseColourOfNegativeValues) {
     EXPECT_FLOAT_EQ(pos.x, 1.0f);
     EXPECT_FLOAT_EQ(pos.y, 0.0f);
     EXPECT_FLOAT_EQ(pos.z, 0.5f);
+    // Huge values and exposures stay finite (also with false colour).
+    for (bool fc : {false, true}) {
+        const glm::vec3 big =
+            sss::displayed_value({3e38f, -3e38f, 1.0f}, ViewValueKind::Colour, 256.0, fc);
+        EXPECT_TRUE(std::isfinite(big.x) && std::isfinite(big.y) && std::isfinite(big.z));
+    }
     // Normals are mapped, never exposed.
     const glm::vec3 up =
         sss::displayed_value({0, 1, 0}, ViewValueKind::Direction, 5.0, true);

@@ -555,12 +555,22 @@ ContactSheetLayout contact_sheet_layout(int tiles, int tile_width, int tile_heig
 glm::vec3 displayed_value(const glm::vec3& value, ViewValueKind kind, double exposure,
                           bool false_color) {
     if (kind == ViewValueKind::Direction) return 0.5f + 0.5f * value;
-    const glm::vec3 v = value * float(std::exp2(exposure));
-    if (!false_color) return v;
-    const float lum = kind == ViewValueKind::Grey ? v.x : luminance(v);
-    if (lum < 0.0f)
-        return -lum * glm::vec3(kNegativeHue[0], kNegativeHue[1], kNegativeHue[2]);
-    return glm::max(v, glm::vec3(0.0f));
+    // In doubles, clamped to the float range: no Inf (nor an Inf - Inf NaN in
+    // the luminance) whatever the value and exposure.
+    constexpr double kLargest = 3.0e38;
+    const double gain = std::exp2(exposure);
+    glm::dvec3 v = glm::dvec3(value) * gain;
+    v = glm::clamp(v, -kLargest, kLargest);
+    if (false_color) {
+        const double lum = kind == ViewValueKind::Grey
+                               ? v.x
+                               : 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z;
+        if (lum < 0.0)
+            v = -lum * glm::dvec3(kNegativeHue[0], kNegativeHue[1], kNegativeHue[2]);
+        else
+            v = glm::max(v, glm::dvec3(0.0));
+    }
+    return glm::vec3(glm::clamp(v, -kLargest, kLargest));
 }
 
 PointViewImage render_point_view(const std::vector<LabelledCloud>& clouds,
