@@ -256,6 +256,7 @@ int run(const std::vector<std::string>& argv) {
 
     r.view.progress = job.progress();
     const sss::Stopwatch watch;
+    const sss::ScopedStage drawing("drawing " + r.output);
     const sss::PointViewImage image = sss::render_point_view(labelled, camera, r.view);
     const double seconds = watch.seconds();
 

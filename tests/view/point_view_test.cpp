@@ -91,6 +91,20 @@ TEST(PointView, SingleDiscLandsAtItsProjectionWithItsProjectedRadius) {
     EXPECT_EQ(t.value[std::size_t(85) * 201 + 130].x, 1.0f);
 }
 
+TEST(PointView, PointsBehindTheEyeAreNotDrawn) {
+    // An orthographic camera (w = 1 everywhere): raster x = 10 + x, y = 10 - y.
+    sss::ViewCamera cam;
+    cam.width = cam.height = 21;
+    cam.world_to_raster[1][1] = -1.0;
+    cam.world_to_raster[3][0] = cam.world_to_raster[3][1] = 10.0;
+    const sss::PointCloud c =
+        discs({{0, 0, -1}, {5, 0, 1}}, {{0, 0, -1}, {0, 0, -1}}, {2, 2}, {1, 2});
+    const sss::ViewTile t = sss::render_view_tile(c, {"v", false}, cam, 1.0f, "ortho");
+    EXPECT_EQ(t.points_drawn, 1u);
+    EXPECT_FALSE(t.covered(10 * 21 + 10));
+    EXPECT_EQ(t.value[10 * 21 + 15].x, 2.0f);
+}
+
 TEST(PointView, TiltedDiscIsAnEllipse) {
     // Tilted 60 degrees about x: the vertical axis shrinks to cos 60 = 1/2.
     const double a = 60.0 * M_PI / 180.0;

@@ -91,7 +91,7 @@ struct ViewTile {
     ViewValueKind kind = ViewValueKind::Grey;
     std::vector<glm::vec3> value; ///< width * height, row-major from the top
     std::vector<uint32_t> point;  ///< the point drawn there, or kNoPoint
-    std::size_t points_drawn = 0; ///< points in front of the camera
+    std::size_t points_drawn = 0; ///< points in front of the eye, in the frame
     static constexpr uint32_t kNoPoint = 0xffffffffu;
 
     bool covered(std::size_t pixel) const { return point[pixel] != kNoPoint; }

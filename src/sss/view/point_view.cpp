@@ -437,6 +437,7 @@ ViewTile render_view_tile(const PointCloud& cloud, const ViewChannel& channel,
                 }
                 const double r = double(cloud.radii[i]) * scale;
                 const double depth = (E * glm::dvec4(p, 1.0)).z;
+                if (!(depth > 0.0)) continue; // behind the eye (orthographic cameras too)
                 double sxx, sxy, syy;
                 double gx = 0.0, gy = 0.0; // depth gradient over the raster
                 glm::dvec3 n(cloud.normals[i]);
