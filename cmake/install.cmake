@@ -21,7 +21,7 @@
 
 include(CMakePackageConfigHelpers)
 
-set(SSS_TOOLS ptbake ptfilter brickmake brickinfo render ptinfo ptsynth shader envdome)
+set(SSS_TOOLS ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview shader envdome)
 set(SSS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/sss)
 
 # --- runtime: tools, shaders, plugin, scenes, docs, man pages ---------------
@@ -53,6 +53,7 @@ set(SSS_MAN_NAMES
   "render|ray-trace a RIB scene"
   "ptinfo|describe point cloud files"
   "ptsynth|write synthetic lit point clouds"
+  "ptview|pictures of point clouds"
   "shader|compile RenderMan Shading Language shaders"
   "envdome|light probes to domes of distant lights"
   "sss-farm|submit the sss chain to a Slurm farm")
@@ -107,7 +108,7 @@ install(FILES ${CMAKE_BINARY_DIR}/cmake/sssConfig.cmake
 file(RELATIVE_PATH SSS_PC_TO_PREFIX /p/${CMAKE_INSTALL_LIBDIR}/pkgconfig /p)
 string(REGEX REPLACE "/$" "" SSS_PC_TO_PREFIX "${SSS_PC_TO_PREFIX}")
 set(SSS_PC_LIBS "")
-foreach(module cli render bake shading brick diffusion light dice scene cloud util)
+foreach(module cli render bake shading brick view diffusion light dice scene cloud util)
   string(APPEND SSS_PC_LIBS " -lsss_${module}")
 endforeach()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/sss.pc.in ${CMAKE_BINARY_DIR}/cmake/sss.pc @ONLY)
@@ -142,7 +143,7 @@ set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
   "sss (= ${PROJECT_VERSION}), libglm-dev, libtbb-dev, zlib1g-dev, libopenexr-dev, libembree-dev, libopenimageio-dev")
 set(CPACK_COMPONENT_RUNTIME_DESCRIPTION
-  "The sss tools: ptbake, ptfilter, brickmake, brickinfo, render, ptinfo, ptsynth, shader,\n envdome and sss-farm, with the standard shaders, scenes, docs and man pages.")
+  "The sss tools: ptbake, ptfilter, brickmake, brickinfo, render, ptinfo, ptsynth, ptview,\n shader, envdome and sss-farm, with the standard shaders, scenes, docs and man pages.")
 set(CPACK_COMPONENT_DEV_DESCRIPTION
   "The sss library: headers, static archives, CMake package (find_package(sss))\n and pkg-config file.")
 include(CPack)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # CLI test of bad input files for every tool that reads .ptc, .ply, .bkm or
-# RIB files (ptinfo, ptfilter, brickmake, brickinfo, render, ptbake):
+# RIB files (ptinfo, ptfilter, brickmake, brickinfo, ptview, render, ptbake):
 # truncated, bit-flipped, NaN and huge-count files each give exit status 1, a
 # "<tool> ERROR:" line as the last (and only error) line on stderr, no output
 # file, no temporary left in the output folder, and an output that existed
@@ -12,7 +12,7 @@
 set -euo pipefail
 
 bin="${SSS_BIN_DIR:?SSS_BIN_DIR must name the folder with the executables}"
-for tool in ptinfo ptfilter brickmake brickinfo render ptbake ptsynth; do
+for tool in ptinfo ptfilter brickmake brickinfo ptview render ptbake ptsynth; do
     [[ -x "$bin/$tool" ]] || { echo "FAIL: missing executable $bin/$tool" >&2; exit 1; }
 done
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -187,6 +187,8 @@ for kind in trunc flip nan huge; do
     check_tool "brickmake $kind.ptc" brickmake out.bkm "$kind.ptc" out.bkm
     check_tool "brickmake $kind.ply" brickmake out.bkm "$kind.ply" out.bkm
     check_tool "brickinfo -picture $kind.bkm" brickinfo out.png -picture out.png "$kind.bkm"
+    check_tool "ptview $kind.ptc" ptview out.png -o out.png "$kind.ptc"
+    check_tool "ptview $kind.ply" ptview out.png -o out.png good.ptc "$kind.ply"
     check_tool "render $kind.bkm" render image.exr "render_$kind.rib"
     check_tool "render $kind.rib" render out.exr -o out.exr "$kind.rib"
     check_tool "ptbake $kind.rib" ptbake out.ptc -o out.ptc "$kind.rib"

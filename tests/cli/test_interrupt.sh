@@ -3,8 +3,8 @@
 # SIGTERM or SIGINT while a tool writes its output leaves the previous file,
 # if any, byte-identical (or no file at all), removes the temporary and ends
 # the tool with 128 + signal. Covers every tool that writes: ptsynth, ptfilter,
-# brickmake, brickinfo (-picture PNG and -lookup cloud), render (OpenEXR) and
-# ptbake (gzip .ptc), both signals each; also signals during the computation
+# brickmake, brickinfo (-picture PNG and -lookup cloud), ptview (PNG), render
+# (OpenEXR) and ptbake (gzip .ptc), both signals each; also signals during the computation
 # (ptfilter, render), jobs with two outputs interrupted while writing the
 # second (ptbake, render: neither output changes), and a SIGINT that the
 # parent ignores. SIGKILL and the other tools: test_kill.sh.
@@ -24,7 +24,8 @@ brickmake="$bin/brickmake"
 brickinfo="$bin/brickinfo"
 render="$bin/render"
 ptinfo="$bin/ptinfo"
-for tool in "$ptsynth" "$ptfilter" "$ptbake" "$brickmake" "$brickinfo" "$render" "$ptinfo"; do
+ptview="$bin/ptview"
+for tool in "$ptsynth" "$ptfilter" "$ptbake" "$brickmake" "$brickinfo" "$render" "$ptinfo" "$ptview"; do
     [[ -x "$tool" ]] || { echo "FAIL: missing executable $tool" >&2; exit 1; }
 done
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -120,6 +121,10 @@ make_lookup() {
     cloud "$1"
     cmd=("$brickinfo" -info 0 -lookup "$cloud_path" "$2" -compress 1 "$work/in/map.bkm")
 }
+make_view() {
+    cloud 100000
+    cmd=("$ptview" -res "$1" "$1" "$cloud_path" "$2")
+}
 make_render() { cmd=("$render" -progress 1 -res "$1" "$1" -o "$2" "$work/in/one.rib"); }
 make_render_two() { cmd=("$render" -res "$1" "$1" "$work/in/two.rib"); }
 make_ptbake() { cmd=("$ptbake" -compress 1 -spacing "$1" -o "$2" "$work/in/bake.rib"); }
@@ -187,6 +192,7 @@ for sig in TERM INT; do
     write_case "brickmake-$sig" make_brickmake "$sig" "$had" out.bkm 100000 400000 1600000
     write_case "brickinfo-picture-$sig" make_picture "$sig" "$had" out.png 1024 2048 4096
     write_case "brickinfo-lookup-$sig" make_lookup "$sig" "$had" out.ptc 100000 400000 1600000
+    write_case "ptview-$sig" make_view "$sig" "$had" out.png 1024 2048 4096
     write_case "render-$sig" make_render "$sig" "$had" out.exr 500 1000 2000
     write_case "ptbake-$sig" make_ptbake "$sig" "$had" out.ptc 0.01 0.005 0.0025
 done

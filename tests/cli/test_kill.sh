@@ -5,7 +5,7 @@
 #    test_interrupt.sh): exit 143, the previous output byte-identical, no
 #    temporary left;
 #  - SIGKILL while ptsynth, ptfilter, brickmake, brickinfo (-picture and
-#    -lookup), render, ptbake, shader and envdome (-sky) write: exit 137, the
+#    -lookup), ptview, render, ptbake, shader and envdome (-sky) write: exit 137, the
 #    previous output byte-identical, the writer's temporary left behind; the
 #    next run of the same job removes it (it owns it: same target, this host,
 #    its writer gone) and writes the new output;
@@ -21,7 +21,7 @@
 set -euo pipefail
 
 bin="${SSS_BIN_DIR:?SSS_BIN_DIR must name the folder with the executables}"
-for tool in ptsynth ptfilter brickmake brickinfo render ptbake shader envdome ptinfo; do
+for tool in ptsynth ptfilter brickmake brickinfo ptview render ptbake shader envdome ptinfo; do
     [[ -x "$bin/$tool" ]] || { echo "FAIL: missing executable $bin/$tool" >&2; exit 1; }
 done
 ptinfo="$bin/ptinfo"
@@ -119,6 +119,10 @@ make_picture() { cmd=("$bin/brickinfo" -info 0 -picture "$2" -size "$1" -level 0
 make_lookup() {
     cloud "$1"
     cmd=("$bin/brickinfo" -info 0 -lookup "$cloud_path" "$2" -compress 1 "$work/in/map.bkm")
+}
+make_view() {
+    cloud 100000
+    cmd=("$bin/ptview" -res "$1" "$1" "$cloud_path" "$2")
 }
 make_render() { cmd=("$bin/render" -res "$1" "$1" -o "$2" "$work/in/one.rib"); }
 make_ptbake() { cmd=("$bin/ptbake" -compress 1 -spacing "$1" -o "$2" "$work/in/bake.rib"); }
@@ -234,6 +238,7 @@ write_case ptfilter-KILL make_ptfilter KILL out.ptc 20000 80000 320000
 write_case brickmake-KILL make_brickmake KILL out.bkm 100000 400000 1600000
 write_case brickinfo-picture-KILL make_picture KILL out.png 1024 2048 4096
 write_case brickinfo-lookup-KILL make_lookup KILL out.ptc 100000 400000 1600000
+write_case ptview-KILL make_view KILL out.png 1024 2048 4096
 write_case render-KILL make_render KILL out.exr 500 1000 2000
 write_case ptbake-KILL make_ptbake KILL out.ptc 0.01 0.005 0.0025
 write_case shader-KILL make_shader KILL out.slo 20000 80000 320000

@@ -52,6 +52,7 @@ for kind in folder fifo; do
     refused "ptinfo $kind" ptinfo "$what" $kind.ptc
     refused "brickmake $kind" brickmake "$what" $kind.ptc out.bkm
     refused "brickinfo $kind" brickinfo "$what" $kind.bkm
+    refused "ptview $kind" ptview "$what" $kind.ptc out.png
     refused "shader $kind" shader "$what" $kind.sl
     refused "envdome $kind" envdome "$what" $kind.exr out.rib
 done

@@ -49,7 +49,7 @@ unchanged() {
 }
 
 # --- --help and --version ------------------------------------------------------
-for tool in render ptbake ptfilter ptinfo ptsynth brickmake brickinfo shader envdome; do
+for tool in render ptbake ptfilter ptinfo ptsynth brickmake brickinfo ptview shader envdome; do
     full "$tool --help" "$tool" --help
     full "$tool --version" "$tool" --version
     "$bin/$tool" --help >/dev/null || fail "$tool --help fails on a working stdout"
@@ -83,7 +83,7 @@ printf 'surface flat() { Ci = 1; }\n' >flat.sl
 
 # --- jobs that print before committing: nothing changes --------------------------
 echo "previous output" >old.ref
-for f in out.ptc filtered.ptc image.exr baked.ptc out.bkm flat.slo sky.exr; do cp old.ref $f; done
+for f in out.ptc filtered.ptc image.exr baked.ptc out.bkm flat.slo sky.exr view.png; do cp old.ref $f; done
 full "ptsynth" ptsynth -n 100 out.ptc
 unchanged "ptsynth" out.ptc
 full "ptfilter -progress 1" ptfilter -ssdiffusion -progress 1 in.ptc filtered.ptc
@@ -98,6 +98,8 @@ full "shader" shader flat.sl
 unchanged "shader" flat.slo
 full "envdome -progress 1" envdome -sky 8 4 -progress 1 sky.exr
 unchanged "envdome -progress 1" sky.exr
+full "ptview" ptview -res 16 16 in.ptc view.png
+unchanged "ptview" view.png
 
 # --- tools that only print ---------------------------------------------------------
 full "ptinfo" ptinfo in.ptc

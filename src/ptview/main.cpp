@@ -1,0 +1,315 @@
+/// \file main.cpp
+/// ptview: pictures of point clouds (PRMan's ptviewer need): a channel of
+/// each cloud splatted as discs through the cloud's camera or an orbit
+/// camera, several clouds or channels as a contact sheet, PNG or EXR:
+///   ptview [options] cloud.ptc... out.png
+/// Option parsing around sss::render_point_view and write_point_view_image.
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/cli/tool.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/util/job_files.h"
+#include "sss/util/limits.h"
+#include "sss/util/messages.h"
+#include "sss/view/point_view.h"
+
+namespace {
+
+const char* const kTool = "ptview";
+
+const char* const kUsage = R"(usage: ptview [options] cloud.ptc... out.png|out.exr
+       ptview [options] -o out.png|out.exr cloud.ptc...
+
+Draws point clouds (.ptc or .ply): each point a disc of its radius facing
+its normal, the nearest one in front, coloured by a channel. Several clouds
+or channels make a contact sheet, one tile per cloud and channel, with one
+camera and one exposure. See docs/ptview.md.
+
+options:
+  -o FILE                the picture: .png (8-bit sRGB) or .exr (float,
+                         linear); default: the last file argument
+  -channel LIST          comma-separated channels shown, each NAME or
+                         NAME:lum (a colour's luminance); N = the normals,
+                         radius = the radii (default: each cloud's first
+                         colour channel). Each cloud shows those it has.
+  -camera auto|file|orbit  file: the camera the first cloud was baked with
+                         (its world2eye and world2ndc); orbit: around the
+                         clouds; auto (default): file when it has one
+  -orbit AZ EL           orbit camera at azimuth AZ and elevation EL degrees
+                         (default 30 20; implies -camera orbit)
+  -up x|y|z              the orbit's up axis (default y)
+  -fov DEGREES           the orbit's field of view, over the shorter side
+                         (default 30)
+  -res W H               size of each tile (default: 512 on the longer side,
+                         the file camera's aspect, square for orbits)
+  -exposure STOPS|auto|tile  multiply values by 2^STOPS; auto (default): the
+                         99.5th percentile of the drawn values becomes 1, one
+                         exposure for the sheet; tile: chosen for each tile
+  -falsecolor 0|1        1 (default): negative values (blockers) in blue
+  -background R G B      linear colour where no point is (default 0.05 0.05 0.05)
+  -radiusscale S         multiply every point's radius (default 1)
+  -columns N             contact sheet columns (default: one row up to 4 tiles)
+  -gap N                 pixels between tiles (default 2)
+  -frame N               frame number: expands %04d, #### and $F4 in file names
+  -threads N             worker threads, 0 = all usable cores (default 0)
+  -progress 0|1|2        ALF_PROGRESS lines, the exposure and per-tile counts
+  -h, --help             this help
+  --version              version information
+
+Exit codes: 0 ok, 1 unreadable or corrupt cloud, missing channel, failed
+output, 2 bad command line.
+)";
+
+enum class CameraChoice { Auto, File, Orbit };
+
+/// What the command line asks for.
+struct Request {
+    std::vector<std::string> inputs;
+    std::string output;
+    CameraChoice camera = CameraChoice::Auto;
+    double azimuth = 30.0, elevation = 20.0;
+    int up = 1;
+    double fov = 30.0;
+    int width = 0, height = 0; ///< 0: default
+    sss::PointViewOptions view;
+    sss::RunOptions running;
+};
+
+/// Parses and checks the command line; nullopt after --help or --version.
+std::optional<Request> parse_request(const std::vector<std::string>& argv) {
+    sss::ArgScanner args(argv);
+    Request r;
+    std::vector<std::string> files;
+    bool have_orbit = false, have_orbit_option = false;
+    std::string o;
+    while (args.next_option(o, files)) {
+        if (sss::standard_option(kTool, o, kUsage)) {
+            return std::nullopt;
+        } else if (o == "o") {
+            r.output = args.value(o);
+        } else if (o == "channel") {
+            for (const std::string& spec : sss::split_channel_list(args.value(o), o)) {
+                try {
+                    r.view.channels.push_back(sss::parse_view_channel(spec));
+                } catch (const sss::ValueError& e) {
+                    throw sss::UsageError("option -channel: " + std::string(e.what()));
+                }
+            }
+        } else if (o == "camera") {
+            const std::string v = args.value(o);
+            if (v == "auto")
+                r.camera = CameraChoice::Auto;
+            else if (v == "file")
+                r.camera = CameraChoice::File;
+            else if (v == "orbit")
+                r.camera = CameraChoice::Orbit;
+            else
+                throw sss::UsageError("option -camera: '" + v +
+                                      "' is not auto, file or orbit");
+        } else if (o == "orbit") {
+            r.azimuth = args.number(o);
+            r.elevation = args.number(o);
+            if (r.elevation < -90.0 || r.elevation > 90.0)
+                throw sss::UsageError("option -orbit: elevation " +
+                                      sss::short_float(r.elevation) +
+                                      " is out of range [-90, 90]");
+            have_orbit = true;
+        } else if (o == "up") {
+            const std::string v = args.value(o);
+            if (v != "x" && v != "y" && v != "z")
+                throw sss::UsageError("option -up: '" + v + "' is not x, y or z");
+            r.up = v[0] - 'x';
+            have_orbit_option = true;
+        } else if (o == "fov") {
+            r.fov = args.positive(o);
+            if (r.fov >= 170.0)
+                throw sss::UsageError("option -fov: must be < 170 (got " +
+                                      sss::short_float(r.fov) + ")");
+            have_orbit_option = true;
+        } else if (o == "res") {
+            r.width = args.integer(o, 1, 16384);
+            r.height = args.integer(o, 1, 16384);
+        } else if (o == "exposure") {
+            if (args.peek() == "auto" || args.peek() == "tile") {
+                r.view.exposure.reset();
+                r.view.exposure_per_tile = args.value(o) == "tile";
+                continue;
+            }
+            r.view.exposure_per_tile = false;
+            const double e = args.number(o);
+            if (e < -256.0 || e > 256.0)
+                throw sss::UsageError("option -exposure: " + sss::short_float(e) +
+                                      " is out of range [-256, 256]");
+            r.view.exposure = e;
+        } else if (o == "falsecolor") {
+            r.view.false_color = args.integer(o, 0, 1) != 0;
+        } else if (o == "background") {
+            const glm::dvec3 b = args.triple(o);
+            if (b.x < 0.0 || b.y < 0.0 || b.z < 0.0)
+                throw sss::UsageError("option -background: must be >= 0");
+            r.view.background = glm::vec3(b);
+        } else if (o == "radiusscale") {
+            r.view.radius_scale = float(args.positive(o));
+        } else if (o == "columns") {
+            r.view.columns = args.integer(o, 1, 4096);
+        } else if (o == "gap") {
+            r.view.gap = args.integer(o, 0, 256);
+        } else if (sss::run_option(args, o, r.running)) {
+            continue;
+        } else {
+            throw sss::UsageError("unknown option -" + o);
+        }
+    }
+    if (r.output.empty()) {
+        if (files.size() < 2)
+            throw sss::UsageError(files.empty()
+                                      ? "no point cloud given (usage: ptview cloud.ptc "
+                                        "out.png)"
+                                      : "no output picture given (the last file argument "
+                                        "or -o out.png)");
+        r.output = files.back();
+        files.pop_back();
+    }
+    if (files.empty()) throw sss::UsageError("no point cloud given");
+    if (have_orbit) {
+        if (r.camera == CameraChoice::File)
+            throw sss::UsageError("-orbit and -camera file exclude each other");
+        r.camera = CameraChoice::Orbit;
+    }
+    if (have_orbit_option && r.camera == CameraChoice::File)
+        throw sss::UsageError("-up and -fov are for the orbit camera, not -camera file");
+    if (!sss::is_png_path(r.output) && !sss::is_exr_path(r.output) &&
+        !sss::writes_into_existing(r.output))
+        throw sss::UsageError("'" + r.output +
+                              "' does not end in .png or .exr (the picture's format)");
+    for (const std::string& f : files)
+        r.inputs.push_back(sss::expand_frame_pattern(f, r.running.frame, "point cloud"));
+    r.output = sss::expand_frame_pattern(r.output, r.running.frame, "output picture");
+    return r;
+}
+
+/// printf into a string.
+template <typename... Args>
+void append(std::string& text, const char* format, Args... args) {
+    char buf[4096];
+    std::snprintf(buf, sizeof buf, format, args...);
+    text += buf;
+}
+
+int run(const std::vector<std::string>& argv) {
+    std::optional<Request> request = parse_request(argv);
+    if (!request) return 0;
+    Request& r = *request;
+    sss::JobFiles files;
+    for (const std::string& in : r.inputs)
+        files.input(in, "the point cloud \"" + in + "\"");
+    files.output(r.output, "the picture \"" + r.output + "\"");
+    sss::check_output_target(r.output);
+    sss::Job job(kTool, r.running);
+
+    std::vector<sss::PointCloud> clouds;
+    clouds.reserve(r.inputs.size());
+    for (const std::string& in : r.inputs) {
+        const sss::ScopedStage stage("reading " + in);
+        clouds.push_back(sss::read_point_cloud(in));
+    }
+    std::vector<sss::LabelledCloud> labelled;
+    for (std::size_t i = 0; i < clouds.size(); ++i)
+        labelled.push_back({&clouds[i], r.inputs[i]});
+
+    // The camera: the first cloud's own, or an orbit around all of them.
+    const bool has_camera = sss::has_file_camera(clouds.front());
+    if (r.camera == CameraChoice::File && !has_camera)
+        throw sss::ValueError("-camera file: " + r.inputs.front() +
+                              " has no camera (its world2ndc is the identity); use "
+                              "-camera orbit");
+    const bool use_file =
+        r.camera == CameraChoice::File || (r.camera == CameraChoice::Auto && has_camera);
+    int width = r.width, height = r.height;
+    if (width == 0) {
+        const double aspect = use_file ? sss::file_camera_aspect(clouds.front()) : 1.0;
+        width = aspect >= 1.0 ? 512 : std::max(1, int(std::lround(512.0 * aspect)));
+        height = aspect >= 1.0 ? std::max(1, int(std::lround(512.0 / aspect))) : 512;
+    }
+    sss::ViewCamera camera;
+    if (use_file) {
+        camera = sss::file_camera(clouds.front(), width, height, r.inputs.front());
+    } else {
+        bool any = false;
+        sss::Bounds3 box;
+        for (const sss::PointCloud& c : clouds) {
+            if (c.size() == 0) continue;
+            const sss::Bounds3 b = c.bounds();
+            box.lo = any ? glm::min(box.lo, b.lo) : b.lo;
+            box.hi = any ? glm::max(box.hi, b.hi) : b.hi;
+            any = true;
+        }
+        camera =
+            sss::orbit_camera(box, r.azimuth, r.elevation, r.up, r.fov, width, height);
+    }
+
+    r.view.progress = job.progress();
+    const sss::Stopwatch watch;
+    const sss::ScopedStage drawing("drawing " + r.output);
+    const sss::PointViewImage image = sss::render_point_view(labelled, camera, r.view);
+    const double seconds = watch.seconds();
+
+    std::string out;
+    append(out, "ptview: wrote %s: %d x %d, %zu tile%s (%d x %d), %s, ", r.output.c_str(),
+           image.width, image.height, image.tiles.size(),
+           image.tiles.size() == 1 ? "" : "s", camera.width, camera.height,
+           camera.description.c_str());
+    if (r.view.exposure_per_tile && image.auto_exposure) {
+        out += "exposure per tile";
+        for (std::size_t t = 0; t < image.tiles.size(); ++t)
+            append(out, "%s%.4g", t ? ", " : " ", image.tiles[t].exposure);
+        out += " stops (auto: the 99.5th percentile of each tile shown as 1)";
+    } else {
+        append(out, "exposure %.4g stops", image.exposure);
+        if (image.auto_exposure)
+            append(out, " (auto: %.6g shown as 1; fix it with -exposure %.4g)",
+                   image.exposure_reference, image.exposure);
+    }
+    out += "\n";
+    if (job.verbose()) {
+        for (std::size_t t = 0; t < image.tiles.size(); ++t) {
+            const sss::PointViewTileInfo& info = image.tiles[t];
+            append(out,
+                   "ptview: tile %zu: %s %s: %zu of %zu points drawn, %zu pixels, "
+                   "exposure %.4g stops\n",
+                   t + 1, r.inputs[info.cloud].c_str(),
+                   sss::view_channel_text(info.channel).c_str(), info.points_drawn,
+                   clouds[info.cloud].size(), info.pixels_covered, info.exposure);
+        }
+        append(out, "ptview: drawn in %.3f s\n", seconds);
+    }
+    {
+        const sss::ScopedStage stage("writing " + r.output);
+        sss::OutputSet outputs;
+        sss::write_point_view_image(image, r.output,
+                                    std::string("sss ptview ") + sss::version_string());
+        // The report goes out before the picture is put in place: a report that
+        // cannot be written fails the job with the picture unchanged.
+        std::fputs(out.c_str(), stdout);
+        sss::flush_standard_output();
+        outputs.commit();
+    }
+    for (std::size_t t = 0; t < image.tiles.size(); ++t)
+        if (image.tiles[t].pixels_covered == 0)
+            sss::warn(kTool, r.inputs[image.tiles[t].cloud] + " " +
+                                 sss::view_channel_text(image.tiles[t].channel) +
+                                 ": no point in view");
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    return sss::run_tool(kTool, argc, argv, run);
+}
