@@ -15,7 +15,7 @@ namespace sss {
 // ---------------------------------------------------------------------------
 
 void Progress::update(uint64_t done, uint64_t total) {
-    if (!m_enabled) return;
+    if (!m_enabled && !m_callback) return;
     int pct = 100;
     if (total > 0 && done < total)
         pct = static_cast<int>((static_cast<unsigned __int128>(done) * 100u) / total);
@@ -23,9 +23,13 @@ void Progress::update(uint64_t done, uint64_t total) {
     if (pct <= m_last.load(std::memory_order_relaxed)) return;
     std::lock_guard<std::mutex> lock(m_mutex);
     if (pct <= m_last.load(std::memory_order_relaxed)) return;
-    std::cout << "ALF_PROGRESS " << pct << "%\n";
-    flush_standard_output();
+    // Stored first: a callback that throws does not see this step again.
     m_last.store(pct, std::memory_order_relaxed);
+    if (m_enabled) {
+        std::cout << "ALF_PROGRESS " << pct << "%\n";
+        flush_standard_output();
+    }
+    if (m_callback) m_callback(done, total);
 }
 
 void Progress::finish() {
