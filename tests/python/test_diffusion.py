@@ -196,3 +196,29 @@ def test_negative_area_in_memory(sphere):
     cloud["_area"][3] = -1.0
     with pytest.raises(sss.Error, match="cloud: "):
         sss.ssdiffusion(cloud)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_ctrl_c_cancels(tool, tmp_path, threads):
+    import os
+    import signal
+    import time
+
+    big = tmp_path / "big.ptc"
+    tool("ptsynth", "-n", 300000, big)
+    cloud = sss.read_cloud(big)
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sss.ssdiffusion(cloud, threads=threads, maxsolidangle=0.1)
+    finally:
+        timer.cancel()
+        timer.join()
+    interrupted = time.perf_counter() - start
+    start = time.perf_counter()
+    sss.ssdiffusion(cloud, threads=threads, maxsolidangle=0.1)
+    whole = time.perf_counter() - start
+    # The signal came during the run, which stopped well before its end.
+    assert whole > 0.3 and interrupted < 0.8 * whole
