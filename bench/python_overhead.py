@@ -13,7 +13,8 @@ Measures, each the median of --runs runs on a ptsynth sphere:
      conversion of the arrays to and from the C++ cloud;
   3. read_cloud() and write_cloud() of the input;
   4. fixed costs per call: ssdiffusion() of a 10-point cloud and
-     BrickMap.lookup() of 1 point, against 1M lookups per point.
+     BrickMap.lookup() of 1 point, against 1M lookups per point;
+  5. `import sss` in a fresh interpreter, against `import numpy`.
 """
 
 import argparse
@@ -124,6 +125,13 @@ def main():
                                         threads=args.threads), args.runs)[0]
     print(f"lookups        1 point per call {1e6 * one:.1f} us; {n} points in one call "
           f"{many:.3f} s ({1e9 * many / n:.0f} ns per point)")
+
+    # 5. Import.
+    def fresh(module):
+        return median_process([sys.executable, "-c", f"import {module}"], args.runs)[0]
+
+    print(f"import         python -c 'import sss' {fresh('sss'):.3f} s, "
+          f"'import numpy' {fresh('numpy'):.3f} s, 'pass' {fresh('os'):.3f} s")
 
 
 def in_memory_tiny(tiny, inner):

@@ -118,6 +118,8 @@ public:
     explicit PythonProgress(py::object callback) : m_callback(std::move(callback)) {
         m_progress.set_callback([this](uint64_t done, uint64_t total) {
             py::gil_scoped_acquire gil;
+            // Another thread's step already cancelled: keep its exception.
+            if (m_error) throw Cancelled{};
             if (PyErr_CheckSignals() != 0) {
                 m_error.emplace();
                 throw Cancelled{};

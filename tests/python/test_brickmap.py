@@ -101,6 +101,19 @@ def test_progress_and_bad_options(tmp_path, diffused):
     assert not (tmp_path / "x.bkm").exists()
 
 
+def test_callback_exception_cancels_the_build(tmp_path, diffused):
+    def stop(done, total):
+        if done * 2 >= total:
+            raise RuntimeError("halfway")
+
+    with pytest.raises(RuntimeError, match="halfway"):
+        sss.make_brickmap(diffused, tmp_path / "c.bkm", maxerror=0.0001, progress=stop)
+    assert not (tmp_path / "c.bkm").exists()
+    # The next build works.
+    sss.make_brickmap(diffused, tmp_path / "c.bkm")
+    assert sss.BrickMap(tmp_path / "c.bkm").verify() > 0
+
+
 def test_bad_brickmap_files(tmp_path, maps):
     with pytest.raises(sss.IoError):
         sss.BrickMap(tmp_path / "missing.bkm")
