@@ -3,7 +3,8 @@
 # after every target exists; not in the sanitizer build.
 #
 #   cmake --install build --prefix P      the whole tree under P (relocatable)
-#   (cd build && cpack)                   build/packages/sss_*.deb, sss-dev_*.deb
+#   (cd build && cpack)                   build/packages/sss_*.deb, sss-dev_*.deb,
+#                                         python3-sss_*.deb
 #
 # Layout under the prefix (GNUInstallDirs):
 #   bin/                        the tools and sss-farm
@@ -132,6 +133,9 @@ set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEB_COMPONENT_INSTALL ON)
 set(CPACK_COMPONENTS_ALL runtime dev)
+if(SSS_BUILD_PYTHON)
+  list(APPEND CPACK_COMPONENTS_ALL python)
+endif()
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
@@ -142,6 +146,14 @@ set(CPACK_DEBIAN_DEV_PACKAGE_NAME sss-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
   "sss (= ${PROJECT_VERSION}), libglm-dev, libtbb-dev, zlib1g-dev, libopenexr-dev, libembree-dev, libopenimageio-dev")
+# python3-sss: the Python module (python/CMakeLists.txt installs it into
+# Debian's dist-packages), built for this machine's python3 (3.11 on Debian 12).
+set(CPACK_DEBIAN_PYTHON_PACKAGE_NAME python3-sss)
+set(CPACK_DEBIAN_PYTHON_PACKAGE_SECTION python)
+set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS
+  "sss (= ${PROJECT_VERSION}), python3 (>= 3.11), python3 (<< 3.12), python3-numpy")
+set(CPACK_COMPONENT_PYTHON_DESCRIPTION
+  "The sss Python module: point clouds as numpy arrays, ptfilter's diffusion in-process,\n brick maps and texture3d lookups, frame patterns.")
 set(CPACK_COMPONENT_RUNTIME_DESCRIPTION
   "The sss tools: ptbake, ptfilter, brickmake, brickinfo, render, ptinfo, ptsynth, ptview,\n shader, envdome and sss-farm, with the standard shaders, scenes, docs and man pages.")
 set(CPACK_COMPONENT_DEV_DESCRIPTION

@@ -25,7 +25,7 @@ scene_setup() {
     [[ -d "$bin" ]] || die "no tools folder $bin (build first: scripts/build, or set SSS_BIN_DIR)"
     bin="$(cd "$bin" && pwd)"
     local tool
-    for tool in ptbake ptfilter brickmake render; do
+    for tool in ptbake ptfilter brickmake render ptview; do
         [[ -x "$bin/$tool" ]] || die "missing $bin/$tool (build first: scripts/build)"
     done
     command -v oiiotool >/dev/null 2>&1 ||

@@ -222,30 +222,8 @@ int run(const std::vector<std::string>& argv) {
                 throw sss::UsageError("filter '" + f +
                                       "' is not supported (only ssdiffusion)");
             have_filter = true;
-        } else if (sss::material_option(args, o, opt.material)) {
+        } else if (sss::ssdiffusion_option(args, o, opt)) {
             continue;
-        } else if (o == "maxsolidangle") {
-            opt.diffusion.max_solid_angle = args.positive(o);
-        } else if (o == "profile") {
-            std::string p = args.value(o);
-            if (!sss::parse_profile_kind(p, opt.profile))
-                throw sss::UsageError("option -profile: unknown profile '" + p +
-                                      "' (classic, better, burley)");
-        } else if (o == "criterion") {
-            std::string c = args.value(o);
-            if (!sss::parse_criterion(c.c_str(), opt.diffusion.criterion))
-                throw sss::UsageError("option -criterion: unknown criterion '" + c +
-                                      "' (error, bbox, centroid)");
-        } else if (o == "isa") {
-            opt.diffusion.isa = sss::parse_isa(args.value(o), "option -isa");
-        } else if (o == "exact") {
-            opt.exact = true;
-        } else if (o == "areachannel") {
-            opt.area_channel = args.value(o);
-        } else if (o == "radiancechannel") {
-            opt.radiance_channel = args.value(o);
-        } else if (o == "keepchannels") {
-            opt.keep_channels = args.integer(o, 0, 1) != 0;
         } else if (sss::write_option(args, o, wopt)) {
             continue;
         } else if (sss::run_option(args, o, running)) {

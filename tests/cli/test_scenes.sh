@@ -123,6 +123,7 @@ if run_scene teapot; then
     exr_ok $d/teapot.exr 160 120 teapot
     exr_ok $d/teapot_nosss.exr 160 120 teapot
     image_ok $d/teapot_compare.png 320 120 "teapot compare"
+    [[ -s $d/teapot_clouds.png ]] || fail "teapot: no ptview picture of the clouds"
     [[ -s $d/teapot.ptc && -s $d/teapot_ssd.ptc && -s $d/teapot_ssd.bkm ]] ||
         fail "teapot: the intermediate files are missing: $(ls $d)"
     # The right of the body, just past the key light's terminator.

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The Debian packages as a farm node gets them (docs/install.md): cpack makes
-# sss and sss-dev from the build tree; their dependencies must be Debian
-# packages this machine has; both are unpacked into a temporary root (dpkg -x:
-# the machine's own /usr is not touched) and the bundled teapot scene runs its
-# whole pipeline (ptbake -> ptfilter -> brickmake -> render) with the
-# installed tools, shaders and scene only.
+# sss, sss-dev and (with the Python module) python3-sss from the build tree;
+# their dependencies must be Debian packages this machine has; they are
+# unpacked into a temporary root (dpkg -x: the machine's own /usr is not
+# touched) and the bundled teapot scene runs its whole pipeline (ptbake ->
+# ptfilter -> brickmake -> ptview -> render) with the installed tools, shaders
+# and scene only; the unpacked Python module reads the filtered cloud.
 #
 #   test_deb.sh BUILD_DIR
 set -euo pipefail
@@ -23,6 +24,11 @@ version="$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "$build/CMakeCache.txt")
 deb="$tmp/packages/sss_${version}_amd64.deb"
 dev="$tmp/packages/sss-dev_${version}_amd64.deb"
 [[ -f "$deb" && -f "$dev" ]] || { ls "$tmp/packages" >&2; fail "cpack made no sss/sss-dev $version"; }
+py=""
+if grep -q '^SSS_BUILD_PYTHON:BOOL=ON$' "$build/CMakeCache.txt"; then
+    py="$tmp/packages/python3-sss_${version}_amd64.deb"
+    [[ -f "$py" ]] || { ls "$tmp/packages" >&2; fail "cpack made no python3-sss $version"; }
+fi
 
 # Dependencies: the libraries the tools load (found by dpkg-shlibdeps), each
 # a package this machine has installed at a version that satisfies it.
@@ -48,6 +54,13 @@ check_depends() { # check_depends "a (>= 1), b, ..."
 }
 check_depends "$depends"
 [[ "$(dpkg-deb -f "$dev" Depends)" == *"sss (= $version)"* ]] || fail "sss-dev must depend on sss $version"
+check_depends "$(dpkg-deb -f "$dev" Depends | sed "s/sss (= $version), //")"
+if [[ -n "$py" ]]; then
+    pydeps="$(dpkg-deb -f "$py" Depends)"
+    [[ "$pydeps" == *"sss (= $version)"* && "$pydeps" == *python3-numpy* ]] ||
+        fail "python3-sss's Depends: $pydeps"
+    check_depends "$(sed "s/sss (= $version), //" <<<"$pydeps")"
+fi
 dpkg-deb -c "$deb" >"$tmp/deb.txt"
 dpkg-deb -c "$dev" >"$tmp/dev.txt"
 grep -q '\./usr/share/man/man1/ptfilter\.1' "$tmp/deb.txt" || fail "no man page in $deb"
@@ -57,16 +70,27 @@ grep -q '\./usr/.*/cmake/sss/sssConfig\.cmake' "$tmp/dev.txt" || fail "no CMake 
 root="$tmp/root"
 dpkg -x "$deb" "$root"
 dpkg -x "$dev" "$root"
+[[ -z "$py" ]] || dpkg -x "$py" "$root"
 
 # The teapot pipeline (quick version) from the installed tree alone.
 unset SSS_SHADER_DIR SSS_PLUGIN_DIR
 PATH="/usr/bin:/bin" SSS_QUICK=1 SSS_BIN_DIR="$root/usr/bin" \
     "$root/usr/share/sss/scenes/teapot/run" "$tmp/out" >"$tmp/run.log" 2>&1 ||
     { cat "$tmp/run.log" >&2; fail "the teapot pipeline with the installed tools"; }
-for f in teapot.ptc teapot_ssd.ptc teapot_ssd.bkm teapot.exr; do
+for f in teapot.ptc teapot_ssd.ptc teapot_ssd.bkm teapot_clouds.png teapot.exr; do
     [[ -s "$tmp/out/$f" ]] || fail "the pipeline wrote no $f"
 done
 # The picture is lit and has subsurface scattering in it (its sss AOV).
 mean="$(oiiotool --stats "$tmp/out/teapot.exr" 2>/dev/null | sed -n 's/^ *Stats Avg: //p' | head -1)"
 awk -v m="${mean%% *}" 'BEGIN { exit !(m > 0.01) }' || fail "teapot.exr is dark (mean '$mean')"
-echo "deb: sss and sss-dev $version packaged; dependencies installed here; teapot pipeline ran from the unpacked packages"
+# Debian's python3 with the unpacked module (and no build tree on its path).
+if [[ -n "$py" ]]; then
+    points="$("$root/usr/bin/ptinfo" "$tmp/out/teapot_ssd.ptc" | sed -n 's/^points: *//p')"
+    got="$(cd "$tmp" && PYTHONPATH="$root/usr/lib/python3/dist-packages" /usr/bin/python3 -c "
+import sss, sys
+assert sss.__file__.startswith('$root/'), sss.__file__
+c = sss.read_cloud('$tmp/out/teapot_ssd.ptc')
+print(len(c['_ssdiffusion']))")" || fail "the unpacked Python module"
+    [[ "$got" == "$points" ]] || fail "the Python module read $got points, ptinfo says $points"
+fi
+echo "deb: sss, sss-dev${py:+ and python3-sss} $version packaged; dependencies installed here; teapot pipeline ran from the unpacked packages"

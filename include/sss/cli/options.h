@@ -17,6 +17,16 @@ struct MaterialSpec;
 bool material_option(ArgScanner& args, const std::string& opt, MaterialSpec& spec,
                      bool allow_fromfile = true);
 
+struct SsDiffusionOptions;
+/// Parses the options of ptfilter -ssdiffusion that fill SsDiffusionOptions:
+/// the material options (material_option), -maxsolidangle, -profile,
+/// -criterion, -isa, -exact, -areachannel, -radiancechannel and
+/// -keepchannels. Returns false when opt is not one of them. ptfilter and
+/// the Python module's ssdiffusion() (keywords turned into these words) share
+/// it, so both accept and refuse the same values with the same messages.
+bool ssdiffusion_option(ArgScanner& args, const std::string& opt,
+                        SsDiffusionOptions& options);
+
 struct PointCloudWriteOptions;
 /// Parses the point-cloud output options (-compress 0|1, -ptcversion 0|1|2);
 /// false when opt is not one of them.

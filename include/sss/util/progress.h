@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <string>
 
@@ -22,6 +23,9 @@ namespace sss {
 ///   Farm logs are never terminals, so they keep only the ALF lines.
 class Progress {
 public:
+    /// Receives (done, total) each time the integer percentage grows.
+    using Callback = std::function<void(uint64_t done, uint64_t total)>;
+
     explicit Progress(bool enabled) : m_enabled(enabled) {}
     ~Progress();
     Progress(const Progress&) = delete;
@@ -41,6 +45,12 @@ public:
     bool enabled() const { return m_enabled; }
     /// Whether the terminal line is on (show_on_terminal() found a terminal).
     bool on_terminal() const { return m_terminal; }
+    /// Also (or, when not enabled, only) calls `callback` each time the
+    /// percentage grows, serialised (one call at a time, percentages in
+    /// order), from whichever thread made the progress. An exception it
+    /// throws leaves update() and ends the caller's work (the Python module
+    /// cancels a run this way). Set it before the work starts.
+    void set_callback(Callback callback) { m_callback = std::move(callback); }
 
 private:
     void draw(uint64_t done, uint64_t total, int64_t now_ns); // under m_mutex
@@ -49,6 +59,7 @@ private:
     bool m_enabled;
     bool m_terminal = false;
     std::string m_tool, m_unit;
+    Callback m_callback;
     std::atomic<int> m_last{-1};
     std::mutex m_mutex;
     // The terminal line's stage: its total, start time and first count.

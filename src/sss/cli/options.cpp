@@ -5,7 +5,9 @@
 
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/material.h"
+#include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/error.h"
+#include "sss/util/isa.h"
 
 namespace sss {
 
@@ -44,6 +46,37 @@ bool material_option(ArgScanner& args, const std::string& o, MaterialSpec& m,
         m.dmfp = triple_or_fromfile(args, o, m.dmfp_from_file, allow_fromfile);
     } else if (o == "ior") {
         m.ior = args.positive(o);
+    } else {
+        return false;
+    }
+    return true;
+}
+
+bool ssdiffusion_option(ArgScanner& args, const std::string& o, SsDiffusionOptions& opt) {
+    if (material_option(args, o, opt.material)) {
+        return true;
+    } else if (o == "maxsolidangle") {
+        opt.diffusion.max_solid_angle = args.positive(o);
+    } else if (o == "profile") {
+        std::string p = args.value(o);
+        if (!parse_profile_kind(p, opt.profile))
+            throw UsageError("option -profile: unknown profile '" + p +
+                             "' (classic, better, burley)");
+    } else if (o == "criterion") {
+        std::string c = args.value(o);
+        if (!parse_criterion(c.c_str(), opt.diffusion.criterion))
+            throw UsageError("option -criterion: unknown criterion '" + c +
+                             "' (error, bbox, centroid)");
+    } else if (o == "isa") {
+        opt.diffusion.isa = parse_isa(args.value(o), "option -isa");
+    } else if (o == "exact") {
+        opt.exact = true;
+    } else if (o == "areachannel") {
+        opt.area_channel = args.value(o);
+    } else if (o == "radiancechannel") {
+        opt.radiance_channel = args.value(o);
+    } else if (o == "keepchannels") {
+        opt.keep_channels = args.integer(o, 0, 1) != 0;
     } else {
         return false;
     }

@@ -150,7 +150,7 @@ void Progress::draw(uint64_t done, uint64_t total, int64_t now) {
 }
 
 void Progress::update(uint64_t done, uint64_t total) {
-    if (!m_enabled && !m_terminal) return;
+    if (!m_enabled && !m_terminal && !m_callback) return;
     int pct = 100;
     if (total > 0 && done < total)
         pct = static_cast<int>((static_cast<unsigned __int128>(done) * 100u) / total);
@@ -162,12 +162,14 @@ void Progress::update(uint64_t done, uint64_t total) {
             draw(done, total, now);
         }
     }
-    if (!m_enabled) return;
+    if (!m_enabled && !m_callback) return;
     // Cheap check first: most calls change nothing and must not serialise.
     if (pct <= m_last.load(std::memory_order_relaxed)) return;
     std::lock_guard<std::mutex> lock(m_mutex);
     if (pct <= m_last.load(std::memory_order_relaxed)) return;
-    {
+    // Stored first: a callback that throws does not see this step again.
+    m_last.store(pct, std::memory_order_relaxed);
+    if (m_enabled) {
         // The farm line on a line of its own, even when stdout is the
         // terminal the progress line is on (it is redrawn next time).
         std::lock_guard<std::mutex> terminal(g_terminal_mutex);
@@ -175,7 +177,7 @@ void Progress::update(uint64_t done, uint64_t total) {
         std::cout << "ALF_PROGRESS " << pct << "%\n";
         flush_standard_output();
     }
-    m_last.store(pct, std::memory_order_relaxed);
+    if (m_callback) m_callback(done, total);
 }
 
 void Progress::finish() {

@@ -1,0 +1,678 @@
+/// \file sss_module.cpp
+/// sss._sss: the Python binding of the sss library (docs/python.md). A front
+/// end like the cli: it turns Python values into the library's structs (and
+/// the keyword options into the words the cli's option parsers read, so that
+/// the values are checked where the tools check them) and the results back
+/// into numpy arrays. The pure-Python package (python/sss/__init__.py) wraps
+/// these functions with keyword arguments, the Cloud dict and warnings.
+
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sss/brick/brickmap.h"
+#include "sss/brick/brickmap_tools.h"
+#include "sss/cli/args.h"
+#include "sss/cli/job.h"
+#include "sss/cli/options.h"
+#include "sss/cloud/point_cloud.h"
+#include "sss/cloud/point_cloud_io.h"
+#include "sss/diffusion/ssdiffusion.h"
+#include "sss/util/atomic_output.h"
+#include "sss/util/error.h"
+#include "sss/util/frame_pattern.h"
+#include "sss/util/isa.h"
+#include "sss/util/job_files.h"
+#include "sss/util/limits.h"
+#include "sss/util/parse.h"
+#include "sss/util/progress.h"
+#include "sss/util/threads.h"
+#include "sss/util/version.h"
+
+namespace py = pybind11;
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// Exceptions: sss.Error and its subclasses, which also derive from the
+// builtin a Python caller would catch (OSError, ValueError, MemoryError).
+// ---------------------------------------------------------------------------
+
+PyObject* g_error = nullptr;
+PyObject* g_usage_error = nullptr;
+PyObject* g_io_error = nullptr;
+PyObject* g_format_error = nullptr;
+PyObject* g_value_error = nullptr;
+PyObject* g_limit_error = nullptr;
+PyObject* g_memory_error = nullptr;
+
+PyObject* new_exception(py::module_& m, const char* name, PyObject* bases,
+                        const char* doc) {
+    const std::string full = std::string("sss.") + name;
+    PyObject* type = PyErr_NewExceptionWithDoc(full.c_str(), doc, bases, nullptr);
+    if (!type) throw py::error_already_set();
+    m.add_object(name, py::handle(type));
+    return type;
+}
+
+/// Raises `type(message)` with the attributes `path` and `point` when given.
+void raise(PyObject* type, const char* message, const std::string* path = nullptr,
+           int64_t point = -1) {
+    py::object exc =
+        py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", message));
+    if (!exc) return; // the call set an error itself
+    exc.attr("path") = path ? py::object(py::str(*path)) : py::object(py::none());
+    exc.attr("point") = point >= 0 ? py::object(py::int_(point)) : py::object(py::none());
+    PyErr_SetObject(type, exc.ptr());
+}
+
+void translate_exception(std::exception_ptr p) {
+    try {
+        if (p) std::rethrow_exception(p);
+    } catch (const sss::IoError& e) {
+        raise(g_io_error, e.what(), &e.path());
+    } catch (const sss::FormatError& e) {
+        raise(g_format_error, e.what(), &e.path(), e.point());
+    } catch (const sss::MissingFrameError& e) {
+        // The cli adds "-frame N" (sss::option_wording); here it is a keyword.
+        raise(g_usage_error,
+              (std::string(e.what()) + "; give the frame with frame=N").c_str());
+    } catch (const sss::UsageError& e) {
+        raise(g_usage_error, e.what());
+    } catch (const sss::ValueError& e) {
+        raise(g_value_error, e.what());
+    } catch (const sss::OutOfMemoryError& e) {
+        raise(g_memory_error, e.what());
+    } catch (const sss::LimitError& e) {
+        raise(g_limit_error, e.what());
+    } catch (const sss::Error& e) {
+        raise(g_error, e.what());
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Progress callbacks and cancellation
+// ---------------------------------------------------------------------------
+
+/// Thrown through the library when the Python side asks to stop (the
+/// callback raised, or a signal such as Ctrl-C arrived). Not a std::exception,
+/// so that no library handler mistakes it for one of its own errors.
+struct Cancelled {};
+
+/// A sss::Progress for one call: each time the percentage grows it takes the
+/// GIL, lets Python handle pending signals and calls the user's callback with
+/// (done, total). An exception there is kept and the run is cancelled by
+/// throwing Cancelled; run() raises the kept exception in the caller.
+class PythonProgress {
+public:
+    explicit PythonProgress(py::object callback) : m_callback(std::move(callback)) {
+        m_progress.set_callback([this](uint64_t done, uint64_t total) {
+            py::gil_scoped_acquire gil;
+            // Another thread's step already cancelled: keep its exception.
+            if (m_error) throw Cancelled{};
+            if (PyErr_CheckSignals() != 0) {
+                m_error.emplace();
+                throw Cancelled{};
+            }
+            if (m_callback.is_none()) return;
+            try {
+                m_callback(done, total);
+            } catch (py::error_already_set& e) {
+                m_error.emplace(std::move(e));
+                throw Cancelled{};
+            }
+        });
+    }
+    sss::Progress* get() { return &m_progress; }
+
+    /// Runs f without the GIL; a cancellation raises the kept Python error.
+    template <class F>
+    auto run(F&& f) {
+        try {
+            py::gil_scoped_release release;
+            return f();
+        } catch (const Cancelled&) {
+            if (m_error) throw std::move(*m_error);
+            throw std::runtime_error("sss: run cancelled");
+        }
+    }
+
+private:
+    py::object m_callback;
+    sss::Progress m_progress{false};
+    std::optional<py::error_already_set> m_error;
+};
+
+// ---------------------------------------------------------------------------
+// Clouds <-> dicts of numpy arrays
+// ---------------------------------------------------------------------------
+
+/// A float32 array over a vector's storage, which the array then owns (no copy).
+template <class T>
+py::array own_array(std::vector<T>&& v, std::vector<py::ssize_t> shape) {
+    auto* holder = new std::vector<T>(std::move(v));
+    py::capsule owner(holder, [](void* p) { delete static_cast<std::vector<T>*>(p); });
+    return py::array_t<float>(shape, reinterpret_cast<const float*>(holder->data()),
+                              owner);
+}
+
+std::vector<py::ssize_t> channel_shape(std::size_t n, sss::ChannelType type) {
+    const auto count = static_cast<py::ssize_t>(n);
+    switch (sss::channel_type_size(type)) {
+    case 1:
+        return {count};
+    case 16:
+        return {count, 4, 4};
+    default:
+        return {count, 3};
+    }
+}
+
+py::list matrix_list(const std::array<float, 16>& m) {
+    py::list out;
+    for (float v : m) out.append(v);
+    return out;
+}
+
+/// (arrays, types, header) of a cloud, its storage moved into the arrays.
+py::tuple cloud_to_python(sss::PointCloud&& cloud) {
+    const std::size_t n = cloud.size();
+    py::dict arrays, types, header;
+    arrays["P"] = own_array(std::move(cloud.positions), {py::ssize_t(n), 3});
+    arrays["N"] = own_array(std::move(cloud.normals), {py::ssize_t(n), 3});
+    arrays["radius"] = own_array(std::move(cloud.radii), {py::ssize_t(n)});
+    for (sss::Channel& c : cloud.channels) {
+        types[py::str(c.name)] = sss::channel_type_name(c.type);
+        arrays[py::str(c.name)] = own_array(std::move(c.data), channel_shape(n, c.type));
+    }
+    header["world_to_eye"] = matrix_list(cloud.world_to_eye);
+    header["world_to_ndc"] = matrix_list(cloud.world_to_ndc);
+    header["format"] = py::make_tuple(cloud.format[0], cloud.format[1], cloud.format[2]);
+    header["file_version"] = cloud.file_version;
+    header["compressed"] = cloud.file_compressed;
+    return py::make_tuple(arrays, types, header);
+}
+
+/// The values of an array as n x width floats (converted to float32, copied).
+std::vector<float> array_values(const std::string& name, const py::handle& value,
+                                std::size_t n, int width) {
+    auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!a) throw sss::ValueError("cloud['" + name + "']: not a numeric array");
+    const auto count = static_cast<std::size_t>(a.size());
+    const bool rows_ok = a.ndim() >= 1 && std::size_t(a.shape(0)) == n;
+    if (!rows_ok || count != n * std::size_t(width))
+        throw sss::ValueError("cloud['" + name + "']: expected " + std::to_string(n) +
+                              " rows of " + std::to_string(width) +
+                              " values, got an array of " + std::to_string(count) +
+                              " values");
+    std::vector<float> out(count);
+    if (count) std::memcpy(out.data(), a.data(), count * sizeof(float));
+    return out;
+}
+
+std::vector<glm::vec3> vec3_values(const std::string& name, const py::handle& value,
+                                   std::size_t n) {
+    std::vector<float> f = array_values(name, value, n, 3);
+    std::vector<glm::vec3> out(n);
+    if (n) std::memcpy(static_cast<void*>(out.data()), f.data(), n * 3 * sizeof(float));
+    return out;
+}
+
+std::array<float, 16> matrix_value(const std::string& name, const py::handle& value) {
+    std::vector<float> f =
+        array_values(name, py::array_t<float>::ensure(value).reshape({1, -1}), 1, 16);
+    std::array<float, 16> m;
+    std::copy(f.begin(), f.end(), m.begin());
+    return m;
+}
+
+/// The cloud of (arrays, types, header): P required; N (zero: no normal) and
+/// radius (zero) optional; other keys are channels whose type is types[name],
+/// else float, color or matrix by their width.
+sss::PointCloud cloud_from_python(const py::dict& arrays, const py::dict& types,
+                                  const py::dict& header) {
+    if (!arrays.contains("P"))
+        throw sss::ValueError("cloud has no 'P' array (positions)");
+    auto p = py::array::ensure(arrays["P"]);
+    if (!p || p.ndim() < 1) throw sss::ValueError("cloud['P']: not an (N, 3) array");
+    const auto n = static_cast<std::size_t>(p.shape(0));
+    sss::PointCloud cloud;
+    cloud.positions = vec3_values("P", arrays["P"], n);
+    cloud.normals = arrays.contains("N") ? vec3_values("N", arrays["N"], n)
+                                         : std::vector<glm::vec3>(n, glm::vec3(0.0f));
+    cloud.radii = arrays.contains("radius")
+                      ? array_values("radius", arrays["radius"], n, 1)
+                      : std::vector<float>(n, 0.0f);
+    for (auto item : arrays) {
+        const std::string name = py::str(item.first);
+        if (name == "P" || name == "N" || name == "radius") continue;
+        sss::ChannelType type = sss::ChannelType::Float;
+        if (types.contains(name)) {
+            const std::string t = py::str(types[py::str(name)]);
+            auto parsed = sss::parse_channel_type(t);
+            if (!parsed)
+                throw sss::ValueError("channel '" + name + "': unknown type '" + t +
+                                      "' (float, color, point, vector, normal, matrix)");
+            type = *parsed;
+        } else {
+            auto a = py::array::ensure(item.second);
+            const py::ssize_t width = a && a.ndim() >= 1 && a.shape(0) > 0
+                                          ? a.size() / a.shape(0)
+                                          : (a && a.ndim() > 1 ? a.shape(1) : 1);
+            type = width == 3    ? sss::ChannelType::Color
+                   : width == 16 ? sss::ChannelType::Matrix
+                                 : sss::ChannelType::Float;
+        }
+        sss::Channel c;
+        c.name = name;
+        c.type = type;
+        c.data = array_values(name, item.second, n, sss::channel_type_size(type));
+        cloud.channels.push_back(std::move(c));
+    }
+    if (header.contains("world_to_eye"))
+        cloud.world_to_eye = matrix_value("world_to_eye", header["world_to_eye"]);
+    if (header.contains("world_to_ndc"))
+        cloud.world_to_ndc = matrix_value("world_to_ndc", header["world_to_ndc"]);
+    if (header.contains("format")) {
+        std::vector<float> f = array_values(
+            "format", py::array_t<float>::ensure(header["format"]).reshape({1, -1}), 1,
+            3);
+        cloud.format = {f[0], f[1], f[2]};
+    }
+    return cloud;
+}
+
+py::tuple read_cloud(const std::string& path) {
+    sss::PointCloud cloud;
+    {
+        py::gil_scoped_release release;
+        cloud = sss::read_point_cloud(path);
+    }
+    return cloud_to_python(std::move(cloud));
+}
+
+void write_cloud(const std::string& path, const py::dict& arrays, const py::dict& types,
+                 const py::dict& header, int ptc_version, bool compress) {
+    const sss::PointCloud cloud = cloud_from_python(arrays, types, header);
+    sss::PointCloudWriteOptions options;
+    options.ptc_version = ptc_version;
+    options.compress = compress;
+    py::gil_scoped_release release;
+    sss::write_point_cloud(cloud, path, options);
+}
+
+// ---------------------------------------------------------------------------
+// Diffusion (ptfilter -ssdiffusion)
+// ---------------------------------------------------------------------------
+
+/// A ptfilter run's options from the words of its command line (without
+/// files), parsed by the cli's own option parsers.
+struct FilterCall {
+    sss::SsDiffusionOptions options;
+    sss::PointCloudWriteOptions write;
+    sss::RunOptions running;
+};
+
+FilterCall parse_filter_words(const std::vector<std::string>& words, bool file_options) {
+    FilterCall call;
+    sss::ArgScanner args(words);
+    std::vector<std::string> stray;
+    std::string o;
+    while (args.next_option(o, stray)) {
+        if (sss::ssdiffusion_option(args, o, call.options)) continue;
+        if ((o == "threads" || (file_options && o == "frame")) &&
+            sss::run_option(args, o, call.running))
+            continue;
+        if (file_options && sss::write_option(args, o, call.write)) continue;
+        throw sss::UsageError("unknown keyword '" + o + "'");
+    }
+    if (!stray.empty()) throw sss::UsageError("unexpected value '" + stray.front() + "'");
+    // What ptfilter checks before reading anything.
+    call.options.diffusion.isa = sss::resolve_isa(call.options.diffusion.isa);
+    sss::describe_material(call.options);
+    return call;
+}
+
+/// The keyword that names a channel of each role (ptfilter names its option).
+const char* channel_keyword(sss::MissingChannelError::Role role) {
+    switch (role) {
+    case sss::MissingChannelError::Role::Radiance:
+        return "radiancechannel=";
+    case sss::MissingChannelError::Role::Albedo:
+        return "albedo='fromfile'";
+    case sss::MissingChannelError::Role::Dmfp:
+        return "diffusemeanfreepath='fromfile'";
+    }
+    return "?";
+}
+
+py::dict report_dict(const sss::SsDiffusionReport& r) {
+    py::dict d;
+    d["material"] = r.material_lines;
+    d["warnings"] = r.warnings;
+    d["seconds"] = r.seconds;
+    d["octree_nodes"] = r.stats.nodes;
+    d["build_seconds"] = r.stats.build_seconds;
+    d["eval_seconds"] = r.stats.eval_seconds;
+    d["isa"] = sss::isa_name(r.stats.isa);
+    return d;
+}
+
+/// Runs f (the filter) and gives its input errors ptfilter's form, naming
+/// `what` (the inputs) and the keyword to set for a missing channel.
+template <class F>
+void filter_errors(const std::string& what, F&& f) {
+    try {
+        f();
+    } catch (const sss::MissingChannelError& e) {
+        throw sss::ValueError(what + ": input has no channel '" + e.channel() +
+                              "' (set it with " + channel_keyword(e.role()) +
+                              "; channels present: " + e.present() + ")");
+    } catch (const sss::ValueError& e) {
+        throw sss::ValueError(what + ": " + e.what());
+    }
+}
+
+/// ssdiffusion() of a cloud given as (arrays, types, header) or read from
+/// files: (arrays, types, header, report) of the output.
+py::tuple ssdiffusion(const py::object& source, const std::vector<std::string>& words,
+                      const py::object& callback) {
+    FilterCall call = parse_filter_words(words, false);
+    sss::PointCloud input;
+    std::vector<std::string> paths;
+    if (py::isinstance<py::tuple>(source)) {
+        py::tuple t = source;
+        input = cloud_from_python(t[0], t[1], t[2]);
+    } else {
+        paths = source.cast<std::vector<std::string>>();
+        if (paths.empty()) throw sss::UsageError("ssdiffusion: no input file given");
+    }
+    PythonProgress progress(callback);
+    call.options.diffusion.progress = progress.get();
+    sss::SsDiffusionReport report;
+    sss::PointCloud out = progress.run([&] {
+        sss::ThreadLimit limit(sss::resolve_thread_count(call.running.threads));
+        for (std::size_t i = 0; i < paths.size(); ++i) {
+            if (i == 0)
+                input = sss::read_point_cloud(paths[i]);
+            else
+                input.append(sss::read_point_cloud(paths[i]));
+        }
+        sss::PointCloud result;
+        filter_errors(paths.empty() ? std::string("cloud") : sss::join(paths),
+                      [&] { result = sss::ssdiffusion(input, call.options, &report); });
+        return result;
+    });
+    py::tuple t = cloud_to_python(std::move(out));
+    return py::make_tuple(t[0], t[1], t[2], report_dict(report));
+}
+
+/// ptfilter -ssdiffusion [options] inputs... output, file to file in little
+/// memory (sss::SsDiffusionFiles): the output is byte for byte ptfilter's.
+py::dict ptfilter(std::vector<std::string> inputs, std::string output,
+                  const std::vector<std::string>& words, const py::object& callback) {
+    FilterCall call = parse_filter_words(words, true);
+    if (inputs.empty()) throw sss::UsageError("ptfilter: no input file given");
+    for (std::string& f : inputs)
+        f = sss::expand_frame_pattern(f, call.running.frame, "file name");
+    output = sss::expand_frame_pattern(output, call.running.frame, "file name");
+    if (!sss::has_extension_in(output, sss::point_cloud_extensions()) &&
+        !sss::writes_into_existing(output))
+        throw sss::UsageError("output " +
+                              sss::unknown_extension_text(output, "a point cloud file",
+                                                          sss::point_cloud_extensions()));
+    PythonProgress progress(callback);
+    call.options.diffusion.progress = progress.get();
+    sss::SsDiffusionReport report;
+    progress.run([&] {
+        sss::ThreadLimit limit(sss::resolve_thread_count(call.running.threads));
+        sss::check_output_target(output);
+        sss::SsDiffusionFiles files(inputs, call.options);
+        filter_errors(sss::join(inputs), [&] { files.filter(&report); });
+        files.write(output, call.write);
+        return 0;
+    });
+    return report_dict(report);
+}
+
+// ---------------------------------------------------------------------------
+// Brick maps
+// ---------------------------------------------------------------------------
+
+/// brickmake's options from the words of its command line (brickmake's own
+/// parsing is in its main; the checks are the cli's ArgScanner's).
+std::pair<sss::BrickMapBuildOptions, sss::RunOptions>
+parse_brickmake_words(const std::vector<std::string>& words) {
+    sss::BrickMapBuildOptions opt;
+    sss::RunOptions running;
+    sss::ArgScanner args(words);
+    std::vector<std::string> stray;
+    std::string o;
+    while (args.next_option(o, stray)) {
+        if (o == "maxerror") {
+            opt.max_error = args.non_negative(o);
+        } else if (o == "maxdepth") {
+            opt.max_depth = args.integer(o, 0, 20);
+        } else if (o == "radiusscale") {
+            opt.radius_scale = args.positive(o);
+        } else if (o == "ignorenormals") {
+            opt.ignore_normals = args.integer(o, 0, 1) != 0;
+        } else if (o == "omitgeometry") {
+            opt.omit_geometry = args.integer(o, 0, 1) != 0;
+        } else if (o == "channels") {
+            opt.channels = sss::split_channel_list(args.value(o), o);
+        } else if ((o == "threads" || o == "frame") &&
+                   sss::run_option(args, o, running)) {
+            continue;
+        } else {
+            throw sss::UsageError("unknown keyword '" + o + "'");
+        }
+    }
+    if (!stray.empty()) throw sss::UsageError("unexpected value '" + stray.front() + "'");
+    return {opt, running};
+}
+
+py::dict make_brickmap(const py::object& source, std::string output,
+                       const std::vector<std::string>& words,
+                       const py::object& callback) {
+    auto [opt, running] = parse_brickmake_words(words);
+    opt.provenance = sss::quoted_command_line(
+        std::string("sss.make_brickmap (Python) ") + sss::version_string(), words);
+    std::vector<sss::PointCloud> clouds;
+    std::vector<std::string> paths;
+    if (py::isinstance<py::list>(source) && py::len(source) > 0 &&
+        py::isinstance<py::tuple>(py::list(source)[0])) {
+        for (py::handle h : source) {
+            py::tuple t = py::reinterpret_borrow<py::tuple>(h);
+            clouds.push_back(cloud_from_python(t[0], t[1], t[2]));
+        }
+    } else {
+        paths = source.cast<std::vector<std::string>>();
+        for (std::string& f : paths)
+            f = sss::expand_frame_pattern(f, running.frame, "file name");
+    }
+    output = sss::expand_frame_pattern(output, running.frame, "file name");
+    PythonProgress progress(callback);
+    opt.progress = progress.get();
+    const sss::BrickMapBuildReport r = progress.run([&] {
+        sss::ThreadLimit limit(sss::resolve_thread_count(running.threads));
+        sss::check_output_target(output);
+        if (!paths.empty()) return sss::make_brick_map_from_files(paths, opt, output);
+        return sss::build_brick_map(clouds, opt, output);
+    });
+    py::dict d;
+    d["points"] = r.points;
+    d["bricks_before_pruning"] = r.bricks_before_pruning;
+    d["bricks"] = r.bricks_written;
+    d["file_size"] = r.file_size;
+    d["seconds"] = r.seconds;
+    return d;
+}
+
+py::dict brickmap_info(const sss::BrickMap& map) {
+    const sss::BrickMapInfo& i = map.info();
+    py::dict d;
+    py::list channels;
+    for (const auto& [name, type] : i.channels)
+        channels.append(py::make_tuple(name, sss::channel_type_name(type)));
+    d["version"] = i.version;
+    d["channels"] = channels;
+    d["data_size"] = i.data_size;
+    d["bbox_min"] = py::make_tuple(i.bbox_min.x, i.bbox_min.y, i.bbox_min.z);
+    d["bbox_max"] = py::make_tuple(i.bbox_max.x, i.bbox_max.y, i.bbox_max.z);
+    d["cube_min"] = py::make_tuple(i.cube_min.x, i.cube_min.y, i.cube_min.z);
+    d["cube_side"] = i.cube_side;
+    d["max_depth"] = i.max_depth;
+    d["max_error"] = i.max_error;
+    d["ignore_normals"] = i.ignore_normals;
+    d["omit_geometry"] = i.omit_geometry;
+    d["world_to_eye"] = matrix_list(i.world_to_eye);
+    d["world_to_ndc"] = matrix_list(i.world_to_ndc);
+    d["format"] = py::make_tuple(i.format[0], i.format[1], i.format[2]);
+    d["provenance"] = i.provenance;
+    d["total_bricks"] = i.total_bricks;
+    d["total_samples"] = i.total_samples;
+    d["levels"] = i.levels.size();
+    d["file_size"] = i.file_size;
+    return d;
+}
+
+/// texture3d at many points: (N, k) float32 values (k: the channel's width,
+/// or every channel's), and (N,) bool "found" flags.
+py::tuple brickmap_lookup(const sss::BrickMap& map, const py::object& points,
+                          const std::optional<std::string>& channel,
+                          const py::object& normals, const py::object& filter_radius,
+                          int threads) {
+    auto pts =
+        py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(points);
+    if (!pts || pts.ndim() != 2 || pts.shape(1) != 3)
+        throw sss::ValueError("lookup: points must be an (N, 3) array");
+    const std::size_t n = std::size_t(pts.shape(0));
+    std::vector<glm::vec3> p = vec3_values("points", pts, n);
+    std::vector<glm::vec3> nn =
+        normals.is_none() ? std::vector<glm::vec3>() : vec3_values("normals", normals, n);
+    std::vector<float> radii;
+    float radius = 0.0f;
+    auto r = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(
+        filter_radius);
+    if (!r)
+        throw sss::ValueError("lookup: filterradius must be a number or an (N,) array");
+    if (r.ndim() == 0)
+        radius = *r.data();
+    else
+        radii = array_values("filterradius", r, n, 1);
+    int offset = 0, width = map.info().data_size;
+    if (channel) {
+        const int index = map.channel_index(*channel);
+        if (index < 0) {
+            std::string names;
+            for (const auto& c : map.info().channels)
+                names += (names.empty() ? "" : ", ") + c.first;
+            throw sss::ValueError("lookup: the brick map has no channel '" + *channel +
+                                  "' (channels: " + (names.empty() ? "none" : names) +
+                                  ")");
+        }
+        offset = map.channel_offset(*channel);
+        width = sss::channel_type_size(map.info().channels[index].second);
+    }
+    const int data_size = map.info().data_size;
+    std::vector<float> out(n * std::size_t(width));
+    std::vector<uint8_t> found(n);
+    {
+        py::gil_scoped_release release;
+        sss::ThreadLimit limit(sss::resolve_thread_count(threads));
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, n, 1024),
+            [&](const tbb::blocked_range<std::size_t>& range) {
+                std::vector<float> sample(std::size_t(std::max(data_size, 1)));
+                for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                    const glm::vec3 normal = nn.empty() ? glm::vec3(0.0f) : nn[i];
+                    const float fr = radii.empty() ? radius : radii[i];
+                    found[i] = map.lookup(p[i], normal, fr, sample.data());
+                    std::memcpy(&out[i * width], sample.data() + offset,
+                                std::size_t(width) * sizeof(float));
+                }
+            });
+    }
+    py::array values = own_array(std::move(out), {py::ssize_t(n), py::ssize_t(width)});
+    py::array_t<bool> hit{py::ssize_t(n)};
+    std::memcpy(hit.mutable_data(), found.data(), n);
+    return py::make_tuple(values, hit);
+}
+
+} // namespace
+
+PYBIND11_MODULE(_sss, m) {
+    m.doc() = "sss: the binding of the sss library (use the `sss` package)";
+
+    g_error = new_exception(m, "Error", PyExc_Exception,
+                            "Base class of every error the sss library reports.");
+    auto bases = [](PyObject* a, PyObject* b) {
+        return py::make_tuple(py::handle(a), py::handle(b)).release().ptr();
+    };
+    g_usage_error = new_exception(m, "UsageError", bases(g_error, PyExc_ValueError),
+                                  "A bad option: unknown keyword, bad or missing value.");
+    g_io_error = new_exception(m, "IoError", bases(g_error, PyExc_OSError),
+                               "A file could not be opened, read or written.");
+    g_format_error =
+        new_exception(m, "FormatError", bases(g_error, PyExc_ValueError),
+                      "A file's content is malformed (bad magic, truncation, "
+                      "NaN/Inf data...).");
+    g_value_error = new_exception(m, "ValueError", bases(g_error, PyExc_ValueError),
+                                  "A value that is impossible (negative lengths, albedo "
+                                  "outside [0,1], a missing channel...).");
+    g_limit_error = new_exception(m, "LimitError", bases(g_error, PyExc_ValueError),
+                                  "An input beyond one of the SSS_LIMIT_* limits.");
+    g_memory_error =
+        new_exception(m, "OutOfMemoryError", bases(g_error, PyExc_MemoryError),
+                      "A job that would not fit in memory.");
+    py::register_exception_translator(translate_exception);
+
+    m.attr("__version__") = sss::version_string();
+
+    m.def("read_cloud", &read_cloud, py::arg("path"));
+    m.def("write_cloud", &write_cloud, py::arg("path"), py::arg("arrays"),
+          py::arg("types"), py::arg("header"), py::arg("ptc_version"),
+          py::arg("compress"));
+    m.def("ssdiffusion", &ssdiffusion, py::arg("source"), py::arg("words"),
+          py::arg("callback"));
+    m.def("ptfilter", &ptfilter, py::arg("inputs"), py::arg("output"), py::arg("words"),
+          py::arg("callback"));
+    m.def("make_brickmap", &make_brickmap, py::arg("source"), py::arg("output"),
+          py::arg("words"), py::arg("callback"));
+    m.def("has_frame_pattern", &sss::has_frame_pattern, py::arg("path"));
+    m.def("expand_frame_pattern", &sss::expand_frame_pattern, py::arg("path"),
+          py::arg("frame") = py::none(), py::arg("what") = "path");
+    m.def("isa_names", [] {
+        std::vector<std::string> out;
+        for (sss::Isa isa : sss::supported_isas()) out.push_back(sss::isa_name(isa));
+        return out;
+    });
+
+    py::class_<sss::BrickMap>(m, "BrickMap")
+        .def(py::init([](const std::string& path, std::size_t cache_bytes) {
+                 py::gil_scoped_release release;
+                 return std::make_unique<sss::BrickMap>(path, cache_bytes);
+             }),
+             py::arg("path"), py::arg("cache_bytes") = std::size_t(256u << 20))
+        .def_property_readonly("info", &brickmap_info)
+        .def("lookup", &brickmap_lookup, py::arg("points"), py::arg("channel"),
+             py::arg("normals"), py::arg("filterradius"), py::arg("threads"))
+        .def("verify",
+             [](const sss::BrickMap& map) {
+                 py::gil_scoped_release release;
+                 return map.verify();
+             })
+        .def_property_readonly("bricks_loaded", &sss::BrickMap::bricks_loaded)
+        .def_property_readonly("cached_bytes", &sss::BrickMap::cached_bytes);
+}
