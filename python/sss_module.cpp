@@ -449,8 +449,8 @@ py::dict ptfilter(std::vector<std::string> inputs, std::string output,
 // Brick maps
 // ---------------------------------------------------------------------------
 
-/// brickmake's options from the words of its command line (brickmake's own
-/// parsing is in its main; the checks are the cli's ArgScanner's).
+/// brickmake's options from the words of its command line, parsed by the
+/// cli's brickmake_option() as brickmake's own are.
 std::pair<sss::BrickMapBuildOptions, sss::RunOptions>
 parse_brickmake_words(const std::vector<std::string>& words) {
     sss::BrickMapBuildOptions opt;
@@ -459,18 +459,8 @@ parse_brickmake_words(const std::vector<std::string>& words) {
     std::vector<std::string> stray;
     std::string o;
     while (args.next_option(o, stray)) {
-        if (o == "maxerror") {
-            opt.max_error = args.non_negative(o);
-        } else if (o == "maxdepth") {
-            opt.max_depth = args.integer(o, 0, 20);
-        } else if (o == "radiusscale") {
-            opt.radius_scale = args.positive(o);
-        } else if (o == "ignorenormals") {
-            opt.ignore_normals = args.integer(o, 0, 1) != 0;
-        } else if (o == "omitgeometry") {
-            opt.omit_geometry = args.integer(o, 0, 1) != 0;
-        } else if (o == "channels") {
-            opt.channels = sss::split_channel_list(args.value(o), o);
+        if (sss::brickmake_option(args, o, opt)) {
+            continue;
         } else if ((o == "threads" || o == "frame") &&
                    sss::run_option(args, o, running)) {
             continue;

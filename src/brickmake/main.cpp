@@ -59,18 +59,8 @@ int run(const std::vector<std::string>& argv) {
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, kUsage)) {
             return 0;
-        } else if (o == "maxerror") {
-            opt.max_error = args.non_negative(o);
-        } else if (o == "maxdepth") {
-            opt.max_depth = args.integer(o, 0, 20);
-        } else if (o == "radiusscale") {
-            opt.radius_scale = args.positive(o);
-        } else if (o == "ignorenormals") {
-            opt.ignore_normals = args.integer(o, 0, 1) != 0;
-        } else if (o == "omitgeometry") {
-            opt.omit_geometry = args.integer(o, 0, 1) != 0;
-        } else if (o == "channels") {
-            opt.channels = sss::split_channel_list(args.value(o), o);
+        } else if (sss::brickmake_option(args, o, opt)) {
+            continue;
         } else if (sss::newer_option(args, o, running)) {
             continue;
         } else if (o == "splitangle") {

@@ -1,6 +1,7 @@
 #pragma once
 /// \file options.h
-/// Option groups shared by several tools: materials and point-cloud output.
+/// Option groups shared by several tools (and the Python module): materials,
+/// ptfilter's diffusion options, brickmake's build options, point-cloud output.
 /// The options of a job (threads, progress, frame, -newer) are in job.h.
 
 #include <string>
@@ -26,6 +27,14 @@ struct SsDiffusionOptions;
 /// it, so both accept and refuse the same values with the same messages.
 bool ssdiffusion_option(ArgScanner& args, const std::string& opt,
                         SsDiffusionOptions& options);
+
+struct BrickMapBuildOptions;
+/// Parses brickmake's build options (-maxerror, -maxdepth, -radiusscale,
+/// -ignorenormals, -omitgeometry, -channels) into options. Returns false when
+/// opt is not one of them. brickmake and the Python module's make_brickmap()
+/// share it.
+bool brickmake_option(ArgScanner& args, const std::string& opt,
+                      BrickMapBuildOptions& options);
 
 struct PointCloudWriteOptions;
 /// Parses the point-cloud output options (-compress 0|1, -ptcversion 0|1|2);

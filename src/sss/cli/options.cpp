@@ -3,6 +3,7 @@
 
 #include "sss/cli/options.h"
 
+#include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/material.h"
 #include "sss/diffusion/ssdiffusion.h"
@@ -77,6 +78,25 @@ bool ssdiffusion_option(ArgScanner& args, const std::string& o, SsDiffusionOptio
         opt.radiance_channel = args.value(o);
     } else if (o == "keepchannels") {
         opt.keep_channels = args.integer(o, 0, 1) != 0;
+    } else {
+        return false;
+    }
+    return true;
+}
+
+bool brickmake_option(ArgScanner& args, const std::string& o, BrickMapBuildOptions& opt) {
+    if (o == "maxerror") {
+        opt.max_error = args.non_negative(o);
+    } else if (o == "maxdepth") {
+        opt.max_depth = args.integer(o, 0, 20);
+    } else if (o == "radiusscale") {
+        opt.radius_scale = args.positive(o);
+    } else if (o == "ignorenormals") {
+        opt.ignore_normals = args.integer(o, 0, 1) != 0;
+    } else if (o == "omitgeometry") {
+        opt.omit_geometry = args.integer(o, 0, 1) != 0;
+    } else if (o == "channels") {
+        opt.channels = split_channel_list(args.value(o), o);
     } else {
         return false;
     }
