@@ -48,7 +48,16 @@ struct BlockKernels {
     // quadrature.
     void (*near)(const BlockTables& t, const float* pos_rho2, const float* power_area,
                  uint32_t first, uint32_t count, BucketBlock& b);
+    // The second-order local expansion about `centre` of the expansions of
+    // nodes[0..n) (evaluation.cpp's LocalExpansion), in double: out[ch] =
+    // {l0, l1 x y z, l2 xx xy xz yy yz zz}, overwritten. The nodes are summed
+    // in kLocalLanes interleaved partial sums, reduced in lane order at the
+    // end: every path does the same operations and gives the same bits.
+    void (*local)(const BlockTables& t, const Expansion* expansions,
+                  const uint32_t* nodes, std::size_t n, const double centre[3],
+                  double out[3][10]);
 };
+constexpr int kLocalLanes = 8;
 
 // The kernels of one path (Auto: resolve_isa()); throws UsageError when the
 // CPU lacks it.

@@ -35,43 +35,23 @@ struct LocalExpansion {
     double l2[3][6] = {}; // xx xy xz yy yz zz
 };
 
-// Re-expands each node of `nodes` about the centre: with w = centre - c,
-// G(w) = F(|w|^2), grad G = 2 F' w, H = 4 F'' w w^T + 2 F' I, the node's
-// sum phi G(w + d - delta) over its points (moments phi, D, Q) is to second
-// order: phi G - grad G . D + tr(H Q) / 2 + (phi grad G - H D) . d + d^T (phi H / 2) d.
-void local_expansion(const Tables& tables, const TableEntry* const t[3], const Tree& tree,
-                     const std::vector<uint32_t>& nodes, LocalExpansion& le) {
-    for (uint32_t k : nodes) {
-        const Expansion& ex = tree.expansions[k];
-        const glm::vec3 wf = glm::vec3(le.centre) - ex.c;
-        Tables::Lookup l = tables.locate(glm::dot(wf, wf));
-        if (!l.valid) continue;
-        const glm::dvec3 w(wf);
-        for (int ch = 0; ch < 3; ++ch) {
-            const TableEntry* e = t[ch] + l.index;
-            const double frac = l.frac;
-            const double f = e[0].f + frac * (double(e[1].f) - e[0].f);
-            const double df = e[0].df + frac * (double(e[1].df) - e[0].df);
-            const double d2f = e[0].d2f + frac * (double(e[1].d2f) - e[0].d2f);
-            const double phi = ex.phi[ch];
-            const float* Q = ex.q[ch];
-            const glm::dvec3 D(ex.d[ch][0], ex.d[ch][1], ex.d[ch][2]);
-            const double wd = glm::dot(w, D);
-            const glm::dvec3 qw(Q[0] * w.x + Q[1] * w.y + Q[2] * w.z,
-                                Q[1] * w.x + Q[3] * w.y + Q[4] * w.z,
-                                Q[2] * w.x + Q[4] * w.y + Q[5] * w.z);
-            const double tr = double(Q[0]) + Q[3] + Q[5];
-            le.l0[ch] += phi * f - 2.0 * df * wd + 2.0 * d2f * glm::dot(w, qw) + df * tr;
-            const glm::dvec3 g = 2.0 * df * phi * w - 4.0 * d2f * wd * w - 2.0 * df * D;
-            for (int a = 0; a < 3; ++a) le.l1[ch][a] += g[a];
-            const double h = 2.0 * d2f * phi;
-            le.l2[ch][0] += h * w.x * w.x + df * phi;
-            le.l2[ch][1] += h * w.x * w.y;
-            le.l2[ch][2] += h * w.x * w.z;
-            le.l2[ch][3] += h * w.y * w.y + df * phi;
-            le.l2[ch][4] += h * w.y * w.z;
-            le.l2[ch][5] += h * w.z * w.z + df * phi;
-        }
+// Re-expands each node of `nodes` about the centre and adds it: with
+// w = centre - c, G(w) = F(|w|^2), grad G = 2 F' w, H = 4 F'' w w^T + 2 F' I,
+// the node's sum phi G(w + d - delta) over its points (moments phi, D, Q) is
+// to second order: phi G - grad G . D + tr(H Q) / 2 + (phi grad G - H D) . d
+// + d^T (phi H / 2) d. The block kernels' local() sums the nodes (vectorised
+// over nodes, the same bits on every instruction-set path).
+void add_local(const EvaluationContext& cx, const BlockTables& t,
+               const std::vector<uint32_t>& nodes, LocalExpansion& le) {
+    if (nodes.empty()) return;
+    double sums[3][10];
+    const double centre[3] = {le.centre.x, le.centre.y, le.centre.z};
+    cx.kernels.local(t, cx.tree.expansions.data(), nodes.data(), nodes.size(), centre,
+                     sums);
+    for (int ch = 0; ch < 3; ++ch) {
+        le.l0[ch] += sums[ch][0];
+        for (int a = 0; a < 3; ++a) le.l1[ch][a] += sums[ch][1 + a];
+        for (int a = 0; a < 6; ++a) le.l2[ch][a] += sums[ch][4 + a];
     }
 }
 
@@ -178,7 +158,7 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         translate(*inherited, centre, le);
     else
         le = LocalExpansion{centre};
-    local_expansion(tables, t.t, tree, w.lists.local, le);
+    add_local(cx, t, w.lists.local, le);
     for (uint32_t r = 0; r < bucket.count; ++r) {
         uint32_t s = bucket.first + r;
         if (!cx.wants(s)) continue;
@@ -368,9 +348,11 @@ void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
     traverse_group(tree, cx.tables, tol, node.lo, node.hi, start, w.lists);
     lv.start.swap(w.lists.near);
     translate(parent, 0.5 * (glm::dvec3(node.lo) + glm::dvec3(node.hi)), lv.le);
-    const TableEntry* t[3] = {rc.table[0]->entries.data(), rc.table[1]->entries.data(),
-                              rc.table[2]->entries.data()};
-    local_expansion(cx.tables, t, tree, w.lists.local, lv.le);
+    const BlockTables t{{rc.table[0]->entries.data(), rc.table[1]->entries.data(),
+                         rc.table[2]->entries.data()},
+                        int32_t(cx.tables.bits0),
+                        int32_t(cx.tables.count) - 1};
+    add_local(cx, t, w.lists.local, lv.le);
     w.local.local_terms += w.lists.local.size();
     for (uint32_t c = node.child_first; c < node.child_first + node.child_count; ++c) {
         const Node& child = tree.nodes[c];

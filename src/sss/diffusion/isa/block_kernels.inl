@@ -126,8 +126,97 @@ void near(const BlockTables& tb, const float* pos_rho2, const float* power_area,
     }
 }
 
+void local(const BlockTables& tb, const Expansion* expansions, const uint32_t* nodes,
+           std::size_t count, const double centre[3], double out[3][10]) {
+    constexpr int L = kLocalLanes;
+    const int32_t bits0 = tb.bits0, last = tb.last;
+    const float ox = float(centre[0]), oy = float(centre[1]), oz = float(centre[2]);
+    alignas(64) double acc[3][10][L];
+    for (int ch = 0; ch < 3; ++ch)
+        for (int c = 0; c < 10; ++c)
+            for (int j = 0; j < L; ++j) acc[ch][c][j] = 0.0;
+    for (std::size_t base = 0; base < count; base += L) {
+        const int m = count - base < std::size_t(L) ? int(count - base) : L;
+        // The lanes' nodes as arrays (lanes past the end repeat the first
+        // node and are weighted 0).
+        alignas(64) float wxf[L], wyf[L], wzf[L], live[L];
+        alignas(64) float phi[3][L], D[3][3][L], Q[3][6][L];
+        for (int j = 0; j < L; ++j) {
+            const Expansion& ex = expansions[nodes[base + std::size_t(j < m ? j : 0)]];
+            wxf[j] = ox - ex.c.x;
+            wyf[j] = oy - ex.c.y;
+            wzf[j] = oz - ex.c.z;
+            live[j] = j < m ? 1.0f : 0.0f;
+            for (int ch = 0; ch < 3; ++ch) {
+                phi[ch][j] = ex.phi[ch];
+                for (int a = 0; a < 3; ++a) D[ch][a][j] = ex.d[ch][a];
+                for (int a = 0; a < 6; ++a) Q[ch][a][j] = ex.q[ch][a];
+            }
+        }
+        for (int ch = 0; ch < 3; ++ch) {
+            const TableEntry* T = tb.t[ch];
+            double* a0 = acc[ch][0];
+            double *a1x = acc[ch][1], *a1y = acc[ch][2], *a1z = acc[ch][3];
+            double *a2xx = acc[ch][4], *a2xy = acc[ch][5], *a2xz = acc[ch][6];
+            double *a2yy = acc[ch][7], *a2yz = acc[ch][8], *a2zz = acc[ch][9];
+#pragma GCC ivdep
+            for (int j = 0; j < L; ++j) {
+                const float q = wxf[j] * wxf[j] + wyf[j] * wyf[j] + wzf[j] * wzf[j];
+                const int32_t off = imax(float_bits(q) - bits0, 0);
+                int32_t idx = imin(off >> kShift, last);
+                const double frac = double(float(off & ((1 << kShift) - 1)) * kFracScale);
+                // Beyond the tables (every profile ~0) or past the end: 0.
+                const double keep = (idx < last && live[j] > 0.0f) ? 1.0 : 0.0;
+                idx = imin(idx, last - 1);
+                const double f =
+                    keep *
+                    (double(T[idx].f) + frac * (double(T[idx + 1].f) - double(T[idx].f)));
+                const double df =
+                    keep * (double(T[idx].df) +
+                            frac * (double(T[idx + 1].df) - double(T[idx].df)));
+                const double d2f =
+                    keep * (double(T[idx].d2f) +
+                            frac * (double(T[idx + 1].d2f) - double(T[idx].d2f)));
+                const double wx = wxf[j], wy = wyf[j], wz = wzf[j];
+                const double p = phi[ch][j];
+                const double dx = D[ch][0][j], dy = D[ch][1][j], dz = D[ch][2][j];
+                const double q0 = Q[ch][0][j], q1 = Q[ch][1][j], q2 = Q[ch][2][j],
+                             q3 = Q[ch][3][j], q4 = Q[ch][4][j], q5 = Q[ch][5][j];
+                // With G(w) = F(|w|^2): grad G = 2 F' w, H = 4 F'' w w^T + 2 F' I;
+                // the node's sum about the centre to second order (see
+                // local_expansion() in evaluation.cpp).
+                const double wd = wx * dx + wy * dy + wz * dz;
+                const double qwx = q0 * wx + q1 * wy + q2 * wz;
+                const double qwy = q1 * wx + q3 * wy + q4 * wz;
+                const double qwz = q2 * wx + q4 * wy + q5 * wz;
+                const double wqw = wx * qwx + wy * qwy + wz * qwz;
+                const double tr = q0 + q3 + q5;
+                const double df2 = 2.0 * df, d2f2 = 2.0 * d2f;
+                a0[j] += p * f - df2 * wd + d2f2 * wqw + df * tr;
+                const double gw = df2 * p - 2.0 * d2f2 * wd;
+                a1x[j] += gw * wx - df2 * dx;
+                a1y[j] += gw * wy - df2 * dy;
+                a1z[j] += gw * wz - df2 * dz;
+                const double h = d2f2 * p, dp = df * p;
+                a2xx[j] += h * wx * wx + dp;
+                a2xy[j] += h * wx * wy;
+                a2xz[j] += h * wx * wz;
+                a2yy[j] += h * wy * wy + dp;
+                a2yz[j] += h * wy * wz;
+                a2zz[j] += h * wz * wz + dp;
+            }
+        }
+    }
+    for (int ch = 0; ch < 3; ++ch)
+        for (int c = 0; c < 10; ++c) {
+            double sum = 0.0;
+            for (int j = 0; j < L; ++j) sum += acc[ch][c][j];
+            out[ch][c] = sum;
+        }
+}
+
 } // namespace
 
-extern const BlockKernels kernels{SSS_KERNEL_ISA, far, mono, near};
+extern const BlockKernels kernels{SSS_KERNEL_ISA, far, mono, near, local};
 
 } // namespace sss::diffusion_detail::SSS_KERNEL_NS
