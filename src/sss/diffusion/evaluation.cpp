@@ -117,6 +117,16 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         block.z[r] = pr.z;
         block.sorted[r] = int32_t(bucket.first + r);
         for (int ch = 0; ch < 3; ++ch) block.acc[ch][r] = 0.0f;
+        // The self term reads the receiver's irradiance and the result goes to
+        // its slot, both at its original index: one cache miss per receiver
+        // (6 % of the run at 1M points) unless fetched now, while the kernels
+        // below work.
+        const uint32_t s = bucket.first + r;
+        if (cx.wants(s)) {
+            const uint32_t original = tree.order[s];
+            __builtin_prefetch(&pb.irradiance[original], 0, 1);
+            __builtin_prefetch(&result[cx.slot(s, original)], 1, 1);
+        }
     }
     const BlockTables t{{first_rc.table[0]->entries.data(),
                          first_rc.table[1]->entries.data(),
