@@ -41,42 +41,62 @@ void far_nodes(const BlockTables& tb, const Expansion* expansions, const uint32_
                std::size_t count, BucketBlock& b) {
     const int32_t bits0 = tb.bits0, last = tb.last;
     const int32_t n = int32_t(b.count);
+    const TableEntry* T0 = tb.t[0];
+    const TableEntry* T1 = tb.t[1];
+    const TableEntry* T2 = tb.t[2];
+    float* a0 = b.acc[0];
+    float* a1 = b.acc[1];
+    float* a2 = b.acc[2];
     for (std::size_t k = 0; k < count; ++k) {
         const Expansion& ex = expansions[nodes[k]];
         const float cx = ex.c.x, cy = ex.c.y, cz = ex.c.z;
+        // Per channel: phi, trace, the quadrupole's six terms (off-diagonal
+        // ones doubled) and the dipole.
+        float phi[3], tr[3], q[3][6], d[3][3];
         for (int ch = 0; ch < 3; ++ch) {
-            const TableEntry* T = tb.t[ch];
-            const float phi = ex.phi[ch];
             const float* Q = ex.q[ch];
-            const float* D = ex.d[ch];
-            const float tr = Q[0] + Q[3] + Q[5];
-            const float q0 = Q[0], q1 = 2.0f * Q[1], q2 = 2.0f * Q[2], q3 = Q[3],
-                        q4 = 2.0f * Q[4], q5 = Q[5];
-            const float d0 = D[0], d1 = D[1], d2 = D[2];
-            float* acc = b.acc[ch];
+            phi[ch] = ex.phi[ch];
+            tr[ch] = Q[0] + Q[3] + Q[5];
+            q[ch][0] = Q[0];
+            q[ch][1] = 2.0f * Q[1];
+            q[ch][2] = 2.0f * Q[2];
+            q[ch][3] = Q[3];
+            q[ch][4] = 2.0f * Q[4];
+            q[ch][5] = Q[5];
+            for (int a = 0; a < 3; ++a) d[ch][a] = ex.d[ch][a];
+        }
+        // The three channels in one pass: the receiver's offset and table
+        // position are computed once for all of them.
 #pragma GCC ivdep
-            for (int32_t r = 0; r < n; ++r) {
-                float wx = b.x[r] - cx, wy = b.y[r] - cy, wz = b.z[r] - cz;
-                float q = wx * wx + wy * wy + wz * wz;
-                // q >= 0, so its bits order like the value (branch-free).
-                int32_t off = imax(float_bits(q) - bits0, 0);
-                int32_t idx = imin(off >> kShift, last);
-                float frac = float(off & ((1 << kShift) - 1)) * kFracScale;
-                float keep = idx < last ? 1.0f : 0.0f;
-                idx = imin(idx, last - 1);
-                float f = T[idx].f + frac * (T[idx + 1].f - T[idx].f);
-                float val = phi * f;
-                if constexpr (Quadrupole) {
-                    float df = T[idx].df + frac * (T[idx + 1].df - T[idx].df);
-                    float d2f = T[idx].d2f + frac * (T[idx + 1].d2f - T[idx].d2f);
-                    float wd = wx * d0 + wy * d1 + wz * d2;
-                    float wqw = wx * (q0 * wx + q1 * wy + q2 * wz) +
-                                wy * (q3 * wy + q4 * wz) + q5 * wz * wz;
-                    // Taylor expansion of F(|w - delta|^2) to second order.
-                    val += df * (tr - 2.0f * wd) + 2.0f * d2f * wqw;
+        for (int32_t r = 0; r < n; ++r) {
+            float wx = b.x[r] - cx, wy = b.y[r] - cy, wz = b.z[r] - cz;
+            float qq = wx * wx + wy * wy + wz * wz;
+            // qq >= 0, so its bits order like the value (branch-free).
+            int32_t off = imax(float_bits(qq) - bits0, 0);
+            int32_t idx = imin(off >> kShift, last);
+            float frac = float(off & ((1 << kShift) - 1)) * kFracScale;
+            float keep = idx < last ? 1.0f : 0.0f;
+            idx = imin(idx, last - 1);
+            float v0 = phi[0] * (T0[idx].f + frac * (T0[idx + 1].f - T0[idx].f));
+            float v1 = phi[1] * (T1[idx].f + frac * (T1[idx + 1].f - T1[idx].f));
+            float v2 = phi[2] * (T2[idx].f + frac * (T2[idx + 1].f - T2[idx].f));
+            if constexpr (Quadrupole) {
+                // Taylor expansion of F(|w - delta|^2) to second order.
+                const TableEntry* T[3] = {T0, T1, T2};
+                float* v[3] = {&v0, &v1, &v2};
+                for (int ch = 0; ch < 3; ++ch) {
+                    float df = T[ch][idx].df + frac * (T[ch][idx + 1].df - T[ch][idx].df);
+                    float d2f =
+                        T[ch][idx].d2f + frac * (T[ch][idx + 1].d2f - T[ch][idx].d2f);
+                    float wd = wx * d[ch][0] + wy * d[ch][1] + wz * d[ch][2];
+                    float wqw = wx * (q[ch][0] * wx + q[ch][1] * wy + q[ch][2] * wz) +
+                                wy * (q[ch][3] * wy + q[ch][4] * wz) + q[ch][5] * wz * wz;
+                    *v[ch] += df * (tr[ch] - 2.0f * wd) + 2.0f * d2f * wqw;
                 }
-                acc[r] += keep * val;
             }
+            a0[r] += keep * v0;
+            a1[r] += keep * v1;
+            a2[r] += keep * v2;
         }
     }
 }
