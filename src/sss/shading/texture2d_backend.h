@@ -1,9 +1,9 @@
 #pragma once
 // Internal to the shading module: the OpenImageIO side of 2-D textures and
 // environment maps, built as a plugin (libsss_texture2d.so, beside the
-// tools: <build>/lib, or an install's <libdir>/sss) and loaded on the first texture lookup, so that tools
-// and jobs that never look up a 2-D texture do not load OpenImageIO and the
-// 260 libraries behind it (0.15 s at every process start).
+// tools: <build>/lib, or an install's <libdir>/sss) and loaded on the first texture
+// lookup, so that tools and jobs that never look up a 2-D texture do not load OpenImageIO
+// and the 260 libraries behind it (0.15 s at every process start).
 
 #include <cstddef>
 #include <cstdint>
