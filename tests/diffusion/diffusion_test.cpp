@@ -408,6 +408,45 @@ TEST(DiffusionHierarchy, NoBias) {
     }
 }
 
+// Unlit sources (zero power in every channel: the far side of an object lit
+// from one side) add exactly 0 to any receiver, so the walk drops their nodes
+// whole (issue 17). The result is what it would be if they were evaluated: a
+// faint, but not zero, power there gives the same numbers to within that
+// power, with about half of the sphere's terms.
+TEST(DiffusionHierarchy, UnlitSourcesAreSkippedExactly) {
+    sss::DiffusionProblem pb =
+        problem_from(sphere_cloud(30000, 50.0), material_profiles("marble"));
+    std::size_t unlit = 0;
+    sss::DiffusionProblem faint = pb;
+    for (glm::vec3& e : faint.irradiance)
+        if (e == glm::vec3(0.0f)) {
+            e = glm::vec3(1e-30f);
+            ++unlit;
+        }
+    ASSERT_GT(unlit, pb.irradiance.size() / 3);
+    sss::DiffusionStats s_unlit, s_faint;
+    std::vector<glm::vec3> h = sss::evaluate_diffusion(pb, {}, &s_unlit);
+    std::vector<glm::vec3> f = sss::evaluate_diffusion(faint, {}, &s_faint);
+    double worst = 0, mean = 0;
+    for (std::size_t i = 0; i < h.size(); ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            worst = std::max(worst, double(std::abs(h[i][ch] - f[i][ch])));
+            mean += double(f[i][ch]) / double(3 * h.size());
+        }
+    EXPECT_LT(worst, 1e-6 * mean);
+    const std::size_t terms_unlit = s_unlit.near_terms + s_unlit.far_terms;
+    const std::size_t terms_faint = s_faint.near_terms + s_faint.far_terms;
+    EXPECT_LT(double(terms_unlit), 0.75 * double(terms_faint))
+        << terms_unlit << " terms against " << terms_faint;
+
+    // Nothing lit: no term at all, and exactly 0 everywhere.
+    for (glm::vec3& e : pb.irradiance) e = glm::vec3(0.0f);
+    sss::DiffusionStats s_dark;
+    std::vector<glm::vec3> d = sss::evaluate_diffusion(pb, {}, &s_dark);
+    EXPECT_EQ(s_dark.near_terms + s_dark.far_terms + s_dark.local_terms, 0u);
+    for (const glm::vec3& v : d) ASSERT_EQ(v, glm::vec3(0.0f));
+}
+
 TEST(DiffusionHierarchy, OtherProfilesMatchExact) {
     sss::PointCloud cloud = sphere_cloud(20000, 30.0);
     for (sss::ProfileKind kind : {sss::ProfileKind::Better, sss::ProfileKind::Burley}) {

@@ -70,6 +70,13 @@ void walk(const Tree& tree, NodeLists& lists, Judge&& judge,
     }
 }
 
+// A node whose sources all have zero power in every channel (the unlit side
+// of an object): whatever the receiver, it adds exactly 0, so dropping it
+// (with everything below it) changes no bit of the result.
+inline bool dark(const Expansion& ex) {
+    return ex.abs_phi[0] == 0.0f && ex.abs_phi[1] == 0.0f && ex.abs_phi[2] == 0.0f;
+}
+
 } // namespace
 
 void traverse_error(const Tree& tree, const Tables& tables, const BucketTolerance& tol,
@@ -84,6 +91,7 @@ void traverse_error(const Tree& tree, const Tables& tables, const BucketToleranc
     walk(
         tree, lists,
         [&](const Node& node, const Expansion& ex) {
+            if (dark(ex)) return Verdict::Drop;
             float d2 = box_distance2(blo, bhi, node.lo, node.hi);
             float r = node.radius;
             // Single points are exact as near terms; the expansion
@@ -145,6 +153,7 @@ void traverse_group(const Tree& tree, const Tables& tables, const BucketToleranc
     walk(
         tree, lists,
         [&](const Node& node, const Expansion& ex) {
+            if (dark(ex)) return Verdict::Drop;
             float d2 = box_distance2(glo, ghi, node.lo, node.hi);
             float r = node.radius;
             const float rl = r + rg;
