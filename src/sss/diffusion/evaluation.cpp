@@ -91,6 +91,7 @@ struct Scratch {
     NodeLists lists;
     std::unique_ptr<BucketBlock> block = std::make_unique<BucketBlock>();
     DiskMemo memo[3];
+    SelfTerm self;
     CoincidentSum coincident;
     LocalExpansion local_expansion;
     DiffusionStats local;
@@ -174,14 +175,16 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         if (!cx.wants(s)) continue;
         uint32_t original = tree.order[s];
         double rho = std::sqrt(double(tree.pos_rho2[s].w));
+        // Self term: the receiver's own disk, integrated exactly.
+        double self[3];
+        w.self(first_rc, rho, pb.irradiance[original], self);
         glm::vec3& out = result[cx.slot(s, original)];
         for (int ch = 0; ch < 3; ++ch) {
-            // Self term: the receiver's own disk, integrated exactly.
             double v =
                 double(block.acc[ch][r]) +
                 local_value(le, ch,
                             glm::dvec3(block.x[r], block.y[r], block.z[r]) - le.centre) +
-                double(pb.irradiance[original][ch]) * first_rc.profile[ch]->disk(rho);
+                self[ch];
             out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
@@ -248,8 +251,7 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
         walk_receiver(cx, x, w.lists);
         double acc[3];
         double rho = std::sqrt(double(tree.pos_rho2[s].w));
-        for (int ch = 0; ch < 3; ++ch)
-            acc[ch] = double(pb.irradiance[original][ch]) * rc.profile[ch]->disk(rho);
+        w.self(rc, rho, pb.irradiance[original], acc);
         for (uint32_t k : lists.far)
             far_node(tables, rc, tree.expansions[k], x, quadrupole, acc);
         for (uint32_t k : lists.mono)

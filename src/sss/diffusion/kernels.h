@@ -43,6 +43,33 @@ struct DiskMemo {
     double rho = -1.0, value = 0.0;
 };
 
+// The receivers' self terms: irradiance times the disk integral of their own
+// radius, per channel. The last radius's integrals are kept (points of equal
+// area, as diced grids and synthetic clouds have, share them: three closed
+// forms with exponentials each otherwise), and an unlit receiver needs none.
+struct SelfTerm {
+    const Profile* profile[3] = {nullptr, nullptr, nullptr};
+    double rho = -1.0, disk[3] = {0, 0, 0};
+
+    // out[ch] = irradiance[ch] * profile[ch]->disk(rho).
+    void operator()(const ReceiverChannels& rc, double rho_, const glm::vec3& irradiance,
+                    double out[3]) {
+        if (irradiance == glm::vec3(0.0f)) {
+            // 0 times a finite integral.
+            for (int ch = 0; ch < 3; ++ch) out[ch] = double(irradiance[ch]) * 0.0;
+            return;
+        }
+        if (rho_ != rho || !std::equal(rc.profile, rc.profile + 3, profile)) {
+            rho = rho_;
+            for (int ch = 0; ch < 3; ++ch) {
+                profile[ch] = rc.profile[ch];
+                disk[ch] = rc.profile[ch]->disk(rho_);
+            }
+        }
+        for (int ch = 0; ch < 3; ++ch) out[ch] = double(irradiance[ch]) * disk[ch];
+    }
+};
+
 // Contribution of sorted source s to receiver at x (never the receiver itself).
 inline void near_source(const Tree& tree, const Tables& tables,
                         const ReceiverChannels& rc, const glm::vec3& x, uint32_t s,
