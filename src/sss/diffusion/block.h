@@ -23,6 +23,11 @@ struct BucketBlock {
     alignas(64) float x[kMaxBucket], y[kMaxBucket], z[kMaxBucket];
     alignas(64) int32_t sorted[kMaxBucket];
     alignas(64) float acc[3][kMaxBucket];
+    // The kernels' scratch: each receiver's table position, and the values
+    // read there (see Tables::rows).
+    alignas(64) int32_t idx[kMaxBucket];
+    alignas(64) float frac[kMaxBucket], keep[kMaxBucket];
+    alignas(64) float val[18][kMaxBucket];
 };
 
 // The three channel tables every receiver of a block reads, and the table
@@ -32,6 +37,8 @@ struct BlockTables {
     const TableEntry* t[3];
     int32_t bits0; // float bits of the tables' first q
     int32_t last;  // index of the last entry
+    // Tables::rows when t are channels 0, 1 and 2, else null.
+    const float* rows;
 };
 
 struct BlockKernels {

@@ -97,6 +97,14 @@ struct Scratch {
     DiffusionStats local;
 };
 
+// The interleaved rows when the receivers read channels 0, 1 and 2.
+const float* rows_of(const Tables& tables, const ReceiverChannels& rc) {
+    if (tables.rows.empty()) return nullptr;
+    for (int ch = 0; ch < 3; ++ch)
+        if (rc.table[ch] != &tables.channels[std::size_t(ch)]) return nullptr;
+    return tables.rows.data();
+}
+
 // Buckets of one material with the error criterion: one traversal for the
 // bucket, then the vectorised block loops over its receivers. Always the whole
 // bucket, wanted or not: each receiver then keeps its place in the vector
@@ -133,7 +141,8 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                          first_rc.table[1]->entries.data(),
                          first_rc.table[2]->entries.data()},
                         int32_t(tables.bits0),
-                        int32_t(tables.count) - 1};
+                        int32_t(tables.count) - 1,
+                        rows_of(tables, first_rc)};
     const BlockKernels& kernels = cx.kernels;
     const float* pos_rho2 = &tree.pos_rho2.data()->x;
     const float* power_area = &tree.power_area.data()->x;
@@ -363,7 +372,8 @@ void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
     const BlockTables t{{rc.table[0]->entries.data(), rc.table[1]->entries.data(),
                          rc.table[2]->entries.data()},
                         int32_t(cx.tables.bits0),
-                        int32_t(cx.tables.count) - 1};
+                        int32_t(cx.tables.count) - 1,
+                        rows_of(cx.tables, rc)};
     add_local(cx, t, w.lists.local, lv.le);
     w.local.local_terms += w.lists.local.size();
     for (uint32_t c = node.child_first; c < node.child_first + node.child_count; ++c) {

@@ -76,6 +76,23 @@ Tables build_tables(const std::vector<Profile>& profiles) {
             ct.max_d2[k] = float(std::min(d2max, 1e30));
         }
     }
+    if (t.channels.size() >= 3) {
+        t.rows.assign(std::size_t(t.count) * kRowFloats, 0.0f);
+        for (uint32_t k = 0; k < t.count; ++k) {
+            float* row = t.rows.data() + std::size_t(k) * kRowFloats;
+            for (int ch = 0; ch < 3; ++ch) {
+                const std::vector<TableEntry>& e = t.channels[std::size_t(ch)].entries;
+                const TableEntry& a = e[k];
+                const TableEntry& b = k + 1 < t.count ? e[k + 1] : e[k];
+                row[2 * ch] = a.f;
+                row[2 * ch + 1] = b.f - a.f;
+                row[8 + 2 * ch] = a.df;
+                row[8 + 2 * ch + 1] = b.df - a.df;
+                row[16 + 2 * ch] = a.d2f;
+                row[16 + 2 * ch + 1] = b.d2f - a.d2f;
+            }
+        }
+    }
     return t;
 }
 

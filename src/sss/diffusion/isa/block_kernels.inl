@@ -14,6 +14,8 @@
 
 #include <cstring>
 
+#include <immintrin.h>
+
 #include "../block.h"
 
 #ifndef SSS_KERNEL_NS
@@ -37,7 +39,7 @@ inline int32_t float_bits(float f) {
 }
 
 template <bool Quadrupole>
-void far_nodes(const BlockTables& tb, const Expansion* expansions, const uint32_t* nodes,
+void far_nodes_tables(const BlockTables& tb, const Expansion* expansions, const uint32_t* nodes,
                std::size_t count, BucketBlock& b) {
     const int32_t bits0 = tb.bits0, last = tb.last;
     const int32_t n = int32_t(b.count);
@@ -101,6 +103,214 @@ void far_nodes(const BlockTables& tb, const Expansion* expansions, const uint32_
     }
 }
 
+// The interleaved rows (Tables::rows): each receiver's table position goes
+// to b.idx (as a float offset into the rows), and the first `Groups` groups
+// of its row ({F}, {F'}, {F''}: six values each) to b.val[6 g + c], so that
+// the arithmetic reads them as arrays. One row load per receiver replaces
+// the 6 to 18 element loads of the per-channel tables.
+//
+// With AVX2 (and AVX-512) the rows of 8 (16) receivers are loaded whole and
+// transposed in registers; receivers past n read row 0 (locate_rows() clears
+// their positions) into scratch slots nobody reads.
+#if defined(__AVX2__)
+// The 8 x 8 transpose of r[0..7] within each 256-bit half, first six columns:
+// out[c] = {r[0][c], ..., r[7][c]} per half.
+template <class V, class Unpack, class Shuffle>
+inline void transpose8(const V r[8], V tt[8], Unpack unpack, Shuffle shuffle) {
+    V t[8];
+    for (int i = 0; i < 4; ++i) {
+        t[2 * i] = unpack(r[2 * i], r[2 * i + 1], false);
+        t[2 * i + 1] = unpack(r[2 * i], r[2 * i + 1], true);
+    }
+    for (int h = 0; h < 2; ++h) {
+        tt[4 * h + 0] = shuffle(t[4 * h], t[4 * h + 2], false);
+        tt[4 * h + 1] = shuffle(t[4 * h], t[4 * h + 2], true);
+        tt[4 * h + 2] = shuffle(t[4 * h + 1], t[4 * h + 3], false);
+        tt[4 * h + 3] = shuffle(t[4 * h + 1], t[4 * h + 3], true);
+    }
+}
+
+// Rows of receivers [r0, r0 + 8), group g, into b.val.
+inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
+    __m256 r[8], tt[8];
+    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows + b.idx[r0 + i] + 8 * g);
+    transpose8(
+        r, tt,
+        [](__m256 a, __m256 c, bool hi) {
+            return hi ? _mm256_unpackhi_ps(a, c) : _mm256_unpacklo_ps(a, c);
+        },
+        [](__m256 a, __m256 c, bool hi) {
+            return hi ? _mm256_shuffle_ps(a, c, 0xEE) : _mm256_shuffle_ps(a, c, 0x44);
+        });
+    _mm256_storeu_ps(b.val[6 * g + 0] + r0, _mm256_permute2f128_ps(tt[0], tt[4], 0x20));
+    _mm256_storeu_ps(b.val[6 * g + 1] + r0, _mm256_permute2f128_ps(tt[1], tt[5], 0x20));
+    _mm256_storeu_ps(b.val[6 * g + 2] + r0, _mm256_permute2f128_ps(tt[2], tt[6], 0x20));
+    _mm256_storeu_ps(b.val[6 * g + 3] + r0, _mm256_permute2f128_ps(tt[3], tt[7], 0x20));
+    _mm256_storeu_ps(b.val[6 * g + 4] + r0, _mm256_permute2f128_ps(tt[0], tt[4], 0x31));
+    _mm256_storeu_ps(b.val[6 * g + 5] + r0, _mm256_permute2f128_ps(tt[1], tt[5], 0x31));
+}
+#endif
+
+
+#if !defined(__AVX2__)
+// Rows of receivers [r0, r0 + 4), group g, into b.val (SSE: two 4 x 4
+// transposes).
+inline void read_rows4(const float* rows, BucketBlock& b, int32_t r0, int g) {
+    const float* p[4];
+    for (int i = 0; i < 4; ++i) p[i] = rows + b.idx[r0 + i] + 8 * g;
+    __m128 a0 = _mm_loadu_ps(p[0]), a1 = _mm_loadu_ps(p[1]), a2 = _mm_loadu_ps(p[2]),
+           a3 = _mm_loadu_ps(p[3]);
+    _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
+    __m128 c0 = _mm_loadu_ps(p[0] + 4), c1 = _mm_loadu_ps(p[1] + 4),
+           c2 = _mm_loadu_ps(p[2] + 4), c3 = _mm_loadu_ps(p[3] + 4);
+    _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
+    _mm_storeu_ps(b.val[6 * g + 0] + r0, a0);
+    _mm_storeu_ps(b.val[6 * g + 1] + r0, a1);
+    _mm_storeu_ps(b.val[6 * g + 2] + r0, a2);
+    _mm_storeu_ps(b.val[6 * g + 3] + r0, a3);
+    _mm_storeu_ps(b.val[6 * g + 4] + r0, c0);
+    _mm_storeu_ps(b.val[6 * g + 5] + r0, c1);
+}
+#endif
+
+template <int Groups>
+inline void read_rows(const float* rows, BucketBlock& b, int32_t n) {
+#if defined(__AVX2__)
+    // (The AVX-512 path too: its kernels prefer 256-bit vectors, which were
+    // faster than 512-bit ones here.)
+    for (int32_t r0 = 0; r0 < n; r0 += 8)
+        for (int g = 0; g < Groups; ++g) read_rows8(rows, b, r0, g);
+#else
+    for (int32_t r0 = 0; r0 < n; r0 += 4)
+        for (int g = 0; g < Groups; ++g) read_rows4(rows, b, r0, g);
+#endif
+}
+
+// The table position of every receiver against a source or node centre at
+// (px, py, pz): b.idx (row offset), b.frac, and b.keep = 0 past the tables'
+// end or for the receiver `self` (sorted position; -1: none).
+inline void locate_rows(const BlockTables& tb, float px, float py, float pz,
+                        int32_t self, BucketBlock& b, int32_t n) {
+    const int32_t bits0 = tb.bits0, last = tb.last;
+#pragma GCC ivdep
+    for (int32_t r = 0; r < n; ++r) {
+        float wx = b.x[r] - px, wy = b.y[r] - py, wz = b.z[r] - pz;
+        float q = wx * wx + wy * wy + wz * wz;
+        int32_t off = imax(float_bits(q) - bits0, 0);
+        int32_t idx = imin(off >> kShift, last);
+        b.frac[r] = float(off & ((1 << kShift) - 1)) * kFracScale;
+        b.keep[r] = (idx < last && b.sorted[r] != self) ? 1.0f : 0.0f;
+        b.idx[r] = imin(idx, last - 1) * kRowFloats;
+    }
+    // read_rows() reads whole vectors of receivers.
+    for (int32_t r = n; r < ((n + 15) & ~15); ++r) b.idx[r] = 0;
+}
+
+// far_nodes_tables() and near_tables() on the interleaved rows: the same
+// operations in the same order, so the same bits.
+template <bool Quadrupole>
+void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
+                    const uint32_t* nodes, std::size_t count, BucketBlock& b) {
+    const int32_t n = int32_t(b.count);
+    float* a0 = b.acc[0];
+    float* a1 = b.acc[1];
+    float* a2 = b.acc[2];
+    const float* V[18];
+    for (int c = 0; c < 18; ++c) V[c] = b.val[c];
+    for (std::size_t k = 0; k < count; ++k) {
+        const Expansion& ex = expansions[nodes[k]];
+        const float cx = ex.c.x, cy = ex.c.y, cz = ex.c.z;
+        float phi[3], tr[3], q[3][6], d[3][3];
+        for (int ch = 0; ch < 3; ++ch) {
+            const float* Q = ex.q[ch];
+            phi[ch] = ex.phi[ch];
+            tr[ch] = Q[0] + Q[3] + Q[5];
+            q[ch][0] = Q[0];
+            q[ch][1] = 2.0f * Q[1];
+            q[ch][2] = 2.0f * Q[2];
+            q[ch][3] = Q[3];
+            q[ch][4] = 2.0f * Q[4];
+            q[ch][5] = Q[5];
+            for (int a = 0; a < 3; ++a) d[ch][a] = ex.d[ch][a];
+        }
+        locate_rows(tb, cx, cy, cz, -1, b, n);
+        read_rows<Quadrupole ? 3 : 1>(tb.rows, b, n);
+        const float* frac = b.frac;
+        const float* keep = b.keep;
+#pragma GCC ivdep
+        for (int32_t r = 0; r < n; ++r) {
+            const float fr = frac[r];
+            float v0 = phi[0] * (V[0][r] + fr * V[1][r]);
+            float v1 = phi[1] * (V[2][r] + fr * V[3][r]);
+            float v2 = phi[2] * (V[4][r] + fr * V[5][r]);
+            if constexpr (Quadrupole) {
+                float wx = b.x[r] - cx, wy = b.y[r] - cy, wz = b.z[r] - cz;
+                float* v[3] = {&v0, &v1, &v2};
+                for (int ch = 0; ch < 3; ++ch) {
+                    float df = V[6 + 2 * ch][r] + fr * V[7 + 2 * ch][r];
+                    float d2f = V[12 + 2 * ch][r] + fr * V[13 + 2 * ch][r];
+                    float wd = wx * d[ch][0] + wy * d[ch][1] + wz * d[ch][2];
+                    float wqw = wx * (q[ch][0] * wx + q[ch][1] * wy + q[ch][2] * wz) +
+                                wy * (q[ch][3] * wy + q[ch][4] * wz) + q[ch][5] * wz * wz;
+                    *v[ch] += df * (tr[ch] - 2.0f * wd) + 2.0f * d2f * wqw;
+                }
+            }
+            a0[r] += keep[r] * v0;
+            a1[r] += keep[r] * v1;
+            a2[r] += keep[r] * v2;
+        }
+    }
+}
+
+void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_area,
+               uint32_t first, uint32_t count, BucketBlock& b) {
+    const int32_t n = int32_t(b.count);
+    float* a0 = b.acc[0];
+    float* a1 = b.acc[1];
+    float* a2 = b.acc[2];
+    const float* V[6];
+    for (int c = 0; c < 6; ++c) V[c] = b.val[c];
+    for (uint32_t j = first; j < first + count; ++j) {
+        const float e0 = power_area[4 * j], e1 = power_area[4 * j + 1],
+                    e2 = power_area[4 * j + 2];
+        locate_rows(tb, pos_rho2[4 * j], pos_rho2[4 * j + 1], pos_rho2[4 * j + 2],
+                    int32_t(j), b, n);
+        read_rows<1>(tb.rows, b, n);
+        const float* frac = b.frac;
+        const float* keep = b.keep;
+#pragma GCC ivdep
+        for (int32_t r = 0; r < n; ++r) {
+            const float fr = frac[r];
+            float f0 = V[0][r] + fr * V[1][r];
+            float f1 = V[2][r] + fr * V[3][r];
+            float f2 = V[4][r] + fr * V[5][r];
+            a0[r] += keep[r] * f0 * e0;
+            a1[r] += keep[r] * f1 * e1;
+            a2[r] += keep[r] * f2 * e2;
+        }
+    }
+}
+
+void near_tables(const BlockTables& tb, const float* pos_rho2, const float* power_area,
+                 uint32_t first, uint32_t count, BucketBlock& b);
+
+template <bool Quadrupole>
+void far_nodes(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
+               std::size_t n, BucketBlock& b) {
+    if (t.rows)
+        far_nodes_rows<Quadrupole>(t, expansions, nodes, n, b);
+    else
+        far_nodes_tables<Quadrupole>(t, expansions, nodes, n, b);
+}
+
+void near(const BlockTables& t, const float* pos_rho2, const float* power_area,
+          uint32_t first, uint32_t count, BucketBlock& b) {
+    if (t.rows)
+        near_rows(t, pos_rho2, power_area, first, count, b);
+    else
+        near_tables(t, pos_rho2, power_area, first, count, b);
+}
+
 void far(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
          std::size_t n, BucketBlock& b) {
     far_nodes<true>(t, expansions, nodes, n, b);
@@ -111,8 +321,8 @@ void mono(const BlockTables& t, const Expansion* expansions, const uint32_t* nod
     far_nodes<false>(t, expansions, nodes, n, b);
 }
 
-void near(const BlockTables& tb, const float* pos_rho2, const float* power_area,
-          uint32_t first, uint32_t count, BucketBlock& b) {
+void near_tables(const BlockTables& tb, const float* pos_rho2, const float* power_area,
+                 uint32_t first, uint32_t count, BucketBlock& b) {
     const int32_t bits0 = tb.bits0, last = tb.last;
     const int32_t n = int32_t(b.count);
     const TableEntry* T0 = tb.t[0];
