@@ -17,7 +17,7 @@ namespace sss::diffusion_detail {
 
 // Receivers of one bucket in structure-of-arrays form, so the loops over
 // receivers vectorise (one source or node against all receivers at once).
-constexpr uint32_t kMaxBucket = 64;
+constexpr uint32_t kMaxBucket = 128;
 struct BucketBlock {
     uint32_t count = 0;
     alignas(64) float x[kMaxBucket], y[kMaxBucket], z[kMaxBucket];
