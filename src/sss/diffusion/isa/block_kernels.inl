@@ -39,8 +39,8 @@ inline int32_t float_bits(float f) {
 }
 
 template <bool Quadrupole>
-void far_nodes_tables(const BlockTables& tb, const Expansion* expansions, const uint32_t* nodes,
-               std::size_t count, BucketBlock& b) {
+void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
+                      const uint32_t* nodes, std::size_t count, BucketBlock& b) {
     const int32_t bits0 = tb.bits0, last = tb.last;
     const int32_t n = int32_t(b.count);
     const TableEntry* T0 = tb.t[0];
@@ -109,39 +109,26 @@ void far_nodes_tables(const BlockTables& tb, const Expansion* expansions, const 
 // the arithmetic reads them as arrays. One row load per receiver replaces
 // the 6 to 18 element loads of the per-channel tables.
 //
-// With AVX2 (and AVX-512) the rows of 8 (16) receivers are loaded whole and
-// transposed in registers; receivers past n read row 0 (locate_rows() clears
-// their positions) into scratch slots nobody reads.
+// The rows of 8 (AVX2, and AVX-512 at 256 bits) or 4 (SSE2) receivers are
+// loaded whole and transposed in registers; receivers past n read row 0
+// (locate_rows() clears their positions) into scratch slots nobody reads.
 #if defined(__AVX2__)
-// The 8 x 8 transpose of r[0..7] within each 256-bit half, first six columns:
-// out[c] = {r[0][c], ..., r[7][c]} per half.
-template <class V, class Unpack, class Shuffle>
-inline void transpose8(const V r[8], V tt[8], Unpack unpack, Shuffle shuffle) {
-    V t[8];
+// Rows of receivers [r0, r0 + 8), group g, into b.val: the 8 x 8 transpose
+// of the rows' first six columns (unpack pairs, shuffle quads, then the
+// 128-bit halves).
+inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
+    __m256 r[8], t[8], tt[8];
+    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows + b.idx[r0 + i] + 8 * g);
     for (int i = 0; i < 4; ++i) {
-        t[2 * i] = unpack(r[2 * i], r[2 * i + 1], false);
-        t[2 * i + 1] = unpack(r[2 * i], r[2 * i + 1], true);
+        t[2 * i] = _mm256_unpacklo_ps(r[2 * i], r[2 * i + 1]);
+        t[2 * i + 1] = _mm256_unpackhi_ps(r[2 * i], r[2 * i + 1]);
     }
     for (int h = 0; h < 2; ++h) {
-        tt[4 * h + 0] = shuffle(t[4 * h], t[4 * h + 2], false);
-        tt[4 * h + 1] = shuffle(t[4 * h], t[4 * h + 2], true);
-        tt[4 * h + 2] = shuffle(t[4 * h + 1], t[4 * h + 3], false);
-        tt[4 * h + 3] = shuffle(t[4 * h + 1], t[4 * h + 3], true);
+        tt[4 * h + 0] = _mm256_shuffle_ps(t[4 * h], t[4 * h + 2], 0x44);
+        tt[4 * h + 1] = _mm256_shuffle_ps(t[4 * h], t[4 * h + 2], 0xEE);
+        tt[4 * h + 2] = _mm256_shuffle_ps(t[4 * h + 1], t[4 * h + 3], 0x44);
+        tt[4 * h + 3] = _mm256_shuffle_ps(t[4 * h + 1], t[4 * h + 3], 0xEE);
     }
-}
-
-// Rows of receivers [r0, r0 + 8), group g, into b.val.
-inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
-    __m256 r[8], tt[8];
-    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows + b.idx[r0 + i] + 8 * g);
-    transpose8(
-        r, tt,
-        [](__m256 a, __m256 c, bool hi) {
-            return hi ? _mm256_unpackhi_ps(a, c) : _mm256_unpacklo_ps(a, c);
-        },
-        [](__m256 a, __m256 c, bool hi) {
-            return hi ? _mm256_shuffle_ps(a, c, 0xEE) : _mm256_shuffle_ps(a, c, 0x44);
-        });
     _mm256_storeu_ps(b.val[6 * g + 0] + r0, _mm256_permute2f128_ps(tt[0], tt[4], 0x20));
     _mm256_storeu_ps(b.val[6 * g + 1] + r0, _mm256_permute2f128_ps(tt[1], tt[5], 0x20));
     _mm256_storeu_ps(b.val[6 * g + 2] + r0, _mm256_permute2f128_ps(tt[2], tt[6], 0x20));
@@ -149,10 +136,7 @@ inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
     _mm256_storeu_ps(b.val[6 * g + 4] + r0, _mm256_permute2f128_ps(tt[0], tt[4], 0x31));
     _mm256_storeu_ps(b.val[6 * g + 5] + r0, _mm256_permute2f128_ps(tt[1], tt[5], 0x31));
 }
-#endif
-
-
-#if !defined(__AVX2__)
+#else
 // Rows of receivers [r0, r0 + 4), group g, into b.val (SSE: two 4 x 4
 // transposes).
 inline void read_rows4(const float* rows, BucketBlock& b, int32_t r0, int g) {
@@ -189,8 +173,8 @@ inline void read_rows(const float* rows, BucketBlock& b, int32_t n) {
 // The table position of every receiver against a source or node centre at
 // (px, py, pz): b.idx (row offset), b.frac, and b.keep = 0 past the tables'
 // end or for the receiver `self` (sorted position; -1: none).
-inline void locate_rows(const BlockTables& tb, float px, float py, float pz,
-                        int32_t self, BucketBlock& b, int32_t n) {
+inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int32_t self,
+                        BucketBlock& b, int32_t n) {
     const int32_t bits0 = tb.bits0, last = tb.last;
 #pragma GCC ivdep
     for (int32_t r = 0; r < n; ++r) {
@@ -202,8 +186,8 @@ inline void locate_rows(const BlockTables& tb, float px, float py, float pz,
         b.keep[r] = (idx < last && b.sorted[r] != self) ? 1.0f : 0.0f;
         b.idx[r] = imin(idx, last - 1) * kRowFloats;
     }
-    // read_rows() reads whole vectors of receivers.
-    for (int32_t r = n; r < ((n + 15) & ~15); ++r) b.idx[r] = 0;
+    // read_rows() reads whole vectors of (at most 8) receivers.
+    for (int32_t r = n; r < ((n + 7) & ~7); ++r) b.idx[r] = 0;
 }
 
 // far_nodes_tables() and near_tables() on the interleaved rows: the same
