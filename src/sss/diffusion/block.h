@@ -51,10 +51,12 @@ struct BlockKernels {
                  std::size_t n, BucketBlock& b);
     // Adds point sources [first, first + count) to every receiver, skipping
     // each receiver's own point; pos_rho2 and power_area are the tree's
-    // sorted arrays as floats (4 per point). Only for pairs that need no disk
-    // quadrature.
+    // sorted arrays as floats (4 per point). With quadrature_core2 >= 0 (the
+    // receivers' near_core2), the pairs whose source disk needs the disk
+    // quadrature (near_source()'s test) are skipped too, for the caller to
+    // add; below 0, the caller has checked that no pair does.
     void (*near)(const BlockTables& t, const float* pos_rho2, const float* power_area,
-                 uint32_t first, uint32_t count, BucketBlock& b);
+                 uint32_t first, uint32_t count, BucketBlock& b, float quadrature_core2);
     // The second-order local expansion about `centre` of the expansions of
     // nodes[0..n) (evaluation.cpp's LocalExpansion), in double: out[ch] =
     // {l0, l1 x y z, l2 xx xy xz yy yz zz}, overwritten. The nodes are summed

@@ -153,20 +153,41 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
     for (uint32_t k : w.lists.near) {
         const Node& leaf = tree.nodes[k];
         float d2 = box_distance2(bucket.lo, bucket.hi, leaf.lo, leaf.hi);
+        plain += leaf.count;
         if (leaf.max_rho * leaf.max_rho <= kNearKappa2 * (d2 + first_rc.near_core2)) {
-            kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block);
-            plain += leaf.count;
+            kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block, -1.0f);
             continue;
         }
-        // Close, large source disks: per pair, with quadrature where
-        // needed.
+        // Close, large source disks: the pairs that need the disk quadrature
+        // one by one, the others (usually nearly all) in the kernel. (The
+        // whole leaf went pair by pair before: coarse clouds spent most of
+        // their time there, issue 17.)
+        kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block,
+                     first_rc.near_core2);
+        float max_rho2 = 0.0f; // (exact: max_rho is its rounded square root)
+        for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
+            max_rho2 = std::max(max_rho2, tree.pos_rho2[j].w);
         for (uint32_t r = 0; r < bucket.count; ++r) {
-            uint32_t s = bucket.first + r;
-            glm::vec3 x(block.x[r], block.y[r], block.z[r]);
+            const uint32_t s = bucket.first + r;
+            const glm::vec3 x(block.x[r], block.y[r], block.z[r]);
+            // No pair of this receiver needs it when the leaf's largest disk
+            // does not at the leaf box's distance (q >= that distance).
+            if (max_rho2 <= kNearKappa2 * (box_distance2(x, x, leaf.lo, leaf.hi) +
+                                           first_rc.near_core2))
+                continue;
             double acc[3] = {0, 0, 0};
-            for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
-                if (j != s) near_source(tree, tables, first_rc, x, j, acc, local, w.memo);
-            for (int ch = 0; ch < 3; ++ch) block.acc[ch][r] += float(acc[ch]);
+            bool any = false;
+            for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j) {
+                const glm::vec4& pr = tree.pos_rho2[j];
+                const glm::vec3 wv = x - glm::vec3(pr);
+                if (j != s &&
+                    pr.w > kNearKappa2 * (glm::dot(wv, wv) + first_rc.near_core2)) {
+                    near_source(tree, tables, first_rc, x, j, acc, local, w.memo);
+                    any = true;
+                }
+            }
+            if (any)
+                for (int ch = 0; ch < 3; ++ch) block.acc[ch][r] += float(acc[ch]);
         }
     }
     local.near_terms += plain * bucket.count;

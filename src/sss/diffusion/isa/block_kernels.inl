@@ -17,6 +17,7 @@
 #include <immintrin.h>
 
 #include "../block.h"
+#include "../disk_quadrature.h"
 
 #ifndef SSS_KERNEL_NS
 #error "compile through a generated file that defines SSS_KERNEL_NS"
@@ -170,11 +171,20 @@ inline void read_rows(const float* rows, BucketBlock& b, int32_t n) {
 #endif
 }
 
+// Whether a source disk of radius^2 rho2 at squared distance q needs the disk
+// quadrature (near_source()'s test, the same operations).
+inline bool needs_quadrature(float rho2, float q, float core2) {
+    return double(rho2) > kNearKappa2 * double(q + core2);
+}
+
 // The table position of every receiver against a source or node centre at
 // (px, py, pz): b.idx (row offset), b.frac, and b.keep = 0 past the tables'
-// end or for the receiver `self` (sorted position; -1: none).
+// end, for the receiver `self` (sorted position; -1: none) and, with Quad,
+// where a source disk of radius^2 rho2 needs the quadrature (see near()).
+template <bool Quad = false>
 inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int32_t self,
-                        BucketBlock& b, int32_t n) {
+                        BucketBlock& b, int32_t n, float rho2 = 0.0f,
+                        float core2 = 0.0f) {
     const int32_t bits0 = tb.bits0, last = tb.last;
 #pragma GCC ivdep
     for (int32_t r = 0; r < n; ++r) {
@@ -183,7 +193,9 @@ inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int
         int32_t off = imax(float_bits(q) - bits0, 0);
         int32_t idx = imin(off >> kShift, last);
         b.frac[r] = float(off & ((1 << kShift) - 1)) * kFracScale;
-        b.keep[r] = (idx < last && b.sorted[r] != self) ? 1.0f : 0.0f;
+        bool keep = idx < last && b.sorted[r] != self;
+        if constexpr (Quad) keep = keep && !needs_quadrature(rho2, q, core2);
+        b.keep[r] = keep ? 1.0f : 0.0f;
         b.idx[r] = imin(idx, last - 1) * kRowFloats;
     }
     // read_rows() reads whole vectors of (at most 8) receivers.
@@ -246,8 +258,9 @@ void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
     }
 }
 
+template <bool Quad>
 void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_area,
-               uint32_t first, uint32_t count, BucketBlock& b) {
+               uint32_t first, uint32_t count, BucketBlock& b, float core2) {
     const int32_t n = int32_t(b.count);
     float* a0 = b.acc[0];
     float* a1 = b.acc[1];
@@ -257,8 +270,8 @@ void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_
     for (uint32_t j = first; j < first + count; ++j) {
         const float e0 = power_area[4 * j], e1 = power_area[4 * j + 1],
                     e2 = power_area[4 * j + 2];
-        locate_rows(tb, pos_rho2[4 * j], pos_rho2[4 * j + 1], pos_rho2[4 * j + 2],
-                    int32_t(j), b, n);
+        locate_rows<Quad>(tb, pos_rho2[4 * j], pos_rho2[4 * j + 1], pos_rho2[4 * j + 2],
+                          int32_t(j), b, n, pos_rho2[4 * j + 3], core2);
         read_rows<1>(tb.rows, b, n);
         const float* frac = b.frac;
         const float* keep = b.keep;
@@ -275,8 +288,9 @@ void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_
     }
 }
 
+template <bool Quad>
 void near_tables(const BlockTables& tb, const float* pos_rho2, const float* power_area,
-                 uint32_t first, uint32_t count, BucketBlock& b);
+                 uint32_t first, uint32_t count, BucketBlock& b, float core2);
 
 template <bool Quadrupole>
 void far_nodes(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
@@ -287,12 +301,21 @@ void far_nodes(const BlockTables& t, const Expansion* expansions, const uint32_t
         far_nodes_tables<Quadrupole>(t, expansions, nodes, n, b);
 }
 
-void near(const BlockTables& t, const float* pos_rho2, const float* power_area,
-          uint32_t first, uint32_t count, BucketBlock& b) {
+template <bool Quad>
+void near_pairs(const BlockTables& t, const float* pos_rho2, const float* power_area,
+                uint32_t first, uint32_t count, BucketBlock& b, float core2) {
     if (t.rows)
-        near_rows(t, pos_rho2, power_area, first, count, b);
+        near_rows<Quad>(t, pos_rho2, power_area, first, count, b, core2);
     else
-        near_tables(t, pos_rho2, power_area, first, count, b);
+        near_tables<Quad>(t, pos_rho2, power_area, first, count, b, core2);
+}
+
+void near(const BlockTables& t, const float* pos_rho2, const float* power_area,
+          uint32_t first, uint32_t count, BucketBlock& b, float quadrature_core2) {
+    if (quadrature_core2 >= 0.0f)
+        near_pairs<true>(t, pos_rho2, power_area, first, count, b, quadrature_core2);
+    else
+        near_pairs<false>(t, pos_rho2, power_area, first, count, b, 0.0f);
 }
 
 void far(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
@@ -305,8 +328,9 @@ void mono(const BlockTables& t, const Expansion* expansions, const uint32_t* nod
     far_nodes<false>(t, expansions, nodes, n, b);
 }
 
+template <bool Quad>
 void near_tables(const BlockTables& tb, const float* pos_rho2, const float* power_area,
-                 uint32_t first, uint32_t count, BucketBlock& b) {
+                 uint32_t first, uint32_t count, BucketBlock& b, float core2) {
     const int32_t bits0 = tb.bits0, last = tb.last;
     const int32_t n = int32_t(b.count);
     const TableEntry* T0 = tb.t[0];
@@ -321,6 +345,7 @@ void near_tables(const BlockTables& tb, const float* pos_rho2, const float* powe
         const float e0 = power_area[4 * j], e1 = power_area[4 * j + 1],
                     e2 = power_area[4 * j + 2];
         const int32_t self = int32_t(j);
+        const float rho2 = pos_rho2[4 * j + 3];
 #pragma GCC ivdep
         for (int32_t r = 0; r < n; ++r) {
             float wx = b.x[r] - px, wy = b.y[r] - py, wz = b.z[r] - pz;
@@ -328,7 +353,9 @@ void near_tables(const BlockTables& tb, const float* pos_rho2, const float* powe
             int32_t off = imax(float_bits(q) - bits0, 0);
             int32_t idx = imin(off >> kShift, last);
             float frac = float(off & ((1 << kShift) - 1)) * kFracScale;
-            float keep = (idx < last && b.sorted[r] != self) ? 1.0f : 0.0f;
+            bool kept = idx < last && b.sorted[r] != self;
+            if constexpr (Quad) kept = kept && !needs_quadrature(rho2, q, core2);
+            float keep = kept ? 1.0f : 0.0f;
             idx = imin(idx, last - 1);
             float f0 = T0[idx].f + frac * (T0[idx + 1].f - T0[idx].f);
             float f1 = T1[idx].f + frac * (T1[idx + 1].f - T1[idx].f);
