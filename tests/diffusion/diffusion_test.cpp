@@ -1208,4 +1208,26 @@ TEST(DiffusionIsa, PathsGiveIdenticalResults) {
             EXPECT_EQ(differ, 0u) << sss::isa_name(isa) << " eps " << eps;
         }
     }
+    // Per-point materials (two, by hemisphere): the kernels then read the
+    // channels' own tables instead of the interleaved rows. The sphere is
+    // coarse enough that near pairs need the disk quadrature in both.
+    sss::DiffusionProblem mixed = pb;
+    for (const sss::Profile& p : material_profiles("skin1")) mixed.profiles.push_back(p);
+    mixed.profile_index.resize(mixed.positions.size());
+    for (std::size_t i = 0; i < mixed.positions.size(); ++i)
+        mixed.profile_index[i] =
+            mixed.positions[i].x < 0 ? glm::u32vec3(0, 1, 2) : glm::u32vec3(3, 4, 5);
+    sss::DiffusionOptions opt;
+    opt.isa = sss::Isa::X86_64;
+    sss::DiffusionStats st;
+    const std::vector<glm::vec3> base = sss::evaluate_diffusion(mixed, opt, &st);
+    EXPECT_GT(st.quadrature_terms, 0u);
+    for (sss::Isa isa : sss::supported_isas()) {
+        opt.isa = isa;
+        const std::vector<glm::vec3> h = sss::evaluate_diffusion(mixed, opt);
+        std::size_t differ = 0;
+        for (std::size_t i = 0; i < h.size(); ++i)
+            differ += std::memcmp(&h[i], &base[i], sizeof(glm::vec3)) != 0;
+        EXPECT_EQ(differ, 0u) << sss::isa_name(isa) << " per-point materials";
+    }
 }
