@@ -172,17 +172,18 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             const glm::vec3 x(block.x[r], block.y[r], block.z[r]);
             // No pair of this receiver needs it when the leaf's largest disk
             // does not at the leaf box's distance (q >= that distance).
-            if (max_rho2 <= kNearKappa2 * (box_distance2(x, x, leaf.lo, leaf.hi) +
-                                           first_rc.near_core2))
+            if (!needs_quadrature(max_rho2, box_distance2(x, x, leaf.lo, leaf.hi),
+                                  first_rc.near_core2))
                 continue;
             double acc[3] = {0, 0, 0};
             bool any = false;
             for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j) {
-                const glm::vec4& pr = tree.pos_rho2[j];
-                const glm::vec3 wv = x - glm::vec3(pr);
+                const glm::vec3 wv = x - glm::vec3(tree.pos_rho2[j]);
+                const float q = glm::dot(wv, wv);
                 if (j != s &&
-                    pr.w > kNearKappa2 * (glm::dot(wv, wv) + first_rc.near_core2)) {
-                    near_source(tree, tables, first_rc, x, j, acc, local, w.memo);
+                    needs_quadrature(tree.pos_rho2[j].w, q, first_rc.near_core2)) {
+                    quadrature_source(tree, tables, first_rc, wv, q, j, acc, local,
+                                      w.memo);
                     any = true;
                 }
             }

@@ -70,6 +70,48 @@ struct SelfTerm {
     }
 };
 
+// Whether source disk of radius^2 rho2 at squared distance q from a receiver
+// is integrated by the disk quadrature rather than taken as a point (the
+// block kernels repeat this test, operation for operation).
+inline bool needs_quadrature(float rho2, float q, float near_core2) {
+    return rho2 > kNearKappa2 * (q + near_core2);
+}
+
+// The disk quadrature of sorted source s for a receiver at offset w = x - p_s
+// (q = |w|^2), for a pair that needs_quadrature().
+inline void quadrature_source(const Tree& tree, const Tables& tables,
+                              const ReceiverChannels& rc, const glm::vec3& w, float q,
+                              uint32_t s, double acc[3], DiffusionStats& st,
+                              DiskMemo memo[3]) {
+    const glm::vec4& pa = tree.power_area[s];
+    ++st.quadrature_terms;
+    double rho = std::sqrt(double(tree.pos_rho2[s].w));
+    if (q == 0.0f) {
+        // Coincident source: its disk is centred on the receiver. Coincident
+        // points come in big leaves (O(n^2) pairs), usually of equal area:
+        // the last disk value per channel is kept, so a pair costs a
+        // multiply rather than a closed form with exponentials.
+        for (int ch = 0; ch < 3; ++ch) {
+            if (!(pa.w > 0)) continue;
+            DiskMemo& m = memo[ch];
+            if (m.profile != rc.profile[ch] || m.rho != rho)
+                m = {rc.profile[ch], rho, rc.profile[ch]->disk(rho)};
+            acc[ch] += pa[ch] / pa.w * m.value;
+        }
+        return;
+    }
+    glm::dvec3 u, v;
+    disk_frame(glm::dvec3(tree.normal[s]), glm::dvec3(w), u, v);
+    double sum[3] = {0, 0, 0};
+    for_disk_points(rho, u, v, [&](const glm::dvec3& off, double wt) {
+        glm::vec3 d = w - glm::vec3(off);
+        float f[3];
+        lookup3(tables, rc, glm::dot(d, d), f);
+        for (int ch = 0; ch < 3; ++ch) sum[ch] += wt * f[ch];
+    });
+    for (int ch = 0; ch < 3; ++ch) acc[ch] += sum[ch] * pa[ch];
+}
+
 // Contribution of sorted source s to receiver at x (never the receiver itself).
 inline void near_source(const Tree& tree, const Tables& tables,
                         const ReceiverChannels& rc, const glm::vec3& x, uint32_t s,
@@ -78,33 +120,8 @@ inline void near_source(const Tree& tree, const Tables& tables,
     const glm::vec4& pa = tree.power_area[s];
     glm::vec3 w = x - glm::vec3(pr);
     float q = glm::dot(w, w);
-    if (pr.w > kNearKappa2 * (q + rc.near_core2)) {
-        ++st.quadrature_terms;
-        double rho = std::sqrt(double(pr.w));
-        if (q == 0.0f) {
-            // Coincident source: its disk is centred on the receiver. Coincident
-            // points come in big leaves (O(n^2) pairs), usually of equal area:
-            // the last disk value per channel is kept, so a pair costs a
-            // multiply rather than a closed form with exponentials.
-            for (int ch = 0; ch < 3; ++ch) {
-                if (!(pa.w > 0)) continue;
-                DiskMemo& m = memo[ch];
-                if (m.profile != rc.profile[ch] || m.rho != rho)
-                    m = {rc.profile[ch], rho, rc.profile[ch]->disk(rho)};
-                acc[ch] += pa[ch] / pa.w * m.value;
-            }
-            return;
-        }
-        glm::dvec3 u, v;
-        disk_frame(glm::dvec3(tree.normal[s]), glm::dvec3(w), u, v);
-        double sum[3] = {0, 0, 0};
-        for_disk_points(rho, u, v, [&](const glm::dvec3& off, double wt) {
-            glm::vec3 d = w - glm::vec3(off);
-            float f[3];
-            lookup3(tables, rc, glm::dot(d, d), f);
-            for (int ch = 0; ch < 3; ++ch) sum[ch] += wt * f[ch];
-        });
-        for (int ch = 0; ch < 3; ++ch) acc[ch] += sum[ch] * pa[ch];
+    if (needs_quadrature(pr.w, q, rc.near_core2)) {
+        quadrature_source(tree, tables, rc, w, q, s, acc, st, memo);
         return;
     }
     ++st.near_terms;

@@ -39,23 +39,13 @@ inline int32_t float_bits(float f) {
     return i;
 }
 
-template <bool Quadrupole>
-void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
-                      const uint32_t* nodes, std::size_t count, BucketBlock& b) {
-    const int32_t bits0 = tb.bits0, last = tb.last;
-    const int32_t n = int32_t(b.count);
-    const TableEntry* T0 = tb.t[0];
-    const TableEntry* T1 = tb.t[1];
-    const TableEntry* T2 = tb.t[2];
-    float* a0 = b.acc[0];
-    float* a1 = b.acc[1];
-    float* a2 = b.acc[2];
-    for (std::size_t k = 0; k < count; ++k) {
-        const Expansion& ex = expansions[nodes[k]];
-        const float cx = ex.c.x, cy = ex.c.y, cz = ex.c.z;
-        // Per channel: phi, trace, the quadrupole's six terms (off-diagonal
-        // ones doubled) and the dipole.
-        float phi[3], tr[3], q[3][6], d[3][3];
+// A node's expansion as the far kernels use it: its centre and, per channel,
+// phi, the quadrupole's trace, its six terms (off-diagonal ones doubled) and
+// the dipole.
+struct NodeTerms {
+    float cx, cy, cz;
+    float phi[3], tr[3], q[3][6], d[3][3];
+    explicit NodeTerms(const Expansion& ex) : cx(ex.c.x), cy(ex.c.y), cz(ex.c.z) {
         for (int ch = 0; ch < 3; ++ch) {
             const float* Q = ex.q[ch];
             phi[ch] = ex.phi[ch];
@@ -68,6 +58,32 @@ void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
             q[ch][5] = Q[5];
             for (int a = 0; a < 3; ++a) d[ch][a] = ex.d[ch][a];
         }
+    }
+    // The Taylor expansion of F(|w - delta|^2) beyond the monopole, to second
+    // order, for channel ch at offset w from the centre.
+    float second_order(int ch, float wx, float wy, float wz, float df, float d2f) const {
+        float wd = wx * d[ch][0] + wy * d[ch][1] + wz * d[ch][2];
+        float wqw = wx * (q[ch][0] * wx + q[ch][1] * wy + q[ch][2] * wz) +
+                    wy * (q[ch][3] * wy + q[ch][4] * wz) + q[ch][5] * wz * wz;
+        return df * (tr[ch] - 2.0f * wd) + 2.0f * d2f * wqw;
+    }
+};
+
+template <bool Quadrupole>
+void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
+                      const uint32_t* nodes, std::size_t count, BucketBlock& b) {
+    const int32_t bits0 = tb.bits0, last = tb.last;
+    const int32_t n = int32_t(b.count);
+    const TableEntry* T0 = tb.t[0];
+    const TableEntry* T1 = tb.t[1];
+    const TableEntry* T2 = tb.t[2];
+    float* a0 = b.acc[0];
+    float* a1 = b.acc[1];
+    float* a2 = b.acc[2];
+    for (std::size_t k = 0; k < count; ++k) {
+        const NodeTerms m(expansions[nodes[k]]);
+        const float cx = m.cx, cy = m.cy, cz = m.cz;
+        const float* phi = m.phi;
         // The three channels in one pass: the receiver's offset and table
         // position are computed once for all of them.
 #pragma GCC ivdep
@@ -91,10 +107,7 @@ void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
                     float df = T[ch][idx].df + frac * (T[ch][idx + 1].df - T[ch][idx].df);
                     float d2f =
                         T[ch][idx].d2f + frac * (T[ch][idx + 1].d2f - T[ch][idx].d2f);
-                    float wd = wx * d[ch][0] + wy * d[ch][1] + wz * d[ch][2];
-                    float wqw = wx * (q[ch][0] * wx + q[ch][1] * wy + q[ch][2] * wz) +
-                                wy * (q[ch][3] * wy + q[ch][4] * wz) + q[ch][5] * wz * wz;
-                    *v[ch] += df * (tr[ch] - 2.0f * wd) + 2.0f * d2f * wqw;
+                    *v[ch] += m.second_order(ch, wx, wy, wz, df, d2f);
                 }
             }
             a0[r] += keep * v0;
@@ -172,7 +185,8 @@ inline void read_rows(const float* rows, BucketBlock& b, int32_t n) {
 }
 
 // Whether a source disk of radius^2 rho2 at squared distance q needs the disk
-// quadrature (near_source()'s test, the same operations).
+// quadrature: kernels.h's needs_quadrature(), the same operations, repeated
+// here because the kernels call no inline code shared with other files.
 inline bool needs_quadrature(float rho2, float q, float core2) {
     return double(rho2) > kNearKappa2 * double(q + core2);
 }
@@ -214,21 +228,9 @@ void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
     const float* V[18];
     for (int c = 0; c < 18; ++c) V[c] = b.val[c];
     for (std::size_t k = 0; k < count; ++k) {
-        const Expansion& ex = expansions[nodes[k]];
-        const float cx = ex.c.x, cy = ex.c.y, cz = ex.c.z;
-        float phi[3], tr[3], q[3][6], d[3][3];
-        for (int ch = 0; ch < 3; ++ch) {
-            const float* Q = ex.q[ch];
-            phi[ch] = ex.phi[ch];
-            tr[ch] = Q[0] + Q[3] + Q[5];
-            q[ch][0] = Q[0];
-            q[ch][1] = 2.0f * Q[1];
-            q[ch][2] = 2.0f * Q[2];
-            q[ch][3] = Q[3];
-            q[ch][4] = 2.0f * Q[4];
-            q[ch][5] = Q[5];
-            for (int a = 0; a < 3; ++a) d[ch][a] = ex.d[ch][a];
-        }
+        const NodeTerms m(expansions[nodes[k]]);
+        const float cx = m.cx, cy = m.cy, cz = m.cz;
+        const float* phi = m.phi;
         locate_rows(tb, cx, cy, cz, -1, b, n);
         read_rows<Quadrupole ? 3 : 1>(tb.rows, b, n);
         const float* frac = b.frac;
@@ -245,10 +247,7 @@ void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
                 for (int ch = 0; ch < 3; ++ch) {
                     float df = V[6 + 2 * ch][r] + fr * V[7 + 2 * ch][r];
                     float d2f = V[12 + 2 * ch][r] + fr * V[13 + 2 * ch][r];
-                    float wd = wx * d[ch][0] + wy * d[ch][1] + wz * d[ch][2];
-                    float wqw = wx * (q[ch][0] * wx + q[ch][1] * wy + q[ch][2] * wz) +
-                                wy * (q[ch][3] * wy + q[ch][4] * wz) + q[ch][5] * wz * wz;
-                    *v[ch] += df * (tr[ch] - 2.0f * wd) + 2.0f * d2f * wqw;
+                    *v[ch] += m.second_order(ch, wx, wy, wz, df, d2f);
                 }
             }
             a0[r] += keep[r] * v0;
