@@ -27,6 +27,7 @@
 #include "sss/cli/options.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/diffusion/filter_job.h"
 #include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
@@ -337,9 +338,6 @@ FilterCall parse_filter_words(const std::vector<std::string>& words, bool file_o
         throw sss::UsageError("unknown keyword '" + o + "'");
     }
     if (!stray.empty()) throw sss::UsageError("unexpected value '" + stray.front() + "'");
-    // What ptfilter checks before reading anything.
-    call.options.diffusion.isa = sss::resolve_isa(call.options.diffusion.isa);
-    sss::describe_material(call.options);
     return call;
 }
 
@@ -368,18 +366,16 @@ py::dict report_dict(const sss::SsDiffusionReport& r) {
     return d;
 }
 
-/// Runs f (the filter) and gives its input errors ptfilter's form, naming
-/// `what` (the inputs) and the keyword to set for a missing channel.
+/// Runs f (the filter) and gives a missing channel ptfilter's form, with the
+/// keyword to set (the input files are named by the library).
 template <class F>
-void filter_errors(const std::string& what, F&& f) {
+void filter_errors(F&& f) {
     try {
         f();
     } catch (const sss::MissingChannelError& e) {
-        throw sss::ValueError(what + ": input has no channel '" + e.channel() +
+        throw sss::ValueError(e.inputs() + ": input has no channel '" + e.channel() +
                               "' (set it with " + channel_keyword(e.role()) +
                               "; channels present: " + e.present() + ")");
-    } catch (const sss::ValueError& e) {
-        throw sss::ValueError(what + ": " + e.what());
     }
 }
 
@@ -388,6 +384,9 @@ void filter_errors(const std::string& what, F&& f) {
 py::tuple ssdiffusion(const py::object& source, const std::vector<std::string>& words,
                       const py::object& callback) {
     FilterCall call = parse_filter_words(words, false);
+    // What ptfilter checks before reading anything (prepare_filter_job()).
+    call.options.diffusion.isa = sss::resolve_isa(call.options.diffusion.isa);
+    sss::describe_material(call.options);
     sss::PointCloud input;
     std::vector<std::string> paths;
     if (py::isinstance<py::tuple>(source)) {
@@ -409,8 +408,16 @@ py::tuple ssdiffusion(const py::object& source, const std::vector<std::string>& 
                 input.append(sss::read_point_cloud(paths[i]));
         }
         sss::PointCloud result;
-        filter_errors(paths.empty() ? std::string("cloud") : sss::join(paths),
-                      [&] { result = sss::ssdiffusion(input, call.options, &report); });
+        const std::string what = paths.empty() ? std::string("cloud") : sss::join(paths);
+        filter_errors([&] {
+            try {
+                result = sss::ssdiffusion(input, call.options, &report);
+            } catch (const sss::MissingChannelError& e) {
+                throw sss::MissingChannelError(e.role(), e.channel(), e.present(), what);
+            } catch (const sss::ValueError& e) {
+                throw sss::ValueError(what + ": " + e.what());
+            }
+        });
         return result;
     });
     py::tuple t = cloud_to_python(std::move(out));
@@ -418,31 +425,27 @@ py::tuple ssdiffusion(const py::object& source, const std::vector<std::string>& 
 }
 
 /// ptfilter -ssdiffusion [options] inputs... output, file to file in little
-/// memory (sss::SsDiffusionFiles): the output is byte for byte ptfilter's.
+/// memory: the tool's own library call (sss::run_filter_job()), so the output
+/// is byte for byte ptfilter's.
 py::dict ptfilter(std::vector<std::string> inputs, std::string output,
                   const std::vector<std::string>& words, const py::object& callback) {
     FilterCall call = parse_filter_words(words, true);
     if (inputs.empty()) throw sss::UsageError("ptfilter: no input file given");
-    for (std::string& f : inputs)
-        f = sss::expand_frame_pattern(f, call.running.frame, "file name");
-    output = sss::expand_frame_pattern(output, call.running.frame, "file name");
-    if (!sss::has_extension_in(output, sss::point_cloud_extensions()) &&
-        !sss::writes_into_existing(output))
-        throw sss::UsageError("output " +
-                              sss::unknown_extension_text(output, "a point cloud file",
-                                                          sss::point_cloud_extensions()));
+    sss::FilterJob job;
+    job.inputs = std::move(inputs);
+    job.output = std::move(output);
+    job.options = call.options;
+    job.write = call.write;
+    sss::prepare_filter_job(job, call.running.frame);
     PythonProgress progress(callback);
-    call.options.diffusion.progress = progress.get();
-    sss::SsDiffusionReport report;
+    job.options.diffusion.progress = progress.get();
+    sss::FilterJobReport report;
     progress.run([&] {
         sss::ThreadLimit limit(sss::resolve_thread_count(call.running.threads));
-        sss::check_output_target(output);
-        sss::SsDiffusionFiles files(inputs, call.options);
-        filter_errors(sss::join(inputs), [&] { files.filter(&report); });
-        files.write(output, call.write);
+        filter_errors([&] { report = sss::run_filter_job(job); });
         return 0;
     });
-    return report_dict(report);
+    return report_dict(report.diffusion);
 }
 
 // ---------------------------------------------------------------------------

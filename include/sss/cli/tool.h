@@ -1,8 +1,9 @@
 #pragma once
 /// \file tool.h
 /// Module cli: everything about command lines; the only module that knows
-/// option names. It uses diffusion (materials), cloud and util, and reports
-/// the versions of every library.
+/// option names.
+/// May use: brick, image, diffusion, cloud and util (and reports the versions of
+/// every library).
 ///
 /// The command-line layer every tool's main() is built on: error reporting
 /// and exit codes (run_tool), --help/--version, warnings. Includes the option
@@ -50,7 +51,9 @@ bool standard_option(const std::string& tool, const std::string& opt,
 /// The message a tool prints for a library error that concerns something its
 /// command line sets, in the options' words: a frame pattern without a frame
 /// ("...; give the frame with -frame N"), a material given in both forms, an
-/// impossible material value ("impossible -albedo value ..."). nullopt for
+/// impossible material value ("impossible -albedo value ..."), a channel the
+/// diffusion needs that the input lacks ("...; set it with -radiancechannel").
+/// nullopt for
 /// any other error (its what() is the message). run_tool uses it.
 std::optional<std::string> option_wording(const std::exception& e);
 

@@ -64,8 +64,12 @@ public:
         Albedo,   ///< per-point albedo (albedo_from_file)
         Dmfp      ///< per-point diffuse mean free path (dmfp_from_file)
     };
-    MissingChannelError(Role role, std::string channel, std::string present);
+    /// `inputs`: the files the channel is missing from ("" when not known).
+    MissingChannelError(Role role, std::string channel, std::string present,
+                        std::string inputs = "");
     Role role() const { return m_role; }
+    /// The input files, as run_filter_job() names them ("" when not known).
+    const std::string& inputs() const { return m_inputs; }
     const std::string& channel() const { return m_channel; }
     /// "type name, ..." of the channels the input has, or "none".
     const std::string& present() const { return m_present; }
@@ -74,6 +78,7 @@ private:
     Role m_role;
     std::string m_channel;
     std::string m_present;
+    std::string m_inputs;
 };
 
 /// Runs the diffusion on a (merged) cloud. The output holds P, N, radius and

@@ -16,6 +16,7 @@
 #include <zlib.h>
 
 #include "sss/diffusion/material.h"
+#include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/limits.h"
@@ -86,6 +87,16 @@ std::optional<std::string> option_wording(const std::exception& e) {
     if (const auto* value = dynamic_cast<const MaterialValueError*>(&e))
         return "impossible -" + value->field() + " value " +
                std::to_string(value->value());
+    if (const auto* missing = dynamic_cast<const MissingChannelError*>(&e)) {
+        const char* option = "-radiancechannel";
+        if (missing->role() == MissingChannelError::Role::Albedo)
+            option = "-albedo fromfile";
+        else if (missing->role() == MissingChannelError::Role::Dmfp)
+            option = "-diffusemeanfreepath fromfile";
+        return (missing->inputs().empty() ? "" : missing->inputs() + ": ") +
+               "input has no channel '" + missing->channel() + "' (set it with " + option +
+               "; channels present: " + missing->present() + ")";
+    }
     return std::nullopt;
 }
 

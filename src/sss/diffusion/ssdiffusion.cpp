@@ -761,9 +761,10 @@ std::string ssdiffusion_signature(const SsDiffusionOptions& o) {
 }
 
 MissingChannelError::MissingChannelError(Role role, std::string channel,
-                                         std::string present)
-    : ValueError("input has no channel '" + channel + "' (channels present: " + present +
-                 ")"),
-      m_role(role), m_channel(std::move(channel)), m_present(std::move(present)) {}
+                                         std::string present, std::string inputs)
+    : ValueError((inputs.empty() ? "" : inputs + ": ") + "input has no channel '" +
+                 channel + "' (channels present: " + present + ")"),
+      m_role(role), m_channel(std::move(channel)), m_present(std::move(present)),
+      m_inputs(std::move(inputs)) {}
 
 } // namespace sss
