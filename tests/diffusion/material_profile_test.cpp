@@ -19,6 +19,7 @@
 #include "sss/diffusion/material.h"
 #include "sss/diffusion/profile.h"
 #include "sss/util/error.h"
+#include "sss/util/math.h"
 
 namespace sss {
 // Readable names for the parameterised tests' ctest entries.
@@ -29,7 +30,7 @@ void PrintTo(ProfileKind kind, std::ostream* os) {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using sss::kPi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr sss::ProfileKind kAllKinds[] = {
     sss::ProfileKind::Classic, sss::ProfileKind::Better, sss::ProfileKind::Burley};

@@ -36,6 +36,7 @@
 #include "sss/diffusion/profile.h"
 #include "sss/diffusion/ssdiffusion.h"
 #include "sss/util/error.h"
+#include "sss/util/math.h"
 
 #include "diffusion_test_util.h"
 
@@ -43,7 +44,7 @@ namespace {
 
 using sss::ProfileKind;
 
-constexpr double kPi = std::numbers::pi;
+using sss::kPi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr ProfileKind kAllKinds[] = {ProfileKind::Classic, ProfileKind::Better,
                                      ProfileKind::Burley};

@@ -1,7 +1,7 @@
 #pragma once
 /// \file lights.h
 /// The light module owns lights, noise and the ray tracer that shadows use.
-/// It may use scene and util, with Embree behind ray_tracer.cpp.
+/// May use: scene and util (Embree privately).
 ///
 /// RenderMan's standard light shaders resolved to world space, and the
 /// irradiance they give at a surface point: ambient() + diffuse(N), the sum
@@ -92,9 +92,12 @@ void light_samples(const std::vector<Light>& lights, const std::vector<int>& act
 /// Improved Perlin gradient noise in [0, 1] (RenderMan's noise() range), deterministic.
 double noise3(const glm::dvec3& p);
 
-/// noise3's permutation table, stored twice (512 entries) so that p[p[x] + y]
-/// needs no wrapping: shared with the shading module's noise family so that
-/// RSL's noise(point) equals noise3.
-const std::array<uint8_t, 512>& noise_permutation();
+/// Signed improved gradient noise (Perlin 2002) in `dims` = 1..4 dimensions at
+/// x[0..dims), roughly in [-1, 1] and 0 on every lattice point. periods[d]
+/// (rounded integers) makes it repeat every periods[d] cells along d; null or
+/// < 1: every 256 cells (the permutation's own period). `component` 0..2
+/// shifts the lattice to decorrelate the components of vector noise. RSL's
+/// noise family (the shading module) and noise3() are this function.
+double gradient_noise(int dims, const double* x, const double* periods, int component);
 
 } // namespace sss

@@ -13,12 +13,11 @@
 #include <glm/geometric.hpp>
 
 #include "sss/util/error.h"
+#include "sss/util/math.h"
 
 namespace sss {
 
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 double luminance(const float* c) {
     return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];

@@ -1,15 +1,9 @@
 /// \file rsl_noise.cpp
 /// RSL's noise(), pnoise() and cellnoise() in 1 to 4 dimensions (rsl_math.h).
 ///
-/// noise is Ken Perlin's improved gradient noise (SIGGRAPH 2002) scaled to
-/// 0.5*(1+n). The 3-D form is the same construction as sss::noise3 (module
-/// light, used by the baker): the same seeded permutation, the same 16
-/// gradients, the same arithmetic in double, so that it returns exactly the
-/// same values and existing bakes keep their patterns. The module layering
-/// forbids calling it from here, hence the copy; a test compares both.
-/// The other dimensions extend the construction: 1-D gradients are slopes
-/// in [-2, 2], 2-D ones the 8 directions to a square's edges and corners,
-/// 4-D ones the 32 directions to a hypercube's edge midpoints.
+/// noise is the light module's improved gradient noise (sss::gradient_noise,
+/// Ken Perlin's, SIGGRAPH 2002) scaled to 0.5*(1+n): the 3-D form is exactly
+/// sss::noise3, the baker's, so existing bakes keep their patterns.
 
 #include <array>
 #include <cmath>
@@ -24,133 +18,6 @@ namespace sss::detail {
 
 namespace {
 
-/// The permutation, stored twice so that p[p[x] + y] needs no wrapping.
-using PermutationTable = std::array<uint8_t, 512>;
-
-/// light's noise3 permutation: RSL's 3-D noise equals noise3.
-const PermutationTable& permutation() {
-    return noise_permutation();
-}
-
-/// 3-D gradients: the 12 cube-edge directions, 4 repeated to make 16 (Perlin
-/// 2002); identical to light/noise.cpp.
-constexpr int kGradients3[16][3] = {{1, 1, 0}, {-1, 1, 0}, {1, -1, 0}, {-1, -1, 0},
-                                    {1, 0, 1}, {-1, 0, 1}, {1, 0, -1}, {-1, 0, -1},
-                                    {0, 1, 1}, {0, -1, 1}, {0, 1, -1}, {0, -1, -1},
-                                    {1, 1, 0}, {0, -1, 1}, {-1, 1, 0}, {0, -1, -1}};
-
-constexpr int kGradients2[8][2] = {{1, 1}, {-1, 1}, {1, -1}, {-1, -1},
-                                   {1, 0}, {-1, 0}, {0, 1},  {0, -1}};
-
-/// 4-D: the 32 vectors with one zero and three +-1 components.
-constexpr std::array<std::array<int, 4>, 32> make_gradients4() {
-    std::array<std::array<int, 4>, 32> g{};
-    int n = 0;
-    for (int zero = 0; zero < 4; ++zero)
-        for (int signs = 0; signs < 8; ++signs) {
-            int bit = 0;
-            for (int d = 0; d < 4; ++d)
-                g[n][d] = d == zero ? 0 : ((signs >> bit++) & 1 ? -1 : 1);
-            ++n;
-        }
-    return g;
-}
-constexpr auto kGradients4 = make_gradients4();
-
-template <int D>
-double grad_dot(int hash, const double* x) {
-    if constexpr (D == 1) {
-        // Slopes +-0.25 .. +-2 so that the 1-D noise reaches +-1 at most.
-        const double g = 0.25 * ((hash & 7) + 1);
-        return (hash & 8 ? -g : g) * x[0];
-    } else if constexpr (D == 2) {
-        const int* g = kGradients2[hash & 7];
-        return g[0] * x[0] + g[1] * x[1];
-    } else if constexpr (D == 3) {
-        const int* g = kGradients3[hash & 15];
-        return g[0] * x[0] + g[1] * x[1] + g[2] * x[2];
-    } else {
-        const auto& g = kGradients4[hash & 31];
-        return g[0] * x[0] + g[1] * x[1] + g[2] * x[2] + g[3] * x[3];
-    }
-}
-
-/// 6t^5 - 15t^4 + 10t^3: zero first and second derivatives at 0 and 1.
-double fade(double t) {
-    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
-}
-
-double lerp(double t, double a, double b) {
-    return a + t * (b - a);
-}
-
-/// The lattice cells either side of x along one axis, as permutation indices
-/// in [0, 255], and the offset of x inside its cell. `period` < 1: the
-/// lattice repeats every 256 cells (the permutation's own period), as in
-/// light/noise.cpp; otherwise every `period` cells. `shift` decorrelates the
-/// components of vector noise (an integer lattice shift keeps the value 0.5
-/// on lattice points and keeps the period).
-struct Axis {
-    int i0 = 0, i1 = 0;
-    double frac = 0.0;
-};
-
-Axis axis(double x, double period, int shift) {
-    Axis a;
-    const double f = std::floor(x);
-    a.frac = x - f;
-    // Reducing in double keeps huge coordinates from overflowing an int.
-    // 256 divides exactly (the formula of light/noise.cpp); other periods
-    // use fmod, which is exact where f - n*floor(f/n) may round out of
-    // [0, n) for huge f.
-    const double n = period >= 1.0 ? period : 256.0;
-    double wrapped;
-    if (n == 256.0) {
-        wrapped = f - n * std::floor(f / n);
-    } else {
-        wrapped = std::fmod(f, n);
-        if (wrapped < 0.0) wrapped += n;
-    }
-    const auto c0 = static_cast<int64_t>(wrapped);
-    const auto p = static_cast<int64_t>(n);
-    const int64_t c1 = c0 + 1 == p ? 0 : c0 + 1;
-    a.i0 = static_cast<int>((c0 + shift) & 255);
-    a.i1 = static_cast<int>((c1 + shift) & 255);
-    return a;
-}
-
-/// Signed gradient noise, roughly in [-1, 1], 0 on every lattice point.
-/// periods[d] < 1: not periodic along d.
-template <int D>
-double gradient_noise(const double* x, const double* periods, int component) {
-    // Per-component lattice shifts (arbitrary, distinct mod 256).
-    static constexpr int kShift[3][4] = {
-        {0, 0, 0, 0}, {97, 13, 181, 59}, {211, 149, 37, 113}};
-    const PermutationTable& p = permutation();
-    Axis ax[D];
-    double u[D];
-    for (int d = 0; d < D; ++d) {
-        ax[d] = axis(x[d], periods ? periods[d] : 0.0, kShift[component][d]);
-        u[d] = fade(ax[d].frac);
-    }
-    constexpr int kCorners = 1 << D;
-    double v[kCorners];
-    for (int c = 0; c < kCorners; ++c) {
-        int h = 0;
-        double offset[D];
-        for (int d = 0; d < D; ++d) {
-            const bool upper = (c >> d) & 1;
-            h = p[h + (upper ? ax[d].i1 : ax[d].i0)];
-            offset[d] = upper ? ax[d].frac - 1.0 : ax[d].frac;
-        }
-        v[c] = grad_dot<D>(h, offset);
-    }
-    // Interpolate x first, then y, z, w: the order of light/noise.cpp.
-    for (int d = 0, n = kCorners; d < D; ++d, n /= 2)
-        for (int c = 0; c < n / 2; ++c) v[c] = lerp(u[d], v[2 * c], v[2 * c + 1]);
-    return v[0];
-}
-
 /// 0.5*(1+n) clamped to [0,1] (improved noise can slightly exceed [-1,1]).
 /// A non-finite coordinate gives 0.5: a shader's NaN must not stop the
 /// render, and the lattice arithmetic is undefined on it.
@@ -161,7 +28,7 @@ float noise01(const double* x, const double* periods, int component) {
     // 4-D gradient noise spreads wider (about 1.1x the 3-D one's standard
     // deviation, and past +-1 now and then): 0.9 matches the 3-D spread.
     constexpr double kScale = D == 4 ? 0.9 : 1.0;
-    const double n = 0.5 + 0.5 * kScale * gradient_noise<D>(x, periods, component);
+    const double n = 0.5 + 0.5 * kScale * gradient_noise(D, x, periods, component);
     return static_cast<float>(n < 0.0 ? 0.0 : (n > 1.0 ? 1.0 : n));
 }
 
