@@ -132,11 +132,11 @@ int run_job(const std::vector<std::string>& argv) {
     }();
     sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
-    if (job.newer() && job.up_to_date(sss::bake_output_files(scene, opt),
-                                      sss::bake_input_files(scene, opt)))
-        return 0;
+    // One plan for the whole job: the shaders are loaded and bound once.
+    const sss::BakeJob bake(scene, opt);
+    if (job.newer() && job.up_to_date(bake.output_files(), bake.input_files())) return 0;
 
-    sss::BakeReport report = sss::bake_scene(scene, opt);
+    sss::BakeReport report = bake.run();
     sss::warn_all(kTool, report.warnings);
     if (job.verbose()) {
         std::printf("ptbake: %s: %zu primitives, %zu lights, %zu baked, %zu occluders "

@@ -190,6 +190,30 @@ redone "render -newer 1 -o new file" shot.0003.png
 remember shot.0003.png ball_sss.png
 run "$bin/render" -newer 1 -o 'shot.$F4.png' -frame 3 render.rib
 skipped "render -newer 1 -o, up to date" shot.0003.png ball_sss.png
+# One plan per job: ptbake and render read each shader file once, with and
+# without -newer 1 (they used to bind the scene's shaders for every phase).
+# opens TOOL ARGS...: "count file" per .slo the run opened (strace).
+opens() {
+    strace -f -qq -e trace=openat -o "$work/trace" "$@" >/dev/null 2>&1 || true
+    grep '\.slo"' "$work/trace" | grep -v ENOENT | sed 's/^[^"]*"\([^"]*\)".*/\1/' |
+        sort | uniq -c
+}
+if command -v strace >/dev/null 2>&1; then
+    for newer in 0 1; do
+        for job in "ptbake bake.rib" "render render.rib"; do
+            read -r tool scene <<<"$job"
+            rm -f ball.ptc ball.exr ball_sss.png
+            [[ "$tool" == render ]] && "$bin/ptbake" bake.rib >/dev/null 2>&1
+            counts="$(opens "$bin/$tool" -newer "$newer" "$scene")"
+            [[ -n "$counts" ]] || fail "$tool -newer $newer: opened no .slo (strace)"
+            twice="$(awk '$1 > 1' <<<"$counts")"
+            [[ -z "$twice" ]] || fail "$tool -newer $newer read shader files more than once: $twice"
+        done
+    done
+else
+    fail "strace is missing (scripts/install-deps installs it)"
+fi
+
 # A missing brick map is an error, not "nothing to do".
 rm ball.bkm
 run "$bin/render" -newer 1 render.rib

@@ -1,8 +1,8 @@
 #pragma once
 /// \file bake.h
 /// The bake module owns ptbake's job: baking lit micropolygons into point
-/// clouds. It may use dice, light, diffusion's materials, cloud, scene and
-/// util.
+/// clouds.
+/// May use: shading, dice, light, diffusion, brick, image, cloud, scene and util.
 ///
 /// The ptbake job as one library call, as PRMan bakes: every primitive whose
 /// surface shader (RSL, found along the shader search path) calls bake3d is
@@ -18,6 +18,7 @@
 /// micropolygon's area).
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -109,22 +110,56 @@ private:
 /// material, in scene units (mm x unitlength, see material.h).
 double material_mean_free_path(const MaterialSpec& material);
 
-/// Bakes the scene and writes its point clouds (atomically). Throws
-/// ValueError / UsageError / IoError with the primitive's source location.
+struct SceneShaders;
+
+/// One ptbake job, planned once: the frame resolved (the options', else the
+/// scene's), and the scene's shaders loaded and bound (each shader file read
+/// once, parameters matched to symbols once). Every phase of the job, the
+/// -newer test's file lists included, uses that plan. Construction throws as
+/// binding does (ShaderNotFoundError, ShaderCompileError, ValueError). The
+/// scene and the options must outlive the job.
+class BakeJob {
+public:
+    BakeJob(const Scene& scene, const BakeOptions& options);
+    ~BakeJob();
+    BakeJob(const BakeJob&) = delete;
+    BakeJob& operator=(const BakeJob&) = delete;
+
+    /// The files run() would write, in first-use order, without baking (for
+    /// -newer 1). Throws MissingBakeFileError for a bake shader without a
+    /// "filename" when options.output is empty.
+    std::vector<std::string> output_files() const;
+    /// The files the bake reads (for -newer 1): the scene's sources, then the
+    /// files its shaders read and the shaders themselves
+    /// (shader_input_files()), without the bake's own outputs.
+    std::vector<std::string> input_files() const;
+    /// Bakes without writing: the clouds by output path, in first-use order.
+    std::vector<std::pair<std::string, PointCloud>> clouds(BakeReport* report) const;
+    /// Bakes the scene and writes its point clouds (atomically). Throws
+    /// ValueError / UsageError / IoError with the primitive's source location.
+    BakeReport run() const;
+
+private:
+    /// The bake shaders' files with how each is named, for messages.
+    std::vector<std::pair<std::string, std::string>> named_outputs() const;
+
+    const Scene& m_scene;
+    const BakeOptions& m_options;
+    std::optional<int> m_frame;
+    std::unique_ptr<const SceneShaders> m_shaders;
+};
+
+/// BakeJob(scene, options).run().
 BakeReport bake_scene(const Scene& scene, const BakeOptions& options);
 
-/// The files bake_scene would write, in first-use order, without baking
-/// (for -newer 1). Throws ValueError like bake_scene for a bake shader
-/// without a "filename" when options.output is empty.
+/// BakeJob(scene, options).output_files().
 std::vector<std::string> bake_output_files(const Scene& scene,
                                            const BakeOptions& options);
 
-/// The files a bake reads (for -newer 1): the scene's sources, then the
-/// files its shaders read and the shaders themselves (shader_input_files),
-/// without the bake's own outputs.
+/// BakeJob(scene, options).input_files().
 std::vector<std::string> bake_input_files(const Scene& scene, const BakeOptions& options);
 
-/// Bakes without writing: the clouds by output path, in first-use order.
+/// BakeJob(scene, options).clouds(report).
 std::vector<std::pair<std::string, PointCloud>>
 bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report);
 

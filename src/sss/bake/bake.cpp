@@ -56,7 +56,7 @@ constexpr double kRayCoarsening = 2.0;
 constexpr std::size_t kChunk = 256;
 
 // What one baked primitive is: its shader, and the file its shader names.
-struct BakeJob {
+struct BakedPrimitive {
     std::size_t prim = 0;
     const ShaderInstance* shader = nullptr;
     std::string file; ///< the shader's "filename" (or -o); "" when unknown
@@ -95,11 +95,11 @@ std::string bake_file(const Primitive& prim, const ShaderInstance& shader,
     return name ? *name : std::string();
 }
 
-BakeJob make_job(const Scene& scene, std::size_t index, const ShaderInstance& shader,
-                 const BakeOptions& options) {
+BakedPrimitive make_job(const Scene& scene, std::size_t index,
+                        const ShaderInstance& shader, const BakeOptions& options) {
     const Primitive& prim = scene.primitives[index];
     const std::string where = prim.source + ": " + shader.program().name;
-    BakeJob job;
+    BakedPrimitive job;
     job.prim = index;
     job.shader = &shader;
     job.file = bake_file(prim, shader, options);
@@ -220,7 +220,7 @@ BakeSpacing resolve_spacing(const BakeOptions& options) {
 
 /// What the bake does with each primitive.
 struct BakePlan {
-    std::vector<BakeJob> jobs;
+    std::vector<BakedPrimitive> jobs;
     std::vector<int> job_of;    ///< per primitive: its job, or -1 when not baked
     std::vector<char> occluder; ///< per primitive: casts shadows
     /// Per job: the mean free path its points should respect, if known.
@@ -263,10 +263,10 @@ BakePlan plan_jobs(const Scene& scene, const SceneShaders& shaders,
 /// job without one.
 void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
                          std::optional<double> material_mfp, BakePlan& plan) {
-    const std::vector<BakeJob>& jobs = plan.jobs;
+    const std::vector<BakedPrimitive>& jobs = plan.jobs;
     plan.job_mfp.assign(jobs.size(), material_mfp);
     for (std::size_t j = 0; j < jobs.size(); ++j) {
-        const BakeJob& job = jobs[j];
+        const BakedPrimitive& job = jobs[j];
         if (!job.has_material) continue;
         MaterialSpec m = options.material ? *options.material : MaterialSpec{};
         const double unit = options.unitlength;
@@ -368,7 +368,7 @@ void check_spacing(const Scene& scene, const BakePlan& plan,
     report.min_spacing = std::numeric_limits<double>::infinity();
     report.max_spacing = 0.0;
     for (std::size_t j = 0; j < plan.jobs.size(); ++j) {
-        const BakeJob& job = plan.jobs[j];
+        const BakedPrimitive& job = plan.jobs[j];
         const DicedSurface& d = diced[job.prim];
         double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
         for (float a : d.areas) {
@@ -469,10 +469,10 @@ thread_local std::vector<Bake3dRecord>* BakeServices::s_sink = nullptr;
 /// depend on how the work is split between threads.
 std::vector<std::vector<Bake3dRecord>>
 shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders& shaders,
-             const std::vector<BakeJob>& jobs, const std::vector<DicedSurface>& diced,
-             const RayTracer* tracer, const SceneRays* scene_rays,
-             std::optional<int> frame, const ShadingResources& resources,
-             BakeReport& report) {
+             const std::vector<BakedPrimitive>& jobs,
+             const std::vector<DicedSurface>& diced, const RayTracer* tracer,
+             const SceneRays* scene_rays, std::optional<int> frame,
+             const ShadingResources& resources, BakeReport& report) {
     std::size_t total_points = 0;
     std::vector<std::size_t> first_point(jobs.size());
     struct Chunk {
@@ -519,7 +519,7 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
     tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t c) {
         ShadingContext& context = *contexts.local();
         const Chunk& ch = chunks[c];
-        const BakeJob& job = jobs[ch.job];
+        const BakedPrimitive& job = jobs[ch.job];
         const Primitive& prim = scene.primitives[job.prim];
         const Attributes& attr = attributes_of(prim);
         const DicedSurface& d = diced[job.prim];
@@ -585,7 +585,7 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
 /// records in chunk order (bake3d_clouds: `_area` always, the camera's
 /// matrices), with the report's per-file figures.
 std::vector<std::pair<std::string, PointCloud>>
-gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
+gather_clouds(const Scene& scene, const std::vector<BakedPrimitive>& jobs,
               std::vector<std::vector<Bake3dRecord>>& records, BakeReport& report) {
     std::vector<Bake3dRecord> all;
     std::map<std::string, std::vector<std::string>> first_channels;
@@ -611,7 +611,7 @@ gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
             for (float a : area->data) fr.area += a;
         for (const Channel& c : cloud.channels)
             fr.channels.push_back(std::string(channel_type_name(c.type)) + " " + c.name);
-        for (const BakeJob& job : jobs)
+        for (const BakedPrimitive& job : jobs)
             if (job.file == path) fr.objects.push_back(scene.primitives[job.prim].source);
         if (mixed.count(path))
             report.warnings.push_back(path +
@@ -619,7 +619,7 @@ gather_clouds(const Scene& scene, const std::vector<BakeJob>& jobs,
                                       "missing channels are filled with 0");
         report.files.push_back(std::move(fr));
     }
-    for (const BakeJob& job : jobs)
+    for (const BakedPrimitive& job : jobs)
         if (!job.file.empty() && !first_channels.count(job.file))
             report.warnings.push_back(scene.primitives[job.prim].source +
                                       ": the shader baked no point into " + job.file);
@@ -633,18 +633,28 @@ double material_mean_free_path(const MaterialSpec& material) {
     return mfp_mm(material, nullptr, nullptr) * material.unitlength;
 }
 
+BakeJob::BakeJob(const Scene& scene, const BakeOptions& options)
+    : m_scene(scene), m_options(options),
+      m_frame(options.frame ? options.frame : scene.options.frame),
+      m_shaders(
+          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
+
+BakeJob::~BakeJob() = default;
+
 std::vector<std::pair<std::string, PointCloud>>
-bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_out) {
+BakeJob::clouds(BakeReport* report_out) const {
     BakeReport local;
     BakeReport& report = report_out ? *report_out : local;
     Stopwatch watch;
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    const Scene& scene = m_scene;
+    const BakeOptions& options = m_options;
+    const std::optional<int> frame = m_frame;
+    const SceneShaders& shaders = *m_shaders;
 
     // Camera space is the shaders' current space and the bake3d files'
     // reference: it must exist (no camera rays are traced).
     check_camera(scene.options.camera, false);
     const BakeSpacing spacing = resolve_spacing(options);
-    const SceneShaders shaders = bind_scene_shaders(scene, frame);
     if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, shaders);
     for (const std::string& w : shaders.warnings) report.warnings.push_back(w);
     if (auto w = unlit_scene_warning(scene, shaders)) report.warnings.push_back(*w);
@@ -714,15 +724,13 @@ bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report_o
     return gather_clouds(scene, plan.jobs, records, report);
 }
 
-namespace {
-
-/// The files the bake shaders name (bake_output_files) with how each is
+/// The files the bake shaders name (output_files()) with how each is
 /// named, for messages: "option -o \"x.ptc\"", "bake file \"a.ptc\"
 /// (parameter \"filename\" of scene.rib:12: Surface \"bake_radiance_t\")".
-std::vector<std::pair<std::string, std::string>>
-named_bake_outputs(const Scene& scene, const BakeOptions& options) {
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
-    const SceneShaders shaders = bind_scene_shaders(scene, frame);
+std::vector<std::pair<std::string, std::string>> BakeJob::named_outputs() const {
+    const Scene& scene = m_scene;
+    const BakeOptions& options = m_options;
+    const SceneShaders& shaders = *m_shaders;
     std::vector<std::pair<std::string, std::string>> files;
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const ShaderInstance& shader = *shaders.surface_of[i];
@@ -742,6 +750,8 @@ named_bake_outputs(const Scene& scene, const BakeOptions& options) {
     return files;
 }
 
+namespace {
+
 /// Checks an output cloud's name before anything is baked: a .ptc or .ply
 /// name, a writable folder, not a file of the job's (`files`).
 void check_bake_output(JobFiles& files, const std::string& file, const std::string& use) {
@@ -755,28 +765,25 @@ void check_bake_output(JobFiles& files, const std::string& file, const std::stri
 
 } // namespace
 
-std::vector<std::string> bake_output_files(const Scene& scene,
-                                           const BakeOptions& options) {
+std::vector<std::string> BakeJob::output_files() const {
     std::vector<std::string> files;
-    for (auto& [file, use] : named_bake_outputs(scene, options))
-        files.push_back(std::move(file));
+    for (auto& [file, use] : named_outputs()) files.push_back(std::move(file));
     return files;
 }
 
-std::vector<std::string> bake_input_files(const Scene& scene,
-                                          const BakeOptions& options) {
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
-    const SceneShaders shaders = bind_scene_shaders(scene, frame);
-    const std::vector<std::string> outputs = bake_output_files(scene, options);
-    std::vector<std::string> files = scene.sources;
-    for (const std::string& f : shader_input_files(shaders))
+std::vector<std::string> BakeJob::input_files() const {
+    const std::vector<std::string> outputs = output_files();
+    std::vector<std::string> files = m_scene.sources;
+    for (const std::string& f : shader_input_files(*m_shaders))
         if (std::find(files.begin(), files.end(), f) == files.end() &&
             std::find(outputs.begin(), outputs.end(), f) == outputs.end())
             files.push_back(f);
     return files;
 }
 
-BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
+BakeReport BakeJob::run() const {
+    const Scene& scene = m_scene;
+    const BakeOptions& options = m_options;
     BakeReport report;
     Stopwatch watch;
     // Before any work: every cloud the shaders name is a .ptc or .ply in a
@@ -789,11 +796,11 @@ BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
                                         ? scene.source_uses[i]
                                         : "\"" + scene.sources[i] + "\"");
     std::vector<std::string> named;
-    for (const auto& [file, use] : named_bake_outputs(scene, options)) {
+    for (const auto& [file, use] : named_outputs()) {
         check_bake_output(job, file, use);
         named.push_back(file);
     }
-    auto files = bake_clouds(scene, options, &report);
+    auto files = clouds(&report);
     // Files only the bake3d calls named (computed at run time).
     for (const auto& [path, cloud] : files)
         if (std::find(named.begin(), named.end(), path) == named.end())
@@ -810,6 +817,25 @@ BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
     report.write_seconds = watch.seconds() - before;
     if (options.progress) options.progress->finish();
     return report;
+}
+
+BakeReport bake_scene(const Scene& scene, const BakeOptions& options) {
+    return BakeJob(scene, options).run();
+}
+
+std::vector<std::string> bake_output_files(const Scene& scene,
+                                           const BakeOptions& options) {
+    return BakeJob(scene, options).output_files();
+}
+
+std::vector<std::string> bake_input_files(const Scene& scene,
+                                          const BakeOptions& options) {
+    return BakeJob(scene, options).input_files();
+}
+
+std::vector<std::pair<std::string, PointCloud>>
+bake_clouds(const Scene& scene, const BakeOptions& options, BakeReport* report) {
+    return BakeJob(scene, options).clouds(report);
 }
 
 MissingBakeFileError::MissingBakeFileError(const std::string& what) : ValueError(what) {}
