@@ -24,14 +24,14 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
 # limited CMD...: under ulimit -v 1.5 GB (not under the sanitizers, whose
-# shadow memory needs terabytes of address space) and a 20 s guard.
+# shadow memory needs terabytes of address space) and a 90 s hang guard.
 limited() {
     if [[ -n "${SSS_SANITIZED:-}" ]]; then
-        timeout 20 "$@"
+        timeout 90 "$@"
     else
         (
             ulimit -v 1500000
-            exec timeout 20 "$@"
+            exec timeout 90 "$@"
         )
     fi
 }

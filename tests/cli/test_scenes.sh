@@ -19,6 +19,8 @@
 #            direct light only, and redder on the side facing the red wall
 #   domelight  the envdome dome lights skin1 (red diffusion), envlight lights
 #            the same ear about as brightly
+# Usage: test_scenes.sh [PART...]: the scenes above (by name) and "guard" (an
+# output folder inside scenes/ is refused); all of them without arguments.
 # Needs SSS_BIN_DIR (the folder with ptbake, ptfilter, brickmake and render) and
 # oiiotool. Every check runs; failures are listed and the script exits 1 at the end.
 set -euo pipefail
@@ -118,7 +120,8 @@ run_scene() {
 
 # ---------------------------------------------------------------------------
 # Teapot: 160 x 120 in quick mode.
-if run_scene teapot; then
+scene_teapot() {
+    run_scene teapot || return 0
     d=teapot
     exr_ok $d/teapot.exr 160 120 teapot
     exr_ok $d/teapot_nosss.exr 160 120 teapot
@@ -152,11 +155,12 @@ if run_scene teapot; then
     is "z == 0" z="$z" || fail "teapot: the no-sss image has sss.R up to $z"
     z="$(mean $d/teapot.exr sss.R 0.3 0.3 0.7 0.8)"
     is "z > 0.1" z="$z" || fail "teapot: the sss layer is dark ($z) over the teapot"
-fi
+}
 
 # ---------------------------------------------------------------------------
 # Thin box: 128 x 128, three blocker strengths.
-if run_scene thinbox; then
+scene_thinbox() {
+    run_scene thinbox || return 0
     d=thinbox
     for b in 0.25 0.5 1; do
         exr_ok $d/blocker_$b/thinbox.exr 128 128 "thinbox $b"
@@ -183,11 +187,12 @@ if run_scene thinbox; then
     # Without sss the underside has the ambient light only (0.03), and no ring.
     is "n < 0.04 && a25 > n + 0.04 && nr < 1.1 * n + 0.001 && nr > 0.9 * n - 0.001" a25="$a25" n="$n" nr="$nr" ||
         fail "thinbox: without sss the underside should be dark and even ($n, ring $nr; with sss $a25)"
-fi
+}
 
 # ---------------------------------------------------------------------------
 # Skin: 120 x 150.
-if run_scene skin; then
+scene_skin() {
+    run_scene skin || return 0
     d=skin
     exr_ok $d/skin.exr 120 150 skin
     exr_ok $d/skin_nosss.exr 120 150 skin
@@ -204,11 +209,12 @@ if run_scene skin; then
         fail "skin: with sss the thin rim ($tr) should outshine the thick middle ($mr); without, not ($nt, $nm)"
     o="$(stat $d/skin.exr occlusion.R Min 0.3 0.3 0.6 0.7) $(stat $d/skin.exr occlusion.R Max 0.3 0.3 0.6 0.7)"
     is "lo >= 0 && hi <= 1 && hi > 0.5" lo="${o% *}" hi="${o#* }" || fail "skin: occlusion range $o"
-fi
+}
 
 # ---------------------------------------------------------------------------
 # Varying albedo: 160 x 120.
-if run_scene varying; then
+scene_varying() {
+    run_scene varying || return 0
     d=varying
     exr_ok $d/varying.exr 160 120 varying
     exr_ok $d/varying_nosss.exr 160 120 varying
@@ -221,11 +227,12 @@ if run_scene varying; then
         fail "varying: G/R should vary with sss (stddev $vs) and not in the matte ($vn)"
     read -r r g b <<<"$(mean $d/varying.exr R,G,B 0.45 0.3 0.6 0.6)"
     is "r > g && g > b && b > 0.02" r="$r" g="$g" b="$b" || fail "varying: not skin-like reds: $r $g $b"
-fi
+}
 
 # ---------------------------------------------------------------------------
 # Orbit: frames 1-2, each a separate job with patterns in every file name.
-if run_scene orbit; then
+scene_orbit() {
+    run_scene orbit || return 0
     d=orbit
     for f in 0001 0002; do
         for file in orbit.$f.ptc orbit_ssd.$f.ptc orbit_ssd.$f.bkm; do
@@ -254,11 +261,12 @@ if run_scene orbit; then
         [[ ! -e orbit_farm/orbit.0001.ptc ]] || fail "orbit: frame 2 alone also made frame 1"
         image_ok orbit_farm/orbit_compare_2-2.png 160 240 "orbit frame 2 alone, its sheet"
     fi
-fi
+}
 
 # ---------------------------------------------------------------------------
 # Absorption-only teapot: 160 x 120; the light gathered through it is "sss".
-if run_scene absorption; then
+scene_absorption() {
+    run_scene absorption || return 0
     d=absorption
     exr_ok $d/absorption.exr 160 120 absorption
     read -r sr sg sb <<<"$(mean $d/absorption.exr sss.R,sss.G,sss.B 0.72 0.38 0.81 0.5)"
@@ -268,11 +276,12 @@ if run_scene absorption; then
         fail "absorption: spout ($sr) and handle ($hr) should glow far more than the body ($br)"
     is "sr > sg && sg > sb" sr="$sr" sg="$sg" sb="$sb" ||
         fail "absorption: red should get through best: $sr $sg $sb"
-fi
+}
 
 # ---------------------------------------------------------------------------
 # GI bake: 100 x 100, with and without indirectdiffuse.
-if run_scene gibake; then
+scene_gibake() {
+    run_scene gibake || return 0
     d=gibake
     exr_ok $d/gibake.exr 100 100 gibake
     exr_ok $d/gibake_direct.exr 100 100 gibake
@@ -283,11 +292,12 @@ if run_scene gibake; then
         fail "gibake: bounced light should brighten the crystal: GI $gr $gg, direct $dr $dg"
     is "gr / gg > 1.05 * dr / dg" gr="$gr" gg="$gg" dr="$dr" dg="$dg" ||
         fail "gibake: the side facing the red wall should turn red with GI: $gr/$gg vs $dr/$dg"
-fi
+}
 
 # ---------------------------------------------------------------------------
 # Dome light: 120 x 150, the dome with sss and envlight without.
-if run_scene domelight; then
+scene_domelight() {
+    run_scene domelight || return 0
     d=domelight
     exr_ok $d/domelight.exr 120 150 domelight
     exr_ok $d/domelight_envlight.exr 120 150 domelight
@@ -302,18 +312,37 @@ if run_scene domelight; then
     read -r er _ _ <<<"$(mean $d/domelight_envlight.exr R,G,B 0.33 0.3 0.66 0.7)"
     is "er > ar / 3 && er < 3 * ar" er="$er" ar="$ar" ||
         fail "domelight: envlight ($er) and the dome ($ar) should light the ear alike"
-fi
+}
 
 # ---------------------------------------------------------------------------
-# Nothing was written into scenes/, and an output folder there is refused.
+# An output folder inside scenes/ is refused, and nothing is created there.
+scene_guard() {
+    run "$scenes/teapot/run" "$scenes/teapot/out"
+    if expect_rc 1 "output folder inside scenes/"; then
+        [[ "$err" == *"ERROR"*"inside scenes/"* ]] || fail "an output folder inside scenes/: $err"
+    fi
+    [[ ! -e "$scenes/teapot/out" ]] || { fail "scenes/teapot/out was created"; rm -rf "$scenes/teapot/out"; }
+}
+
+# The parts to run: the arguments (CTest runs one per test, cli.test_scenes.<part>,
+# tests/CMakeLists.txt), or all of them.
+all_parts=(teapot thinbox skin varying orbit absorption gibake domelight guard)
+parts=("$@")
+((${#parts[@]})) || parts=("${all_parts[@]}")
+for part in "${parts[@]}"; do
+    if ! declare -F "scene_$part" >/dev/null; then
+        echo "usage: test_scenes.sh [PART...]; parts: ${all_parts[*]}" >&2
+        exit 2
+    fi
+    "scene_$part"
+done
+# The run scripts wrote nothing into scenes/.
 new="$(find "$scenes" -newer "$start_marker" -print | head -n 5)"
 [[ -z "$new" ]] || fail "the run scripts wrote into scenes/: $new"
-run "$scenes/teapot/run" "$scenes/teapot/out"
-if expect_rc 1 "output folder inside scenes/"; then
-    [[ "$err" == *"ERROR"*"inside scenes/"* ]] || fail "an output folder inside scenes/: $err"
-fi
-[[ ! -e "$scenes/teapot/out" ]] || { fail "scenes/teapot/out was created"; rm -rf "$scenes/teapot/out"; }
 
-echo "quick-mode run times (s): teapot ${seconds[teapot]:-?}, thinbox ${seconds[thinbox]:-?}," \
-    "skin ${seconds[skin]:-?}, varying ${seconds[varying]:-?}, orbit ${seconds[orbit]:-?}"
-finish_checks scenes
+times=""
+for part in "${!seconds[@]}"; do
+    times+=" $part ${seconds[$part]}"
+done
+echo "quick-mode run times (s):${times:- none}"
+finish_checks "scenes (${parts[*]})"

@@ -23,17 +23,18 @@ source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 mkdir folder.rib folder.ptc folder.bkm folder.sl folder.exr
 mkfifo fifo.rib fifo.ptc fifo.bkm fifo.sl fifo.exr
 
-# refused LABEL TOOL WHAT ARGS...: exit 1 within 10 s, one "TOOL ERROR:" first
+# refused LABEL TOOL WHAT ARGS...: exit 1 within 60 s (a tool that blocks on a
+# FIFO would wait forever; a refusal takes well under a second), one "TOOL ERROR:" first
 # line saying WHAT, and no new files in the folder.
 refused() {
     local label="$1" tool="$2" what="$3"
     shift 3
     local before after
     before="$(ls -A | grep -v "^std\(out\|err\)$")"
-    run timeout 10 "$bin/$tool" "$@"
+    run timeout 60 "$bin/$tool" "$@"
     after="$(ls -A | grep -v "^std\(out\|err\)$")"
     if [[ "$rc" == 124 ]]; then
-        fail "$label: $tool blocked (killed after 10 s)"
+        fail "$label: $tool blocked (killed after 60 s)"
         return
     fi
     expect_rc 1 "$label" || return 0

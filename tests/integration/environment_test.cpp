@@ -16,7 +16,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "engine_test_util.h"
+#include "shading/engine_test_util.h"
 #include "sss/light/light_dome.h"
 #include "sss/render/image_io.h"
 #include "test_util.h"

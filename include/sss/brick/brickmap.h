@@ -1,7 +1,8 @@
 #pragma once
 /// \file brickmap.h
 /// Module brick: brick maps (build, .bkm format, cached lookups, brickinfo
-/// reports and pictures). It uses cloud and util (and OpenImageIO privately).
+/// reports and pictures).
+/// May use: image, cloud and util.
 ///
 /// Brick maps: sparse octrees of 8^3-sample bricks built from point clouds
 /// (brickmake), stored in our own documented .bkm format (docs/bkm-format.md),

@@ -1,7 +1,8 @@
 #pragma once
 /// \file point_cloud.h
 /// Module cloud: point clouds in memory, .ptc/.ply I/O, channel statistics,
-/// point-cloud lookups and synthetic clouds. It uses util only.
+/// point-cloud lookups and synthetic clouds.
+/// May use: util.
 ///
 /// In-memory point cloud: positions, normals, radii and named typed channels,
 /// stored as a structure of arrays.

@@ -2,7 +2,8 @@
 /// \file dice.h
 /// The dice module owns dicing: primitives of the scene layer become
 /// micropolygons and ray-tracing triangles, one primitive or many in
-/// parallel. It may use scene and util only.
+/// parallel.
+/// May use: scene and util.
 ///
 /// Dicing: every primitive of the scene layer becomes micropolygons (one
 /// point each, with its exact area, normal and radius) and triangles for the

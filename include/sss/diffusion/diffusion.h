@@ -2,10 +2,11 @@
 /// \file diffusion.h
 /// Subsurface diffusion over a point cloud: M_o(x_i) = sum_j R(|x_i - P_j|) A_j E_j,
 /// evaluated exactly (all pairs) or hierarchically over an octree.
+/// May use: cloud and util.
 ///
 /// The diffusion module owns the materials, the profiles, the hierarchical and
-/// exact evaluations and the ptfilter -ssdiffusion job (ssdiffusion.h). It uses
-/// util and cloud only; its private pieces (tables, octree, traversal, kernels)
+/// exact evaluations and the ptfilter -ssdiffusion job (ssdiffusion.h). Its private
+/// pieces (tables, octree, traversal, kernels)
 /// live next to its sources.
 
 #include <cstddef>

@@ -1,12 +1,14 @@
 #pragma once
 /// \file render.h
 /// The render module owns the final image: ray tracing, shading and image
-/// output. It may use dice, light, brick, cloud, scene and util, with
-/// OpenEXR and OpenImageIO behind its sources.
+/// output.
+/// May use: shading, dice, light, brick, image, cloud, scene and util (OpenEXR
+/// and OpenImageIO privately).
 ///
 /// The final renderer: ray tracing (Embree) over the shared scene layer,
-/// built-in surface shaders that look `_ssdiffusion` up in a brick map or a
-/// point cloud (texture3d semantics), AOVs, and RenderMan Display outputs.
+/// the scene's RSL shaders run over batches of hits (the shading module;
+/// `read_ssdiffusion` looks `_ssdiffusion` up with texture3d), AOVs, and
+/// RenderMan Display outputs.
 
 #include <optional>
 #include <string>

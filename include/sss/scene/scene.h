@@ -2,7 +2,8 @@
 /// \file scene.h
 /// The scene module owns the scene description (primitives, attributes,
 /// lights, options and camera), the RIB reader (rib.h) and the OBJ import it
-/// uses; it may use util only.
+/// uses.
+/// May use: util.
 ///
 /// The scene layer shared by ptbake and render: what a RIB file describes,
 /// resolved into world space. The RIB reader (rib.h) fills it; the dicer

@@ -3,8 +3,9 @@
 /// The shading module owns the RenderMan Shading Language: the compiler
 /// (preprocess.h, compiler.h), compiled shaders (this file), the engine that
 /// runs them over batches of shading points (engine.h) and the built-in
-/// function library. It may use light (the ray tracer), brick and cloud (3-D
-/// texture lookups), scene and util, with OpenImageIO behind its sources.
+/// function library.
+/// May use: dice, light, brick, image, cloud, scene and util (OpenImageIO
+/// through a plugin).
 ///
 /// A compiled shader, as the compiler produces it and a `.slo` file stores
 /// it: a table of typed symbols and a list of operations over them, with

@@ -2,7 +2,8 @@
 /// \file error.h
 /// Module util: the runtime services every stage uses (errors, atomic output,
 /// threads, progress, version, frame patterns, hashing, parsing, name tables,
-/// byte streams). It uses no other module: glm, oneTBB and zlib only.
+/// byte streams).
+/// May use: no other module (glm, oneTBB and zlib only).
 ///
 /// Typed exceptions thrown by the sss library. Tools catch them in one place
 /// (sss::run_tool) and turn them into "<tool> ERROR: ..." lines and exit codes.

@@ -1,7 +1,8 @@
 #pragma once
 /// \file point_view.h
 /// Module view: pictures of point clouds (the ptview tool, PRMan's ptviewer
-/// need). It uses cloud and util, and OpenImageIO privately to write images.
+/// need).
+/// May use: image, cloud and util.
 ///
 /// Each point is drawn as a disc of its radius, oriented by its normal (a
 /// sphere's outline when it has none), projected as an ellipse through the

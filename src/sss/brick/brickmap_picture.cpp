@@ -12,13 +12,13 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
 #include <glm/geometric.hpp>
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "sss/brick/brickmap_tools.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/image/image_file.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/parse.h"
@@ -117,10 +117,6 @@ const char* axis_name(int axis) {
     return names[axis];
 }
 
-double srgb_encode(double c) {
-    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-}
-
 /// Value at quantile q of the values (0 when empty); reorders them.
 double quantile(std::vector<float>& values, double q) {
     if (values.empty()) return 0.0;
@@ -189,19 +185,14 @@ std::vector<uint8_t> expose(const Canvas& canvas, BrickMapPictureReport& report)
 
 void write_png(const std::string& path, int width, int height,
                const std::vector<uint8_t>& rgb, const std::string& description) {
-    AtomicOutput file(path);
-    // The temporary's name ends in .tmp: ask for the PNG writer by name.
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create("png");
-    if (!out) throw IoError(path, "no PNG writer in OpenImageIO: " + OIIO::geterror());
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("ImageDescription", description);
-    spec.attribute("Software", std::string("sss brickinfo ") + version_string());
-    if (!out->open(file.temp_path(), spec))
-        throw IoError(path, "cannot write PNG: " + out->geterror());
-    bool ok = out->write_image(OIIO::TypeDesc::UINT8, rgb.data());
-    ok = out->close() && ok;
-    if (!ok) throw IoError(path, "cannot write PNG: " + out->geterror());
-    file.commit();
+    ImageFileSpec spec;
+    spec.width = width;
+    spec.height = height;
+    spec.channel_names = {"R", "G", "B"};
+    spec.attributes = {{"ImageDescription", description},
+                       {"Software", std::string("sss brickinfo ") + version_string()}};
+    spec.what = "PNG";
+    write_image_file(path, spec, PixelType::UInt8, rgb.data());
 }
 
 /// A signed world axis (screen axes are +-x, +-y or +-z).

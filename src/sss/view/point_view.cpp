@@ -13,12 +13,12 @@
 #include <limits>
 #include <memory>
 
-#include <OpenImageIO/imageio.h>
 #include <glm/geometric.hpp>
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/image/image_file.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/math.h"
@@ -197,10 +197,6 @@ double exposure_reference(const std::vector<const ViewTile*>& tiles) {
 /// The stops that show `reference` as 1 (0 for no reference; never -0).
 double stops_for(double reference) {
     return reference > 0.0 ? 0.0 - std::log2(reference) : 0.0;
-}
-
-double srgb_encode(double c) {
-    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
 
 } // namespace
@@ -681,24 +677,17 @@ bool is_png_path(const std::string& path) {
 void write_point_view_image(const PointViewImage& image, const std::string& path,
                             const std::string& software) {
     const bool exr = is_exr_path(path);
-    AtomicOutput file(path);
-    // The temporary's name ends in .tmp: ask for the writer by name.
-    std::unique_ptr<OIIO::ImageOutput> out =
-        OIIO::ImageOutput::create(exr ? "openexr" : "png");
-    if (!out)
-        throw IoError(path, std::string("no ") + (exr ? "EXR" : "PNG") +
-                                " writer in OpenImageIO: " + OIIO::geterror());
     const std::size_t n = image.rgb.size();
-    OIIO::ImageSpec spec(image.width, image.height, 3,
-                         exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    spec.attribute("ImageDescription", image.description);
-    spec.attribute("Software", software);
-    if (exr) spec.attribute("compression", "zip");
-    if (!out->open(file.temp_path(), spec))
-        throw IoError(path, "cannot write image: " + out->geterror());
-    bool ok;
+    ImageFileSpec spec;
+    spec.format = exr ? "openexr" : "png";
+    spec.width = image.width;
+    spec.height = image.height;
+    spec.channel_names = {"R", "G", "B"};
+    spec.stored = exr ? PixelType::Float : PixelType::UInt8;
+    spec.attributes = {{"ImageDescription", image.description}, {"Software", software}};
+    if (exr) spec.attributes.push_back({"compression", std::string("zip")});
     if (exr) {
-        ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
+        write_image_file(path, spec, PixelType::Float, image.rgb.data());
     } else {
         std::vector<uint8_t> bytes(3 * n);
         tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
@@ -708,11 +697,8 @@ void write_point_view_image(const PointViewImage& image, const std::string& path
                     uint8_t(std::lround(255.0 * srgb_encode(v)));
             }
         });
-        ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+        write_image_file(path, spec, PixelType::UInt8, bytes.data());
     }
-    ok = out->close() && ok;
-    if (!ok) throw IoError(path, "cannot write image: " + out->geterror());
-    file.commit();
 }
 
 } // namespace sss
