@@ -237,15 +237,25 @@ void bkm_pread(int fd, const std::string& path, void* dst, std::size_t size,
     }
 }
 
-BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
-                          bool verify_checksums) {
+namespace {
+
+/// The counts and sizes of a .bkm file's sections, from its header.
+struct BkmSizes {
+    uint32_t nchannels = 0, data_size = 0, max_depth = 0;
+    uint32_t provenance_length = 0, table_bytes = 0;
+    uint64_t dir_offset = 0, tables_offset = 0, brick_data = 0;
+};
+
+/// The tree directory as read, and its node and data brick counts per tree.
+struct BkmDirectory {
+    unsigned char bytes[kBkmTrees * kBkmDirEntrySize];
+    std::array<uint32_t, kBkmTrees> counts{}, data_counts{};
+};
+
+/// Magic, version, flags and file size of header `h`, into `info`.
+void read_header_identity(const unsigned char* h, const std::string& path,
+                          uint64_t file_size, BrickMapInfo& info) {
     const auto fail = [&](const std::string& what) { return FormatError(path, what); };
-    if (file_size < kBkmHeaderSize) {
-        throw fail("file too short for a .bkm header (" + std::to_string(file_size) +
-                   " of " + std::to_string(kBkmHeaderSize) + " bytes)");
-    }
-    unsigned char h[kBkmHeaderSize];
-    bkm_pread(fd, path, h, sizeof h, 0);
     if (!std::equal(kBkmMagic.begin(), kBkmMagic.end(), h))
         throw fail("not a .bkm brick map (bad magic)");
     const uint32_t version = load_u32(h + kOffVersion);
@@ -259,8 +269,6 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
                         : " (this sss reads version " + std::to_string(kBkmVersion) +
                               "; a newer brickmake wrote it)"));
     }
-    BkmContents c;
-    BrickMapInfo& info = c.info;
     info.version = version;
     const uint32_t flags = load_u32(h + kOffFlags);
     if (flags & ~(kBkmFlagIgnoreNormals | kBkmFlagOmitGeometry)) {
@@ -279,7 +287,13 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
                              " bytes but the header says " + std::to_string(stored_size));
     }
     info.file_size = file_size;
+}
 
+/// The counts, bounds, matrices and section offsets of header `h`, checked
+/// against the file before any allocation that depends on them.
+BkmSizes read_header_sizes(const unsigned char* h, const std::string& path,
+                           uint64_t file_size, BrickMapInfo& info) {
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
     const uint32_t nchannels = load_u32(h + kOffChannelCount);
     const uint32_t data_size = load_u32(h + kOffDataSize);
     const uint32_t max_depth = load_u32(h + kOffMaxDepth);
@@ -343,17 +357,22 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
                    std::to_string(brick_data) + " in a file of " +
                    std::to_string(file_size) + " bytes");
     }
+    return {nchannels,   data_size,  max_depth,     provenance_length,
+            table_bytes, dir_offset, tables_offset, brick_data};
+}
 
-    // The tree directory, read on its own first: its node counts must fill
-    // the node tables exactly, stay within Limit::Bricks and fit in memory
-    // before anything is allocated for them.
-    unsigned char directory[kBkmTrees * kBkmDirEntrySize];
-    bkm_pread(fd, path, directory, sizeof directory, dir_offset);
-    uint64_t expected_table = tables_offset;
+/// The tree directory, read on its own first: its node counts must fill
+/// the node tables exactly, stay within Limit::Bricks and fit in memory
+/// before anything is allocated for them.
+void read_directory(int fd, const std::string& path, const BkmSizes& s, BkmDirectory& d) {
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
+    bkm_pread(fd, path, d.bytes, sizeof d.bytes, s.dir_offset);
+    uint64_t expected_table = s.tables_offset;
     uint64_t total_nodes = 0;
-    std::array<uint32_t, kBkmTrees> counts{}, data_counts{};
+    std::array<uint32_t, kBkmTrees>& counts = d.counts;
+    std::array<uint32_t, kBkmTrees>& data_counts = d.data_counts;
     for (int t = 0; t < kBkmTrees; ++t) {
-        const unsigned char* e = directory + t * kBkmDirEntrySize;
+        const unsigned char* e = d.bytes + t * kBkmDirEntrySize;
         const uint64_t table = load_u64(e);
         counts[t] = load_u32(e + 8);
         data_counts[t] = load_u32(e + 12);
@@ -361,7 +380,7 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
         if (table != expected_table)
             throw fail("node table of " + tree + " at offset " + std::to_string(table) +
                        ", expected " + std::to_string(expected_table));
-        if (uint64_t(counts[t]) * kBkmNodeSize > brick_data - expected_table)
+        if (uint64_t(counts[t]) * kBkmNodeSize > s.brick_data - expected_table)
             throw fail("node count " + std::to_string(counts[t]) + " of " + tree +
                        " does not fit in the file");
         if (data_counts[t] > counts[t])
@@ -369,24 +388,180 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
         expected_table += uint64_t(counts[t]) * kBkmNodeSize;
         total_nodes += counts[t];
     }
-    if (expected_table != brick_data)
-        throw fail("brick data at offset " + std::to_string(brick_data) + ", expected " +
-                   std::to_string(expected_table));
+    if (expected_table != s.brick_data)
+        throw fail("brick data at offset " + std::to_string(s.brick_data) +
+                   ", expected " + std::to_string(expected_table));
     check_limit(Limit::Bricks, total_nodes, path);
     // The tables as read, the records decoded, and BrickMap's lookup
     // structures over them (brickmap_lookup.cpp): about 120 bytes a node.
     // (Small maps skip the check: it reads cgroup files.)
-    const uint64_t need = brick_data + total_nodes * 120;
+    const uint64_t need = s.brick_data + total_nodes * 120;
     if (need >= (8u << 20))
         check_memory(need, "opening " + path,
                      "rebuild the map with a larger -maxerror, a smaller -maxdepth or "
                      "-omitgeometry 1");
+}
 
-    std::vector<unsigned char> head(static_cast<std::size_t>(brick_data));
+/// The channel table and the provenance text after it, into `info`.
+void read_channel_table(const unsigned char* base, const BkmSizes& s, BrickMapInfo& info,
+                        const std::string& path) {
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
+    const unsigned char* p = base + kBkmHeaderSize;
+    const unsigned char* end = p + s.table_bytes;
+    std::set<std::string> names;
+    int sum = 0;
+    for (uint32_t i = 0; i < s.nchannels; ++i) {
+        const std::string which = "channel " + std::to_string(i + 1);
+        if (end - p < 4) throw fail("channel table too short (at " + which + ")");
+        const uint8_t type = p[0];
+        const uint16_t len = load_u16(p + 2);
+        if (type != kTypeFloat && type != kTypeColor)
+            throw fail("unknown type code " + std::to_string(type) + " of " + which);
+        if (p[1] != 0) throw fail("reserved byte of " + which + " is not 0");
+        if (len < 1 || len > kBkmMaxNameLength || end - p - 4 < len)
+            throw fail("invalid name length " + std::to_string(len) + " of " + which);
+        std::string name(reinterpret_cast<const char*>(p + 4), len);
+        for (unsigned char ch : name) {
+            if (ch <= 0x20 || ch == 0x7f)
+                throw fail("invalid character in the name of " + which);
+        }
+        if (!names.insert(name).second) throw fail("duplicate channel '" + name + "'");
+        const ChannelType t =
+            type == kTypeColor ? ChannelType::Color : ChannelType::Float;
+        sum += channel_type_size(t);
+        info.channels.emplace_back(std::move(name), t);
+        p += 4 + len;
+    }
+    if (p != end) throw fail("channel table has trailing bytes");
+    if (sum != static_cast<int>(s.data_size)) {
+        throw fail("channel sizes add up to " + std::to_string(sum) +
+                   " floats per sample but the header data size is " +
+                   std::to_string(s.data_size));
+    }
+    const unsigned char* prov = end;
+    info.provenance.assign(reinterpret_cast<const char*>(prov), s.provenance_length);
+    if (info.provenance.find('\0') != std::string::npos)
+        throw fail("provenance text contains a NUL byte");
+}
+
+/// Decodes and checks the node records of tree t from `table`; its bricks
+/// start at `expected_brick`. Returns where the next tree's bricks start.
+uint64_t read_node_table(const unsigned char* table, int t, uint64_t expected_brick,
+                         uint32_t max_depth, int data_size, uint64_t file_size,
+                         std::vector<BkmNode>& nodes, const std::string& path) {
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+        const unsigned char* r = table + i * kBkmNodeSize;
+        BkmNode& n = nodes[i];
+        n.depth = r[0];
+        n.child_mask = r[1];
+        n.flags = r[2];
+        n.samples = load_u16(r + 4);
+        n.ix = load_u32(r + 8);
+        n.iy = load_u32(r + 12);
+        n.iz = load_u32(r + 16);
+        n.first_child = load_u32(r + 20);
+        n.offset = load_u64(r + 24);
+        n.crc = load_u32(r + 32);
+        const auto bad = [&](const std::string& what) {
+            return fail("node " + std::to_string(i) + " of tree " + std::to_string(t) +
+                        ": " + what);
+        };
+        if (r[3] != 0 || load_u16(r + 6) != 0) throw bad("reserved bytes are not 0");
+        if (n.flags & ~kBkmNodeHasData) throw bad("unknown flags");
+        if (n.depth > max_depth)
+            throw bad("depth " + std::to_string(n.depth) + " exceeds the maximum depth");
+        const uint64_t limit = uint64_t(1) << n.depth;
+        if (n.ix >= limit || n.iy >= limit || n.iz >= limit)
+            throw bad("coordinates outside depth " + std::to_string(n.depth));
+        if (n.samples < 1 || n.samples > kBrickSamples)
+            throw bad("invalid sample count " + std::to_string(n.samples));
+        if (n.offset != expected_brick)
+            throw bad("brick at offset " + std::to_string(n.offset) + ", expected " +
+                      std::to_string(expected_brick));
+        const uint64_t size = bkm_brick_size(n, data_size);
+        if (size > file_size - expected_brick)
+            throw bad("brick beyond the end of the file");
+        expected_brick += size;
+    }
+    return expected_brick;
+}
+
+/// Checks the structure of tree t: the root first, every other node the child
+/// of exactly one earlier node, children contiguous and in octant order.
+void check_tree_structure(const std::vector<BkmNode>& nodes, int t, uint32_t data_count,
+                          const std::string& path) {
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
+    if (nodes.empty()) {
+        if (data_count != 0)
+            throw fail("tree " + std::to_string(t) + " is empty but counts data bricks");
+        return;
+    }
+    if (nodes[0].depth != 0 || !nodes[0].has_data())
+        throw fail("tree " + std::to_string(t) +
+                   ": the first node is not a root with data");
+    uint64_t next = 1;
+    uint32_t data = 0;
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+        const BkmNode& n = nodes[i];
+        const auto bad = [&](const std::string& what) {
+            return fail("node " + std::to_string(i) + " of tree " + std::to_string(t) +
+                        ": " + what);
+        };
+        data += n.has_data() ? 1 : 0;
+        if (i > 0 && i >= next) throw bad("not the child of any earlier node");
+        if (n.child_mask == 0) {
+            if (n.first_child != 0) throw bad("first child set without children");
+            continue;
+        }
+        if (n.first_child != next)
+            throw bad("first child " + std::to_string(n.first_child) + ", expected " +
+                      std::to_string(next));
+        const int kids = std::popcount(n.child_mask);
+        if (next + kids > nodes.size()) throw bad("children beyond the node table");
+        int k = 0;
+        for (int o = 0; o < 8; ++o) {
+            if (!((n.child_mask >> o) & 1)) continue;
+            const BkmNode& ch = nodes[next + k++];
+            if (ch.depth != n.depth + 1 || ch.ix != 2 * n.ix + (o & 1) ||
+                ch.iy != 2 * n.iy + ((o >> 1) & 1) || ch.iz != 2 * n.iz + ((o >> 2) & 1))
+                throw bad("child " + std::to_string(next + k - 1) +
+                          " does not match its octant");
+            if (ch.has_data() && !n.has_data())
+                throw bad("a data brick below an occupancy-only node");
+        }
+        next += kids;
+    }
+    if (next != nodes.size()) throw fail("tree " + std::to_string(t) + ": orphan nodes");
+    if (data != data_count)
+        throw fail("tree " + std::to_string(t) + ": the directory counts " +
+                   std::to_string(data_count) + " data bricks, the table has " +
+                   std::to_string(data));
+}
+
+} // namespace
+
+BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
+                          bool verify_checksums) {
+    const auto fail = [&](const std::string& what) { return FormatError(path, what); };
+    if (file_size < kBkmHeaderSize) {
+        throw fail("file too short for a .bkm header (" + std::to_string(file_size) +
+                   " of " + std::to_string(kBkmHeaderSize) + " bytes)");
+    }
+    unsigned char h[kBkmHeaderSize];
+    bkm_pread(fd, path, h, sizeof h, 0);
+    BkmContents c;
+    BrickMapInfo& info = c.info;
+    read_header_identity(h, path, file_size, info);
+    const BkmSizes s = read_header_sizes(h, path, file_size, info);
+    BkmDirectory d;
+    read_directory(fd, path, s, d);
+
+    std::vector<unsigned char> head(static_cast<std::size_t>(s.brick_data));
     std::copy(h, h + kBkmHeaderSize, head.begin());
     bkm_pread(fd, path, head.data() + kBkmHeaderSize, head.size() - kBkmHeaderSize,
               kBkmHeaderSize);
-    if (!std::equal(directory, directory + sizeof directory, head.begin() + dir_offset))
+    if (!std::equal(d.bytes, d.bytes + sizeof d.bytes, head.begin() + s.dir_offset))
         throw fail("the file changed while it was read");
     if (verify_checksums) {
         const uint32_t stored = load_u32(h + kOffHeadCrc);
@@ -396,147 +571,25 @@ BkmContents bkm_read_head(int fd, const std::string& path, uint64_t file_size,
             char sums[64];
             std::snprintf(sums, sizeof sums, "stored 0x%08x, computed 0x%08x", stored,
                           crc);
-            throw fail("header and tables (bytes 0 to " + std::to_string(brick_data - 1) +
-                       ") fail their CRC-32 check (" + sums +
-                       "): the file is corrupt; rebuild it with brickmake");
+            throw fail("header and tables (bytes 0 to " +
+                       std::to_string(s.brick_data - 1) + ") fail their CRC-32 check (" +
+                       sums + "): the file is corrupt; rebuild it with brickmake");
         }
     }
     const unsigned char* base = head.data(); // file offset -> pointer
 
-    // Channel table.
-    {
-        const unsigned char* p = base + kBkmHeaderSize;
-        const unsigned char* end = p + table_bytes;
-        std::set<std::string> names;
-        int sum = 0;
-        for (uint32_t i = 0; i < nchannels; ++i) {
-            const std::string which = "channel " + std::to_string(i + 1);
-            if (end - p < 4) throw fail("channel table too short (at " + which + ")");
-            const uint8_t type = p[0];
-            const uint16_t len = load_u16(p + 2);
-            if (type != kTypeFloat && type != kTypeColor)
-                throw fail("unknown type code " + std::to_string(type) + " of " + which);
-            if (p[1] != 0) throw fail("reserved byte of " + which + " is not 0");
-            if (len < 1 || len > kBkmMaxNameLength || end - p - 4 < len)
-                throw fail("invalid name length " + std::to_string(len) + " of " + which);
-            std::string name(reinterpret_cast<const char*>(p + 4), len);
-            for (unsigned char ch : name) {
-                if (ch <= 0x20 || ch == 0x7f)
-                    throw fail("invalid character in the name of " + which);
-            }
-            if (!names.insert(name).second)
-                throw fail("duplicate channel '" + name + "'");
-            const ChannelType t =
-                type == kTypeColor ? ChannelType::Color : ChannelType::Float;
-            sum += channel_type_size(t);
-            info.channels.emplace_back(std::move(name), t);
-            p += 4 + len;
-        }
-        if (p != end) throw fail("channel table has trailing bytes");
-        if (sum != static_cast<int>(data_size)) {
-            throw fail("channel sizes add up to " + std::to_string(sum) +
-                       " floats per sample but the header data size is " +
-                       std::to_string(data_size));
-        }
-        const unsigned char* prov = end;
-        info.provenance.assign(reinterpret_cast<const char*>(prov), provenance_length);
-        if (info.provenance.find('\0') != std::string::npos)
-            throw fail("provenance text contains a NUL byte");
-    }
+    read_channel_table(base, s, info, path);
 
-    // Node tables.
-    uint64_t expected_brick = brick_data;
-    uint64_t table_offset = tables_offset;
+    uint64_t expected_brick = s.brick_data;
+    uint64_t table_offset = s.tables_offset;
     for (int t = 0; t < kBkmTrees; ++t) {
         std::vector<BkmNode>& nodes = c.trees[t];
-        nodes.resize(counts[t]);
+        nodes.resize(d.counts[t]);
         const unsigned char* table = base + table_offset;
-        table_offset += uint64_t(counts[t]) * kBkmNodeSize;
-        for (std::size_t i = 0; i < nodes.size(); ++i) {
-            const unsigned char* r = table + i * kBkmNodeSize;
-            BkmNode& n = nodes[i];
-            n.depth = r[0];
-            n.child_mask = r[1];
-            n.flags = r[2];
-            n.samples = load_u16(r + 4);
-            n.ix = load_u32(r + 8);
-            n.iy = load_u32(r + 12);
-            n.iz = load_u32(r + 16);
-            n.first_child = load_u32(r + 20);
-            n.offset = load_u64(r + 24);
-            n.crc = load_u32(r + 32);
-            const auto bad = [&](const std::string& what) {
-                return fail("node " + std::to_string(i) + " of tree " +
-                            std::to_string(t) + ": " + what);
-            };
-            if (r[3] != 0 || load_u16(r + 6) != 0) throw bad("reserved bytes are not 0");
-            if (n.flags & ~kBkmNodeHasData) throw bad("unknown flags");
-            if (n.depth > max_depth)
-                throw bad("depth " + std::to_string(n.depth) +
-                          " exceeds the maximum depth");
-            const uint64_t limit = uint64_t(1) << n.depth;
-            if (n.ix >= limit || n.iy >= limit || n.iz >= limit)
-                throw bad("coordinates outside depth " + std::to_string(n.depth));
-            if (n.samples < 1 || n.samples > kBrickSamples)
-                throw bad("invalid sample count " + std::to_string(n.samples));
-            if (n.offset != expected_brick)
-                throw bad("brick at offset " + std::to_string(n.offset) + ", expected " +
-                          std::to_string(expected_brick));
-            const uint64_t size = bkm_brick_size(n, info.data_size);
-            if (size > file_size - expected_brick)
-                throw bad("brick beyond the end of the file");
-            expected_brick += size;
-        }
-        // Structure: the root first, every other node the child of exactly one
-        // earlier node, children contiguous and in octant order.
-        if (nodes.empty()) {
-            if (data_counts[t] != 0)
-                throw fail("tree " + std::to_string(t) +
-                           " is empty but counts data bricks");
-            continue;
-        }
-        if (nodes[0].depth != 0 || !nodes[0].has_data())
-            throw fail("tree " + std::to_string(t) +
-                       ": the first node is not a root with data");
-        uint64_t next = 1;
-        uint32_t data = 0;
-        for (std::size_t i = 0; i < nodes.size(); ++i) {
-            const BkmNode& n = nodes[i];
-            const auto bad = [&](const std::string& what) {
-                return fail("node " + std::to_string(i) + " of tree " +
-                            std::to_string(t) + ": " + what);
-            };
-            data += n.has_data() ? 1 : 0;
-            if (i > 0 && i >= next) throw bad("not the child of any earlier node");
-            if (n.child_mask == 0) {
-                if (n.first_child != 0) throw bad("first child set without children");
-                continue;
-            }
-            if (n.first_child != next)
-                throw bad("first child " + std::to_string(n.first_child) + ", expected " +
-                          std::to_string(next));
-            const int kids = std::popcount(n.child_mask);
-            if (next + kids > nodes.size()) throw bad("children beyond the node table");
-            int k = 0;
-            for (int o = 0; o < 8; ++o) {
-                if (!((n.child_mask >> o) & 1)) continue;
-                const BkmNode& ch = nodes[next + k++];
-                if (ch.depth != n.depth + 1 || ch.ix != 2 * n.ix + (o & 1) ||
-                    ch.iy != 2 * n.iy + ((o >> 1) & 1) ||
-                    ch.iz != 2 * n.iz + ((o >> 2) & 1))
-                    throw bad("child " + std::to_string(next + k - 1) +
-                              " does not match its octant");
-                if (ch.has_data() && !n.has_data())
-                    throw bad("a data brick below an occupancy-only node");
-            }
-            next += kids;
-        }
-        if (next != nodes.size())
-            throw fail("tree " + std::to_string(t) + ": orphan nodes");
-        if (data != data_counts[t])
-            throw fail("tree " + std::to_string(t) + ": the directory counts " +
-                       std::to_string(data_counts[t]) + " data bricks, the table has " +
-                       std::to_string(data));
+        table_offset += uint64_t(d.counts[t]) * kBkmNodeSize;
+        expected_brick = read_node_table(table, t, expected_brick, s.max_depth,
+                                         info.data_size, file_size, nodes, path);
+        check_tree_structure(nodes, t, d.data_counts[t], path);
     }
     if (expected_brick != file_size) {
         throw fail("bricks end at offset " + std::to_string(expected_brick) +

@@ -413,71 +413,65 @@ void plane_basis(const glm::dvec3& n, glm::dvec3& u, glm::dvec3& v) {
 constexpr std::array<glm::dvec2, 4> kQuadUV{glm::dvec2(0, 0), glm::dvec2(1, 0),
                                             glm::dvec2(1, 1), glm::dvec2(0, 1)};
 
-} // namespace
+/// The world position of every point, and the micropolygon edge length at
+/// every point a corner uses (0 at the others).
+void world_points(const Primitive& prim, const DiceControl& control,
+                  const Attributes& attr, const PolygonTopology& topo,
+                  const std::vector<glm::dvec3>& points, std::vector<glm::dvec3>& world,
+                  std::vector<double>& edge) {
+    const Matrix4& m = prim.object_to_world;
+    std::vector<uint8_t> used(points.size(), 0);
+    for (uint32_t p : topo.corner_point) used[p] = 1;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        world[i] = to_world(m, points[i]);
+        if (used[i]) {
+            check_world_point(prim, world[i]);
+            edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
+        }
+    }
+}
 
-DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
-                           DiceEstimate* estimate) {
-    const Attributes& attr = attributes_of(prim);
-    const std::vector<glm::dvec3> points = read_positions(prim);
-    const PolygonTopology topo = polygon_topology(prim, points.size());
+/// Adds the faces' estimate: per face its outer loop's area, every loop's
+/// perimeter, the finest edge at its corners; a convex quad is one piece,
+/// anything else about as many triangles as corners.
+void estimate_polygons(const PolygonTopology& topo, const std::vector<glm::dvec3>& world,
+                       const std::vector<double>& edge, DiceEstimate& estimate) {
+    const std::size_t nfaces = topo.face_loops.size() - 1;
+    for (std::size_t f = 0; f < nfaces; ++f) {
+        const int l0 = topo.face_loops[f], l1 = topo.face_loops[f + 1];
+        const auto c0 = static_cast<std::size_t>(topo.loop_corners[l0]);
+        const auto c1 = static_cast<std::size_t>(topo.loop_corners[l0 + 1]);
+        const auto cend = static_cast<std::size_t>(topo.loop_corners[l1]);
+        const auto at = [&](std::size_t c) -> const glm::dvec3& {
+            return world[topo.corner_point[c]];
+        };
+        glm::dvec3 newell(0.0);
+        for (std::size_t c = c0 + 1; c + 1 < c1; ++c)
+            newell += glm::cross(at(c) - at(c0), at(c + 1) - at(c0));
+        double perimeter = 0.0, e = std::numeric_limits<double>::infinity();
+        for (int l = l0; l < l1; ++l) {
+            const auto b = static_cast<std::size_t>(topo.loop_corners[l]);
+            const auto n = static_cast<std::size_t>(topo.loop_corners[l + 1]) - b;
+            for (std::size_t k = 0; k < n; ++k) {
+                perimeter += glm::length(at(b + (k + 1) % n) - at(b + k));
+                e = std::min(e, edge[topo.corner_point[b + k]]);
+            }
+        }
+        const double corners = static_cast<double>(cend - c0);
+        const double pieces = l1 - l0 == 1 && corners == 4 ? 1.0 : corners - 2.0;
+        estimate += estimate_flat_face(0.5 * glm::length(newell), perimeter, e, pieces);
+    }
+}
+
+/// Convex quads stay quads (diced like REYES grids); every other face is
+/// triangulated in object space (affine maps keep the result valid). Also
+/// the world normal of every face (0 for a face without area).
+void face_jobs(const PolygonTopology& topo, const std::vector<glm::dvec3>& points,
+               const Matrix4& m, const Attributes& attr, std::vector<FaceJob>& jobs,
+               std::vector<glm::dvec3>& face_normal) {
     const std::size_t nfaces = topo.face_loops.size() - 1;
     const std::size_t ncorners = topo.corner_point.size();
-    const CornerVec3 cs(prim, "Cs", nfaces, topo.points_referenced, ncorners);
-    const CornerVec3 user_n(prim, "N", nfaces, topo.points_referenced, ncorners);
-    const CornerTexCoords st(prim, nfaces, topo.points_referenced, ncorners);
-    const NormalTransform normals(prim);
-    const Matrix4& m = prim.object_to_world;
-
-    std::vector<glm::dvec3> world(points.size());
-    std::vector<double> edge(points.size(), 0.0);
-    {
-        std::vector<uint8_t> used(points.size(), 0);
-        for (uint32_t p : topo.corner_point) used[p] = 1;
-        for (std::size_t i = 0; i < points.size(); ++i) {
-            world[i] = to_world(m, points[i]);
-            if (used[i]) {
-                check_world_point(prim, world[i]);
-                edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
-            }
-        }
-    }
-    if (estimate) {
-        // Per face: its outer loop's area, every loop's perimeter, the finest
-        // edge at its corners; a convex quad is one piece, anything else
-        // about as many triangles as corners.
-        for (std::size_t f = 0; f < nfaces; ++f) {
-            const int l0 = topo.face_loops[f], l1 = topo.face_loops[f + 1];
-            const auto c0 = static_cast<std::size_t>(topo.loop_corners[l0]);
-            const auto c1 = static_cast<std::size_t>(topo.loop_corners[l0 + 1]);
-            const auto cend = static_cast<std::size_t>(topo.loop_corners[l1]);
-            const auto at = [&](std::size_t c) -> const glm::dvec3& {
-                return world[topo.corner_point[c]];
-            };
-            glm::dvec3 newell(0.0);
-            for (std::size_t c = c0 + 1; c + 1 < c1; ++c)
-                newell += glm::cross(at(c) - at(c0), at(c + 1) - at(c0));
-            double perimeter = 0.0, e = std::numeric_limits<double>::infinity();
-            for (int l = l0; l < l1; ++l) {
-                const auto b = static_cast<std::size_t>(topo.loop_corners[l]);
-                const auto n = static_cast<std::size_t>(topo.loop_corners[l + 1]) - b;
-                for (std::size_t k = 0; k < n; ++k) {
-                    perimeter += glm::length(at(b + (k + 1) % n) - at(b + k));
-                    e = std::min(e, edge[topo.corner_point[b + k]]);
-                }
-            }
-            const double corners = static_cast<double>(cend - c0);
-            const double pieces = l1 - l0 == 1 && corners == 4 ? 1.0 : corners - 2.0;
-            *estimate +=
-                estimate_flat_face(0.5 * glm::length(newell), perimeter, e, pieces);
-        }
-        return {};
-    }
-
-    // Convex quads stay quads (diced like REYES grids); every other face is
-    // triangulated in object space (affine maps keep the result valid).
-    std::vector<FaceJob> jobs;
     jobs.reserve(ncorners);
-    std::vector<glm::dvec3> face_normal(nfaces, glm::dvec3(0.0));
     Triangulator triangulator;
     std::vector<glm::dvec2> flat;
     std::vector<int> loop_sizes;
@@ -531,9 +525,19 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
             jobs.push_back(
                 {{c0 + t[0], c0 + t[1], c0 + t[2], 0}, face, 3, {0, 0}, false});
     }
+}
 
-    // Piece counts, then exact output sizes.
-    std::size_t total_mp = 0, total_vertices = 0, total_triangles = 0;
+/// The output's sizes.
+struct DiceTotals {
+    std::size_t mp = 0, vertices = 0, triangles = 0;
+};
+
+/// The piece counts of every job (and whether a triangle is diced in
+/// columns), then the exact output sizes, checked against the budget.
+DiceTotals count_pieces(const Primitive& prim, const DiceControl& control,
+                        const PolygonTopology& topo, const std::vector<glm::dvec3>& world,
+                        const std::vector<double>& edge, std::vector<FaceJob>& jobs) {
+    DiceTotals total;
     for (FaceJob& job : jobs) {
         std::array<glm::dvec3, 4> w;
         double e = std::numeric_limits<double>::infinity();
@@ -551,9 +555,9 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
                 std::max(glm::length(w[3] - w[0]), glm::length(w[2] - w[1])), e);
             job.pieces[0] = static_cast<uint32_t>(nu);
             job.pieces[1] = static_cast<uint32_t>(nv);
-            total_mp += nu * nv;
-            total_vertices += (nu + 1) * (nv + 1);
-            total_triangles += 2 * nu * nv;
+            total.mp += nu * nv;
+            total.vertices += (nu + 1) * (nv + 1);
+            total.triangles += 2 * nu * nv;
         } else {
             const double longest = std::sqrt(std::max(
                 {glm::dot(w[1] - w[0], w[1] - w[0]), glm::dot(w[2] - w[1], w[2] - w[1]),
@@ -573,26 +577,56 @@ DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
             // Slivers: columns when they need less than half the pieces.
             job.columns = n > 2 && 2 * columns.micropolygons < n * n;
             if (job.columns) {
-                total_mp += columns.micropolygons;
-                total_vertices += columns.vertices;
-                total_triangles += columns.micropolygons;
+                total.mp += columns.micropolygons;
+                total.vertices += columns.vertices;
+                total.triangles += columns.micropolygons;
             } else {
-                total_mp += n * n;
-                total_vertices += (n + 1) * (n + 2) / 2;
-                total_triangles += n * n;
+                total.mp += n * n;
+                total.vertices += (n + 1) * (n + 2) / 2;
+                total.triangles += n * n;
             }
         }
-        check_budget(prim, control, total_mp);
+        check_budget(prim, control, total.mp);
+    }
+    return total;
+}
+
+} // namespace
+
+DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
+                           DiceEstimate* estimate) {
+    const Attributes& attr = attributes_of(prim);
+    const std::vector<glm::dvec3> points = read_positions(prim);
+    const PolygonTopology topo = polygon_topology(prim, points.size());
+    const std::size_t nfaces = topo.face_loops.size() - 1;
+    const std::size_t ncorners = topo.corner_point.size();
+    const CornerVec3 cs(prim, "Cs", nfaces, topo.points_referenced, ncorners);
+    const CornerVec3 user_n(prim, "N", nfaces, topo.points_referenced, ncorners);
+    const CornerTexCoords st(prim, nfaces, topo.points_referenced, ncorners);
+    const NormalTransform normals(prim);
+    const Matrix4& m = prim.object_to_world;
+
+    std::vector<glm::dvec3> world(points.size());
+    std::vector<double> edge(points.size(), 0.0);
+    world_points(prim, control, attr, topo, points, world, edge);
+    if (estimate) {
+        estimate_polygons(topo, world, edge, *estimate);
+        return {};
     }
 
+    std::vector<FaceJob> jobs;
+    std::vector<glm::dvec3> face_normal(nfaces, glm::dvec3(0.0));
+    face_jobs(topo, points, m, attr, jobs, face_normal);
+    const DiceTotals total = count_pieces(prim, control, topo, world, edge, jobs);
+
     DicedSurface out;
-    allocate(prim, out, total_mp, total_vertices, total_triangles, cs.present());
+    allocate(prim, out, total.mp, total.vertices, total.triangles, cs.present());
     SurfaceWriter writer{out, cs.present(), control.grids};
     if (control.displace) {
         writer.displace = &control.displace;
         writer.prim = &prim;
     }
-    if (control.grids) out.resize_parametric(total_mp, total_vertices);
+    if (control.grids) out.resize_parametric(total.mp, total.vertices);
     TriangleCorners tri;
     QuadCorners quad;
     QuadDicer quad_dicer;

@@ -111,6 +111,75 @@ bool SubdivMesh::all_quads() const {
     return true;
 }
 
+namespace {
+
+/// Applies the tags (creases, corners, holes) to `m`, whose edges are in
+/// `edge_index`; returns the interpolateboundary mode (0 without the tag).
+int apply_tags(const Primitive& prim, const EdgeIndex& edge_index, SubdivMesh& m) {
+    const int npoints = static_cast<int>(m.points.size());
+    const int nfaces = static_cast<int>(prim.nverts.size());
+    if (prim.tag_nargs.size() != 2 * prim.tags.size())
+        fail(prim, "tags need 2 argument counts each (" +
+                       std::to_string(prim.tags.size()) + " tags, " +
+                       std::to_string(prim.tag_nargs.size()) + " counts)");
+    int boundary_mode = 0;
+    std::size_t ip = 0, fp = 0;
+    for (std::size_t t = 0; t < prim.tags.size(); ++t) {
+        const int ni = prim.tag_nargs[2 * t], nf = prim.tag_nargs[2 * t + 1];
+        if (ni < 0 || nf < 0 || ip + ni > prim.tag_intargs.size() ||
+            fp + nf > prim.tag_floatargs.size())
+            fail(prim, "tag \"" + prim.tags[t] +
+                           "\" has more arguments than the tag lists hold");
+        const int* ints = prim.tag_intargs.data() + ip;
+        const double* floats = prim.tag_floatargs.data() + fp;
+        ip += ni;
+        fp += nf;
+        const std::string& tag = prim.tags[t];
+        auto sharpness_arg = [&](double s) {
+            if (std::isnan(s)) fail(prim, "tag \"" + tag + "\": NaN sharpness");
+            return static_cast<float>(std::max(0.0, s));
+        };
+        auto vertex_arg = [&](int v) {
+            if (v < 0 || v >= npoints)
+                fail(prim, "tag \"" + tag + "\": vertex " + std::to_string(v) +
+                               " out of range");
+            return v;
+        };
+        if (tag == "interpolateboundary") {
+            boundary_mode = ni > 0 ? ints[0] : 1;
+        } else if (tag == "crease") {
+            if (ni < 2 || nf < 1)
+                fail(prim, "tag \"crease\" needs at least 2 vertices and a "
+                           "sharpness");
+            const float s = sharpness_arg(floats[0]);
+            for (int k = 0; k + 1 < ni; ++k) {
+                // A crease between vertices with no edge between them is ignored,
+                // as the renderers do.
+                const int e =
+                    find_edge(edge_index, vertex_arg(ints[k]), vertex_arg(ints[k + 1]));
+                if (e >= 0 && m.edge_faces[e][1] >= 0) m.edge_sharpness[e] = s;
+            }
+        } else if (tag == "corner") {
+            if (ni > 0 && nf < 1) fail(prim, "tag \"corner\" needs a sharpness");
+            for (int k = 0; k < ni; ++k)
+                m.vertex_sharpness[vertex_arg(ints[k])] =
+                    sharpness_arg(nf == ni ? floats[k] : floats[0]);
+        } else if (tag == "hole") {
+            for (int k = 0; k < ni; ++k) {
+                if (ints[k] < 0 || ints[k] >= nfaces)
+                    fail(prim, "tag \"hole\": face " + std::to_string(ints[k]) +
+                                   " out of range");
+                m.face_hole[ints[k]] = 1;
+            }
+        }
+        // Other tags (facevaryinginterpolateboundary, stitch, creasemethod...) do
+        // not change the surface enough to matter here and are ignored.
+    }
+    return boundary_mode;
+}
+
+} // namespace
+
 SubdivMesh build_subdiv_mesh(const Primitive& prim) {
     if (prim.type != "catmull-clark")
         fail(prim, "unsupported subdivision scheme \"" + prim.type +
@@ -190,64 +259,7 @@ SubdivMesh build_subdiv_mesh(const Primitive& prim) {
     m.vertex_sharpness.assign(npoints, 0.0f);
     m.face_hole.assign(nfaces, 0);
 
-    // Tags.
-    if (prim.tag_nargs.size() != 2 * prim.tags.size())
-        fail(prim, "tags need 2 argument counts each (" +
-                       std::to_string(prim.tags.size()) + " tags, " +
-                       std::to_string(prim.tag_nargs.size()) + " counts)");
-    int boundary_mode = 0;
-    std::size_t ip = 0, fp = 0;
-    for (std::size_t t = 0; t < prim.tags.size(); ++t) {
-        const int ni = prim.tag_nargs[2 * t], nf = prim.tag_nargs[2 * t + 1];
-        if (ni < 0 || nf < 0 || ip + ni > prim.tag_intargs.size() ||
-            fp + nf > prim.tag_floatargs.size())
-            fail(prim, "tag \"" + prim.tags[t] +
-                           "\" has more arguments than the tag lists hold");
-        const int* ints = prim.tag_intargs.data() + ip;
-        const double* floats = prim.tag_floatargs.data() + fp;
-        ip += ni;
-        fp += nf;
-        const std::string& tag = prim.tags[t];
-        auto sharpness_arg = [&](double s) {
-            if (std::isnan(s)) fail(prim, "tag \"" + tag + "\": NaN sharpness");
-            return static_cast<float>(std::max(0.0, s));
-        };
-        auto vertex_arg = [&](int v) {
-            if (v < 0 || v >= npoints)
-                fail(prim, "tag \"" + tag + "\": vertex " + std::to_string(v) +
-                               " out of range");
-            return v;
-        };
-        if (tag == "interpolateboundary") {
-            boundary_mode = ni > 0 ? ints[0] : 1;
-        } else if (tag == "crease") {
-            if (ni < 2 || nf < 1)
-                fail(prim, "tag \"crease\" needs at least 2 vertices and a "
-                           "sharpness");
-            const float s = sharpness_arg(floats[0]);
-            for (int k = 0; k + 1 < ni; ++k) {
-                // A crease between vertices with no edge between them is ignored,
-                // as the renderers do.
-                const int e =
-                    find_edge(edge_index, vertex_arg(ints[k]), vertex_arg(ints[k + 1]));
-                if (e >= 0 && m.edge_faces[e][1] >= 0) m.edge_sharpness[e] = s;
-            }
-        } else if (tag == "corner") {
-            if (ni > 0 && nf < 1) fail(prim, "tag \"corner\" needs a sharpness");
-            for (int k = 0; k < ni; ++k)
-                m.vertex_sharpness[vertex_arg(ints[k])] =
-                    sharpness_arg(nf == ni ? floats[k] : floats[0]);
-        } else if (tag == "hole") {
-            for (int k = 0; k < ni; ++k) {
-                if (ints[k] < 0 || ints[k] >= nfaces)
-                    fail(prim, "tag \"hole\": face " + std::to_string(ints[k]) +
-                                   " out of range");
-                m.face_hole[ints[k]] = 1;
-            }
-        }
-        // Other tags (facevaryinginterpolateboundary, stitch, creasemethod...) do
-        // not change the surface enough to matter here and are ignored.
-    }
+    const int boundary_mode = apply_tags(prim, edge_index, m);
     if (boundary_mode == 1) {
         VertexSums sums;
         sums.scatter_edges(m);

@@ -474,8 +474,11 @@ double dither_noise(int x, int y, int k) {
     return 2.0 * detail::unit_double(h) - 1.0;
 }
 
-void write_display(const Image& image, const DisplayTarget& target,
-                   const ImageMetadata& metadata) {
+namespace {
+
+/// Checks the image and the display against each other; the image channel of
+/// each of the display's channels.
+std::vector<int> display_sources(const Image& image, const DisplayTarget& target) {
     const std::string& path = target.path;
     if (path.empty()) throw ValueError("image output with an empty file name");
     if (image.width <= 0 || image.height <= 0)
@@ -492,7 +495,6 @@ void write_display(const Image& image, const DisplayTarget& target,
         throw ValueError(path + ": display has " +
                          std::to_string(target.channels.size()) + " channels and " +
                          std::to_string(target.names.size()) + " channel names");
-    const bool exr = target.format == "openexr";
     const std::size_t n = target.channels.size();
     std::vector<int> source(n);
     for (std::size_t k = 0; k < n; ++k) {
@@ -504,8 +506,16 @@ void write_display(const Image& image, const DisplayTarget& target,
             throw ValueError(path + ": channel name '" + target.names[k] +
                              "' is used twice");
     }
+    return source;
+}
 
-    // Gather the written channels; any NaN/Inf stops here, before a file exists.
+/// The written channels, pixel by pixel; any NaN/Inf stops here, before a
+/// file exists.
+std::vector<float> display_values(const Image& image, const DisplayTarget& target,
+                                  const std::vector<int>& source) {
+    const std::string& path = target.path;
+    const std::size_t pixel_count = std::size_t(image.width) * std::size_t(image.height);
+    const std::size_t n = target.channels.size();
     std::vector<float> values(pixel_count * n);
     std::size_t bad = 0, first_bad = 0;
     const std::size_t stride = image.channels.size();
@@ -525,6 +535,107 @@ void write_display(const Image& image, const DisplayTarget& target,
             " at pixel (" + std::to_string(p % std::size_t(image.width)) + ", " +
             std::to_string(p / std::size_t(image.width)) + "); nothing was written");
     }
+    return values;
+}
+
+/// The pixels of an integer (or TIFF float) file, one of `floats`, `words`
+/// or `bytes` by the display's bits.
+struct IntegerPixels {
+    std::vector<uint8_t> bytes;
+    std::vector<uint16_t> words;
+    std::vector<float> floats;
+};
+
+/// Integer (or TIFF float): straight alpha (colour divided by coverage), the
+/// exposure, then quantize: round(zero + one * v + dither * r) clamped to
+/// [min, max]. No sRGB curve: the values are linear unless the exposure's
+/// gamma encodes them.
+IntegerPixels integer_pixels(const std::vector<float>& values, int width,
+                             const DisplayTarget& target, OIIO::ImageSpec& spec,
+                             const std::vector<char>& exposed_channel) {
+    const std::size_t n = target.channels.size();
+    const std::size_t pixel_count = values.size() / n;
+    const double gamma = target.exposure_gamma;
+    if (gamma == 1.0) {
+        spec.attribute("oiio:ColorSpace", "Linear");
+    } else {
+        spec.attribute("oiio:ColorSpace", "Gamma" + std::to_string(gamma));
+        spec.attribute("oiio:Gamma", static_cast<float>(gamma));
+    }
+    // Our data is already unassociated: OIIO must not divide again (PNG)
+    // and TIFF marks its alpha as unassociated.
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    spec.set_format(target.bits == 32   ? OIIO::TypeDesc::FLOAT
+                    : target.bits == 16 ? OIIO::TypeDesc::UINT16
+                                        : OIIO::TypeDesc::UINT8);
+    const int alpha = spec.alpha_channel;
+    IntegerPixels px;
+    if (target.bits == 32)
+        px.floats.resize(values.size());
+    else if (target.bits == 16)
+        px.words.resize(values.size());
+    else
+        px.bytes.resize(values.size());
+    for (std::size_t p = 0; p < pixel_count; ++p) {
+        const float* in = &values[p * n];
+        const double a = alpha >= 0 ? double(in[alpha]) : 1.0;
+        const int x = int(p % std::size_t(width));
+        const int y = int(p / std::size_t(width));
+        for (std::size_t k = 0; k < n; ++k) {
+            double v = in[k];
+            if (int(k) != alpha && alpha >= 0 && a > 0.0) v /= a;
+            if (exposed_channel[k])
+                v = expose(v, target.exposure_gain, target.exposure_gamma);
+            if (target.bits == 32) {
+                px.floats[p * n + k] = static_cast<float>(v);
+                continue;
+            }
+            const double q =
+                quantize_value(v, target.quantize, dither_noise(x, y, int(k)));
+            if (target.bits == 16)
+                px.words[p * n + k] = uint16_t(std::clamp(q, 0.0, 65535.0));
+            else
+                px.bytes[p * n + k] = uint8_t(std::clamp(q, 0.0, 255.0));
+        }
+    }
+    return px;
+}
+
+/// Writes the file through a temporary (AtomicOutput).
+void write_display_file(const DisplayTarget& target, const OIIO::ImageSpec& spec,
+                        bool exr, const std::vector<float>& values,
+                        const IntegerPixels& px) {
+    const std::string& path = target.path;
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(target.format);
+    if (!out)
+        throw IoError(path, "no '" + target.format +
+                                "' writer in OpenImageIO: " + OIIO::geterror());
+    AtomicOutput file(path);
+    // The temporary is ".<name>.<random>.tmp": the writer is chosen by format
+    // name above, so the extension does not matter.
+    if (!out->open(file.temp_path(), spec))
+        throw IoError(path,
+                      "cannot write " + target.format + " image: " + out->geterror());
+    bool ok =
+        exr                 ? out->write_image(OIIO::TypeDesc::FLOAT, values.data())
+        : target.bits == 32 ? out->write_image(OIIO::TypeDesc::FLOAT, px.floats.data())
+        : target.bits == 16 ? out->write_image(OIIO::TypeDesc::UINT16, px.words.data())
+                            : out->write_image(OIIO::TypeDesc::UINT8, px.bytes.data());
+    ok = out->close() && ok;
+    if (!ok)
+        throw IoError(path,
+                      "cannot write " + target.format + " image: " + out->geterror());
+    file.commit();
+}
+
+} // namespace
+
+void write_display(const Image& image, const DisplayTarget& target,
+                   const ImageMetadata& metadata) {
+    const std::vector<int> source = display_sources(image, target);
+    const bool exr = target.format == "openexr";
+    const std::size_t n = target.channels.size();
+    std::vector<float> values = display_values(image, target, source);
 
     OIIO::ImageSpec spec(
         image.width, image.height, int(n),
@@ -536,7 +647,7 @@ void write_display(const Image& image, const DisplayTarget& target,
     add_metadata(spec, metadata, exr);
 
     // Exposure (a no-op at gain 1, gamma 1). Integer files apply it after
-    // dividing by alpha, below.
+    // dividing by alpha, in integer_pixels.
     const bool exposure = target.exposure_gain != 1.0 || target.exposure_gamma != 1.0;
     std::vector<char> exposed_channel(n);
     for (std::size_t k = 0; k < n; ++k) exposed_channel[k] = exposed(target.channels[k]);
@@ -546,9 +657,7 @@ void write_display(const Image& image, const DisplayTarget& target,
                 values[i] = static_cast<float>(
                     expose(values[i], target.exposure_gain, target.exposure_gamma));
 
-    std::vector<uint8_t> bytes;
-    std::vector<uint16_t> words;
-    std::vector<float> floats;
+    IntegerPixels px;
     if (exr) {
         spec.attribute("compression", target.compression);
         if (target.half) {
@@ -566,73 +675,9 @@ void write_display(const Image& image, const DisplayTarget& target,
                     values[i] = std::clamp(values[i], -kHalfMax, kHalfMax);
         }
     } else {
-        // Integer (or TIFF float): straight alpha (colour divided by
-        // coverage), the exposure, then quantize: round(zero + one * v +
-        // dither * r) clamped to [min, max]. No sRGB curve: the values are
-        // linear unless the exposure's gamma encodes them.
-        const double gamma = target.exposure_gamma;
-        if (gamma == 1.0) {
-            spec.attribute("oiio:ColorSpace", "Linear");
-        } else {
-            spec.attribute("oiio:ColorSpace", "Gamma" + std::to_string(gamma));
-            spec.attribute("oiio:Gamma", static_cast<float>(gamma));
-        }
-        // Our data is already unassociated: OIIO must not divide again (PNG)
-        // and TIFF marks its alpha as unassociated.
-        spec.attribute("oiio:UnassociatedAlpha", 1);
-        spec.set_format(target.bits == 32   ? OIIO::TypeDesc::FLOAT
-                        : target.bits == 16 ? OIIO::TypeDesc::UINT16
-                                            : OIIO::TypeDesc::UINT8);
-        const int alpha = spec.alpha_channel;
-        if (target.bits == 32)
-            floats.resize(values.size());
-        else if (target.bits == 16)
-            words.resize(values.size());
-        else
-            bytes.resize(values.size());
-        for (std::size_t p = 0; p < pixel_count; ++p) {
-            const float* in = &values[p * n];
-            const double a = alpha >= 0 ? double(in[alpha]) : 1.0;
-            const int x = int(p % std::size_t(image.width));
-            const int y = int(p / std::size_t(image.width));
-            for (std::size_t k = 0; k < n; ++k) {
-                double v = in[k];
-                if (int(k) != alpha && alpha >= 0 && a > 0.0) v /= a;
-                if (exposed_channel[k])
-                    v = expose(v, target.exposure_gain, target.exposure_gamma);
-                if (target.bits == 32) {
-                    floats[p * n + k] = static_cast<float>(v);
-                    continue;
-                }
-                const double q =
-                    quantize_value(v, target.quantize, dither_noise(x, y, int(k)));
-                if (target.bits == 16)
-                    words[p * n + k] = uint16_t(std::clamp(q, 0.0, 65535.0));
-                else
-                    bytes[p * n + k] = uint8_t(std::clamp(q, 0.0, 255.0));
-            }
-        }
+        px = integer_pixels(values, image.width, target, spec, exposed_channel);
     }
-
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(target.format);
-    if (!out)
-        throw IoError(path, "no '" + target.format +
-                                "' writer in OpenImageIO: " + OIIO::geterror());
-    AtomicOutput file(path);
-    // The temporary is ".<name>.<random>.tmp": the writer is chosen by format
-    // name above, so the extension does not matter.
-    if (!out->open(file.temp_path(), spec))
-        throw IoError(path,
-                      "cannot write " + target.format + " image: " + out->geterror());
-    bool ok = exr                 ? out->write_image(OIIO::TypeDesc::FLOAT, values.data())
-              : target.bits == 32 ? out->write_image(OIIO::TypeDesc::FLOAT, floats.data())
-              : target.bits == 16 ? out->write_image(OIIO::TypeDesc::UINT16, words.data())
-                                  : out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
-    ok = out->close() && ok;
-    if (!ok)
-        throw IoError(path,
-                      "cannot write " + target.format + " image: " + out->geterror());
-    file.commit();
+    write_display_file(target, spec, exr, values, px);
 }
 
 // ---------------------------------------------------------------------------

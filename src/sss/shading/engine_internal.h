@@ -74,6 +74,21 @@ struct Frame;
 struct BoundOp;
 using OpFn = void (*)(Frame&, const BoundOp&);
 
+/// The kinds of the control-flow ops: set by bind_program, run by Frame::run.
+enum Control : int {
+    C_None = 0,
+    C_If,
+    C_Loop,
+    C_Break,
+    C_Continue,
+    C_Block,
+    C_Return,
+    C_Illuminance,
+    C_Illuminate,
+    C_Solar,
+    C_Gather
+};
+
 /// One op bound to its implementation, with what the binder chose.
 struct BoundOp {
     OpFn fn = nullptr;

@@ -303,30 +303,31 @@ bool close_rel(const glm::vec3& a, const glm::vec3& b) {
 
 // --- gather ------------------------------------------------------------------------
 
-void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
-    const std::size_t n = f.n;
-    const Op& op = *b.op;
-    const std::size_t i0 = f.first_active();
-    if (i0 >= n) return;
-    const std::string cat = f.str(b, 0, i0);
-    const int samples = std::clamp(static_cast<int>(*f.ptr(b, 4, i0)), 0, 4096);
-    const bool env = cat == "environment";
-    if (!env && !cat.empty() && cat != "illuminance")
-        f.warn_once(b, "gather category \"" + cat +
-                           "\" is not supported; traced as \"illuminance\"");
+namespace {
 
-    // Options and outputs.
+enum GatherOutKind { O_Surface, O_Length, O_Direction, O_Origin, O_EnvColor, O_EnvDir };
+
+/// An output variable of a gather.
+struct GatherOut {
+    GatherOutKind kind;
+    int k; ///< argument index of the variable
+    int q; ///< index in the query's outputs (O_Surface)
+};
+
+/// A gather's options and outputs, from its token-value pairs.
+struct GatherArgs {
     RayParams o;
+    std::vector<GatherOut> outs;
+    std::vector<std::string> qnames; ///< the query's outputs ("surface:" names)
+    std::vector<int> qfloats;        ///< the floats of each of them
+};
+
+/// Reads the token-value pairs (from argument 5) at point i0.
+GatherArgs read_gather_args(Frame& f, const BoundOp& b, std::size_t i0) {
+    const Op& op = *b.op;
+    GatherArgs g;
+    RayParams& o = g.o;
     o.bias = -1.0f;
-    enum OutKind { O_Surface, O_Length, O_Direction, O_Origin, O_EnvColor, O_EnvDir };
-    struct Out {
-        OutKind kind;
-        int k; ///< argument index of the variable
-        int q; ///< index in the query's outputs (O_Surface)
-    };
-    std::vector<Out> outs;
-    std::vector<std::string> qnames;
-    std::vector<int> qfloats;
     const int nargs = static_cast<int>(op.args.size());
     for (int k = 5; k + 1 < nargs; k += 2) {
         const std::string& name = f.str(b, k, i0);
@@ -335,19 +336,19 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
             const auto colon = name.find(':');
             const std::string group = name.substr(0, colon), key = name.substr(colon + 1);
             if (group == "surface") {
-                outs.push_back({O_Surface, v, static_cast<int>(qnames.size())});
-                qnames.push_back(key);
-                qfloats.push_back(f.slot(b, v).nf);
+                g.outs.push_back({O_Surface, v, static_cast<int>(g.qnames.size())});
+                g.qnames.push_back(key);
+                g.qfloats.push_back(f.slot(b, v).nf);
             } else if (name == "ray:length") {
-                outs.push_back({O_Length, v, -1});
+                g.outs.push_back({O_Length, v, -1});
             } else if (name == "ray:direction") {
-                outs.push_back({O_Direction, v, -1});
+                g.outs.push_back({O_Direction, v, -1});
             } else if (name == "ray:origin") {
-                outs.push_back({O_Origin, v, -1});
+                g.outs.push_back({O_Origin, v, -1});
             } else if (name == "environment:color") {
-                outs.push_back({O_EnvColor, v, -1});
+                g.outs.push_back({O_EnvColor, v, -1});
             } else if (name == "environment:direction") {
-                outs.push_back({O_EnvDir, v, -1});
+                g.outs.push_back({O_EnvDir, v, -1});
             } else {
                 f.warn_once(b,
                             "gather output \"" + name + "\" is not supported; ignored");
@@ -377,20 +378,16 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
     if (!std::isfinite(o.bias)) o.bias = -1.0f;
     if (!std::isfinite(o.maxdist)) o.maxdist = 0.0f;
     if (!std::isfinite(o.samplebase)) o.samplebase = 0.0f;
-    const bool cosine = o.distribution == "cosine";
-    if (!o.distribution.empty() && !cosine && o.distribution != "uniform")
-        f.warn_once(b, "gather distribution \"" + o.distribution +
-                           "\" is not supported; uniform");
-    RayEnv re(f, b, o);
+    return g;
+}
 
-    std::vector<uint8_t>& entry = f.push_mask();
-    entry = f.mask;
-    if (samples == 0) {
-        f.pop_mask();
-        return;
-    }
-
-    // One query for every running point and sample.
+/// One query for every running point (`entry`) and sample: point i's rays
+/// start at first[i].
+RayQuery gather_query(Frame& f, const BoundOp& b, const GatherArgs& g, RayEnv& re,
+                      const std::vector<uint8_t>& entry, int samples, bool env,
+                      bool cosine, std::vector<std::size_t>& first) {
+    const std::size_t n = f.n;
+    const RayParams& o = g.o;
     RayQuery q;
     q.kind = env || cosine ? RayKind::Diffuse : RayKind::Specular;
     q.label = o.label;
@@ -399,10 +396,9 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
     q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
     q.seed = re.query_seed();
     if (!env) {
-        q.outputs = qnames;
-        q.output_floats = qfloats;
+        q.outputs = g.qnames;
+        q.output_floats = g.qfloats;
     }
-    std::vector<std::size_t> first(n, 0);
     const float tfar = re.tfar(o.maxdist);
     float spread = 0.0f;
     for (std::size_t i = 0; i < n; ++i) {
@@ -427,12 +423,87 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
         }
     }
     q.spread = spread;
+    return q;
+}
+
+/// Writes the outputs of sample s into the variables of the points of `base`.
+void write_gather_outputs(Frame& f, const BoundOp& b, const GatherArgs& g,
+                          const RayEnv& re, const RayQuery& q,
+                          const std::vector<std::size_t>& first,
+                          const std::vector<uint8_t>& base, int s, bool env,
+                          const std::vector<glm::vec3>& envc) {
+    const std::size_t n = f.n;
+    for (const GatherOut& out : g.outs) {
+        Slot& sl = f.slot(b, out.k);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!base[i]) continue;
+            const std::size_t r = first[i] + s;
+            const ShadowRay& ray = q.rays[r];
+            float* dst = sl.at(i);
+            switch (out.kind) {
+            case O_Surface:
+                // Hits only: a miss leaves the variable as it was.
+                if (!env && q.hit[r]) {
+                    const int nf = q.output_floats[out.q];
+                    std::memcpy(dst, &q.values[out.q][r * nf], sizeof(float) * nf);
+                }
+                break;
+            case O_Length:
+                *dst = q.hit[r] ? q.length[r]
+                                : (g.o.maxdist > 0.0f ? g.o.maxdist : kMissLength);
+                if (!std::isfinite(*dst)) *dst = kMissLength;
+                break;
+            case O_Direction:
+            case O_EnvDir:
+                st3(dst, xform_vector(re.to_current, ray.direction));
+                break;
+            case O_Origin:
+                st3(dst, xform_point(re.to_current, ray.origin));
+                break;
+            case O_EnvColor:
+                st3(dst, env && !envc.empty() ? envc[r] : glm::vec3(0.0f));
+                break;
+            }
+        }
+    }
+}
+
+} // namespace
+
+void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
+    const std::size_t n = f.n;
+    const std::size_t i0 = f.first_active();
+    if (i0 >= n) return;
+    const std::string cat = f.str(b, 0, i0);
+    const int samples = std::clamp(static_cast<int>(*f.ptr(b, 4, i0)), 0, 4096);
+    const bool env = cat == "environment";
+    if (!env && !cat.empty() && cat != "illuminance")
+        f.warn_once(b, "gather category \"" + cat +
+                           "\" is not supported; traced as \"illuminance\"");
+
+    const GatherArgs g = read_gather_args(f, b, i0);
+    const RayParams& o = g.o;
+    const bool cosine = o.distribution == "cosine";
+    if (!o.distribution.empty() && !cosine && o.distribution != "uniform")
+        f.warn_once(b, "gather distribution \"" + o.distribution +
+                           "\" is not supported; uniform");
+    RayEnv re(f, b, o);
+
+    std::vector<uint8_t>& entry = f.push_mask();
+    entry = f.mask;
+    if (samples == 0) {
+        f.pop_mask();
+        return;
+    }
+
+    std::vector<std::size_t> first(n, 0);
+    RayQuery q = gather_query(f, b, g, re, entry, samples, env, cosine, first);
     re.trace(q);
 
     // Environment lookups of every ray (category "environment").
     std::vector<glm::vec3> envc;
     bool need_env = false;
-    for (const Out& out : outs) need_env = need_env || out.kind == O_EnvColor;
+    for (const GatherOut& out : g.outs) need_env = need_env || out.kind == O_EnvColor;
     if (env && need_env) {
         std::vector<glm::vec3> dirs(q.rays.size());
         for (std::size_t r = 0; r < dirs.size(); ++r) dirs[r] = q.rays[r].direction;
@@ -447,40 +518,7 @@ void run_gather(Frame& f, const BoundOp& b, int hit_end, int miss_end) {
             cnt += base[i];
         }
         if (cnt == 0) break;
-        // The outputs of sample s.
-        for (const Out& out : outs) {
-            Slot& sl = f.slot(b, out.k);
-            for (std::size_t i = 0; i < n; ++i) {
-                if (!base[i]) continue;
-                const std::size_t r = first[i] + s;
-                const ShadowRay& ray = q.rays[r];
-                float* dst = sl.at(i);
-                switch (out.kind) {
-                case O_Surface:
-                    // Hits only: a miss leaves the variable as it was.
-                    if (!env && q.hit[r]) {
-                        const int nf = q.output_floats[out.q];
-                        std::memcpy(dst, &q.values[out.q][r * nf], sizeof(float) * nf);
-                    }
-                    break;
-                case O_Length:
-                    *dst = q.hit[r] ? q.length[r]
-                                    : (o.maxdist > 0.0f ? o.maxdist : kMissLength);
-                    if (!std::isfinite(*dst)) *dst = kMissLength;
-                    break;
-                case O_Direction:
-                case O_EnvDir:
-                    st3(dst, xform_vector(re.to_current, ray.direction));
-                    break;
-                case O_Origin:
-                    st3(dst, xform_point(re.to_current, ray.origin));
-                    break;
-                case O_EnvColor:
-                    st3(dst, env && !envc.empty() ? envc[r] : glm::vec3(0.0f));
-                    break;
-                }
-            }
-        }
+        write_gather_outputs(f, b, g, re, q, first, base, s, env, envc);
         // Hits, then misses.
         for (int part = 0; part < 2; ++part) {
             const int begin = part == 0 ? b.index + 1 : hit_end;
