@@ -109,7 +109,7 @@ install(FILES ${CMAKE_BINARY_DIR}/cmake/sssConfig.cmake
 file(RELATIVE_PATH SSS_PC_TO_PREFIX /p/${CMAKE_INSTALL_LIBDIR}/pkgconfig /p)
 string(REGEX REPLACE "/$" "" SSS_PC_TO_PREFIX "${SSS_PC_TO_PREFIX}")
 set(SSS_PC_LIBS "")
-foreach(module cli render bake shading brick view image diffusion light dice scene cloud util)
+foreach(module cli render bake binding shading rsl brick view image diffusion light dice scene cloud util)
   string(APPEND SSS_PC_LIBS " -lsss_${module}")
 endforeach()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/sss.pc.in ${CMAKE_BINARY_DIR}/cmake/sss.pc @ONLY)

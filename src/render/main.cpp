@@ -1,7 +1,7 @@
 /// \file main.cpp
 /// render: ray traces a RIB scene with the built-in surface shaders (brick-map
 /// and point-cloud _ssdiffusion lookups included) and writes its Displays,
-/// beauty and AOVs. Option parsing around sss::read_rib and sss::render_scene.
+/// beauty and AOVs. Option parsing around sss::read_rib and sss::RenderJob.
 
 #include <algorithm>
 #include <climits>
@@ -120,12 +120,14 @@ int run(const std::vector<std::string>& argv) {
     }();
     sss::warn_all(kTool, scene.warnings);
     const double read_s = job.seconds();
+    // One plan for the whole job: the shaders are loaded and bound once.
+    const sss::RenderJob render(scene, opt);
     if (job.newer()) {
-        const sss::RenderFiles io = sss::render_files(scene, opt);
+        const sss::RenderFiles io = render.files();
         if (job.up_to_date(io.outputs, io.inputs)) return 0;
     }
 
-    const sss::RenderReport report = sss::render_scene(scene, opt);
+    const sss::RenderReport report = render.run();
     sss::warn_all(kTool, report.warnings);
     if (job.verbose()) {
         const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "sss/cli/tool.h"
-#include "sss/shading/compiler.h"
-#include "sss/shading/preprocess.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/compiler.h"
+#include "sss/rsl/preprocess.h"
+#include "sss/rsl/program.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/job_files.h"

@@ -10,7 +10,7 @@
 
 #include "sss/bake/bake.h"
 #include "sss/scene/rib.h"
-#include "sss/shading/shader_library.h"
+#include "sss/rsl/shader_library.h"
 #include "test_util.h"
 
 namespace {

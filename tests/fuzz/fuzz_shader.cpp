@@ -10,8 +10,8 @@
 #include <string>
 
 #include "fuzz_common.h"
-#include "sss/shading/compiler.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/compiler.h"
+#include "sss/rsl/program.h"
 
 namespace {
 

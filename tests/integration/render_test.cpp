@@ -29,7 +29,7 @@
 #include "sss/render/image_io.h"
 #include "sss/render/render.h"
 #include "sss/scene/rib.h"
-#include "sss/shading/shader_library.h"
+#include "sss/rsl/shader_library.h"
 #include "sss/util/error.h"
 #include "sss/util/threads.h"
 #include "sss/util/version.h"

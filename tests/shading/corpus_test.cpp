@@ -36,7 +36,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 
-#include "../../src/sss/shading/builtins.h"
+#include "sss/rsl/builtins.h"
 #include "engine_test_util.h"
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"

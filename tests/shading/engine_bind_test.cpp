@@ -10,36 +10,16 @@
 #include <string>
 #include <vector>
 
-#include "../../src/sss/shading/builtins.h"
+#include "sss/rsl/builtins.h"
 #include "sss/shading/engine.h"
 
 namespace {
 
 using namespace sss;
 
+// The compiler's type letters; '.' (any type) is tried as a float here.
 ShadingType letter_type(char c, ShadingType x) {
-    switch (c) {
-    case 'f':
-        return ShadingType::Float;
-    case 'c':
-        return ShadingType::Color;
-    case 'p':
-        return ShadingType::Point;
-    case 'v':
-        return ShadingType::Vector;
-    case 'n':
-        return ShadingType::Normal;
-    case 'm':
-        return ShadingType::Matrix;
-    case 's':
-        return ShadingType::String;
-    case 'x':
-        return x;
-    case '.':
-        return ShadingType::Float;
-    default:
-        return ShadingType::Void;
-    }
+    return c == '.' ? ShadingType::Float : detail::letter_type(c, x);
 }
 
 struct Arg {

@@ -13,7 +13,7 @@
 
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
-#include "sss/shading/compiler.h"
+#include "sss/rsl/compiler.h"
 #include "sss/shading/engine.h"
 
 namespace sss::test {

@@ -7,9 +7,9 @@
 #include <sstream>
 #include <string>
 
-#include "rsl_test_util.h"
+#include "rsl/rsl_test_util.h"
 #include "sss/shading/engine.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 #include "sss/util/error.h"
 
 namespace {

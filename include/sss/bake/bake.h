@@ -2,7 +2,8 @@
 /// \file bake.h
 /// The bake module owns ptbake's job: baking lit micropolygons into point
 /// clouds.
-/// May use: shading, dice, light, diffusion, brick, image, cloud, scene and util.
+/// May use: binding, shading, rsl, dice, light, diffusion, brick, image, cloud, scene
+/// and util.
 ///
 /// The ptbake job as one library call, as PRMan bakes: every primitive whose
 /// surface shader (RSL, found along the shader search path) calls bake3d is

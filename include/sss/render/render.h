@@ -2,14 +2,15 @@
 /// \file render.h
 /// The render module owns the final image: ray tracing, shading and image
 /// output.
-/// May use: shading, dice, light, brick, image, cloud, scene and util (OpenEXR
-/// and OpenImageIO privately).
+/// May use: binding, shading, rsl, dice, light, brick, image, cloud, scene and util
+/// (OpenEXR and OpenImageIO privately).
 ///
 /// The final renderer: ray tracing (Embree) over the shared scene layer,
 /// the scene's RSL shaders run over batches of hits (the shading module;
 /// `read_ssdiffusion` looks `_ssdiffusion` up with texture3d), AOVs, and
 /// RenderMan Display outputs.
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -56,6 +57,41 @@ struct RenderReport {
     double write_seconds = 0.0;
 };
 
+/// The files a render job reads and writes, without rendering (for -newer 1).
+struct RenderFiles {
+    std::vector<std::string> inputs;  ///< scene.sources, then the diffusion files
+    std::vector<std::string> outputs; ///< every Display's file
+};
+
+struct SceneShaders;
+
+/// One render job, planned once: the frame resolved (the options', else the
+/// scene's), and the scene's shaders loaded and bound (each shader file read
+/// once, parameters matched to symbols once); the -newer test's file lists
+/// and the render itself use that plan. Construction throws as binding does
+/// (ShaderNotFoundError, ShaderCompileError, ValueError). The scene and the
+/// options must outlive the job.
+class RenderJob {
+public:
+    RenderJob(const Scene& scene, const RenderJobOptions& options);
+    ~RenderJob();
+    RenderJob(const RenderJob&) = delete;
+    RenderJob& operator=(const RenderJob&) = delete;
+
+    /// The files the job reads and writes (render_files()).
+    RenderFiles files() const;
+    /// The image (render_image()).
+    Image image(RenderReport* report) const;
+    /// Renders and writes every Display (render_scene()).
+    RenderReport run() const;
+
+private:
+    const Scene& m_scene;
+    const RenderJobOptions& m_options;
+    std::optional<int> m_frame;
+    std::unique_ptr<const SceneShaders> m_shaders;
+};
+
 /// Renders the scene into an image with the beauty (R, G, B, A) and the AOV
 /// layers (at least ambient, diffuse, specular, sss as layer.R/G/B and
 /// occlusion.R/G/B... see docs/render.md). Deterministic: the same image for
@@ -63,11 +99,7 @@ struct RenderReport {
 Image render_image(const Scene& scene, const RenderJobOptions& options,
                    RenderReport* report);
 
-/// The files a render job reads and writes, without rendering (for -newer 1).
-struct RenderFiles {
-    std::vector<std::string> inputs;  ///< scene.sources, then the diffusion files
-    std::vector<std::string> outputs; ///< every Display's file
-};
+/// RenderJob(scene, options).files().
 RenderFiles render_files(const Scene& scene, const RenderJobOptions& options);
 
 /// render_image, then writes every Display of the scene (the primary one

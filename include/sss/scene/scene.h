@@ -399,4 +399,10 @@ struct Scene {
     int worlds = 0;
 };
 
+/// The frame a job works on: `requested` (the tools' -frame) when given, else
+/// the scene's own (the FrameBegin block it read), else none.
+inline std::optional<int> job_frame(const Scene& scene, std::optional<int> requested) {
+    return requested ? requested : scene.options.frame;
+}
+
 } // namespace sss

@@ -1,5 +1,13 @@
 #pragma once
 /// \file engine.h
+/// Module shading: the engine that runs compiled shaders (module rsl) over
+/// batches of shading points, its ops and the shading language's function
+/// library (noise, strings, colour spaces), textures and brick-map and
+/// point-cloud lookups, bake3d files. A renderer reaches it through
+/// ShadingServices (below); the scene binding is module binding.
+/// May use: rsl, light, brick, image, cloud, scene and util (OpenImageIO
+/// through a plugin).
+///
 /// The shading engine: runs compiled shaders (program.h) SIMD-style over a
 /// batch of shading points (a diced grid in ptbake, a batch of ray hits in
 /// render) with a running mask for varying control flow, as REYES renderers
@@ -48,7 +56,7 @@
 
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -107,6 +115,14 @@ public:
     const std::string& where() const { return m_where; }
     /// The bound values (uniform, in the RIB's space: points in shader space).
     const std::vector<ShaderArgument>& arguments() const { return m_arguments; }
+    /// The bound value of the program's symbol `symbol` (a parameter), or
+    /// null when the call gives none: names are matched once, at binding.
+    const ShaderArgument* argument_of(int symbol) const {
+        const int a = symbol >= 0 && std::size_t(symbol) < m_argument_of.size()
+                          ? m_argument_of[std::size_t(symbol)]
+                          : -1;
+        return a < 0 ? nullptr : &m_arguments[std::size_t(a)];
+    }
     /// A uniform parameter's value as bound or defaulted, when it is a
     /// constant (for the renderer: light categories, file names...).
     std::optional<std::string> string_parameter(const std::string& name) const;
@@ -120,6 +136,7 @@ private:
     Matrix4 m_shader_to_world{1.0};
     std::string m_where;
     std::vector<ShaderArgument> m_arguments;
+    std::vector<int> m_argument_of; ///< per symbol: its index in m_arguments, or -1
 };
 
 /// What kind of ray a shader traces: the `Attribute "visibility"` name that

@@ -22,6 +22,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "sss/image/image_file.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"
@@ -438,24 +439,26 @@ std::array<float, 16> row_vector_matrix(const Matrix4& m) {
     return out;
 }
 
-void add_metadata(OIIO::ImageSpec& spec, const ImageMetadata& metadata, bool exr) {
-    if (!metadata.software.empty()) spec.attribute("Software", metadata.software);
+void add_metadata(std::vector<ImageAttribute>& attributes, const ImageMetadata& metadata,
+                  bool exr) {
+    auto add = [&](std::string name, auto value) {
+        attributes.push_back({std::move(name), std::move(value)});
+    };
+    if (!metadata.software.empty()) add("Software", metadata.software);
     // OIIO writes DateTime as EXR's capDate (a capDate of our own would be
     // replaced by the current time).
     CaptureTime when = capture_time();
-    spec.attribute("DateTime", when.date);
+    add("DateTime", when.date);
     if (!metadata.command_line.empty()) {
-        spec.attribute("sss:commandLine", metadata.command_line);
-        if (!exr) spec.attribute("ImageDescription", metadata.command_line);
+        add("sss:commandLine", metadata.command_line);
+        if (!exr) add("ImageDescription", metadata.command_line);
     }
-    for (const auto& [name, value] : metadata.extra) spec.attribute(name, value);
+    for (const auto& [name, value] : metadata.extra) add(name, value);
     if (!exr) return;
-    spec.attribute("utcOffset", when.utc_offset);
-    spec.attribute("renderTimeSeconds", static_cast<float>(metadata.render_seconds));
-    auto w2c = row_vector_matrix(metadata.world_to_camera);
-    auto w2n = row_vector_matrix(metadata.world_to_ndc);
-    spec.attribute("worldToCamera", OIIO::TypeMatrix44, w2c.data());
-    spec.attribute("worldToNDC", OIIO::TypeMatrix44, w2n.data());
+    add("utcOffset", when.utc_offset);
+    add("renderTimeSeconds", static_cast<float>(metadata.render_seconds));
+    add("worldToCamera", row_vector_matrix(metadata.world_to_camera));
+    add("worldToNDC", row_vector_matrix(metadata.world_to_ndc));
 }
 
 int index_of(const std::vector<std::string>& list, const std::string& s) {
@@ -551,23 +554,23 @@ struct IntegerPixels {
 /// [min, max]. No sRGB curve: the values are linear unless the exposure's
 /// gamma encodes them.
 IntegerPixels integer_pixels(const std::vector<float>& values, int width,
-                             const DisplayTarget& target, OIIO::ImageSpec& spec,
+                             const DisplayTarget& target, ImageFileSpec& spec,
                              const std::vector<char>& exposed_channel) {
     const std::size_t n = target.channels.size();
     const std::size_t pixel_count = values.size() / n;
     const double gamma = target.exposure_gamma;
     if (gamma == 1.0) {
-        spec.attribute("oiio:ColorSpace", "Linear");
+        spec.attributes.push_back({"oiio:ColorSpace", std::string("Linear")});
     } else {
-        spec.attribute("oiio:ColorSpace", "Gamma" + std::to_string(gamma));
-        spec.attribute("oiio:Gamma", static_cast<float>(gamma));
+        spec.attributes.push_back({"oiio:ColorSpace", "Gamma" + std::to_string(gamma)});
+        spec.attributes.push_back({"oiio:Gamma", static_cast<float>(gamma)});
     }
     // Our data is already unassociated: OIIO must not divide again (PNG)
     // and TIFF marks its alpha as unassociated.
-    spec.attribute("oiio:UnassociatedAlpha", 1);
-    spec.set_format(target.bits == 32   ? OIIO::TypeDesc::FLOAT
-                    : target.bits == 16 ? OIIO::TypeDesc::UINT16
-                                        : OIIO::TypeDesc::UINT8);
+    spec.attributes.push_back({"oiio:UnassociatedAlpha", 1});
+    spec.stored = target.bits == 32   ? PixelType::Float
+                  : target.bits == 16 ? PixelType::UInt16
+                                      : PixelType::UInt8;
     const int alpha = spec.alpha_channel;
     IntegerPixels px;
     if (target.bits == 32)
@@ -601,33 +604,6 @@ IntegerPixels integer_pixels(const std::vector<float>& values, int width,
     return px;
 }
 
-/// Writes the file through a temporary (AtomicOutput).
-void write_display_file(const DisplayTarget& target, const OIIO::ImageSpec& spec,
-                        bool exr, const std::vector<float>& values,
-                        const IntegerPixels& px) {
-    const std::string& path = target.path;
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(target.format);
-    if (!out)
-        throw IoError(path, "no '" + target.format +
-                                "' writer in OpenImageIO: " + OIIO::geterror());
-    AtomicOutput file(path);
-    // The temporary is ".<name>.<random>.tmp": the writer is chosen by format
-    // name above, so the extension does not matter.
-    if (!out->open(file.temp_path(), spec))
-        throw IoError(path,
-                      "cannot write " + target.format + " image: " + out->geterror());
-    bool ok =
-        exr                 ? out->write_image(OIIO::TypeDesc::FLOAT, values.data())
-        : target.bits == 32 ? out->write_image(OIIO::TypeDesc::FLOAT, px.floats.data())
-        : target.bits == 16 ? out->write_image(OIIO::TypeDesc::UINT16, px.words.data())
-                            : out->write_image(OIIO::TypeDesc::UINT8, px.bytes.data());
-    ok = out->close() && ok;
-    if (!ok)
-        throw IoError(path,
-                      "cannot write " + target.format + " image: " + out->geterror());
-    file.commit();
-}
-
 } // namespace
 
 void write_display(const Image& image, const DisplayTarget& target,
@@ -637,14 +613,16 @@ void write_display(const Image& image, const DisplayTarget& target,
     const std::size_t n = target.channels.size();
     std::vector<float> values = display_values(image, target, source);
 
-    OIIO::ImageSpec spec(
-        image.width, image.height, int(n),
-        exr ? (target.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT)
-            : OIIO::TypeDesc::UINT8);
-    spec.channelnames = target.names;
+    ImageFileSpec spec;
+    spec.format = target.format;
+    spec.width = image.width;
+    spec.height = image.height;
+    spec.stored = exr ? (target.half ? PixelType::Half : PixelType::Float) : PixelType::UInt8;
+    spec.channel_names = target.names;
     spec.alpha_channel = index_of(target.names, "A");
     spec.z_channel = exr ? index_of(target.names, "Z") : -1;
-    add_metadata(spec, metadata, exr);
+    spec.what = target.format + " image";
+    add_metadata(spec.attributes, metadata, exr);
 
     // Exposure (a no-op at gain 1, gamma 1). Integer files apply it after
     // dividing by alpha, in integer_pixels.
@@ -659,25 +637,33 @@ void write_display(const Image& image, const DisplayTarget& target,
 
     IntegerPixels px;
     if (exr) {
-        spec.attribute("compression", target.compression);
+        spec.attributes.push_back({"compression", target.compression});
         if (target.half) {
             bool mixed = false;
-            std::vector<OIIO::TypeDesc> formats(n, OIIO::TypeDesc::HALF);
+            std::vector<PixelType> formats(n, PixelType::Half);
             for (std::size_t k = 0; k < n; ++k)
                 if (needs_float(target.channels[k])) {
-                    formats[k] = OIIO::TypeDesc::FLOAT;
+                    formats[k] = PixelType::Float;
                     mixed = true;
                 }
-            if (mixed) spec.channelformats = formats;
+            if (mixed) spec.channel_stored = formats;
             // Beyond the half range a value would be stored as infinity.
             for (std::size_t i = 0; i < values.size(); ++i)
-                if (formats[i % n] == OIIO::TypeDesc::HALF)
+                if (formats[i % n] == PixelType::Half)
                     values[i] = std::clamp(values[i], -kHalfMax, kHalfMax);
         }
     } else {
         px = integer_pixels(values, image.width, target, spec, exposed_channel);
     }
-    write_display_file(target, spec, exr, values, px);
+    // The file through a temporary (write_image_file()).
+    if (exr)
+        write_image_file(target.path, spec, PixelType::Float, values.data());
+    else if (target.bits == 32)
+        write_image_file(target.path, spec, PixelType::Float, px.floats.data());
+    else if (target.bits == 16)
+        write_image_file(target.path, spec, PixelType::UInt16, px.words.data());
+    else
+        write_image_file(target.path, spec, PixelType::UInt8, px.bytes.data());
 }
 
 // ---------------------------------------------------------------------------

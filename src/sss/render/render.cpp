@@ -616,14 +616,22 @@ void write_render_bakes(Renderer& job, const Scene& scene, RenderReport& report)
 
 } // namespace
 
-Image render_image(const Scene& scene, const RenderJobOptions& options,
-                   RenderReport* report_out) {
+RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
+    : m_scene(scene), m_options(options),
+      m_frame(job_frame(scene, options.frame)),
+      m_shaders(std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
+
+RenderJob::~RenderJob() = default;
+
+Image RenderJob::image(RenderReport* report_out) const {
     RenderReport local;
     RenderReport& report = report_out ? *report_out : local;
     Stopwatch watch;
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    const Scene& scene = m_scene;
+    const RenderJobOptions& options = m_options;
+    const std::optional<int> frame = m_frame;
 
-    Renderer job;
+    Renderer job(*m_shaders);
     if (scene.primitives.empty())
         report.warnings.push_back(
             (scene.path.empty() ? std::string("the scene") : scene.path) +
@@ -730,24 +738,24 @@ std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions
 
 } // namespace
 
-RenderFiles render_files(const Scene& scene, const RenderJobOptions& options) {
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+RenderFiles RenderJob::files() const {
     RenderFiles files;
-    files.inputs = scene.sources;
-    const SceneShaders shaders = bind_scene_shaders(scene, frame);
-    for (const std::string& f : shader_input_files(shaders))
+    files.inputs = m_scene.sources;
+    for (const std::string& f : shader_input_files(*m_shaders))
         if (std::find(files.inputs.begin(), files.inputs.end(), f) == files.inputs.end())
             files.inputs.push_back(f);
     int primary = -1;
-    for (const DisplaySpec& d : job_displays(scene, options, frame, primary))
+    for (const DisplaySpec& d : job_displays(m_scene, m_options, m_frame, primary))
         files.outputs.push_back(display_file(d));
     return files;
 }
 
-RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
+RenderReport RenderJob::run() const {
     RenderReport report;
     Stopwatch watch;
-    const std::optional<int> frame = options.frame ? options.frame : scene.options.frame;
+    const Scene& scene = m_scene;
+    const RenderJobOptions& options = m_options;
+    const std::optional<int> frame = m_frame;
 
     int primary = -1;
     const std::vector<DisplaySpec> displays =
@@ -781,7 +789,7 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
     // Every file (the shaders' bakes, then the Displays) is written as a
     // temporary first; the set puts them all in place at the end, or none.
     OutputSet outputs;
-    Image image = render_image(scene, options, &report);
+    Image image = this->image(&report);
     const Stopwatch write_watch;
     ImageMetadata meta;
     meta.software = std::string("render (sss) ") + version_string();
@@ -821,6 +829,19 @@ RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
     report.write_seconds = write_watch.seconds();
     if (options.progress) options.progress->finish();
     return report;
+}
+
+Image render_image(const Scene& scene, const RenderJobOptions& options,
+                   RenderReport* report) {
+    return RenderJob(scene, options).image(report);
+}
+
+RenderFiles render_files(const Scene& scene, const RenderJobOptions& options) {
+    return RenderJob(scene, options).files();
+}
+
+RenderReport render_scene(const Scene& scene, const RenderJobOptions& options) {
+    return RenderJob(scene, options).run();
 }
 
 } // namespace sss

@@ -29,10 +29,10 @@
 #include "sss/light/ray_tracer.h"
 #include "sss/render/camera_sampling.h"
 #include "sss/shading/bake3d_file.h"
-#include "sss/shading/displacement.h"
+#include "sss/binding/displacement.h"
 #include "sss/shading/engine.h"
-#include "sss/shading/scene_rays.h"
-#include "sss/shading/scene_shaders.h"
+#include "sss/binding/scene_rays.h"
+#include "sss/binding/scene_shaders.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
@@ -149,6 +149,7 @@ private:
 
 /// Everything the pixel loop reads (immutable once built).
 struct Renderer {
+    explicit Renderer(const SceneShaders& bound) : shaders(bound) {}
     const Scene* scene = nullptr;
     Camera camera;
     std::optional<CameraRays> rays;
@@ -159,7 +160,7 @@ struct Renderer {
     /// lobes, or narrower than a pixel): such pixels take the value of their
     /// own sample nearest to their centre.
     bool nearest_fallback = false;
-    SceneShaders shaders;
+    const SceneShaders& shaders; ///< the job's, bound once (RenderJob)
     std::unique_ptr<ShadingResources> resources;
     std::unique_ptr<RenderServices> services;
     std::vector<Aov> aovs;

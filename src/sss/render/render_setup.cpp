@@ -151,7 +151,6 @@ std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
 /// traces shadow or occlusion rays.
 bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame,
                      RenderReport& report) {
-    job.shaders = bind_scene_shaders(scene, frame);
     if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, job.shaders);
     for (const std::string& w : job.shaders.warnings) report.warnings.push_back(w);
     job.resources = std::make_unique<ShadingResources>();

@@ -323,6 +323,7 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
     const std::string prefix =
         (m_where.empty() ? "" : m_where + ": ") + "shader '" + p.name + "'";
     m_bound = detail::bind_program(m_program);
+    m_argument_of.assign(p.symbols.size(), -1);
 
     for (const Param& param : params.items) {
         const int s = p.find(param.name);
@@ -382,6 +383,8 @@ ShaderInstance::ShaderInstance(std::shared_ptr<const Program> program,
             arg.numbers = std::move(numbers);
         }
         m_arguments.push_back(std::move(arg));
+        // A parameter given twice takes its last value.
+        m_argument_of[std::size_t(s)] = static_cast<int>(m_arguments.size()) - 1;
     }
 }
 
@@ -465,10 +468,7 @@ void ShadingContext::Impl::init_params(detail::Frame& f, bool primvars) {
     const ShaderInstance& inst = *f.instance;
     for (int s : f.bound->params) {
         const Symbol& sym = p.symbols[s];
-        const ShaderArgument* given = nullptr;
-        for (const ShaderArgument& a : inst.arguments())
-            if (a.name == sym.name) given = &a;
-        if (given) {
+        if (const ShaderArgument* given = inst.argument_of(s)) {
             write_argument(*this, f.slots[s], sym, *given, f.n, f.shader_to_current,
                            true);
         } else if (sym.init_begin >= 0 && sym.init_end > sym.init_begin) {

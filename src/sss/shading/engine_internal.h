@@ -31,7 +31,7 @@
 #include <glm/vec3.hpp>
 
 #include "sss/shading/engine.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 
 namespace sss::detail {
 

@@ -40,13 +40,13 @@
 #include "engine_internal.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/util/hash.h"
+#include "sss/util/math.h"
 #include "texture_library.h"
 
 namespace sss::detail {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kGolden = 0.6180339887498949;
 constexpr float kHalfPi = 1.5707963f;
 /// ray:length of a ray that hit nothing within an infinite maxdist.

@@ -10,7 +10,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 
 namespace sss::detail {
 

@@ -2,7 +2,7 @@
 /// Binding a scene's Surface and LightSource calls to compiled shaders
 /// (scene_shaders.h).
 
-#include "sss/shading/scene_shaders.h"
+#include "sss/binding/scene_shaders.h"
 
 #include <algorithm>
 #include <cctype>
@@ -10,7 +10,7 @@
 #include <map>
 #include <system_error>
 
-#include "builtins.h"
+#include "sss/rsl/builtins.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/messages.h"
 
@@ -120,6 +120,14 @@ std::optional<std::string> unlit_scene_warning(const Scene& scene,
     return (scene.path.empty() ? std::string("the scene") : scene.path) +
            ": no light sources: the surfaces shaded by " + list +
            " gather light from none and are black but for what they emit";
+}
+
+std::vector<std::string> shader_search_path(const Scene& scene) {
+    auto group = scene.options.groups.find("searchpath");
+    if (group == scene.options.groups.end() || !group->second.has("shader"))
+        return resolve_shader_search_path(scene.path, nullptr);
+    const std::string text = group->second.get_string("shader", "");
+    return resolve_shader_search_path(scene.path, &text);
 }
 
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {

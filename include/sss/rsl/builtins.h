@@ -21,6 +21,8 @@
 #include <span>
 #include <string_view>
 
+#include "sss/rsl/program.h"
+
 namespace sss::detail {
 
 struct BuiltinSignature {
@@ -40,5 +42,9 @@ std::span<const BuiltinSignature> builtin_signatures();
 
 /// Whether `name` is a built-in function.
 bool is_builtin(std::string_view name);
+
+/// The type a prototype's type letter names (lower case; 'x' stands for `x`):
+/// Void for 'o', '.' and anything else.
+ShadingType letter_type(char c, ShadingType x);
 
 } // namespace sss::detail

@@ -3,7 +3,7 @@
 /// (lexer.cpp, parser.cpp, codegen.cpp). compile_file and compile_text,
 /// which run the preprocessor first, are in compile_source.cpp.
 
-#include "sss/shading/compiler.h"
+#include "sss/rsl/compiler.h"
 
 #include "ast.h"
 #include "codegen.h"

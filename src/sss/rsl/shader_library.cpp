@@ -1,14 +1,14 @@
 /// \file shader_library.cpp
 /// The shader search path and on-demand loading (shader_library.h).
 
-#include "sss/shading/shader_library.h"
+#include "sss/rsl/shader_library.h"
 
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
 #include <unistd.h>
 
-#include "sss/shading/compiler.h"
+#include "sss/rsl/compiler.h"
 #include "sss/util/install_layout.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
@@ -47,19 +47,17 @@ std::string standard_shader_dir() {
     return data_folder(DataFolder::Shaders);
 }
 
-std::vector<std::string> shader_search_path(const Scene& scene) {
-    const std::string rib_dir = scene.path.empty()
-                                    ? std::string(".")
-                                    : fs::path(scene.path).parent_path().string();
+std::vector<std::string> resolve_shader_search_path(const std::string& rib_path,
+                                                    const std::string* option) {
+    const std::string rib_dir =
+        rib_path.empty() ? std::string(".") : fs::path(rib_path).parent_path().string();
     const std::string base = rib_dir.empty() ? std::string(".") : rib_dir;
     const std::string standard = standard_shader_dir();
     std::vector<std::string> defaults = {base};
     if (!standard.empty()) defaults.push_back(standard);
 
-    auto group = scene.options.groups.find("searchpath");
-    if (group == scene.options.groups.end() || !group->second.has("shader"))
-        return defaults;
-    const std::string text = group->second.get_string("shader", "");
+    if (!option) return defaults;
+    const std::string& text = *option;
     std::vector<std::string> out;
     for (const std::string& entry : split_path(text)) {
         if (entry == "&") {

@@ -1,7 +1,7 @@
 /// \file displacement.cpp
 /// Displacement shaders run for the dicer (displacement.h).
 
-#include "sss/shading/displacement.h"
+#include "sss/binding/displacement.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,11 +1,12 @@
 #pragma once
 /// \file program.h
-/// The shading module owns the RenderMan Shading Language: the compiler
-/// (preprocess.h, compiler.h), compiled shaders (this file), the engine that
-/// runs them over batches of shading points (engine.h) and the built-in
-/// function library.
-/// May use: dice, light, brick, image, cloud, scene and util (OpenImageIO
-/// through a plugin).
+/// Module rsl: the RenderMan Shading Language compiler, in phases as OSL's
+/// (preprocess.h; lexer, parser, the code generator by phase: types,
+/// expressions, calls, statements; compiler.h), compiled shaders (this file)
+/// and their `.slo` files, the built-in functions' signatures (builtins.h)
+/// and the shader search path (shader_library.h). It knows nothing of
+/// scenes or renderers: the `shader` tool needs nothing else.
+/// May use: util.
 ///
 /// A compiled shader, as the compiler produces it and a `.slo` file stores
 /// it: a table of typed symbols and a list of operations over them, with

@@ -44,7 +44,7 @@
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
-#include "sss/shading/scene_shaders.h"
+#include "sss/binding/scene_shaders.h"
 
 namespace sss {
 

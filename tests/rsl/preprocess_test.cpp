@@ -1,5 +1,5 @@
 /// \file preprocess_test.cpp
-/// The shader preprocessor (sss/shading/preprocess.h): every directive,
+/// The shader preprocessor (sss/rsl/preprocess.h): every directive,
 /// macros, #if arithmetic, includes, the line map and error locations.
 
 #include <fstream>
@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "sss/shading/preprocess.h"
+#include "sss/rsl/preprocess.h"
 #include "test_util.h"
 
 namespace sss {

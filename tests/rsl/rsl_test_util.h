@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "sss/shading/compiler.h"
+#include "sss/rsl/compiler.h"
 
 namespace sss::test {
 

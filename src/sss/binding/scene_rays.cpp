@@ -3,7 +3,7 @@
 /// ray, hit finding, and the shading of hits by their own surface shaders in
 /// per-thread, per-depth shading contexts.
 
-#include "sss/shading/scene_rays.h"
+#include "sss/binding/scene_rays.h"
 
 #include <algorithm>
 #include <array>

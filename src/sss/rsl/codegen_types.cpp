@@ -52,29 +52,6 @@ const std::vector<Proto>& protos() {
     return table;
 }
 
-ShadingType letter_type(char c, ShadingType x) {
-    switch (c) {
-    case 'f':
-        return ShadingType::Float;
-    case 'c':
-        return ShadingType::Color;
-    case 'p':
-        return ShadingType::Point;
-    case 'v':
-        return ShadingType::Vector;
-    case 'n':
-        return ShadingType::Normal;
-    case 'm':
-        return ShadingType::Matrix;
-    case 's':
-        return ShadingType::String;
-    case 'x':
-        return x;
-    default:
-        return ShadingType::Void;
-    }
-}
-
 // --- uniform / varying ------------------------------------------------
 
 void Generator::force_varying(int sym) {

@@ -26,7 +26,7 @@
 #include "sss/dice/dice.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
-#include "sss/shading/scene_shaders.h"
+#include "sss/binding/scene_shaders.h"
 
 namespace sss {
 

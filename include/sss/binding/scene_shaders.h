@@ -1,5 +1,11 @@
 #pragma once
 /// \file scene_shaders.h
+/// Module binding: a scene's shaders bound for a job (this file), secondary
+/// rays through a diced scene with the hits shaded by their own shaders
+/// (scene_rays.h) and displacement shaders on the dicer's grids
+/// (displacement.h): what ptbake and render share above the engine.
+/// May use: shading, rsl, dice, light, brick, image, cloud, scene and util.
+///
 /// The shaders of a scene bound for one job (ptbake or render): every
 /// distinct Surface and Displacement call and every light source as a
 /// ShaderInstance, loaded
@@ -15,7 +21,7 @@
 
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
-#include "sss/shading/shader_library.h"
+#include "sss/rsl/shader_library.h"
 #include "sss/util/job_files.h"
 
 namespace sss {
@@ -40,6 +46,10 @@ struct SceneShaders {
     /// Whether any bound program (surface or light) calls `op`.
     bool uses(std::string_view op) const;
 };
+
+/// The scene's shader search path, folders in search order
+/// (resolve_shader_search_path() of its `Option "searchpath" "shader"`).
+std::vector<std::string> shader_search_path(const Scene& scene);
 
 /// Whether `program` has an op named `op`.
 bool program_uses(const Program& program, std::string_view op);

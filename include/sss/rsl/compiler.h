@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "sss/shading/preprocess.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/preprocess.h"
+#include "sss/rsl/program.h"
 #include "sss/util/error.h"
 
 namespace sss {

@@ -8,8 +8,8 @@
 
 #include "sss/dice/dice.h"
 #include "sss/scene/rib.h"
-#include "sss/shading/scene_rays.h"
-#include "sss/shading/scene_shaders.h"
+#include "sss/binding/scene_rays.h"
+#include "sss/binding/scene_shaders.h"
 #include "test_util.h"
 
 namespace {

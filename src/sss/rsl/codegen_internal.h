@@ -16,12 +16,13 @@
 #include <unordered_set>
 #include <vector>
 
-#include "builtins.h"
+#include "sss/rsl/builtins.h"
 #include "codegen.h"
+#include "sss/util/math.h"
 
 namespace sss::detail::codegen {
 
-constexpr double kPi = 3.14159265358979323846;
+using sss::kPi;
 constexpr std::size_t kMaxOps = 500000;
 constexpr std::size_t kMaxSymbols = 500000;
 constexpr std::size_t kMaxInlineDepth = 64; ///< calls inside calls inside calls...
@@ -62,8 +63,6 @@ struct Proto {
 
 /// The built-in prototypes of builtins.h, parsed once.
 const std::vector<Proto>& protos();
-/// The type of a prototype letter; `x` stands for the overload's free type.
-ShadingType letter_type(char c, ShadingType x);
 
 // --- the generator -----------------------------------------------------------
 

@@ -25,8 +25,8 @@
 #include <limits>
 #include <sstream>
 
-#include "builtins.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/builtins.h"
+#include "sss/rsl/program.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"

@@ -2,7 +2,7 @@
 /// Types and symbol tables of compiled shaders (program.h). The .slo file
 /// format is in slo_io.cpp.
 
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 
 namespace sss {
 

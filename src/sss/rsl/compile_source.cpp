@@ -3,7 +3,7 @@
 /// compile_preprocessed. A file of its own so that code calling only
 /// compile_preprocessed does not pull in the preprocessor.
 
-#include "sss/shading/compiler.h"
+#include "sss/rsl/compiler.h"
 
 namespace sss {
 

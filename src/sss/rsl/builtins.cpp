@@ -2,7 +2,7 @@
 /// The table of RSL built-in functions (builtins.h): RISpec 3.2 chapter 15
 /// and the PRMan extensions production shaders use.
 
-#include "builtins.h"
+#include "sss/rsl/builtins.h"
 
 #include <algorithm>
 #include <array>
@@ -127,6 +127,29 @@ std::span<const BuiltinSignature> builtin_signatures() {
 bool is_builtin(std::string_view name) {
     return std::any_of(std::begin(kTable), std::end(kTable),
                        [&](const BuiltinSignature& s) { return name == s.name; });
+}
+
+ShadingType letter_type(char c, ShadingType x) {
+    switch (c) {
+    case 'f':
+        return ShadingType::Float;
+    case 'c':
+        return ShadingType::Color;
+    case 'p':
+        return ShadingType::Point;
+    case 'v':
+        return ShadingType::Vector;
+    case 'n':
+        return ShadingType::Normal;
+    case 'm':
+        return ShadingType::Matrix;
+    case 's':
+        return ShadingType::String;
+    case 'x':
+        return x;
+    default:
+        return ShadingType::Void;
+    }
 }
 
 } // namespace sss::detail

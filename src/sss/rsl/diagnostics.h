@@ -7,9 +7,9 @@
 #include <tuple>
 #include <vector>
 
-#include "sss/shading/compiler.h"
-#include "sss/shading/preprocess.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/compiler.h"
+#include "sss/rsl/preprocess.h"
+#include "sss/rsl/program.h"
 
 namespace sss::detail {
 

@@ -19,7 +19,7 @@
 
 #include <sys/stat.h>
 
-#include "sss/shading/preprocess.h"
+#include "sss/rsl/preprocess.h"
 #include "sss/util/byte_io.h"
 
 namespace sss::preprocess_detail {

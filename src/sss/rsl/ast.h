@@ -8,7 +8,7 @@
 
 #include "diagnostics.h"
 #include "lexer.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 
 namespace sss::detail {
 

@@ -20,8 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "sss/scene/scene.h"
-#include "sss/shading/program.h"
+#include "sss/rsl/program.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -36,8 +35,11 @@ public:
 /// The folder of the standard shaders (see above); "" when it cannot be found.
 std::string standard_shader_dir();
 
-/// The scene's shader search path, folders in search order.
-std::vector<std::string> shader_search_path(const Scene& scene);
+/// A shader search path, folders in search order: `option` is the value of
+/// `Option "searchpath" "shader"` (null when the scene sets none) and
+/// `rib_path` the scene's file (relative folders are taken from its folder).
+std::vector<std::string> resolve_shader_search_path(const std::string& rib_path,
+                                                    const std::string* option);
 
 /// Loads shaders by name along a search path; each once. Thread-safe.
 class ShaderLibrary {
