@@ -10,11 +10,12 @@
 /// radius sqrt(A / pi); a uniformly lit square integrates to
 /// (1/2pi) \oint disk(rho(theta)) dtheta around the receiver).
 ///
-/// Time and memory are bounded by the CTest TIMEOUT of each test; the cases are
+/// Time and memory are bounded by the CTest TIMEOUT of the file's test; the cases are
 /// sized so that a pathological blow-up (unbounded octree recursion on
 /// coincident points, an O(N^2) path on a large cloud) would exceed it.
 ///
-/// Suite names all start with "Stability" so `ctest -R Stability` selects them.
+/// Suite names all start with "Stability" (--gtest_filter='*Stability*'); the file
+/// runs as unit.diffusion.stability_test (ctest -L stability).
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,6 @@
 // The texture library's 3-D side: texture3d on brick maps and point clouds,
-// with the renderer's semantics (src/sss/render/shaders.cpp DiffusionSource):
-// brick maps blend their levels by the filter radius, point clouds average
-// their nearest points.
+// as RenderMan looks them up: brick maps blend their levels by the filter
+// radius, point clouds average their nearest points.
 
 #include "texture_library.h"
 
