@@ -34,9 +34,61 @@ struct Preprocessor::Expression {
         return c != 0 ? a : b;
     }
 
-    /// Binary operators by precedence level, lowest first.
-    int64_t binary(int level, bool eval, int depth) {
-        static const std::vector<std::vector<std::string_view>> kLevels = {
+    /// `a op b` for a binary operator. Out of line, so that the recursion
+    /// through the precedence levels keeps small frames (the sanitizer build
+    /// gives each std::string of an error message a large one).
+    [[gnu::noinline]] int64_t apply(std::string_view op, const Token& op_tok, int64_t a,
+                                    int64_t b, bool eval) const {
+        int64_t r = a;
+        const auto ua = static_cast<uint64_t>(a), ub = static_cast<uint64_t>(b);
+        if (op == "||")
+            r = (a != 0 || b != 0);
+        else if (op == "&&")
+            r = (a != 0 && b != 0);
+        else if (op == "|")
+            r = wrap(ua | ub);
+        else if (op == "^")
+            r = wrap(ua ^ ub);
+        else if (op == "&")
+            r = wrap(ua & ub);
+        else if (op == "==")
+            r = a == b;
+        else if (op == "!=")
+            r = a != b;
+        else if (op == "<")
+            r = a < b;
+        else if (op == ">")
+            r = a > b;
+        else if (op == "<=")
+            r = a <= b;
+        else if (op == ">=")
+            r = a >= b;
+        else if (op == "<<")
+            r = b < 0 || b > 63 ? 0 : wrap(ua << b);
+        else if (op == ">>")
+            r = b < 0 || b > 63 ? (a < 0 ? -1 : 0) : a >> b;
+        else if (op == "+")
+            r = wrap(ua + ub);
+        else if (op == "-")
+            r = wrap(ua - ub);
+        else if (op == "*")
+            r = wrap(ua * ub);
+        else if (!eval)
+            r = 0;
+        else if (b == 0)
+            pp.fail(op_tok, "division by zero in #if expression");
+        else if (b == -1)
+            r = op == "/" ? wrap(0 - ua) : 0; // no INT64_MIN / -1 trap
+        else
+            r = op == "/" ? a / b : a % b;
+        return r;
+    }
+
+    /// Binary operators by precedence level, lowest first. Out of line: the
+    /// table's initializer would take room in every frame of binary().
+    [[gnu::noinline]] static const std::vector<std::vector<std::string_view>>&
+    binary_levels() {
+        static const std::vector<std::vector<std::string_view>> levels = {
             {"||"},
             {"&&"},
             {"|"},
@@ -47,6 +99,12 @@ struct Preprocessor::Expression {
             {"<<", ">>"},
             {"+", "-"},
             {"*", "/", "%"}};
+        return levels;
+    }
+
+    /// Binary operators by precedence level, lowest first.
+    int64_t binary(int level, bool eval, int depth) {
+        const std::vector<std::vector<std::string_view>>& kLevels = binary_levels();
         if (level == static_cast<int>(kLevels.size())) return unary(eval, depth);
         int64_t a = binary(level + 1, eval, depth);
         for (;;) {
@@ -58,47 +116,7 @@ struct Preprocessor::Expression {
             const bool rhs_eval =
                 eval && !(op == "||" && a != 0) && !(op == "&&" && a == 0);
             const int64_t b = binary(level + 1, rhs_eval, depth);
-            const auto ua = static_cast<uint64_t>(a), ub = static_cast<uint64_t>(b);
-            if (op == "||")
-                a = (a != 0 || b != 0);
-            else if (op == "&&")
-                a = (a != 0 && b != 0);
-            else if (op == "|")
-                a = wrap(ua | ub);
-            else if (op == "^")
-                a = wrap(ua ^ ub);
-            else if (op == "&")
-                a = wrap(ua & ub);
-            else if (op == "==")
-                a = a == b;
-            else if (op == "!=")
-                a = a != b;
-            else if (op == "<")
-                a = a < b;
-            else if (op == ">")
-                a = a > b;
-            else if (op == "<=")
-                a = a <= b;
-            else if (op == ">=")
-                a = a >= b;
-            else if (op == "<<")
-                a = b < 0 || b > 63 ? 0 : wrap(ua << b);
-            else if (op == ">>")
-                a = b < 0 || b > 63 ? (a < 0 ? -1 : 0) : a >> b;
-            else if (op == "+")
-                a = wrap(ua + ub);
-            else if (op == "-")
-                a = wrap(ua - ub);
-            else if (op == "*")
-                a = wrap(ua * ub);
-            else if (!eval)
-                a = 0;
-            else if (b == 0)
-                pp.fail(op_tok, "division by zero in #if expression");
-            else if (b == -1)
-                a = op == "/" ? wrap(0 - ua) : 0; // no INT64_MIN / -1 trap
-            else
-                a = op == "/" ? a / b : a % b;
+            a = apply(op, op_tok, a, b, eval);
         }
     }
 
