@@ -9,8 +9,8 @@
 #include <glm/geometric.hpp>
 
 #include "sss/bake/bake.h"
-#include "sss/scene/rib.h"
 #include "sss/rsl/shader_library.h"
+#include "sss/scene/rib.h"
 #include "test_util.h"
 
 namespace {

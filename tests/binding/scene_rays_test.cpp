@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "sss/dice/dice.h"
-#include "sss/scene/rib.h"
 #include "sss/binding/scene_rays.h"
 #include "sss/binding/scene_shaders.h"
+#include "sss/dice/dice.h"
+#include "sss/scene/rib.h"
 #include "test_util.h"
 
 namespace {

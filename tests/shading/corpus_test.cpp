@@ -36,11 +36,11 @@
 
 #include <OpenImageIO/imagebuf.h>
 
-#include "sss/rsl/builtins.h"
 #include "engine_test_util.h"
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/rsl/builtins.h"
 #include "test_util.h"
 
 namespace {

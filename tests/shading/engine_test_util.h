@@ -12,8 +12,8 @@
 #include <glm/vec3.hpp>
 
 #include "sss/light/ray_tracer.h"
-#include "sss/scene/scene.h"
 #include "sss/rsl/compiler.h"
+#include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
 
 namespace sss::test {

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "rsl/rsl_test_util.h"
-#include "sss/shading/engine.h"
 #include "sss/rsl/program.h"
+#include "sss/shading/engine.h"
 #include "sss/util/error.h"
 
 namespace {

@@ -23,10 +23,10 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include "sss/binding/scene_shaders.h"
 #include "sss/dice/dice.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
-#include "sss/binding/scene_shaders.h"
 
 namespace sss {
 

@@ -40,11 +40,11 @@
 
 #include <glm/vec3.hpp>
 
+#include "sss/binding/scene_shaders.h"
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
-#include "sss/binding/scene_shaders.h"
 
 namespace sss {
 

@@ -19,9 +19,9 @@
 #include <string_view>
 #include <vector>
 
+#include "sss/rsl/shader_library.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
-#include "sss/rsl/shader_library.h"
 #include "sss/util/job_files.h"
 
 namespace sss {

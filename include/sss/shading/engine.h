@@ -55,8 +55,8 @@
 #include <glm/vec3.hpp>
 
 #include "sss/light/ray_tracer.h"
-#include "sss/scene/scene.h"
 #include "sss/rsl/program.h"
+#include "sss/scene/scene.h"
 #include "sss/util/error.h"
 
 namespace sss {

@@ -26,13 +26,13 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "sss/binding/displacement.h"
+#include "sss/binding/scene_rays.h"
+#include "sss/binding/scene_shaders.h"
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/shading/bake3d_file.h"
-#include "sss/binding/displacement.h"
 #include "sss/shading/engine.h"
-#include "sss/binding/scene_rays.h"
-#include "sss/binding/scene_shaders.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
@@ -634,8 +634,7 @@ double material_mean_free_path(const MaterialSpec& material) {
 }
 
 BakeJob::BakeJob(const Scene& scene, const BakeOptions& options)
-    : m_scene(scene), m_options(options),
-      m_frame(job_frame(scene, options.frame)),
+    : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
       m_shaders(
           std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
 

@@ -94,8 +94,8 @@ std::optional<std::string> option_wording(const std::exception& e) {
         else if (missing->role() == MissingChannelError::Role::Dmfp)
             option = "-diffusemeanfreepath fromfile";
         return (missing->inputs().empty() ? "" : missing->inputs() + ": ") +
-               "input has no channel '" + missing->channel() + "' (set it with " + option +
-               "; channels present: " + missing->present() + ")";
+               "input has no channel '" + missing->channel() + "' (set it with " +
+               option + "; channels present: " + missing->present() + ")";
     }
     return std::nullopt;
 }

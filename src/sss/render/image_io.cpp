@@ -617,7 +617,8 @@ void write_display(const Image& image, const DisplayTarget& target,
     spec.format = target.format;
     spec.width = image.width;
     spec.height = image.height;
-    spec.stored = exr ? (target.half ? PixelType::Half : PixelType::Float) : PixelType::UInt8;
+    spec.stored =
+        exr ? (target.half ? PixelType::Half : PixelType::Float) : PixelType::UInt8;
     spec.channel_names = target.names;
     spec.alpha_channel = index_of(target.names, "A");
     spec.z_channel = exr ? index_of(target.names, "Z") : -1;

@@ -617,9 +617,9 @@ void write_render_bakes(Renderer& job, const Scene& scene, RenderReport& report)
 } // namespace
 
 RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
-    : m_scene(scene), m_options(options),
-      m_frame(job_frame(scene, options.frame)),
-      m_shaders(std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
+    : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
+      m_shaders(
+          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
 
 RenderJob::~RenderJob() = default;
 

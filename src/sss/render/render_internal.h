@@ -25,14 +25,14 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "sss/binding/displacement.h"
+#include "sss/binding/scene_rays.h"
+#include "sss/binding/scene_shaders.h"
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/render/camera_sampling.h"
 #include "sss/shading/bake3d_file.h"
-#include "sss/binding/displacement.h"
 #include "sss/shading/engine.h"
-#include "sss/binding/scene_rays.h"
-#include "sss/binding/scene_shaders.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"

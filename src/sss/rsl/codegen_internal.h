@@ -16,8 +16,8 @@
 #include <unordered_set>
 #include <vector>
 
-#include "sss/rsl/builtins.h"
 #include "codegen.h"
+#include "sss/rsl/builtins.h"
 #include "sss/util/math.h"
 
 namespace sss::detail::codegen {

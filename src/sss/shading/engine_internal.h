@@ -30,8 +30,8 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
-#include "sss/shading/engine.h"
 #include "sss/rsl/program.h"
+#include "sss/shading/engine.h"
 
 namespace sss::detail {
 
