@@ -17,6 +17,7 @@
 #include <glm/geometric.hpp>
 
 #include "shading/engine_test_util.h"
+#include "sss/binding/texture_library.h"
 #include "sss/light/light_dome.h"
 #include "sss/render/image_io.h"
 #include "test_util.h"
@@ -50,7 +51,9 @@ std::string make_envlatl(const LatLongImage& img, const TempDir& dir,
 /// environment(map, dir) for each direction (world = camera space here).
 std::vector<glm::vec3> lookup(const std::string& map,
                               const std::vector<glm::dvec3>& dirs) {
-    return environment_lookups(map, std::vector<glm::vec3>(dirs.begin(), dirs.end()));
+    TextureLibrary textures;
+    return environment_lookups(textures, map,
+                               std::vector<glm::vec3>(dirs.begin(), dirs.end()));
 }
 
 TEST(RslEnvironment, LatLongLookupsReturnThePixels) {

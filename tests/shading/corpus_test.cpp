@@ -34,12 +34,8 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include <OpenImageIO/imagebuf.h>
-
+#include "corpus_harness.h"
 #include "engine_test_util.h"
-#include "sss/brick/brickmap.h"
-#include "sss/cloud/point_cloud.h"
-#include "sss/cloud/point_cloud_io.h"
 #include "sss/rsl/builtins.h"
 #include "test_util.h"
 
@@ -49,70 +45,6 @@ using namespace sss;
 using namespace sss::test;
 
 constexpr double kPi = std::numbers::pi;
-
-/// The corpus folder (tests/shading/corpus).
-std::filesystem::path corpus_dir() {
-    return std::filesystem::path(SSS_TEST_DATA_DIR).parent_path() / "shading" / "corpus";
-}
-
-PreprocessOptions corpus_options() {
-    PreprocessOptions o;
-    o.include_dirs = {corpus_dir().string(), (corpus_dir() / "include").string()};
-    o.defines = {{"CORPUS_LEVEL", "3"}}; // preprocessor.sl checks it
-    return o;
-}
-
-/// Every shader of a corpus file, compiled from disk (the test fails on errors).
-std::vector<std::shared_ptr<const Program>> compile_corpus(const std::string& file) {
-    std::vector<std::shared_ptr<const Program>> out;
-    try {
-        CompileResult r = compile_file((corpus_dir() / file).string(), corpus_options());
-        for (const Diagnostic& w : r.warnings)
-            ADD_FAILURE() << file << ": " << w.format();
-        for (Program& p : r.shaders)
-            out.push_back(std::make_shared<Program>(std::move(p)));
-    } catch (const ShaderCompileError& e) {
-        std::string all;
-        for (const Diagnostic& d : e.diagnostics()) all += d.format() + "\n";
-        ADD_FAILURE() << file << " does not compile:\n" << all;
-    } catch (const std::exception& e) {
-        ADD_FAILURE() << file << ": " << e.what();
-    }
-    return out;
-}
-
-/// Asserts every check_* output of the last execute() is 0 at every point;
-/// returns the number of checks.
-int expect_checks(const ShadingContext& ctx, const Program& prog, const std::string& what,
-                  std::size_t points, bool allow_nonfinite = false) {
-    int checks = 0;
-    for (int index : prog.parameters()) {
-        const std::string& name = prog.symbols[index].name;
-        if (name.rfind("check_", 0) != 0) continue;
-        ++checks;
-        TypeSpec type;
-        std::vector<float> values;
-        if (!ctx.output(name, type, values)) {
-            ADD_FAILURE() << what << ": no output " << name;
-            continue;
-        }
-        std::size_t bad = 0, first = 0;
-        for (std::size_t i = 0; i < values.size(); ++i) {
-            if (values[i] != 0.0f && bad++ == 0) first = i;
-        }
-        EXPECT_EQ(values.size() == 1 ? points : values.size(), points)
-            << what << " " << name;
-        EXPECT_EQ(bad, 0u) << what << ": " << name.substr(6) << " fails at " << bad
-                           << " of " << values.size() << " points (first: point " << first
-                           << ", value " << values[first]
-                           << (values[first] == -1.0f ? ": never written" : "") << ")";
-    }
-    EXPECT_GT(checks, 0) << what << " has no checks";
-    if (!allow_nonfinite) {
-        EXPECT_EQ(ctx.nonfinite_points(), 0u) << what << ": " << ctx.nonfinite_message();
-    }
-    return checks;
-}
 
 /// One float output per point.
 std::vector<float> output_of(const ShadingContext& ctx, const std::string& name) {
@@ -154,38 +86,6 @@ ShadingBatch sphere_grid(int nu, int nv, double r) {
     b.t = b.v;
     b.I = b.P;
     return b;
-}
-
-/// Runs shader `name` of `file` (by default the file's first surface shader)
-/// over `batch` and checks it.
-int run_corpus(const std::string& file, ShadingBatch& batch, const ParamList& params = {},
-               Engine* engine = nullptr, LightList lights = {},
-               const std::string& name = "",
-               const Matrix4& shader_to_world = Matrix4(1.0)) {
-    Engine local;
-    Engine& e = engine ? *engine : local;
-    std::shared_ptr<const Program> prog;
-    for (auto& p : compile_corpus(file))
-        if (!prog && (name.empty() ? p->kind == ShaderKind::Surface : p->name == name))
-            prog = p;
-    if (!prog) {
-        ADD_FAILURE() << file << ": no shader " << name;
-        return 0;
-    }
-    const std::string what = file + (name.empty() ? "" : " (" + name + ")");
-    try {
-        ShaderInstance inst(prog, params, shader_to_world, file);
-        e.context.execute(inst, batch, lights);
-    } catch (const std::exception& ex) {
-        ADD_FAILURE() << what << ": " << ex.what();
-        return 0;
-    }
-    return expect_checks(e.context, *prog, what, batch.size);
-}
-int run_corpus(const std::string& file, ShadingBatch&& batch,
-               const ParamList& params = {}, Engine* engine = nullptr,
-               LightList lights = {}, const std::string& name = "") {
-    return run_corpus(file, batch, params, engine, lights, name);
 }
 
 TEST(RslCorpus, OperatorsAndTypes) {
@@ -319,94 +219,6 @@ TEST(RslCorpus, Lighting) {
         EXPECT_NE(all.find(name), std::string::npos) << name << " in:\n" << all;
     for (const char* name : {"trace()", "indirectdiffuse()"})
         EXPECT_EQ(all.find(name), std::string::npos) << name << " in:\n" << all;
-}
-
-/// Writes a float image of `channels` channels with value(x, y, c).
-template <class F>
-std::string write_image(const std::string& path, int w, int h, int channels, F value) {
-    OIIO::ImageBuf buf(OIIO::ImageSpec(w, h, channels, OIIO::TypeDesc::FLOAT));
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            float v[4];
-            for (int c = 0; c < channels; ++c) v[c] = value(x, y, c);
-            buf.setpixel(x, y, v, channels);
-        }
-    EXPECT_TRUE(buf.write(path)) << buf.geterror();
-    return path;
-}
-
-TEST(RslCorpus, Textures) {
-    TempDir dir;
-    const std::string map =
-        write_image(dir.file("map.exr"), 4, 2, 3, [](int x, int y, int c) {
-            return c == 0 ? (x + 0.5f) / 4 : c == 1 ? (y + 0.5f) / 2 : 0.25f + 0.1f * x;
-        });
-    const std::string env = write_image(dir.file("env.exr"), 8, 4, 3,
-                                        [](int, int, int c) { return 0.2f * (c + 1); });
-    Engine e;
-    ParamList params;
-    params.set(string_param("map", map));
-    params.set(string_param("env", env));
-    run_corpus("textures.sl", plane_grid(4, 2), params, &e);
-    EXPECT_TRUE(e.services.warnings.empty()) << e.services.warnings[0];
-}
-
-TEST(RslCorpus, Bake3dAndTexture3d) {
-    TempDir dir;
-    // A 1 x 1 square on world z = 0, normals -z (towards the camera below).
-    PointCloud cloud;
-    const int n = 32;
-    cloud.resize(std::size_t(n) * n);
-    // Every channel first: adding one may move the others.
-    cloud.add_channel("v", ChannelType::Float);
-    cloud.add_channel("c", ChannelType::Color);
-    cloud.add_channel("x", ChannelType::Float);
-    Channel& v = *cloud.find_channel("v");
-    Channel& c = *cloud.find_channel("c");
-    Channel& x = *cloud.find_channel("x");
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const std::size_t k = std::size_t(j) * n + i;
-            cloud.positions[k] = {(i + 0.5f) / n - 0.5f, (j + 0.5f) / n - 0.5f, 0.0f};
-            cloud.normals[k] = {0.0f, 0.0f, -1.0f};
-            cloud.radii[k] = 0.5f / n;
-            v.data[k] = 0.25f;
-            c.data[3 * k] = 0.1f;
-            c.data[3 * k + 1] = 0.2f;
-            c.data[3 * k + 2] = 0.3f;
-            x.data[k] = cloud.positions[k].x;
-        }
-    const std::string ptc = dir.file("square.ptc"), bkm = dir.file("square.bkm");
-    write_point_cloud(cloud, ptc);
-    build_brick_map({cloud}, BrickMapBuildOptions{}, bkm);
-
-    Engine e;
-    e.services.scene_.options.camera.world_to_camera =
-        glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 1));
-    ShadingBatch b = plane_grid(6, 6);
-    b.Cs.assign(b.size, glm::vec3(0.5f, 0.25f, 1.0f));
-    ParamList params;
-    params.set(string_param("cloud", ptc));
-    params.set(string_param("bkm", bkm));
-    params.set(string_param("out", "baked.ptc"));
-    run_corpus("bake3d_texture3d.sl", b, params, &e);
-    // What bake3d sent: world-space points on z = 0, the channels per point.
-    ASSERT_EQ(e.services.bakes.size(), 1u);
-    const Bake3dRecord& rec = e.services.bakes[0];
-    EXPECT_EQ(rec.file, "baked.ptc");
-    EXPECT_EQ(rec.channels, (std::vector<std::string>{"a", "col"}));
-    EXPECT_EQ(rec.channel_floats, (std::vector<int>{1, 3}));
-    ASSERT_EQ(rec.P.size(), b.size);
-    ASSERT_EQ(rec.values.size(), 4 * b.size);
-    for (std::size_t i = 0; i < b.size; ++i) {
-        EXPECT_NEAR(rec.P[i].x, b.P[i].x, 1e-6);
-        EXPECT_NEAR(rec.P[i].z, 0.0f, 1e-6);
-        EXPECT_NEAR(rec.N[i].z, -1.0f, 1e-6);
-        EXPECT_EQ(rec.radius[i], 0.05f);
-        EXPECT_NEAR(rec.values[4 * i], b.u[i], 1e-6);
-        EXPECT_NEAR(rec.values[4 * i + 1], 0.5f, 1e-6);
-        EXPECT_NEAR(rec.values[4 * i + 3], 1.0f, 1e-6);
-    }
 }
 
 TEST(RslCorpus, Queries) {

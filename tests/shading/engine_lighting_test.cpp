@@ -1,9 +1,8 @@
 /// \file engine_lighting_test.cpp
 /// Tests of the shading engine's lighting (illuminance, illuminate, solar,
 /// ambient/diffuse/specular, categories, ray-traced shadows), derivatives
-/// (Du, Dv, Deriv, area, calculatenormal per batch layout) and 3-D textures
-/// (bake3d records, texture3d misses). The standard lights written in RSL are
-/// compared with the C++ lights (sss/light/lights.h).
+/// (Du, Dv, Deriv, area, calculatenormal per batch layout). The standard lights written
+/// in RSL are compared with the C++ lights (sss/light/lights.h).
 ///
 /// Suite names start with "RslEngine".
 
@@ -21,7 +20,6 @@
 #include <fstream>
 
 #include "engine_test_util.h"
-#include "sss/cloud/point_cloud_io.h"
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
 #include "test_util.h"
@@ -495,105 +493,6 @@ surface t(output varying float r[12] = {0,0,0,0,0,0,0,0,0,0,0,0};) {
     EXPECT_NEAR(r[9], 0.5f, 1e-6);
     EXPECT_NEAR(r[10], 2.0f, 1e-6);
     EXPECT_NEAR(r[11], 5.5f / 1e30, 1e-6);
-}
-
-// --- 3-D textures -----------------------------------------------------------------
-
-TEST(RslEngineTextures, Bake3dRecordsAndTexture3dMisses) {
-    // A cloud whose only point is far from the plane: every lookup misses.
-    sss::test::TempDir dir;
-    const std::string cloud_file = dir.file("far.ptc");
-    {
-        PointCloud cloud;
-        cloud.resize(1);
-        cloud.add_channel("a", ChannelType::Float);
-        cloud.positions[0] = glm::vec3(100.0f, 100.0f, 100.0f);
-        cloud.normals[0] = glm::vec3(0.0f, 0.0f, 1.0f);
-        cloud.radii[0] = 0.01f;
-        cloud.find_channel("a")->data[0] = 3.0f;
-        write_point_cloud(cloud, cloud_file, {});
-    }
-    Engine e;
-    e.services.scene_.options.camera.world_to_camera =
-        glm::translate(Matrix4(1.0), glm::dvec3(0, 0, 2));
-    ShadingBatch b = plane_grid(4, 2);
-    b.Cs.assign(b.size, glm::vec3(0.5f, 0.25f, 1.0f));
-    ShaderInstance inst = e.instance(R"(
-surface t(string cloud = "";
-          output varying float r = 0; output varying float x = 7; output varying float y = 0;) {
-    if (u > 0.5)
-        y = bake3d("out.ptc", "a, col", P, N, "a", u, "col", Cs, "radius", 0.25, "interpolate", 1);
-    r = texture3d(cloud, P, N, "a", x);
-}
-)");
-    ParamList params;
-    Param file;
-    file.name = "cloud";
-    file.type = ParamType::String;
-    file.strings = {cloud_file};
-    params.set(file);
-    ShaderInstance with_cloud(inst.program_ptr(), params, Matrix4(1.0), "test.rib:1");
-    e.context.execute(with_cloud, b);
-    ASSERT_EQ(e.services.bakes.size(), 1u);
-    const Bake3dRecord& rec = e.services.bakes[0];
-    EXPECT_EQ(rec.file, "out.ptc");
-    ASSERT_EQ(rec.channels, (std::vector<std::string>{"a", "col"}));
-    EXPECT_EQ(rec.channel_floats, (std::vector<int>{1, 3}));
-    ASSERT_EQ(rec.P.size(), 4u);
-    ASSERT_EQ(rec.values.size(), 16u);
-    EXPECT_EQ(rec.radius[0], 0.25f);
-    EXPECT_NEAR(rec.P[0].z, -1.0f, 1e-6); // camera z 1 -> world -1
-    EXPECT_NEAR(rec.values[0], 0.625f, 1e-6);
-    EXPECT_NEAR(rec.values[1], 0.5f, 1e-6);
-    TypeSpec ty;
-    std::vector<float> r, x, y;
-    e.context.output("r", ty, r);
-    e.context.output("x", ty, x);
-    e.context.output("y", ty, y);
-    for (std::size_t i = 0; i < b.size; ++i) {
-        EXPECT_EQ(r[i], 0.0f);
-        EXPECT_EQ(x[i], 7.0f);
-        EXPECT_EQ(y[i], b.u[i] > 0.5f ? 1.0f : 0.0f);
-    }
-
-    // A file that cannot be read stops the shader with an error naming it.
-    try {
-        e.context.execute(inst, b);
-        FAIL() << "no error for a cloud named \"\"";
-    } catch (const ShaderRuntimeError& err) {
-        EXPECT_NE(std::string(err.what()).find("texture3d"), std::string::npos)
-            << err.what();
-    }
-}
-
-TEST(RslEngineTextures, TextureLooksUpThePixels) {
-    sss::test::TempDir dir;
-    const std::string file = dir.file("two.ppm");
-    {
-        std::ofstream out(file);
-        out << "P3\n2 1\n255\n255 0 0  0 0 255\n";
-    }
-    Engine e;
-    ShadingBatch b = plane_grid(2, 1); // s = 0.25, 0.75
-    ShaderInstance inst = e.instance(R"(
-surface t(string map = "";) {
-    Ci = color texture(map, "width", 0);
-    Oi = float texture(map[2], s, t, "width", 0);
-}
-)",
-                                     [&] {
-                                         ParamList p;
-                                         p.set(string_param("map", file));
-                                         return p;
-                                     }());
-    e.context.execute(inst, b);
-    EXPECT_NEAR(b.Ci[0].x, 1.0f, 1e-3);
-    EXPECT_NEAR(b.Ci[0].z, 0.0f, 1e-3);
-    EXPECT_NEAR(b.Ci[1].x, 0.0f, 1e-3);
-    EXPECT_NEAR(b.Ci[1].z, 1.0f, 1e-3);
-    EXPECT_NEAR(b.Oi[0].x, 0.0f, 1e-3); // blue channel
-    EXPECT_NEAR(b.Oi[1].y, 1.0f, 1e-3);
-    EXPECT_TRUE(e.services.warnings.empty());
 }
 
 TEST(RslEngineQueries, AttributesAndOptions) {

@@ -10,14 +10,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
-
-#include <OpenImageIO/imagebuf.h>
 
 #include "engine_test_util.h"
 
@@ -28,6 +27,63 @@ using namespace sss::test;
 
 constexpr double kPi = std::numbers::pi;
 
+/// Texture services whose environment maps are constant colours by file
+/// name (constant_map): what the ray-tracing shadeops hand to environment()
+/// is the engine's, how a map is filtered is the texture library's
+/// (tests/binding). Other lookups fail as unreadable files.
+class ConstantEnvironments final : public TextureServices {
+public:
+    static ConstantEnvironments& instance() {
+        static ConstantEnvironments one;
+        return one;
+    }
+    std::map<std::string, glm::vec3> maps;
+
+    bool texture(const std::string& file, int, int, const TextureOptions&, std::size_t,
+                 const float*, const float*, const float*, const float*, const float*,
+                 const float*, const uint8_t*, float*, std::string* error) override {
+        return fail(file, error);
+    }
+    bool texture_quad(const std::string& file, int, int, const TextureOptions&,
+                      std::size_t, const float* const*, const uint8_t*, float*,
+                      std::string* error) override {
+        return fail(file, error);
+    }
+    bool environment(const std::string& file, int channel, int nchannels,
+                     const TextureOptions& options, std::size_t count,
+                     const glm::vec3* dir, const glm::vec3*, const glm::vec3*,
+                     const uint8_t* mask, float* out, std::string* error) override {
+        const auto it = maps.find(file);
+        if (it == maps.end()) return fail(file, error);
+        for (std::size_t i = 0; i < count; ++i) {
+            if (mask && !mask[i]) continue;
+            const bool zero = glm::dot(dir[i], dir[i]) == 0.0f;
+            for (int k = 0; k < nchannels; ++k) {
+                const int c = channel + k;
+                out[i * nchannels + k] = zero    ? 0.0f
+                                         : c < 3 ? it->second[c]
+                                                 : options.fill;
+            }
+        }
+        return true;
+    }
+    bool texture_info(const std::string&, const std::string&, int, float*,
+                      std::string*) override {
+        return false;
+    }
+    bool texture3d(const std::string& file, std::span<const std::string>, std::size_t,
+                   const glm::vec3*, const glm::vec3*, const float*, const uint8_t*,
+                   std::vector<int>&, float*, uint8_t*, std::string* error) override {
+        return fail(file, error);
+    }
+
+private:
+    static bool fail(const std::string& file, std::string* error) {
+        if (error) *error = file + ": not a constant environment map";
+        return false;
+    }
+};
+
 /// An analytic world (world space):
 ///  - None: every ray misses;
 ///  - All: every ray hits at length 1;
@@ -35,6 +91,7 @@ constexpr double kPi = std::numbers::pi;
 /// Hits return "Ci" = the ray direction (ci_is_direction) or `ci`, "foo" = 7.
 class FakeWorld : public RecordingServices {
 public:
+    FakeWorld() { texture_services = &ConstantEnvironments::instance(); }
     enum Mode { None, All, HalfX } mode = None;
     bool ci_is_direction = false;
     glm::vec3 ci{0.2f, 0.4f, 0.8f};
@@ -331,7 +388,7 @@ surface t(output varying float blocked = 0, open = 0, bad = 0) {
     EXPECT_TRUE(rig.services.queries[0].outputs.empty());
 }
 
-/// A constant lat-long environment map of colour c.
+/// A constant environment map of colour c (a name for ConstantEnvironments).
 std::string constant_map(const std::string& name, glm::vec3 c);
 
 TEST(EngineRaytrace, GatherEnvironmentMapAndSamplebase) {
@@ -424,19 +481,11 @@ surface t(output varying color hit = 0, miss = 1, cone = 0, env = 0; output vary
     EXPECT_EQ(rig.services.queries[4].rays, 4u);
 }
 
-/// A constant lat-long environment map of colour c.
+/// A constant environment map of colour c, known to ConstantEnvironments.
 std::string constant_map(const std::string& name, glm::vec3 c) {
-    const std::string path =
-        (std::filesystem::temp_directory_path() / ("sss_raytrace_" + name + ".exr"))
-            .string();
-    OIIO::ImageBuf buf(OIIO::ImageSpec(16, 8, 3, OIIO::TypeDesc::FLOAT));
-    for (int y = 0; y < 8; ++y)
-        for (int x = 0; x < 16; ++x) {
-            const float v[3] = {c.x, c.y, c.z};
-            buf.setpixel(x, y, v, 3);
-        }
-    EXPECT_TRUE(buf.write(path)) << buf.geterror();
-    return path;
+    const std::string file = "sss_raytrace_" + name + ".exr";
+    ConstantEnvironments::instance().maps[file] = c;
+    return file;
 }
 
 const char* kIndirect = R"(

@@ -18,7 +18,8 @@
 
 namespace sss::test {
 
-/// Records messages, warnings and bake3d records.
+/// Records messages, warnings and bake3d records; textures through
+/// `texture_services` (none by default: every lookup fails).
 class RecordingServices : public ShadingServices {
 public:
     Scene scene_;
@@ -26,9 +27,11 @@ public:
     std::vector<std::string> messages;
     std::vector<std::string> warnings;
     std::vector<Bake3dRecord> bakes;
+    TextureServices* texture_services = nullptr;
 
     const Scene& scene() const override { return scene_; }
     const RayTracer* occluders() const override { return tracer; }
+    TextureServices* textures() override { return texture_services; }
     void bake3d(Bake3dRecord&& record) override { bakes.push_back(std::move(record)); }
     void message(const std::string& text) override { messages.push_back(text); }
     void warning(const std::string& text) override { warnings.push_back(text); }
@@ -129,9 +132,11 @@ inline Param string_param(const std::string& name, const std::string& v) {
 
 /// environment(map, dir) through the shading engine for each direction,
 /// point lookups ("width" 0; world = camera space here). No warnings.
-inline std::vector<glm::vec3> environment_lookups(const std::string& map,
+inline std::vector<glm::vec3> environment_lookups(TextureServices& textures,
+                                                  const std::string& map,
                                                   const std::vector<glm::vec3>& dirs) {
     Engine e;
+    e.services.texture_services = &textures;
     ShadingBatch b;
     b.layout = BatchLayout::Points;
     b.size = dirs.size();

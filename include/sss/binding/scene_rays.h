@@ -41,6 +41,7 @@
 #include <glm/vec3.hpp>
 
 #include "sss/binding/scene_shaders.h"
+#include "sss/binding/texture_library.h"
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
@@ -70,16 +71,20 @@ std::optional<float> trace_bias(const Primitive& prim);
 class SceneRays;
 
 /// The services of a tool's run (ptbake, render): the scene, the frame,
-/// shader printf output on stdout one message at a time, and the
-/// ray-tracing shadeops through a SceneRays once one is set (before that,
+/// shader printf output on stdout one message at a time, the job's
+/// TextureLibrary (one per job, shared by every SceneServices of the job, so
+/// that each file is opened once), and the ray-tracing
+/// shadeops through a SceneRays once one is set (before that,
 /// ShadingServices' defaults).
 class SceneServices : public ShadingServices {
 public:
-    SceneServices(const Scene& scene, std::optional<int> frame)
-        : m_scene(scene), m_frame(frame) {}
+    /// `textures` must outlive the services.
+    SceneServices(const Scene& scene, std::optional<int> frame, TextureLibrary& textures)
+        : m_scene(scene), m_frame(frame), m_textures(textures) {}
     const Scene& scene() const override { return m_scene; }
     std::optional<int> frame() const override { return m_frame; }
     void message(const std::string& text) override;
+    TextureServices* textures() override { return &m_textures; }
     void trace(RayQuery& query) override;
     void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
                   int depth) override;
@@ -91,6 +96,7 @@ private:
     std::optional<int> m_frame;
     const SceneRays* m_rays = nullptr;
     std::mutex m_mutex;
+    TextureLibrary& m_textures;
 };
 
 /// The one warning ptbake and render give about the rays their ray tracers

@@ -2,11 +2,12 @@
 /// \file engine.h
 /// Module shading: the engine that runs compiled shaders (module rsl) over
 /// batches of shading points, its ops and the shading language's function
-/// library (noise, strings, colour spaces), textures and brick-map and
-/// point-cloud lookups, bake3d files. A renderer reaches it through
-/// ShadingServices (below); the scene binding is module binding.
-/// May use: rsl, light, brick, image, cloud, scene and util (OpenImageIO
-/// through a plugin).
+/// library (noise, strings, colour spaces). The engine reaches the renderer
+/// only through ShadingServices (below): the scene, rays, textures
+/// (TextureServices, texture_services.h) and bake3d's records. The
+/// renderers' side, the scene's shaders bound for a job, the texture
+/// library and bake3d's files, is module binding.
+/// May use: rsl, light, scene and util.
 ///
 /// The shading engine: runs compiled shaders (program.h) SIMD-style over a
 /// batch of shading points (a diced grid in ptbake, a batch of ray hits in
@@ -33,8 +34,9 @@
 ///    indirectdiffuse() through ShadingServices::trace; shadow("raytrace")
 ///    and transmission() through ShadingServices::transmit. Every ray carries
 ///    depth = ShadingBatch::ray.depth + 1;
-///  - texture/environment/textureinfo/texture3d through the job's
-///    TextureLibrary, bake3d records handed to ShadingServices::bake3d;
+///  - texture/environment/textureinfo/texture3d through
+///    ShadingServices::textures(), bake3d records handed to
+///    ShadingServices::bake3d;
 ///  - attribute/option/rendererinfo/rayinfo queries.
 /// Not supported (they run and return 0, warned once where it matters):
 /// depth-map shadow(), message passing (surface(), displacement(),
@@ -57,6 +59,7 @@
 #include "sss/light/ray_tracer.h"
 #include "sss/rsl/program.h"
 #include "sss/scene/scene.h"
+#include "sss/shading/texture_services.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -317,6 +320,10 @@ public:
     /// shader's Oi). The default: all-or-nothing through occluders().
     virtual void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
                           int depth);
+    /// The texture lookups of shaders (texture, environment, textureinfo,
+    /// texture3d), or null: then every lookup fails as an unreadable file
+    /// would ("no texture services", reported once, results 0).
+    virtual TextureServices* textures() { return nullptr; }
     /// Receives what bake3d writes (ptbake collects it; render too).
     virtual void bake3d(Bake3dRecord&& record) { (void)record; }
     /// printf output (one message per call).
@@ -329,8 +336,8 @@ public:
     virtual std::optional<int> frame() const { return std::nullopt; }
 };
 
-/// Shared read-only resources of a job: the OpenImageIO texture system,
-/// opened brick maps and point clouds. Thread-safe.
+/// What the shading contexts of one job share: the run-time warnings given
+/// so far (each text once per job). Thread-safe.
 class ShadingResources {
 public:
     ShadingResources();

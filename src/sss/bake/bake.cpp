@@ -26,12 +26,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "sss/binding/bake3d_file.h"
 #include "sss/binding/displacement.h"
 #include "sss/binding/scene_rays.h"
 #include "sss/binding/scene_shaders.h"
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
-#include "sss/shading/bake3d_file.h"
 #include "sss/shading/engine.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
@@ -443,8 +443,9 @@ void fill_parametric(const DicedSurface& d, std::size_t begin,
 class BakeServices final : public SceneServices {
 public:
     BakeServices(const Scene& scene, const RayTracer* occluders, std::optional<int> frame,
-                 const std::string& output)
-        : SceneServices(scene, frame), m_occluders(occluders), m_output(output) {}
+                 TextureLibrary& textures, const std::string& output)
+        : SceneServices(scene, frame, textures), m_occluders(occluders),
+          m_output(output) {}
     const RayTracer* occluders() const override {
         return scene_rays() ? scene_rays()->occluders() : m_occluders;
     }
@@ -467,12 +468,11 @@ thread_local std::vector<Bake3dRecord>* BakeServices::s_sink = nullptr;
 /// centres as bake3d's "interpolate" mode bakes them) and returns the bake3d records of
 /// each chunk in order. Point seeds are global point indices, so the result does not
 /// depend on how the work is split between threads.
-std::vector<std::vector<Bake3dRecord>>
-shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders& shaders,
-             const std::vector<BakedPrimitive>& jobs,
-             const std::vector<DicedSurface>& diced, const RayTracer* tracer,
-             const SceneRays* scene_rays, std::optional<int> frame,
-             const ShadingResources& resources, BakeReport& report) {
+std::vector<std::vector<Bake3dRecord>> shade_points(
+    const Scene& scene, const BakeOptions& options, const SceneShaders& shaders,
+    const std::vector<BakedPrimitive>& jobs, const std::vector<DicedSurface>& diced,
+    const RayTracer* tracer, const SceneRays* scene_rays, std::optional<int> frame,
+    const ShadingResources& resources, TextureLibrary& textures, BakeReport& report) {
     std::size_t total_points = 0;
     std::vector<std::size_t> first_point(jobs.size());
     struct Chunk {
@@ -502,7 +502,7 @@ shade_points(const Scene& scene, const BakeOptions& options, const SceneShaders&
             }
         points_up_to(n);
     }
-    BakeServices services(scene, tracer, frame, options.output);
+    BakeServices services(scene, tracer, frame, textures, options.output);
     services.set_scene_rays(scene_rays);
     const double extent = tracer       ? tracer->scene_extent()
                           : scene_rays ? scene_rays->extent()
@@ -678,7 +678,8 @@ BakeJob::clouds(BakeReport* report_out) const {
     // Displacement shaders run while dicing, before the occluders are built:
     // shadows see the displaced surfaces.
     ShadingResources resources;
-    BakeServices dice_services(scene, nullptr, frame, options.output);
+    TextureLibrary textures; // every phase's lookups: each file opened once
+    BakeServices dice_services(scene, nullptr, frame, textures, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
     const std::vector<DiceRequest> requests = dice_requests(
@@ -713,7 +714,7 @@ BakeJob::clouds(BakeReport* report_out) const {
     stage.emplace("baking " + name);
     std::vector<std::vector<Bake3dRecord>> records =
         shade_points(scene, options, shaders, plan.jobs, diced, tracer.get(),
-                     scene_rays.get(), frame, resources, report);
+                     scene_rays.get(), frame, resources, textures, report);
     const uint64_t invalid = (tracer ? tracer->invalid_rays() : 0) +
                              (scene_rays ? scene_rays->invalid_rays() : 0);
     if (invalid > 0) report.warnings.push_back(invalid_rays_warning(invalid));

@@ -107,8 +107,8 @@ bool program_traces_rays(const Program& program) {
            contains_raytrace(program);
 }
 
-/// What hit shaders get as their services: the outer job's messages, this
-/// scene's rays, and no bake3d.
+/// What hit shaders get as their services: the outer job's messages and
+/// textures, this scene's rays, and no bake3d.
 class HitServices final : public ShadingServices {
 public:
     HitServices(const SceneRays::Impl& impl, ShadingServices& outer)
@@ -118,6 +118,7 @@ public:
     void trace(RayQuery& query) override;
     void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
                   int depth) override;
+    TextureServices* textures() override { return m_outer.textures(); }
     void bake3d(Bake3dRecord&& record) override { (void)record; }
     void message(const std::string& text) override { m_outer.message(text); }
     void warning(const std::string& text) override { m_outer.warning(text); }

@@ -25,13 +25,13 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "sss/binding/bake3d_file.h"
 #include "sss/binding/displacement.h"
 #include "sss/binding/scene_rays.h"
 #include "sss/binding/scene_shaders.h"
 #include "sss/dice/dice.h"
 #include "sss/light/ray_tracer.h"
 #include "sss/render/camera_sampling.h"
-#include "sss/shading/bake3d_file.h"
 #include "sss/shading/engine.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
@@ -162,6 +162,7 @@ struct Renderer {
     bool nearest_fallback = false;
     const SceneShaders& shaders; ///< the job's, bound once (RenderJob)
     std::unique_ptr<ShadingResources> resources;
+    std::unique_ptr<TextureLibrary> textures; ///< before services, which use it
     std::unique_ptr<RenderServices> services;
     std::vector<Aov> aovs;
     std::vector<char> derivatives; ///< per primitive: its shader differentiates

@@ -154,7 +154,8 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     if (JobFiles* files = JobFiles::current()) record_shader_inputs(*files, job.shaders);
     for (const std::string& w : job.shaders.warnings) report.warnings.push_back(w);
     job.resources = std::make_unique<ShadingResources>();
-    job.services = std::make_unique<RenderServices>(scene, frame);
+    job.textures = std::make_unique<TextureLibrary>();
+    job.services = std::make_unique<RenderServices>(scene, frame, *job.textures);
     job.aovs = plan_aovs(scene, job.shaders);
     job.derivatives.resize(scene.primitives.size());
     job.parametric.resize(scene.primitives.size());

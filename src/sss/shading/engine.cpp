@@ -28,8 +28,6 @@
 #include "engine_internal.h"
 #include "sss/util/hash.h"
 
-#include "texture_library.h"
-
 namespace sss {
 
 namespace detail {
@@ -346,9 +344,7 @@ void ShadingServices::transmit(const ShadowRay* rays, std::size_t count, glm::ve
 // ---------------------------------------------------------------------------
 // ShadingResources
 
-ShadingResources::Impl::Impl() {
-    textures = std::make_unique<detail::TextureLibrary>();
-}
+ShadingResources::Impl::Impl() = default;
 ShadingResources::Impl::~Impl() = default;
 
 bool ShadingResources::Impl::first_time(const std::string& text) const {

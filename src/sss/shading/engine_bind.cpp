@@ -18,8 +18,6 @@
 #include "engine_internal.h"
 #include "sss/util/hash.h"
 
-#include "texture_library.h"
-
 namespace sss {
 
 namespace detail {

@@ -35,8 +35,6 @@
 
 namespace sss::detail {
 
-class TextureLibrary;
-
 /// The global variables the engine binds by name.
 enum Global : int {
     G_P,
@@ -272,7 +270,6 @@ namespace sss {
 struct ShadingResources::Impl {
     Impl();
     ~Impl();
-    std::unique_ptr<detail::TextureLibrary> textures;
     mutable std::mutex warned_mutex;
     mutable std::set<std::string> warned;
     /// True the first time `text` is seen.

@@ -39,9 +39,9 @@
 
 #include "engine_internal.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/shading/texture_services.h"
 #include "sss/util/hash.h"
 #include "sss/util/math.h"
-#include "texture_library.h"
 
 namespace sss::detail {
 
@@ -262,7 +262,7 @@ void environment_colors(Frame& f, const BoundOp& b, const std::string& file,
                         float spread) {
     out.assign(dirs.size(), glm::vec3(0.0f));
     if (file.empty() || dirs.empty()) return;
-    TextureLibrary* lib = f.ctx->resources.impl().textures.get();
+    TextureServices* lib = f.ctx->services.textures();
     std::vector<float> values(dirs.size() * 3, 0.0f);
     std::vector<uint8_t> all(dirs.size(), 1);
     std::string error;
@@ -285,7 +285,7 @@ void environment_colors(Frame& f, const BoundOp& b, const std::string& file,
                                             all.data(), values.data(), &error);
     if (!ok)
         f.fail(b,
-               "environment \"" + file + "\": " + (lib ? error : "no texture library"));
+               "environment \"" + file + "\": " + (lib ? error : "no texture services"));
     for (std::size_t r = 0; r < dirs.size(); ++r) {
         const glm::vec3 c = ld3(&values[r * 3]);
         out[r] = finite3(c) ? c : glm::vec3(0.0f);

@@ -34,17 +34,19 @@
 #include <glm/matrix.hpp>
 
 #include "engine_internal.h"
+#include "sss/shading/texture_services.h"
 #include "sss/util/job_files.h"
 #include "sss/util/parse.h"
 #include "sss/util/version.h"
-#include "texture_library.h"
+#include "texture_options.h"
 
 namespace sss::detail {
 
 namespace {
 
-TextureLibrary* library(Frame& f) {
-    return f.ctx->resources.impl().textures.get();
+/// The job's texture services (null: every lookup fails, "no texture services").
+TextureServices* library(Frame& f) {
+    return f.ctx->services.textures();
 }
 
 /// Running points as a byte mask (the frame's running mask).
@@ -127,11 +129,11 @@ void op_texture(Frame& f, const BoundOp& b) {
     TextureOptions o;
     read_texture_options(f, b, 3 + coords, o);
     std::vector<float> out(n * nc, 0.0f);
-    TextureLibrary* lib = library(f);
+    TextureServices* lib = library(f);
     std::string error;
     bool ok = false;
     if (!lib) {
-        error = "no texture library";
+        error = "no texture services";
     } else if (coords == 8) {
         std::vector<std::vector<float>> st(8);
         const float* ptrs[8];
@@ -227,13 +229,13 @@ void op_environment(Frame& f, const BoundOp& b) {
     }
     std::vector<float> out(n * nc, 0.0f);
     std::string error;
-    TextureLibrary* lib = library(f);
+    TextureServices* lib = library(f);
     const bool ok =
         lib && lib->environment(file, channel, nc, o, n, dir.data(), ddu.data(),
                                 ddv.data(), run_mask(f), out.data(), &error);
     if (!ok) {
         f.fail(b,
-               "environment \"" + file + "\": " + (lib ? error : "no texture library"));
+               "environment \"" + file + "\": " + (lib ? error : "no texture services"));
     }
     write_result(f, d, out, nc);
 }
@@ -294,7 +296,7 @@ void op_textureinfo(Frame& f, const BoundOp& b) {
     v.matrix = sym.type.type == ShadingType::Matrix;
     const int expected = str ? 0 : sym.type.floats();
     v.numbers.assign(expected, 0.0f);
-    TextureLibrary* lib = library(f);
+    TextureServices* lib = library(f);
     bool ok = lib && lib->texture_info(file, key, expected, v.numbers.data(), &v.text);
     if (ok) ok = write_query(f, b, 3, v);
     set_result(f, b, ok ? 1.0f : 0.0f);
@@ -552,7 +554,7 @@ void op_texture3d(Frame& f, const BoundOp& b) {
     std::vector<int> floats;
     std::vector<float> out;
     std::string error;
-    TextureLibrary* lib = library(f);
+    TextureServices* lib = library(f);
     bool ok = false;
     if (lib && !channels.empty()) {
         // Stride at most the sum of the outputs' sizes.
@@ -563,7 +565,8 @@ void op_texture3d(Frame& f, const BoundOp& b) {
                             run_mask(f), floats, out.data(), found.data(), &error);
     }
     if (!ok) {
-        if (lib && !channels.empty()) f.fail(b, "texture3d: " + error);
+        if (!lib) f.fail(b, "texture3d \"" + file + "\": no texture services");
+        if (!channels.empty()) f.fail(b, "texture3d: " + error);
         set_result(f, b, 0.0f);
         return;
     }

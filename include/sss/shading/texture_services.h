@@ -1,14 +1,14 @@
 #pragma once
-// Internal to the shading module: the texture library the engine calls for
-// RSL's texture, environment, textureinfo, texture3d (and the file side of
-// bake3d). 2-D and environment maps go through one OpenImageIO
-// TextureSystem; 3-D textures (brick maps, point clouds) reuse the lookups
-// of the brick and cloud modules with the renderer's semantics (brick maps
-// blend levels by radius, point clouds use the nearest points).
+/// \file texture_services.h
+/// Module shading: what the engine asks of textures. RSL's texture(),
+/// environment(), textureinfo() and texture3d() reach files only through
+/// the TextureServices a renderer hands out (ShadingServices::textures(),
+/// engine.h), as OSL's runtime reaches its texture system through its
+/// renderer services. The job's implementation, opened files and
+/// OpenImageIO included, is binding's TextureLibrary.
 
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -16,7 +16,7 @@
 
 #include <glm/vec3.hpp>
 
-namespace sss::detail {
+namespace sss {
 
 /// Filtering options of texture/environment/shadow calls (RSL token-value lists).
 struct TextureOptions {
@@ -37,47 +37,12 @@ struct TextureOptions {
 bool set_texture_option(TextureOptions& options, std::string_view name,
                         const float* numbers, int count, const std::string* text);
 
-/// Options of texture3d calls (formats.md 3.5). The engine turns them into
-/// the per-point world-space P, N and filter radius texture3d() takes.
-struct Texture3dOptions {
-    std::string coordsystem = "world"; // space of the file's data
-    float filterradius =
-        -1; // < 0: not given (the shading point's own radius); 0: the finest data
-    float filterscale = 1; // multiplies filterradius
-    int maxdepth = -1;     // brick maps: accepted, not used (-1: all)
-};
-
-/// Sets a texture3d option ("coordsystem", "filterradius", "filterscale",
-/// "maxdepth"; Pixie's "radius" and "radiusscale" as the first two, its
-/// "interpolate" accepted and ignored). False for an unknown name.
-bool set_texture3d_option(Texture3dOptions& options, std::string_view name,
-                          const float* numbers, int count, const std::string* text);
-
-/// Options of bake3d calls (formats.md 3.5).
-struct Bake3dOptions {
-    float radius = -1;                 // < 0: not given (the micropolygon's size)
-    float radiusscale = 1;             // multiplies the radius
-    std::string coordsystem = "world"; // space the points are written in
-    bool interpolate = false;          // bake micropolygon centres
-};
-
-/// Sets a bake3d option ("radius", "radiusscale", "coordsystem",
-/// "interpolate"). False for an unknown name.
-bool set_bake3d_option(Bake3dOptions& options, std::string_view name,
-                       const float* numbers, int count, const std::string* text);
-
-/// 2-D textures through one OpenImageIO TextureSystem (MIP-mapped .tx/.tex
-/// made by maketx, and any image OIIO reads, MIP-mapped on the fly),
-/// environment maps (lat-long through OIIO, OpenEXR cube-face maps looked
-/// up face by face with OIIO's texture()) and 3-D textures
-/// (brick maps, point clouds), opened once per file. Thread-safe; one per
-/// job (owned by ShadingResources).
-class TextureLibrary {
+/// Texture lookups for shaders. Every function may be called from many
+/// threads at once; `mask` may be null (every point), and points whose mask
+/// byte is 0 are left alone.
+class TextureServices {
 public:
-    TextureLibrary();
-    ~TextureLibrary();
-    TextureLibrary(const TextureLibrary&) = delete;
-    TextureLibrary& operator=(const TextureLibrary&) = delete;
+    virtual ~TextureServices() = default;
 
     /// texture(file[channel], s, t): nchannels (1 for float, 3 for color)
     /// floats per point into out (count*nchannels), for the points whose mask
@@ -91,20 +56,20 @@ public:
     /// Non-finite s or t give 0. Returns false (and sets *error to "file:
     /// reason") when the file cannot be read; the engine reports that once
     /// and leaves the result 0.
-    bool texture(const std::string& file, int channel, int nchannels,
-                 const TextureOptions& options, std::size_t count, const float* s,
-                 const float* t, const float* ds_du, const float* dt_du,
-                 const float* ds_dv, const float* dt_dv, const uint8_t* mask, float* out,
-                 std::string* error);
+    virtual bool texture(const std::string& file, int channel, int nchannels,
+                         const TextureOptions& options, std::size_t count, const float* s,
+                         const float* t, const float* ds_du, const float* dt_du,
+                         const float* ds_dv, const float* dt_dv, const uint8_t* mask,
+                         float* out, std::string* error) = 0;
     /// The 4-point form: the quad (s1,t1)...(s4,t4) per point is the filter
     /// region (st[0..7] = s1,t1,s2,t2,s3,t3,s4,t4, each count floats). The
     /// corners are in a bilinear patch's order: 1 at (0,0), 2 at (1,0), 3 at
     /// (0,1), 4 at (1,1); the lookup is at their mean, its footprint spanned
     /// by the mean edges along each direction.
-    bool texture_quad(const std::string& file, int channel, int nchannels,
-                      const TextureOptions& options, std::size_t count,
-                      const float* const st[8], const uint8_t* mask, float* out,
-                      std::string* error);
+    virtual bool texture_quad(const std::string& file, int channel, int nchannels,
+                              const TextureOptions& options, std::size_t count,
+                              const float* const st[8], const uint8_t* mask, float* out,
+                              std::string* error) = 0;
     /// environment(file[channel], dir): world-space directions, footprint
     /// from the direction's differences (may be null). Lat-long maps follow
     /// OpenImageIO's convention, +y up: s = 0.5 + atan2(-x, z) / 2pi (+z at
@@ -125,19 +90,19 @@ public:
     /// (docs/lighting.md). A cube-tagged file of another layout fails with
     /// "file: cube-face environment map of W x H...; expected ...". A zero or
     /// non-finite direction gives 0.
-    bool environment(const std::string& file, int channel, int nchannels,
-                     const TextureOptions& options, std::size_t count,
-                     const glm::vec3* dir, const glm::vec3* ddir_du,
-                     const glm::vec3* ddir_dv, const uint8_t* mask, float* out,
-                     std::string* error);
+    virtual bool environment(const std::string& file, int channel, int nchannels,
+                             const TextureOptions& options, std::size_t count,
+                             const glm::vec3* dir, const glm::vec3* ddir_du,
+                             const glm::vec3* ddir_dv, const uint8_t* mask, float* out,
+                             std::string* error) = 0;
     /// textureinfo(file, key, out): "resolution" (2 floats), "channels" (1),
     /// "type" ("texture", "environment", "shadow"),
     /// "viewingmatrix"/"projectionmatrix" (16, when the file has them: OIIO
     /// worldtocamera/worldtoscreen). Returns false for an unknown key, a
     /// missing file, or a value type mismatch (expected_floats: how many
     /// floats the caller's variable holds; 0 for a string).
-    bool texture_info(const std::string& file, const std::string& key,
-                      int expected_floats, float* numbers, std::string* text);
+    virtual bool texture_info(const std::string& file, const std::string& key,
+                              int expected_floats, float* numbers, std::string* text) = 0;
     /// texture3d(file, P, N, "channel", out...): world-space P, N, filter
     /// radius per point (0: the nearest points). For each requested channel
     /// name, its floats per point go to channel_floats (1 float, 3
@@ -161,20 +126,11 @@ public:
     /// \"x\" (it has: a, b)"), while the call returns true for the others:
     /// the engine warns once and leaves those variables alone. found is
     /// zeroed first (every point, masked ones included).
-    bool texture3d(const std::string& file, std::span<const std::string> channels,
-                   std::size_t count, const glm::vec3* P, const glm::vec3* N,
-                   const float* radius, const uint8_t* mask,
-                   std::vector<int>& channel_floats, float* out, uint8_t* found,
-                   std::string* error);
-
-    /// Forgets what is known of `file` (2-D and 3-D), so that the next call
-    /// opens it again: for a file written during the job (bake3d, then
-    /// texture3d). Unreadable files are otherwise remembered as such.
-    void invalidate(const std::string& file);
-
-private:
-    struct Impl;
-    std::unique_ptr<Impl> m_impl;
+    virtual bool texture3d(const std::string& file, std::span<const std::string> channels,
+                           std::size_t count, const glm::vec3* P, const glm::vec3* N,
+                           const float* radius, const uint8_t* mask,
+                           std::vector<int>& channel_floats, float* out, uint8_t* found,
+                           std::string* error) = 0;
 };
 
-} // namespace sss::detail
+} // namespace sss

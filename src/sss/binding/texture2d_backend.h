@@ -1,6 +1,6 @@
 #pragma once
-// Internal to the shading module: the OpenImageIO side of 2-D textures and
-// environment maps, built as a plugin (libsss_texture2d.so, beside the
+// Internal to the binding module (TextureLibrary and its plugin): the OpenImageIO side of
+// 2-D textures and environment maps, built as a plugin (libsss_texture2d.so, beside the
 // tools: <build>/lib, or an install's <libdir>/sss) and loaded on the first texture
 // lookup, so that tools and jobs that never look up a 2-D texture do not load OpenImageIO
 // and the 260 libraries behind it (0.15 s at every process start).
@@ -11,7 +11,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "texture_library.h"
+#include "sss/shading/texture_services.h"
 
 namespace sss::detail {
 

@@ -2,7 +2,7 @@
 // as RenderMan looks them up: brick maps blend their levels by the filter
 // radius, point clouds average their nearest points.
 
-#include "texture_library.h"
+#include "sss/binding/texture_library.h"
 
 #include <algorithm>
 #include <cctype>
@@ -94,6 +94,12 @@ bool Texture3dFile::near_data(const glm::vec3& p, float radius) const {
             }
     return false;
 }
+
+} // namespace sss::detail
+
+namespace sss {
+
+using namespace detail;
 
 std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& file) {
     std::shared_ptr<Texture3dFile> entry;
@@ -223,4 +229,4 @@ void TextureLibrary::invalidate(const std::string& file) {
         b->invalidate(file);
 }
 
-} // namespace sss::detail
+} // namespace sss

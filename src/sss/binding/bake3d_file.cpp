@@ -1,6 +1,6 @@
 // The file side of bake3d: records merged into point clouds and written.
 
-#include "sss/shading/bake3d_file.h"
+#include "sss/binding/bake3d_file.h"
 
 #include <array>
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file bake3d_file.h
-/// The file side of RSL's bake3d: the records shaders hand to
+/// Module binding: the file side of RSL's bake3d: the records shaders hand to
 /// ShadingServices::bake3d (engine.h), merged per file into point clouds and
 /// written as .ptc (or .ply) files, for ptbake and render.
 

@@ -28,8 +28,8 @@
 #include <OpenImageIO/imageio.h>
 #include <glm/geometric.hpp>
 
-#include "../../src/sss/shading/texture_library.h"
-#include "engine_test_util.h"
+#include "shading/engine_test_util.h"
+#include "sss/binding/texture_library.h"
 #include "sss/light/light_dome.h"
 #include "test_util.h"
 
@@ -37,8 +37,8 @@ namespace {
 
 using namespace sss;
 using namespace sss::test;
-using sss::detail::TextureLibrary;
-using sss::detail::TextureOptions;
+using sss::TextureLibrary;
+using sss::TextureOptions;
 
 /// Colour of pixel (x, y) of face `face` (y = 0 the face's top row).
 using FacePixel = std::function<glm::vec3(int face, int x, int y)>;
@@ -81,7 +81,8 @@ std::string maketx_cube(const std::string& file, const std::string& out) {
 /// environment(map, dir) through the shading engine, point lookups.
 std::vector<glm::vec3> engine_lookup(const std::string& map,
                                      const std::vector<glm::vec3>& dirs) {
-    return environment_lookups(map, dirs);
+    TextureLibrary textures;
+    return environment_lookups(textures, map, dirs);
 }
 
 /// TextureLibrary::environment for each direction with the derivatives

@@ -1,9 +1,9 @@
-// The texture library: the texture options, and 2-D textures and
+// The texture library: 2-D textures and
 // environment maps forwarded to the OpenImageIO plugin (texture2d_backend.h,
 // plugin/texture2d_oiio.cpp), loaded on first use. The 3-D side (texture3d)
 // is in texture3d_library.cpp.
 
-#include "texture_library.h"
+#include "sss/binding/texture_library.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,7 +18,12 @@
 #include "texture2d_backend.h"
 #include "texture_library_impl.h"
 
-namespace sss::detail {
+namespace sss {
+
+using detail::kTexture2dEntry;
+using detail::kTexture2dPlugin;
+using detail::MakeTexture2dBackend;
+using detail::Texture2dBackend;
 
 namespace {
 
@@ -32,72 +37,6 @@ bool readable_by_job(const std::string& file, const char* use, std::string* erro
 }
 
 } // namespace
-
-bool set_texture_option(TextureOptions& options, std::string_view name,
-                        const float* numbers, int count, const std::string* text) {
-    const bool number = numbers && count >= 1;
-    const float x = number ? numbers[0] : 0.0f;
-    if (name == "blur") {
-        if (number) options.sblur = options.tblur = x;
-    } else if (name == "sblur") {
-        if (number) options.sblur = x;
-    } else if (name == "tblur") {
-        if (number) options.tblur = x;
-    } else if (name == "width") {
-        if (number) options.swidth = options.twidth = x;
-    } else if (name == "swidth") {
-        if (number) options.swidth = x;
-    } else if (name == "twidth") {
-        if (number) options.twidth = x;
-    } else if (name == "samples") {
-        if (number) options.samples = std::max(1, static_cast<int>(std::lround(x)));
-    } else if (name == "filter") {
-        if (text) options.filter = *text;
-    } else if (name == "fill") {
-        if (number) options.fill = x;
-    } else if (name == "lerp") {
-        if (number) options.lerp = std::clamp(static_cast<int>(std::lround(x)), 0, 2);
-    } else {
-        return false;
-    }
-    return true;
-}
-
-bool set_texture3d_option(Texture3dOptions& options, std::string_view name,
-                          const float* numbers, int count, const std::string* text) {
-    const bool number = numbers && count >= 1;
-    const float x = number ? numbers[0] : 0.0f;
-    if (name == "coordsystem") {
-        if (text) options.coordsystem = *text;
-    } else if (name == "filterradius" || name == "radius") {
-        if (number) options.filterradius = x;
-    } else if (name == "filterscale" || name == "radiusscale") {
-        if (number) options.filterscale = x;
-    } else if (name == "maxdepth") {
-        if (number) options.maxdepth = static_cast<int>(std::lround(x));
-    } else if (name != "interpolate") {
-        return false;
-    }
-    return true;
-}
-
-bool set_bake3d_option(Bake3dOptions& options, std::string_view name,
-                       const float* numbers, int count, const std::string* text) {
-    const bool number = numbers && count >= 1;
-    const float x = number ? numbers[0] : 0.0f;
-    if (name == "radius") {
-        if (number) options.radius = x;
-    } else if (name == "radiusscale") {
-        if (number) options.radiusscale = x;
-    } else if (name == "coordsystem") {
-        if (text) options.coordsystem = *text;
-    } else if (name == "interpolate") {
-        if (number) options.interpolate = x != 0.0f;
-    } else {
-        return false;
-    }
-    return true;
-}
 
 // ---------------------------------------------------------------------------
 // TextureLibrary
@@ -199,4 +138,4 @@ bool TextureLibrary::texture_info(const std::string& file, const std::string& ke
     return b && b->texture_info(file, key, expected_floats, numbers, text);
 }
 
-} // namespace sss::detail
+} // namespace sss

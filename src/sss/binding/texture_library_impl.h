@@ -1,5 +1,5 @@
 #pragma once
-// Internal to the texture library (texture_library.cpp,
+// Internal to binding's texture library (texture_library.cpp,
 // texture3d_library.cpp): the files it has opened, each once.
 
 #include <atomic>
@@ -11,12 +11,14 @@
 #include <unordered_set>
 #include <vector>
 
+#include "sss/binding/texture_library.h"
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_lookup.h"
-#include "texture_library.h"
 
-namespace sss::detail {
+namespace sss {
+
+namespace detail {
 
 /// A 3-D texture: a brick map, or a point cloud (.ptc, .ply) with its lookup.
 struct Texture3dFile {
@@ -53,21 +55,23 @@ struct Texture3dFile {
 
 class Texture2dBackend; // texture2d_backend.h
 
+} // namespace detail
+
 struct TextureLibrary::Impl {
     Impl();
     ~Impl();
     /// The 2-D texture plugin, loaded on first use; null (with *error set)
     /// when it cannot be loaded.
-    Texture2dBackend* textures(std::string* error);
+    detail::Texture2dBackend* textures(std::string* error);
     std::once_flag plugin_once;
-    std::unique_ptr<Texture2dBackend> backend;
+    std::unique_ptr<detail::Texture2dBackend> backend;
     /// The backend once loaded (for invalidate(), which must not load it).
-    std::atomic<Texture2dBackend*> loaded{nullptr};
+    std::atomic<detail::Texture2dBackend*> loaded{nullptr};
     std::string plugin_error;
     std::mutex mutex; ///< guards files3d (not the files' contents)
-    std::unordered_map<std::string, std::shared_ptr<Texture3dFile>> files3d;
+    std::unordered_map<std::string, std::shared_ptr<detail::Texture3dFile>> files3d;
 
-    std::shared_ptr<Texture3dFile> open3d(const std::string& file);
+    std::shared_ptr<detail::Texture3dFile> open3d(const std::string& file);
 };
 
-} // namespace sss::detail
+} // namespace sss

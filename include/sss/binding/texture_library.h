@@ -1,0 +1,60 @@
+#pragma once
+/// \file texture_library.h
+/// Module binding: the job's TextureServices (shading/texture_services.h),
+/// over OpenImageIO (a plugin loaded on the first 2-D lookup), brick maps
+/// and point clouds.
+
+#include <memory>
+#include <string>
+
+#include "sss/shading/texture_services.h"
+
+namespace sss {
+
+/// 2-D textures through one OpenImageIO TextureSystem (MIP-mapped .tx/.tex
+/// made by maketx, and any image OIIO reads, MIP-mapped on the fly),
+/// environment maps (lat-long through OIIO, OpenEXR cube-face maps looked
+/// up face by face with OIIO's texture()) and 3-D textures
+/// (brick maps, point clouds), opened once per file. Thread-safe; one per
+/// job (SceneServices owns it). The contracts of the lookups are
+/// TextureServices'.
+class TextureLibrary final : public TextureServices {
+public:
+    TextureLibrary();
+    ~TextureLibrary() override;
+    TextureLibrary(const TextureLibrary&) = delete;
+    TextureLibrary& operator=(const TextureLibrary&) = delete;
+
+    bool texture(const std::string& file, int channel, int nchannels,
+                 const TextureOptions& options, std::size_t count, const float* s,
+                 const float* t, const float* ds_du, const float* dt_du,
+                 const float* ds_dv, const float* dt_dv, const uint8_t* mask, float* out,
+                 std::string* error) override;
+    bool texture_quad(const std::string& file, int channel, int nchannels,
+                      const TextureOptions& options, std::size_t count,
+                      const float* const st[8], const uint8_t* mask, float* out,
+                      std::string* error) override;
+    bool environment(const std::string& file, int channel, int nchannels,
+                     const TextureOptions& options, std::size_t count,
+                     const glm::vec3* dir, const glm::vec3* ddir_du,
+                     const glm::vec3* ddir_dv, const uint8_t* mask, float* out,
+                     std::string* error) override;
+    bool texture_info(const std::string& file, const std::string& key,
+                      int expected_floats, float* numbers, std::string* text) override;
+    bool texture3d(const std::string& file, std::span<const std::string> channels,
+                   std::size_t count, const glm::vec3* P, const glm::vec3* N,
+                   const float* radius, const uint8_t* mask,
+                   std::vector<int>& channel_floats, float* out, uint8_t* found,
+                   std::string* error) override;
+
+    /// Forgets what is known of `file` (2-D and 3-D), so that the next call
+    /// opens it again: for a file written during the job (bake3d, then
+    /// texture3d). Unreadable files are otherwise remembered as such.
+    void invalidate(const std::string& file);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+} // namespace sss
