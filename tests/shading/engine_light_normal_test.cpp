@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -104,7 +105,8 @@ surface t(output varying color r = 0;) { r = diffuse(normalize(N)); }
 TEST(RslEngineLighting, EnvlightWithoutAMapIsAWhiteSky) {
     // shaders/envlight.sl with no map and nothing to occlude it: Cl = 1 along
     // N, so diffuse(N) = intensity * lightcolor for every N; __nonspecular.
-    std::ifstream in(std::string(SSS_TEST_DATA_DIR) + "/../../shaders/envlight.sl");
+    std::ifstream in(std::filesystem::path(SSS_TEST_DATA_DIR) / ".." / ".." / "shaders" /
+                     "envlight.sl");
     ASSERT_TRUE(in) << "shaders/envlight.sl";
     std::stringstream text;
     text << in.rdbuf();
