@@ -98,8 +98,10 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
                                 [](uint8_t w) { return w != 0; });
         });
     } else if (selection.parts > 0) {
-        const auto [first, end] =
-            part_range(tree.order.size(), selection.part, selection.parts);
+        // Named variables, not a structured binding: clang 14 cannot
+        // capture a binding in the lambda below.
+        const auto range = part_range(tree.order.size(), selection.part, selection.parts);
+        const auto first = range.first, end = range.second;
         part_out->first = first;
         part_out->receivers.assign(tree.order.begin() + first, tree.order.begin() + end);
         result.assign(end - first, glm::vec3(0.0f));
