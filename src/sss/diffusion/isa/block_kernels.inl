@@ -20,7 +20,8 @@
 #include "../disk_quadrature.h"
 
 // The receivers of a loop are independent: gcc vectorises them without
-// proving it (clang, which builds the sanitizer suite, has no such pragma).
+// proving it. clang, which builds only the sanitizer suite, does not read
+// gcc's pragma and gets none (the sanitizer build is not about speed).
 #if defined(__GNUC__) && !defined(__clang__)
 #define SSS_IVDEP _Pragma("GCC ivdep")
 #else
