@@ -531,6 +531,25 @@ def equal_error_cell(x, d):
     return f"{fs(x['time_at_err'])} s ({fx(x['time_at_err'] / d['seconds'])})"
 
 
+def model_against_light(data_dir):
+    """(material, profile) -> "r g b" L1w from docs/accuracy/data (scripts/accuracy-report),
+    or nothing when that report has not been made."""
+    acc = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(data_dir))),
+                       "accuracy", "data")
+    out = {}
+    if not os.path.isdir(acc):
+        return out
+    for name in os.listdir(acc):
+        if not name.endswith(".tsv") or name == "cost.tsv":
+            continue
+        by = {}
+        for r in read_tsv(os.path.join(acc, name)):
+            by.setdefault(r["profile"], []).append(f"{100 * float(r['l1w']):.0f}")
+        for prof, vals in by.items():
+            out[(name[:-4], prof)] = " ".join(vals) + " %"
+    return out
+
+
 def main():
     data_dir, plot_dir, report = sys.argv[1], sys.argv[2], sys.argv[3]
     os.makedirs(plot_dir, exist_ok=True)
@@ -726,6 +745,7 @@ def main():
         if prof_png:
             w(f"![profiles]({rel}/{prof_png})")
             w("")
+        light = model_against_light(data_dir)
         prow = []
         for name in sorted({r["case"] for r in profiles}):
             for prof in ["classic", "better", "burley"]:
@@ -734,9 +754,16 @@ def main():
                     if r["maxsolidangle"] not in (0.25, 1.0, 4.0):
                         continue
                     prow.append([name, prof, feps(r["maxsolidangle"]), fs(r["seconds"]),
-                                 fp(r["rms_pct"]), fp(r["p99_pct"]), fp(r["max_pct"])])
-        w(table(["case", "profile", "maxsolidangle", "seconds", "RMS %", "p99 %", "max %"],
-                prow))
+                                 fp(r["rms_pct"]), fp(r["p99_pct"]), fp(r["max_pct"]),
+                                 light.get((name.split("-")[-1], prof), "-")])
+        w(table(["case", "profile", "maxsolidangle", "seconds", "RMS %", "p99 %", "max %",
+                 "model vs the light: L1w"], prow))
+        w("")
+        w("The last column is the model's own error, which no setting of the evaluation "
+          "changes: the L1 error of r R(r) over the first ten transport mean free paths "
+          "against a Monte-Carlo random walk of the light, per colour channel (r g b), from "
+          "[accuracy.md](accuracy.md), which also has `-profile pbd` and `-profile mc` (3 % "
+          "and less) and what they cost.")
         w("")
         w(f"All values: [{data_rel}/profiles.tsv]({data_rel}/profiles.tsv).")
         w("")

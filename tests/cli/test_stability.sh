@@ -67,7 +67,7 @@ stat_lines() {
 }
 
 for cloud in identical line single empty zeroarea signs; do
-    for profile in classic better burley; do
+    for profile in classic better burley pbd mc; do
         for material in "" "-albedo fromfile -diffusemeanfreepath fromfile"; do
             label="$cloud $profile ${material:+per-point}"
             result="$work/$cloud.$profile.ptc"

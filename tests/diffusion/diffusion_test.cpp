@@ -231,6 +231,11 @@ TEST(DiffusionFlatPlane, BurleyWellSampled) {
     expect_plane_ratio({"skin1", sss::ProfileKind::Burley, 0.2});
 }
 
+TEST(DiffusionFlatPlane, BeamDiffusionAndMonteCarloWellSampled) {
+    expect_plane_ratio({"skin1", sss::ProfileKind::Pbd, 0.2});
+    expect_plane_ratio({"skin1", sss::ProfileKind::Mc, 0.2});
+}
+
 // src/sss/diffusion.cpp (kNearKappa2) and docs/ptfilter.md claim that a
 // uniformly lit plane stays within 1 % of albedo x E "from well-sampled down
 // to spacings of 9 z_r". This checks the claim per channel, with the spacing
@@ -449,7 +454,8 @@ TEST(DiffusionHierarchy, UnlitSourcesAreSkippedExactly) {
 
 TEST(DiffusionHierarchy, OtherProfilesMatchExact) {
     sss::PointCloud cloud = sphere_cloud(20000, 30.0);
-    for (sss::ProfileKind kind : {sss::ProfileKind::Better, sss::ProfileKind::Burley}) {
+    for (sss::ProfileKind kind : {sss::ProfileKind::Better, sss::ProfileKind::Burley,
+                                  sss::ProfileKind::Pbd, sss::ProfileKind::Mc}) {
         sss::DiffusionProblem pb =
             problem_from(cloud, material_profiles("marble", 1.0, kind));
         Comparison c = compare_with_exact(pb, {});
@@ -627,8 +633,9 @@ TEST(DiffusionRobustness, EmptyCloud) {
 }
 
 TEST(DiffusionRobustness, SinglePointIsItsOwnDisk) {
-    for (sss::ProfileKind kind : {sss::ProfileKind::Classic, sss::ProfileKind::Better,
-                                  sss::ProfileKind::Burley}) {
+    for (sss::ProfileKind kind :
+         {sss::ProfileKind::Classic, sss::ProfileKind::Better, sss::ProfileKind::Burley,
+          sss::ProfileKind::Pbd, sss::ProfileKind::Mc}) {
         std::vector<sss::Profile> prof = material_profiles("skin1", 1.0, kind);
         sss::DiffusionProblem pb;
         pb.positions = {{1, 2, 3}};
@@ -901,8 +908,9 @@ TEST(DiffusionSsdiffusion, ConstantPerPointMaterialEqualsConstantMaterial) {
     const glm::vec3 albedo(0.6f, 0.4f, 0.2f), dmfp(3.0f, 1.5f, 0.7f);
     add_color(cloud, "_albedo", albedo);
     add_color(cloud, "_diffusemeanfreepath", dmfp);
-    for (sss::ProfileKind kind : {sss::ProfileKind::Classic, sss::ProfileKind::Better,
-                                  sss::ProfileKind::Burley}) {
+    for (sss::ProfileKind kind :
+         {sss::ProfileKind::Classic, sss::ProfileKind::Better, sss::ProfileKind::Burley,
+          sss::ProfileKind::Pbd, sss::ProfileKind::Mc}) {
         sss::SsDiffusionOptions constant;
         constant.profile = kind;
         constant.material.albedo = glm::dvec3(albedo);

@@ -23,6 +23,11 @@ CASES = [
       "-isa", "x86-64"]),
     ({"exact": True, "material": "ketchup", "unitlength": 0.3},
      ["-exact", "-material", "ketchup", "-unitlength", "0.3"]),
+    ({"material": "skin1", "unitlength": 0.1, "profile": "pbd"},
+     ["-material", "skin1", "-unitlength", "0.1", "-profile", "pbd"]),
+    ({"albedo": (0.8, 0.6, 0.4), "diffusemeanfreepath": (1.5, 0.7, 0.3), "profile": "mc"},
+     ["-albedo", "0.8", "0.6", "0.4", "-diffusemeanfreepath", "1.5", "0.7", "0.3",
+      "-profile", "mc"]),
 ]
 
 

@@ -160,3 +160,64 @@ TEST(TruthHalfSpace, OptionsOutOfRangeAreRefused) {
 }
 
 } // namespace
+
+namespace {
+
+using namespace sss;
+
+TEST(TruthHalfSpace, SweepMatchesChandrasekharAndTheSingleWalk) {
+    // One set of paths for several albedos: the H-function totals at eta 1,
+    // and at eta 1.3 the walk of each albedo on its own.
+    HalfSpaceSweepOptions s;
+    s.albedos = {0.5, 0.9, 0.99};
+    s.eta = 1.0;
+    s.photons = 100'000;
+    s.batches = 32;
+    std::vector<HalfSpaceResult> r = walk_half_space_sweep(s);
+    ASSERT_EQ(r.size(), 3u);
+    expect_within(r[0].total, r[0].total_error, 0.115226, 0.002, "sweep 0.5");
+    expect_within(r[2].total, r[2].total_error, 0.752721, 0.002, "sweep 0.99");
+    for (const HalfSpaceResult& x : r) {
+        EXPECT_LT(x.truncated, 1e-11);
+        EXPECT_NEAR(x.total + x.absorbed + x.truncated, 1.0, 1e-12);
+    }
+    // Single scattering is the order-1 weight: albedo times the walk's.
+    EXPECT_NEAR(r[1].total_single / r[2].total_single, 0.9 / 0.99, 1e-12);
+
+    s.eta = 1.3;
+    s.edges = {0.0, 0.3, 1.0, 3.0, 10.0};
+    r = walk_half_space_sweep(s);
+    HalfSpaceOptions o;
+    o.albedo = 0.9;
+    o.eta = 1.3;
+    o.photons = 100'000;
+    o.batches = 32;
+    o.seed = 5;
+    o.edges = s.edges;
+    const HalfSpaceResult w = walk_half_space(o);
+    for (std::size_t a = 0; a + 1 < s.edges.size(); ++a) {
+        const double err = std::hypot(w.multiple_error[a], r[1].multiple_error[a]);
+        EXPECT_NEAR(r[1].multiple[a], w.multiple[a], 4.0 * err) << "annulus " << a;
+    }
+    EXPECT_NEAR(r[1].total, w.total, 4.0 * std::hypot(w.total_error, r[1].total_error));
+
+    // The same thread independence as one walk, and bad albedos refused.
+    HalfSpaceSweepOptions t = s;
+    t.photons = 5'000;
+    std::vector<HalfSpaceResult> one, two;
+    {
+        ThreadLimit limit(1);
+        one = walk_half_space_sweep(t);
+    }
+    {
+        ThreadLimit limit(2);
+        two = walk_half_space_sweep(t);
+    }
+    EXPECT_EQ(one[2].multiple, two[2].multiple);
+    t.albedos = {0.5, 1.0};
+    EXPECT_THROW(walk_half_space_sweep(t), ValueError);
+    t.albedos = {};
+    EXPECT_THROW(walk_half_space_sweep(t), ValueError);
+}
+
+} // namespace

@@ -4,6 +4,7 @@
 /// distance r from a unit-power point source on a flat surface. Each profile
 /// knows its closed-form disk integral, used for exact self and near terms.
 
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -15,10 +16,19 @@ namespace sss {
 enum class ProfileKind {
     Classic, ///< Jensen et al. 2001 dipole (default; PRMan's)
     Better,  ///< d'Eon 2012 "better dipole" (Grosjean D, moment boundary)
-    Burley   ///< Christensen-Burley 2015 normalized diffusion (dmfp fit)
+    Burley,  ///< Christensen-Burley 2015 normalized diffusion (dmfp fit)
+    /// Photon beam diffusion (Habel, Christensen, Jarosz 2013) with the exact
+    /// single scattering.
+    Pbd,
+    /// Tabulated from the project's half-space random walk
+    /// (data/profiles/mc_halfspace.tbl).
+    Mc
 };
 
-/// Parses "classic" / "dipole", "better" / "betterdipole", "burley" / "normalized".
+class RadialCurve;
+
+/// Parses "classic" / "dipole", "better" / "betterdipole", "burley" /
+/// "normalized", "pbd" / "beam", "mc" / "montecarlo".
 bool parse_profile_kind(std::string_view name, ProfileKind& out);
 const char* profile_kind_name(ProfileKind kind);
 
@@ -38,7 +48,7 @@ public:
 
     ProfileKind kind() const { return m_kind; }
     /// R(r), per unit area (scene units^-2). Finite at r = 0 for the dipoles,
-    /// +inf for Burley.
+    /// +inf for Burley, pbd and mc (their single scattering peaks as 1/r).
     double eval(double r) const;
     /// Integral of R over a disk of radius rho centred on the source:
     /// 2 pi \int_0^rho r R(r) dr (closed form).
@@ -46,7 +56,8 @@ public:
     /// Total diffuse reflectance, disk(infinity).
     double total() const { return m_total; }
     /// Length below which R stops growing like a power law (z_r for the
-    /// dipoles, 0 for Burley): the scale the near field must resolve.
+    /// dipoles, 0 for Burley, pbd and mc): the scale the near field must
+    /// resolve.
     double core_length() const { return m_core; }
     /// Diffuse mean free path 1/sigma_tr (inf when sigma_a = 0).
     double dmfp() const { return m_dmfp; }
@@ -75,6 +86,7 @@ private:
     double m_core = 0;
     double m_dmfp = 0;
     double m_ior = 1.3;
+    std::shared_ptr<const RadialCurve> m_curve; // pbd, mc: rho R(rho), rho = r sigma_t'
 };
 
 /// Three channels (r, g, b).

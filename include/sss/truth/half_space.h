@@ -7,7 +7,7 @@
 /// (the similarity relation), so results near the entry point (r below one
 /// transport mean free path) hold for that medium, not for the material's
 /// real phase function.
-/// May use: util.
+/// May use: diffusion, dice, light, cloud, scene, util.
 ///
 /// Units: lengths in transport mean free paths l = 1 / sigma_t'
 /// (sigma_t' = sigma_s' + sigma_a), fluxes per unit flux transmitted into
@@ -75,6 +75,31 @@ struct HalfSpaceResult {
 /// reflection past the critical angle). Throws ValueError for options out
 /// of range.
 HalfSpaceResult walk_half_space(const HalfSpaceOptions& options);
+
+/// The largest albedo a sweep accepts: its paths end after ln(floor) /
+/// ln(albedo) collisions, which grows without bound towards 1.
+constexpr double kMaxSweepAlbedo = 0.99999;
+
+/// Many albedos from one set of paths ("white" Monte Carlo): the paths are
+/// walked without absorption and a path that leaves after n collisions
+/// counts albedo^n for each albedo. The results of neighbouring albedos
+/// share their noise, which keeps a table over albedo smooth.
+struct HalfSpaceSweepOptions {
+    std::vector<double> albedos; ///< each in [0, kMaxSweepAlbedo]
+    double eta = 1.0;
+    Incidence incidence = Incidence::Pencil;
+    uint64_t photons = 1'000'000;
+    int batches = 64;
+    uint64_t seed = 1;
+    std::vector<double> edges; ///< as HalfSpaceOptions::edges
+    /// A path ends when the largest albedo's weight albedo^n falls below
+    /// this; the rest of its weight is counted as `truncated`.
+    double weight_floor = 1e-12;
+};
+
+/// One result per albedo, in the order given (`absorbed` is what neither
+/// left nor was truncated). Deterministic for any thread count.
+std::vector<HalfSpaceResult> walk_half_space_sweep(const HalfSpaceSweepOptions& options);
 
 /// Unpolarised Fresnel reflectance for light arriving at cosine `cos_in`
 /// (in (0, 1]) from a medium of index n_in onto one of index n_out; 1 past

@@ -116,4 +116,8 @@ bool writes_into_existing(const std::string& path);
 /// A signal the parent ignores (nohup) stays ignored.
 void install_signal_handlers();
 
+/// Writes `text` to `path` through an AtomicOutput (a report, a table, a
+/// plot). Throws IoError.
+void write_text_file(const std::string& path, const std::string& text);
+
 } // namespace sss

@@ -62,7 +62,7 @@ bool ssdiffusion_option(ArgScanner& args, const std::string& o, SsDiffusionOptio
         std::string p = args.value(o);
         if (!parse_profile_kind(p, opt.profile))
             throw UsageError("option -profile: unknown profile '" + p +
-                             "' (classic, better, burley)");
+                             "' (classic, better, burley, pbd, mc)");
     } else if (o == "criterion") {
         std::string c = args.value(o);
         if (!parse_criterion(c.c_str(), opt.diffusion.criterion))

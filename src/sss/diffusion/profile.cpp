@@ -11,58 +11,19 @@
 #include "sss/util/math.h"
 #include "sss/util/name_table.h"
 
+#include "beam_diffusion.h"
+#include "fresnel.h"
+#include "mc_table.h"
+#include "radial_curve.h"
+
 namespace sss {
+
+using diffusion_detail::fresnel_moments;
+using diffusion_detail::FresnelMoments;
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// Fresnel reflectance for light inside a medium of relative index eta
-// (inside/outside) meeting the boundary at cosine mu; total internal
-// reflection beyond the critical angle.
-double fresnel_internal(double mu, double eta) {
-    double sin_i2 = std::max(0.0, 1.0 - mu * mu);
-    double sin_t2 = eta * eta * sin_i2;
-    if (sin_t2 >= 1.0) return 1.0;
-    double cos_t = std::sqrt(1.0 - sin_t2);
-    // Relative index for the inside -> outside interface is 1/eta.
-    double n1 = eta, n2 = 1.0;
-    double rs = (n1 * mu - n2 * cos_t) / (n1 * mu + n2 * cos_t);
-    double rp = (n2 * mu - n1 * cos_t) / (n2 * mu + n1 * cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
-struct FresnelMoments {
-    double two_c1; // 2 C1 = \int_0^1 2 F(mu) mu dmu
-    double three_c2;
-};
-
-// Exact hemispherical Fresnel moments by composite Simpson integration
-// (cached per ior: they are needed once per material).
-FresnelMoments fresnel_moments(double eta) {
-    static std::mutex mutex;
-    static std::map<double, FresnelMoments> cache;
-    std::lock_guard<std::mutex> lock(mutex);
-    auto it = cache.find(eta);
-    if (it != cache.end()) return it->second;
-    // The integrand has a kink at the critical angle: integrate the two sides.
-    double mu_c = eta > 1.0 ? std::sqrt(std::max(0.0, 1.0 - 1.0 / (eta * eta))) : 0.0;
-    auto simpson = [&](double a, double b, int power) {
-        const int n = 4000;
-        double h = (b - a) / n, sum = 0.0;
-        for (int i = 0; i <= n; ++i) {
-            double mu = a + i * h;
-            double w = (i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0);
-            sum += w * fresnel_internal(mu, eta) * std::pow(mu, power);
-        }
-        return sum * h / 3.0;
-    };
-    FresnelMoments m;
-    m.two_c1 = 2.0 * (simpson(0.0, mu_c, 1) + simpson(mu_c, 1.0, 1));
-    m.three_c2 = 3.0 * (simpson(0.0, mu_c, 2) + simpson(mu_c, 1.0, 2));
-    cache.emplace(eta, m);
-    return m;
-}
 
 // (exp(-sigma a) - exp(-sigma b)) / sigma for b >= a, given delta = b - a
 // computed without cancellation; the sigma -> 0 limit is delta.
@@ -86,14 +47,63 @@ double burley_shape(double albedo) {
 }
 
 // The first name of a kind is the one written; the others are accepted aliases.
-constexpr NameTable<ProfileKind, 6> kProfileKindNames({{
+constexpr NameTable<ProfileKind, 10> kProfileKindNames({{
     {ProfileKind::Classic, "classic"},
     {ProfileKind::Classic, "dipole"},
     {ProfileKind::Better, "better"},
     {ProfileKind::Better, "betterdipole"},
     {ProfileKind::Burley, "burley"},
     {ProfileKind::Burley, "normalized"},
+    {ProfileKind::Pbd, "pbd"},
+    {ProfileKind::Pbd, "beam"},
+    {ProfileKind::Mc, "mc"},
+    {ProfileKind::Mc, "montecarlo"},
 }});
+
+bool is_curve(ProfileKind kind) {
+    return kind == ProfileKind::Pbd || kind == ProfileKind::Mc;
+}
+
+// The curve of a sampled profile for reduced albedo alpha in (0, 1].
+std::shared_ptr<const RadialCurve> curve_of(ProfileKind kind, double alpha, double eta) {
+    using namespace diffusion_detail;
+    if (kind == ProfileKind::Mc) {
+        check_mc_range(eta);
+        return cached_curve(1, mc_curve_value, alpha, eta);
+    }
+    return cached_curve(0, beam_curve_value, alpha, eta);
+}
+
+// Reduced albedo whose curve's total reflectance is `albedo` (sigma_t' = 1):
+// regula falsi (Illinois) in u = sqrt(1 - alpha'), where the total is
+// smooth and falls monotonically.
+double curve_alpha_for_total(ProfileKind kind, double albedo, double eta) {
+    auto total_of_u = [&](double u) {
+        double alpha = 1.0 - u * u;
+        return alpha <= 0.0 ? 0.0 : 2.0 * kPi * curve_of(kind, alpha, eta)->total();
+    };
+    double lo = 1e-4, hi = 1.0; // u
+    double flo = total_of_u(lo) - albedo, fhi = -albedo;
+    if (flo <= 0.0) return 1.0 - lo * lo;
+    int side = 0;
+    for (int it = 0; it < 60 && hi - lo > 1e-12; ++it) {
+        double u = (lo * fhi - hi * flo) / (fhi - flo);
+        if (!(u > lo && u < hi)) u = 0.5 * (lo + hi);
+        double f = total_of_u(u) - albedo;
+        if (std::abs(f) < 1e-10) return 1.0 - u * u;
+        if (f > 0.0) {
+            lo = u, flo = f;
+            if (side == 1) fhi *= 0.5;
+            side = 1;
+        } else {
+            hi = u, fhi = f;
+            if (side == -1) flo *= 0.5;
+            side = -1;
+        }
+    }
+    double u = 0.5 * (lo + hi);
+    return 1.0 - u * u;
+}
 
 } // namespace
 
@@ -120,6 +130,22 @@ Profile Profile::from_coefficients(ProfileKind kind, const ChannelCoefficients& 
     p.m_kind = kind;
     p.m_ior = c.ior;
     double st = c.sigma_s_prime + c.sigma_a;
+    if (is_curve(kind)) {
+        if (kind == ProfileKind::Mc) diffusion_detail::check_mc_range(c.ior);
+        if (!(st > 0.0) || c.sigma_s_prime == 0.0) {
+            p.m_dmfp = 0.0;
+            return p;
+        }
+        p.m_sigma_t = st;
+        p.m_alpha = c.sigma_s_prime / st;
+        p.m_curve = curve_of(kind, p.m_alpha, c.ior);
+        p.m_sigma_tr = diffusion_detail::grosjean_sigma_tr(p.m_alpha) * st;
+        p.m_dmfp = p.m_sigma_tr > 0.0 ? 1.0 / p.m_sigma_tr : kInf;
+        p.m_scale = 1.0;
+        p.m_core = 0.0;
+        p.m_total = 2.0 * kPi * p.m_curve->total();
+        return p;
+    }
     if (!(st > 0.0) || c.sigma_s_prime == 0.0) {
         // No scattering: nothing comes back out. Keep lengths finite.
         p.m_zr = p.m_core = 1.0;
@@ -190,6 +216,15 @@ Profile Profile::from_albedo_dmfp(ProfileKind kind, double albedo, double dmfp,
         if (!std::isfinite(st)) throw ValueError("albedo too close to 1");
         return from_coefficients(kind, {ss1 * st, sa1 * st, ior});
     }
+    case ProfileKind::Pbd:
+    case ProfileKind::Mc: {
+        if (kind == ProfileKind::Mc) diffusion_detail::check_mc_range(ior);
+        if (albedo == 0.0) return from_coefficients(kind, {0.0, 1.0 / dmfp, ior});
+        double alpha = curve_alpha_for_total(kind, albedo, ior);
+        double st = 1.0 / (dmfp * diffusion_detail::grosjean_sigma_tr(alpha));
+        if (!std::isfinite(st)) throw ValueError("albedo too close to 1");
+        return from_coefficients(kind, {alpha * st, (1.0 - alpha) * st, ior});
+    }
     case ProfileKind::Burley: {
         Profile p;
         p.m_kind = kind;
@@ -229,6 +264,12 @@ double Profile::eval(double r) const {
         double delta = (m_zv * m_zv - m_zr * m_zr) / (dv + dr);
         double fluence = exp_over_d_diff(s, dr, dv, delta);
         return m_scale * (real - virt + m_cphi / m_D * fluence);
+    }
+    case ProfileKind::Pbd:
+    case ProfileKind::Mc: {
+        if (r <= 0.0) return kInf;
+        double rho = r * m_sigma_t;
+        return m_sigma_t * m_sigma_t * m_curve->value(rho) / rho;
     }
     case ProfileKind::Burley: {
         if (r <= 0.0) return kInf;
@@ -281,6 +322,9 @@ double Profile::disk(double rho) const {
         double phi = m_cphi / m_D * fluence;
         return 2.0 * kPi * m_scale * (ce + phi);
     }
+    case ProfileKind::Pbd:
+    case ProfileKind::Mc:
+        return 2.0 * kPi * m_curve->integral(rho == kInf ? kInf : rho * m_sigma_t);
     case ProfileKind::Burley: {
         if (rho == kInf) return m_scale;
         return m_scale *

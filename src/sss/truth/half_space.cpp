@@ -8,13 +8,14 @@
 #include <functional>
 #include <limits>
 #include <numbers>
-#include <random>
 #include <string>
 
 #include <tbb/parallel_for.h>
 
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+
+#include "random.h"
 
 namespace sss {
 
@@ -31,25 +32,13 @@ struct Tally {
     long collisions = 0;
 };
 
-/// Uniform doubles in [0, 1) from a 64-bit generator seeded per batch.
-class Uniform {
-public:
-    explicit Uniform(uint64_t seed) : m_engine(seed) {}
-    double operator()() { return double(m_engine() >> 11) * 0x1.0p-53; }
-
-private:
-    std::mt19937_64 m_engine;
-};
-
 struct Vec {
     double x, y, z;
 };
 
 Vec isotropic(Uniform& u) {
-    const double z = 1.0 - 2.0 * u();
-    const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-    const double phi = 2.0 * std::numbers::pi * u();
-    return {s * std::cos(phi), s * std::sin(phi), z};
+    const glm::dvec3 d = uniform_direction(u);
+    return {d.x, d.y, d.z};
 }
 
 /// The annulus of radius r (edges increasing from 0), or -1 beyond.
@@ -73,9 +62,17 @@ std::pair<Vec, double> entering(const HalfSpaceOptions& o, Uniform& u) {
     return {{sin_in * std::cos(phi), sin_in * std::sin(phi), cos_in}, t};
 }
 
-void walk_one(const HalfSpaceOptions& o, Uniform& u, Tally& tally) {
-    auto [d, w] = entering(o, u);
-    tally.entered += w;
+/// One path from its entry. `collide(order, w)` is called at each collision
+/// (weight before it) and returns the weight after it, or a negative value to
+/// end the path; `leave(order, r, w)` when it leaves at radius r.
+template <class Collide, class Leave>
+void walk_path(double eta, Incidence incidence, Uniform& u, double& entered,
+               Collide&& collide, Leave&& leave) {
+    HalfSpaceOptions in;
+    in.eta = eta;
+    in.incidence = incidence;
+    auto [d, w] = entering(in, u);
+    entered += w;
     Vec p{0.0, 0.0, 0.0};
     long order = 0;
     for (;;) {
@@ -85,35 +82,48 @@ void walk_one(const HalfSpaceOptions& o, Uniform& u, Tally& tally) {
             // reflection is as good as the rest of this one (memoryless).
             const double t = -p.z / d.z;
             p = {p.x + d.x * t, p.y + d.y * t, 0.0};
-            if (u() < fresnel_reflectance(-d.z, o.eta, 1.0)) {
+            if (u() < fresnel_reflectance(-d.z, eta, 1.0)) {
                 d.z = -d.z;
                 continue;
             }
-            const long a = annulus_of(o.edges, std::hypot(p.x, p.y));
+            leave(order, std::hypot(p.x, p.y), w);
+            return;
+        }
+        p = {p.x + d.x * s, p.y + d.y * s, p.z + d.z * s};
+        ++order;
+        w = collide(order, w);
+        if (!(w > 0.0)) return;
+        d = isotropic(u);
+    }
+}
+
+void walk_one(const HalfSpaceOptions& o, Uniform& u, Tally& tally) {
+    walk_path(
+        o.eta, o.incidence, u, tally.entered,
+        [&](long order, double w) {
+            ++tally.collisions;
+            tally.absorbed += w * (1.0 - o.albedo);
+            w *= o.albedo;
+            if (w <= 0.0) return -1.0;
+            if (w < kRouletteBelow) {
+                // Unbiased: survivors carry the expected weight of the rest.
+                if (u() >= kRouletteSurvival) return -1.0;
+                w /= kRouletteSurvival;
+            }
+            if (order >= o.max_collisions) {
+                tally.truncated += w;
+                return -1.0;
+            }
+            return w;
+        },
+        [&](long order, double r, double w) {
+            const long a = annulus_of(o.edges, r);
             const bool once = order == 1;
             if (a < 0)
                 (once ? tally.beyond_single : tally.beyond_multiple) += w;
             else
                 (once ? tally.single : tally.multiple)[std::size_t(a)] += w;
-            return;
-        }
-        p = {p.x + d.x * s, p.y + d.y * s, p.z + d.z * s};
-        ++order;
-        ++tally.collisions;
-        tally.absorbed += w * (1.0 - o.albedo);
-        w *= o.albedo;
-        if (w <= 0.0) return;
-        if (w < kRouletteBelow) {
-            // Unbiased: survivors carry the expected weight of the rest.
-            if (u() >= kRouletteSurvival) return;
-            w /= kRouletteSurvival;
-        }
-        if (order >= o.max_collisions) {
-            tally.truncated += w;
-            return;
-        }
-        d = isotropic(u);
-    }
+        });
 }
 
 void check(const HalfSpaceOptions& o) {
@@ -189,27 +199,17 @@ double fresnel_reflectance(double cos_in, double n_in, double n_out) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-HalfSpaceResult walk_half_space(const HalfSpaceOptions& options) {
-    HalfSpaceOptions o = options;
-    if (o.edges.empty())
-        for (int i = 0; i <= 200; ++i) o.edges.push_back(0.05 * i);
-    check(o);
-    const std::size_t n = o.edges.size() - 1;
-    const std::size_t batches = std::size_t(o.batches);
-    std::vector<Tally> tallies(batches);
-    tbb::parallel_for(std::size_t(0), batches, [&](std::size_t b) {
-        Tally& t = tallies[b];
-        t.single.assign(n, 0.0);
-        t.multiple.assign(n, 0.0);
-        const uint64_t first = o.photons * b / batches,
-                       end = o.photons * (b + 1) / batches;
-        Uniform u(detail::splitmix64(o.seed ^ detail::splitmix64(b + 1)));
-        for (uint64_t i = first; i < end; ++i) walk_one(o, u, t);
-    });
+namespace {
 
+/// The result from the batches' tallies: fluxes per unit flux that entered,
+/// standard errors from the batch means.
+HalfSpaceResult summarise_tallies(const std::vector<Tally>& tallies,
+                                  const std::vector<double>& edges, uint64_t photons) {
+    const std::size_t n = edges.size() - 1;
+    const std::size_t batches = tallies.size();
     HalfSpaceResult r;
-    r.edges = o.edges;
-    r.photons = o.photons;
+    r.edges = edges;
+    r.photons = photons;
     r.single.assign(n, 0.0);
     r.multiple.assign(n, 0.0);
     r.single_error.assign(n, 0.0);
@@ -263,6 +263,122 @@ HalfSpaceResult walk_half_space(const HalfSpaceOptions& options) {
         r.truncated /= entered;
     }
     return r;
+}
+
+std::vector<double> default_edges(std::vector<double> edges) {
+    if (edges.empty())
+        for (int i = 0; i <= 200; ++i) edges.push_back(0.05 * i);
+    return edges;
+}
+
+Uniform batch_generator(uint64_t seed, std::size_t batch) {
+    return Uniform(batch_seed(seed, batch));
+}
+
+} // namespace
+
+HalfSpaceResult walk_half_space(const HalfSpaceOptions& options) {
+    HalfSpaceOptions o = options;
+    o.edges = default_edges(o.edges);
+    check(o);
+    const std::size_t n = o.edges.size() - 1;
+    const std::size_t batches = std::size_t(o.batches);
+    std::vector<Tally> tallies(batches);
+    tbb::parallel_for(std::size_t(0), batches, [&](std::size_t b) {
+        Tally& t = tallies[b];
+        t.single.assign(n, 0.0);
+        t.multiple.assign(n, 0.0);
+        const uint64_t first = o.photons * b / batches,
+                       end = o.photons * (b + 1) / batches;
+        Uniform u = batch_generator(o.seed, b);
+        for (uint64_t i = first; i < end; ++i) walk_one(o, u, t);
+    });
+    return summarise_tallies(tallies, o.edges, o.photons);
+}
+
+std::vector<HalfSpaceResult> walk_half_space_sweep(const HalfSpaceSweepOptions& options) {
+    HalfSpaceOptions o;
+    o.eta = options.eta;
+    o.incidence = options.incidence;
+    o.photons = options.photons;
+    o.batches = options.batches;
+    o.seed = options.seed;
+    o.edges = default_edges(options.edges);
+    check(o);
+    const std::vector<double>& albedos = options.albedos;
+    if (albedos.empty()) throw ValueError("half-space sweep: no albedos");
+    double top = 0.0;
+    for (double a : albedos) {
+        if (!(a >= 0.0 && a <= kMaxSweepAlbedo))
+            throw ValueError("half-space sweep: albedo " + std::to_string(a) +
+                             " is outside [0, " + std::to_string(kMaxSweepAlbedo) + "]");
+        top = std::max(top, a);
+    }
+    if (!(options.weight_floor > 0.0 && options.weight_floor < 1.0))
+        throw ValueError("half-space sweep: weight_floor must be in (0, 1)");
+    // Past this many collisions even the largest albedo's weight is below
+    // the floor: the path ends there and that weight counts as truncated.
+    const long last =
+        top > 0.0 ? long(std::ceil(std::log(options.weight_floor) / std::log(top))) : 1;
+    std::vector<double> log_albedo;
+    for (double a : albedos)
+        log_albedo.push_back(a > 0.0 ? std::log(a)
+                                     : -std::numeric_limits<double>::infinity());
+    const std::size_t n = o.edges.size() - 1, na = albedos.size();
+    const std::size_t batches = std::size_t(o.batches);
+    // tallies[b * na + k]: batch b, albedo k.
+    std::vector<Tally> tallies(batches * na);
+    tbb::parallel_for(std::size_t(0), batches, [&](std::size_t b) {
+        Tally* t = &tallies[b * na];
+        for (std::size_t k = 0; k < na; ++k) {
+            t[k].single.assign(n, 0.0);
+            t[k].multiple.assign(n, 0.0);
+        }
+        const uint64_t first = o.photons * b / batches,
+                       end = o.photons * (b + 1) / batches;
+        Uniform u = batch_generator(o.seed, b);
+        double entered = 0.0;
+        long collisions = 0;
+        for (uint64_t i = first; i < end; ++i) {
+            walk_path(
+                o.eta, o.incidence, u, entered,
+                [&](long order, double w) {
+                    ++collisions;
+                    if (order < last) return w;
+                    for (std::size_t k = 0; k < na; ++k)
+                        t[k].truncated += w * std::exp(double(order) * log_albedo[k]);
+                    return -1.0;
+                },
+                [&](long order, double r, double w) {
+                    const long a = annulus_of(o.edges, r);
+                    for (std::size_t k = 0; k < na; ++k) {
+                        // albedo^order; 0^0 = 1 (light that never scattered).
+                        const double wk =
+                            order == 0 ? w : w * std::exp(double(order) * log_albedo[k]);
+                        Tally& tk = t[k];
+                        const bool once = order == 1;
+                        if (a < 0)
+                            (once ? tk.beyond_single : tk.beyond_multiple) += wk;
+                        else
+                            (once ? tk.single : tk.multiple)[std::size_t(a)] += wk;
+                    }
+                });
+        }
+        for (std::size_t k = 0; k < na; ++k) {
+            t[k].entered = entered;
+            t[k].collisions = collisions;
+        }
+    });
+    std::vector<HalfSpaceResult> out;
+    std::vector<Tally> one(batches);
+    for (std::size_t k = 0; k < na; ++k) {
+        for (std::size_t b = 0; b < batches; ++b) one[b] = std::move(tallies[b * na + k]);
+        HalfSpaceResult r = summarise_tallies(one, o.edges, o.photons);
+        // What neither left nor was truncated was absorbed.
+        r.absorbed = std::max(0.0, 1.0 - r.total - r.truncated);
+        out.push_back(std::move(r));
+    }
+    return out;
 }
 
 double single_scattering_flux(double albedo, double eta, double r0, double r1) {

@@ -6,6 +6,8 @@
 
 #include "sss/util/atomic_output.h"
 
+#include <fstream>
+
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -677,6 +679,18 @@ void check_output_target(const std::string& path) {
     if (::access(dir.c_str(), W_OK | X_OK) != 0)
         throw IoError(path,
                       "cannot write into folder '" + dir + "': " + errno_text(errno));
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+    AtomicOutput out(path);
+    {
+        std::ofstream f(out.temp_path(), std::ios::binary | std::ios::trunc);
+        if (!f) throw IoError(path, "cannot create");
+        f.write(text.data(), std::streamsize(text.size()));
+        f.flush();
+        if (!f) throw IoError(path, "cannot write");
+    }
+    out.commit();
 }
 
 } // namespace sss
