@@ -41,6 +41,12 @@ for p in "${paths[@]}"; do
     grep -q "kernels $p\$" <<<"$out" || fail "-isa $p: -progress 1 does not say 'kernels $p': $out"
     cmp -s out_x86-64.ptc "out_$p.ptc" || fail "-isa $p writes other bytes than x86-64"
 done
+# The sampled profiles' kernels (disks as their means, with the normals) too.
+for p in "${paths[@]}"; do
+    run "$ptfilter" -ssdiffusion -profile mc -material skin1 -isa "$p" in.ptc "mc_$p.ptc"
+    expect_rc 0 "-profile mc -isa $p" || continue
+    cmp -s mc_x86-64.ptc "mc_$p.ptc" || fail "-profile mc -isa $p writes other bytes than x86-64"
+done
 # An old CPU: glibc's math functions (exp, expm1, sincos, atan2: the profiles
 # and their tables) in their SSE2 variants, which glibc picks on a CPU
 # without AVX/FMA (masked here with GLIBC_TUNABLES), and the baseline kernels:

@@ -57,6 +57,13 @@ struct BlockKernels {
     // add; below 0, the caller has checked that no pair does.
     void (*near)(const BlockTables& t, const float* pos_rho2, const float* power_area,
                  uint32_t first, uint32_t count, BucketBlock& b, float quadrature_core2);
+    // The same for receivers whose profiles have no core (near_core2 = 0):
+    // each source disk (normals: the tree's, 3 floats per point) as its
+    // second-order mean (kTaylorDisk2); the pairs whose disk is larger than
+    // that are skipped, for the caller's quadrature.
+    void (*near_disks)(const BlockTables& t, const float* pos_rho2,
+                       const float* power_area, const float* normals, uint32_t first,
+                       uint32_t count, BucketBlock& b);
     // The second-order local expansion about `centre` of the expansions of
     // nodes[0..n) (evaluation.cpp's LocalExpansion), in double: out[ch] =
     // {l0, l1 x y z, l2 xx xy xz yy yz zz}, overwritten. The nodes are summed

@@ -19,6 +19,19 @@ namespace sss::diffusion_detail {
 // down to spacings of 9 z_r (measured; docs/ptfilter.md).
 constexpr double kNearKappa2 = 0.1;
 
+// The sampled profiles (pbd, mc: 1/r at the source, no core length) would
+// send every close pair to the quadrature (twice the classic's time at 1M
+// points). A disk whose radius^2 is at most this fraction of its squared
+// distance is taken instead as its mean to second order,
+// F + rho^2/2 (F' + |w_t|^2 F'') (w_t: the offset within the disk's plane):
+// 1.3x the classic's time, 0.26 % RMS from the exact sum (0.15 % at 0.25,
+// but 1.5x the time; docs/ptfilter.md).
+constexpr float kTaylorDisk2 = 0.5f;
+
+// The exact sum takes a source disk of a sampled profile as a point
+// only when its radius^2 is below this fraction of its squared distance.
+constexpr double kExactDisk2 = 1e-3;
+
 // Quadrature over a disk: 4 Gauss-Legendre nodes in t = (rho'/rho)^2 (uniform
 // in area) times 8 angles.
 constexpr int kQuadRadial = 4, kQuadAngular = 8;

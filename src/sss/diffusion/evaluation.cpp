@@ -161,9 +161,20 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         // Close, large source disks: the pairs that need the disk quadrature
         // one by one, the others (usually nearly all) in the kernel. (The
         // whole leaf went pair by pair before: coarse clouds spent most of
-        // their time there, issue 17.)
-        kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block,
-                     first_rc.near_core2);
+        // their time there.) The sampled profiles' kernel takes the moderately
+        // close disks as their second-order means and only the larger ones are
+        // left.
+        const bool coreless = first_rc.disk_means;
+        if (coreless)
+            kernels.near_disks(t, pos_rho2, power_area, &tree.normal.data()->x,
+                               leaf.first, leaf.count, block);
+        else
+            kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block,
+                         first_rc.near_core2);
+        const auto left = [&](float rho2, float q) {
+            return coreless ? rho2 > kTaylorDisk2 * q
+                            : needs_quadrature(rho2, q, first_rc.near_core2);
+        };
         float max_rho2 = 0.0f; // (exact: max_rho is its rounded square root)
         for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
             max_rho2 = std::max(max_rho2, tree.pos_rho2[j].w);
@@ -172,16 +183,13 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             const glm::vec3 x(block.x[r], block.y[r], block.z[r]);
             // No pair of this receiver needs it when the leaf's largest disk
             // does not at the leaf box's distance (q >= that distance).
-            if (!needs_quadrature(max_rho2, box_distance2(x, x, leaf.lo, leaf.hi),
-                                  first_rc.near_core2))
-                continue;
+            if (!left(max_rho2, box_distance2(x, x, leaf.lo, leaf.hi))) continue;
             double acc[3] = {0, 0, 0};
             bool any = false;
             for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j) {
                 const glm::vec3 wv = x - glm::vec3(tree.pos_rho2[j]);
                 const float q = glm::dot(wv, wv);
-                if (j != s &&
-                    needs_quadrature(tree.pos_rho2[j].w, q, first_rc.near_core2)) {
+                if (j != s && left(tree.pos_rho2[j].w, q)) {
                     quadrature_source(tree, tables, first_rc, wv, q, j, acc, local,
                                       w.memo);
                     any = true;

@@ -17,6 +17,7 @@
 #include "sss/util/progress.h"
 
 #include "disk_quadrature.h"
+#include "profile_tables.h"
 
 namespace sss {
 
@@ -45,6 +46,7 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
         double core2 = std::numeric_limits<double>::max();
         for (int ch = 0; ch < 3; ++ch)
             core2 = std::min(core2, prof[ch]->core_length() * prof[ch]->core_length());
+        const bool disk_means = diffusion_detail::uses_disk_means(prof);
         glm::dvec3 x(pb.positions[i]);
         double acc[3] = {0, 0, 0};
         // Coincident sources usually share their area: keep the last disk.
@@ -63,8 +65,14 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
                 for (int ch = 0; ch < 3; ++ch) acc[ch] += e[ch] * memo_disk[ch];
                 continue;
             }
-            // Same rule as the hierarchical path (in float there).
-            if (float(a / kPi) > float(kNearKappa2 * (q + core2))) {
+            // Same rule as the hierarchical path (in float there). The
+            // sampled profiles (1/r at the source) take every disk that is not
+            // tiny against its distance as a disk: the reference for the
+            // hierarchical path's disk means.
+            const bool disk = disk_means
+                                  ? a / kPi > diffusion_detail::kExactDisk2 * q
+                                  : float(a / kPi) > float(kNearKappa2 * (q + core2));
+            if (disk) {
                 glm::dvec3 u, v;
                 glm::dvec3 nj =
                     pb.normals.empty() ? glm::dvec3(0) : glm::dvec3(pb.normals[j]);

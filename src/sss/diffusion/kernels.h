@@ -77,6 +77,26 @@ inline bool needs_quadrature(float rho2, float q, float near_core2) {
     return rho2 > kNearKappa2 * (q + near_core2);
 }
 
+// The mean of F over a source disk of radius^2 rho2 with unit normal n (zero:
+// facing the receiver) at offset w (q = |w|^2), to second order, times the
+// source's power.
+inline void disk_taylor(const Tables& tables, const ReceiverChannels& rc,
+                        const glm::vec3& n, const glm::vec3& w, float q, float rho2,
+                        const glm::vec4& pa, double acc[3]) {
+    Tables::Lookup l = tables.locate(q);
+    if (!l.valid) return;
+    const float n2 = glm::dot(n, n);
+    const float wn = n2 > 0.0f ? glm::dot(w, n) : 0.0f;
+    const float wt2 = n2 > 0.0f ? std::max(0.0f, q - wn * wn / n2) : 0.0f;
+    for (int ch = 0; ch < 3; ++ch) {
+        const TableEntry* e = rc.table[ch]->entries.data() + l.index;
+        const float f = e[0].f + l.frac * (e[1].f - e[0].f);
+        const float df = e[0].df + l.frac * (e[1].df - e[0].df);
+        const float d2f = e[0].d2f + l.frac * (e[1].d2f - e[0].d2f);
+        acc[ch] += double((f + 0.5f * rho2 * (df + wt2 * d2f)) * pa[ch]);
+    }
+}
+
 // The disk quadrature of sorted source s for a receiver at offset w = x - p_s
 // (q = |w|^2), for a pair that needs_quadrature().
 inline void quadrature_source(const Tree& tree, const Tables& tables,
@@ -98,6 +118,12 @@ inline void quadrature_source(const Tree& tree, const Tables& tables,
                 m = {rc.profile[ch], rho, rc.profile[ch]->disk(rho)};
             acc[ch] += pa[ch] / pa.w * m.value;
         }
+        return;
+    }
+    if (rc.disk_means && tree.pos_rho2[s].w <= kTaylorDisk2 * q) {
+        // The sampled profiles (1/r at the source) take a moderately close
+        // disk as its mean to second order (kTaylorDisk2).
+        disk_taylor(tables, rc, tree.normal[s], w, q, tree.pos_rho2[s].w, pa, acc);
         return;
     }
     glm::dvec3 u, v;

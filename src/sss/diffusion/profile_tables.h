@@ -75,7 +75,19 @@ struct ReceiverChannels {
     const ChannelTable* table[3];
     const Profile* profile[3];
     float near_core2; // smallest core^2 of the three channels
+    // The sampled profiles (pbd, mc): close source disks are taken as their
+    // second-order means (kTaylorDisk2) rather than points or the quadrature.
+    bool disk_means;
 };
+
+// Whether a receiver with these profiles takes close disks as their means.
+inline bool uses_disk_means(const Profile* const profile[3]) {
+    for (int ch = 0; ch < 3; ++ch)
+        if (profile[ch]->kind() != ProfileKind::Pbd &&
+            profile[ch]->kind() != ProfileKind::Mc)
+            return false;
+    return true;
+}
 
 // The channels of the receiver at original index `original`.
 inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
@@ -90,6 +102,7 @@ inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
         core2 = std::min(core2, rc.table[ch]->core2);
     }
     rc.near_core2 = core2;
+    rc.disk_means = uses_disk_means(rc.profile);
     return rc;
 }
 

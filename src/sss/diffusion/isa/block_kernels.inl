@@ -95,7 +95,7 @@ void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
         const float* phi = m.phi;
         // The three channels in one pass: the receiver's offset and table
         // position are computed once for all of them.
-SSS_IVDEP
+        SSS_IVDEP
         for (int32_t r = 0; r < n; ++r) {
             float wx = b.x[r] - cx, wy = b.y[r] - cy, wz = b.z[r] - cz;
             float qq = wx * wx + wy * wy + wz * wz;
@@ -209,7 +209,7 @@ inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int
                         BucketBlock& b, int32_t n, float rho2 = 0.0f,
                         float core2 = 0.0f) {
     const int32_t bits0 = tb.bits0, last = tb.last;
-SSS_IVDEP
+    SSS_IVDEP
     for (int32_t r = 0; r < n; ++r) {
         float wx = b.x[r] - px, wy = b.y[r] - py, wz = b.z[r] - pz;
         float q = wx * wx + wy * wy + wz * wz;
@@ -244,7 +244,7 @@ void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
         read_rows<Quadrupole ? 3 : 1>(tb.rows, b, n);
         const float* frac = b.frac;
         const float* keep = b.keep;
-SSS_IVDEP
+        SSS_IVDEP
         for (int32_t r = 0; r < n; ++r) {
             const float fr = frac[r];
             float v0 = phi[0] * (V[0][r] + fr * V[1][r]);
@@ -283,7 +283,7 @@ void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_
         read_rows<1>(tb.rows, b, n);
         const float* frac = b.frac;
         const float* keep = b.keep;
-SSS_IVDEP
+        SSS_IVDEP
         for (int32_t r = 0; r < n; ++r) {
             const float fr = frac[r];
             float f0 = V[0][r] + fr * V[1][r];
@@ -299,6 +299,105 @@ SSS_IVDEP
 template <bool Quad>
 void near_tables(const BlockTables& tb, const float* pos_rho2, const float* power_area,
                  uint32_t first, uint32_t count, BucketBlock& b, float core2);
+
+// Source disks of moderate size (radius^2 at most kTaylorDisk2 times the
+// squared distance) for profiles without a core: the disk's mean to second
+// order, F + rho^2/2 (F' + |w_t|^2 F''), w_t the offset within the disk's
+// plane (normal: the source's; a zero normal faces the receiver, w_t = 0).
+// Larger disks are skipped for the caller's quadrature.
+// The rows and the per-channel tables do the same operations in the same
+// order.
+// A source's normal for in-plane offsets, |w_t|^2 = has max(0, q - (w.n)^2 / n^2):
+// 0 for a zero normal (the disk faces the receiver). Locals, so that the
+// receivers' loop stays vectorised.
+#define SSS_DISK_PLANE(normals, j)                                                       \
+    const float* nrm = (normals) + 3 * std::size_t(j);                                   \
+    const float nx = nrm[0], ny = nrm[1], nz = nrm[2];                                   \
+    const float nn = nx * nx + ny * ny + nz * nz;                                        \
+    const float inv_n2 = nn > 0.0f ? 1.0f / nn : 0.0f, has = nn > 0.0f ? 1.0f : 0.0f
+
+void near_disks_rows(const BlockTables& tb, const float* pos_rho2,
+                     const float* power_area, const float* normals, uint32_t first,
+                     uint32_t count, BucketBlock& b) {
+    const int32_t n = int32_t(b.count);
+    const float* V[18];
+    for (int c = 0; c < 18; ++c) V[c] = b.val[c];
+    float* acc[3] = {b.acc[0], b.acc[1], b.acc[2]};
+    for (uint32_t j = first; j < first + count; ++j) {
+        const float e[3] = {power_area[4 * j], power_area[4 * j + 1],
+                            power_area[4 * j + 2]};
+        const float px = pos_rho2[4 * j], py = pos_rho2[4 * j + 1],
+                    pz = pos_rho2[4 * j + 2];
+        const float rho2 = pos_rho2[4 * j + 3], h = 0.5f * rho2;
+        SSS_DISK_PLANE(normals, j);
+        locate_rows(tb, px, py, pz, int32_t(j), b, n);
+        read_rows<3>(tb.rows, b, n);
+        const float* frac = b.frac;
+        const float* keep = b.keep;
+        SSS_IVDEP
+        for (int32_t r = 0; r < n; ++r) {
+            const float wx = b.x[r] - px, wy = b.y[r] - py, wz = b.z[r] - pz;
+            const float q = wx * wx + wy * wy + wz * wz;
+            const float k = rho2 > kTaylorDisk2 * q ? 0.0f : keep[r];
+            const float wn = wx * nx + wy * ny + wz * nz;
+            const float t2 = q - wn * wn * inv_n2;
+            const float wt2 = has * (t2 > 0.0f ? t2 : 0.0f);
+            const float fr = frac[r];
+            for (int ch = 0; ch < 3; ++ch) {
+                const float f = V[2 * ch][r] + fr * V[2 * ch + 1][r];
+                const float df = V[6 + 2 * ch][r] + fr * V[7 + 2 * ch][r];
+                const float d2f = V[12 + 2 * ch][r] + fr * V[13 + 2 * ch][r];
+                acc[ch][r] += k * (f + h * (df + wt2 * d2f)) * e[ch];
+            }
+        }
+    }
+}
+
+void near_disks_tables(const BlockTables& tb, const float* pos_rho2,
+                       const float* power_area, const float* normals, uint32_t first,
+                       uint32_t count, BucketBlock& b) {
+    const int32_t bits0 = tb.bits0, last = tb.last;
+    const int32_t n = int32_t(b.count);
+    float* acc[3] = {b.acc[0], b.acc[1], b.acc[2]};
+    for (uint32_t j = first; j < first + count; ++j) {
+        const float px = pos_rho2[4 * j], py = pos_rho2[4 * j + 1],
+                    pz = pos_rho2[4 * j + 2];
+        const float e[3] = {power_area[4 * j], power_area[4 * j + 1],
+                            power_area[4 * j + 2]};
+        const int32_t self = int32_t(j);
+        const float rho2 = pos_rho2[4 * j + 3], h = 0.5f * rho2;
+        SSS_DISK_PLANE(normals, j);
+        SSS_IVDEP
+        for (int32_t r = 0; r < n; ++r) {
+            const float wx = b.x[r] - px, wy = b.y[r] - py, wz = b.z[r] - pz;
+            const float q = wx * wx + wy * wy + wz * wz;
+            int32_t off = imax(float_bits(q) - bits0, 0);
+            int32_t idx = imin(off >> kShift, last);
+            const float fr = float(off & ((1 << kShift) - 1)) * kFracScale;
+            const bool kept = idx < last && b.sorted[r] != self;
+            const float k = rho2 > kTaylorDisk2 * q ? 0.0f : (kept ? 1.0f : 0.0f);
+            const float wn = wx * nx + wy * ny + wz * nz;
+            const float t2 = q - wn * wn * inv_n2;
+            const float wt2 = has * (t2 > 0.0f ? t2 : 0.0f);
+            idx = imin(idx, last - 1);
+            for (int ch = 0; ch < 3; ++ch) {
+                const TableEntry* T = tb.t[ch];
+                const float f = T[idx].f + fr * (T[idx + 1].f - T[idx].f);
+                const float df = T[idx].df + fr * (T[idx + 1].df - T[idx].df);
+                const float d2f = T[idx].d2f + fr * (T[idx + 1].d2f - T[idx].d2f);
+                acc[ch][r] += k * (f + h * (df + wt2 * d2f)) * e[ch];
+            }
+        }
+    }
+}
+
+void near_disks(const BlockTables& t, const float* pos_rho2, const float* power_area,
+                const float* normals, uint32_t first, uint32_t count, BucketBlock& b) {
+    if (t.rows)
+        near_disks_rows(t, pos_rho2, power_area, normals, first, count, b);
+    else
+        near_disks_tables(t, pos_rho2, power_area, normals, first, count, b);
+}
 
 template <bool Quadrupole>
 void far_nodes(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
@@ -354,7 +453,7 @@ void near_tables(const BlockTables& tb, const float* pos_rho2, const float* powe
                     e2 = power_area[4 * j + 2];
         const int32_t self = int32_t(j);
         const float rho2 = pos_rho2[4 * j + 3];
-SSS_IVDEP
+        SSS_IVDEP
         for (int32_t r = 0; r < n; ++r) {
             float wx = b.x[r] - px, wy = b.y[r] - py, wz = b.z[r] - pz;
             float q = wx * wx + wy * wy + wz * wz;
@@ -408,7 +507,7 @@ void local(const BlockTables& tb, const Expansion* expansions, const uint32_t* n
             double *a1x = acc[ch][1], *a1y = acc[ch][2], *a1z = acc[ch][3];
             double *a2xx = acc[ch][4], *a2xy = acc[ch][5], *a2xz = acc[ch][6];
             double *a2yy = acc[ch][7], *a2yz = acc[ch][8], *a2zz = acc[ch][9];
-SSS_IVDEP
+            SSS_IVDEP
             for (int j = 0; j < L; ++j) {
                 const float q = wxf[j] * wxf[j] + wyf[j] * wyf[j] + wzf[j] * wzf[j];
                 const int32_t off = imax(float_bits(q) - bits0, 0);
@@ -466,6 +565,6 @@ SSS_IVDEP
 
 } // namespace
 
-extern const BlockKernels kernels{SSS_KERNEL_ISA, far, mono, near, local};
+extern const BlockKernels kernels{SSS_KERNEL_ISA, far, mono, near, near_disks, local};
 
 } // namespace sss::diffusion_detail::SSS_KERNEL_NS
