@@ -170,12 +170,24 @@ DiffusionPart evaluate_diffusion_part(DiffusionProblem&& problem,
 /// splits it: order[s] is the index of the point at position s.
 std::vector<uint32_t> space_filling_order(const DiffusionProblem& problem);
 
+/// Which source disks the exact evaluation integrates over (the others are
+/// points).
+enum class ExactDisks {
+    /// The point model's rule: disks close against their distance softened
+    /// by the profile's core length (rho^2 > 0.1 (r^2 + core^2)); for the
+    /// sampled profiles (pbd, mc) every disk with rho^2 > 1e-3 r^2.
+    Model,
+    /// Every disk with rho^2 > 1e-3 r^2, whatever the profile: the reference
+    /// that also measures the point model's near field.
+    All
+};
+
 /// Exact evaluation in double precision, all pairs, at the given receivers
 /// (all points when empty). The same point model as the hierarchical path:
 /// exact self disk, disk integration of close sources.
 std::vector<glm::dvec3>
 evaluate_diffusion_exact(const DiffusionProblem& problem,
                          const std::vector<std::size_t>& receivers = {},
-                         Progress* progress = nullptr);
+                         Progress* progress = nullptr, ExactDisks disks = ExactDisks::Model);
 
 } // namespace sss

@@ -27,7 +27,8 @@ using diffusion_detail::kNearKappa2;
 
 std::vector<glm::dvec3>
 evaluate_diffusion_exact(const DiffusionProblem& pb,
-                         const std::vector<std::size_t>& receivers, Progress* progress) {
+                         const std::vector<std::size_t>& receivers, Progress* progress,
+                         ExactDisks disks) {
     const std::size_t n = pb.positions.size();
     std::vector<std::size_t> rec = receivers;
     if (rec.empty()) {
@@ -46,7 +47,8 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
         double core2 = std::numeric_limits<double>::max();
         for (int ch = 0; ch < 3; ++ch)
             core2 = std::min(core2, prof[ch]->core_length() * prof[ch]->core_length());
-        const bool disk_means = diffusion_detail::uses_disk_means(prof);
+        const bool disk_means =
+            disks == ExactDisks::All || diffusion_detail::uses_disk_means(prof);
         glm::dvec3 x(pb.positions[i]);
         double acc[3] = {0, 0, 0};
         // Coincident sources usually share their area: keep the last disk.
