@@ -118,15 +118,21 @@ void check_mc_range(double eta) {
 double mc_ratio(const McTable& t, double alpha, double eta, double rho) {
     // Albedo nodes are increasing in alpha; interpolate in v = sqrt(1 - alpha),
     // where the profiles change smoothly up to alpha = 1.
-    auto [e, te] = bracket(t.eta, eta);
-    auto [a, ta] = bracket(t.albedo, alpha);
+    // (Plain variables, not structured bindings: a lambda below uses them.)
+    const std::pair<std::size_t, double> be = bracket(t.eta, eta),
+                                         ba = bracket(t.albedo, alpha);
+    const std::size_t e = be.first, a = ba.first;
+    const double te = be.second;
+    double ta = ba.second;
     if (ta > 0.0 && ta < 1.0) {
         const double v0 = std::sqrt(1.0 - t.albedo[a]),
                      v1 = std::sqrt(1.0 - t.albedo[a + 1]);
         ta = (v0 - std::sqrt(1.0 - alpha)) / (v0 - v1);
     }
     const double lrho = std::log(std::max(rho, 1e-300));
-    auto [k, tk] = bracket(t.rho, rho);
+    const std::pair<std::size_t, double> bk = bracket(t.rho, rho);
+    const std::size_t k = bk.first;
+    double tk = bk.second;
     if (tk > 0.0 && tk < 1.0)
         tk = (lrho - std::log(t.rho[k])) / (std::log(t.rho[k + 1]) - std::log(t.rho[k]));
     const std::size_t na = t.albedo.size(), nr = t.rho.size();
