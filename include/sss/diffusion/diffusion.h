@@ -185,9 +185,8 @@ enum class ExactDisks {
 /// Exact evaluation in double precision, all pairs, at the given receivers
 /// (all points when empty). The same point model as the hierarchical path:
 /// exact self disk, disk integration of close sources.
-std::vector<glm::dvec3>
-evaluate_diffusion_exact(const DiffusionProblem& problem,
-                         const std::vector<std::size_t>& receivers = {},
-                         Progress* progress = nullptr, ExactDisks disks = ExactDisks::Model);
+std::vector<glm::dvec3> evaluate_diffusion_exact(
+    const DiffusionProblem& problem, const std::vector<std::size_t>& receivers = {},
+    Progress* progress = nullptr, ExactDisks disks = ExactDisks::Model);
 
 } // namespace sss
