@@ -14,21 +14,15 @@
 #include "sss/util/error.h"
 #include "sss/util/math.h"
 
+#include "diffusion_test_util.h"
+
 namespace {
 
 using sss::Profile;
 using sss::ProfileKind;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-/// Unpolarised Fresnel reflectance inside a medium of index eta.
-double fresnel_inside(double mu, double eta) {
-    double sin_t2 = eta * eta * (1.0 - mu * mu);
-    if (sin_t2 >= 1.0) return 1.0;
-    double ct = std::sqrt(1.0 - sin_t2);
-    double rs = (eta * mu - ct) / (eta * mu + ct);
-    double rp = (mu - eta * ct) / (mu + eta * ct);
-    return 0.5 * (rs * rs + rp * rp);
-}
+using sss::test::fresnel_inside;
 
 /// Single scattering under a normal pencil beam at radius r (sigma_t' = 1),
 /// by a plain midpoint rule in the first collision's depth (independent of

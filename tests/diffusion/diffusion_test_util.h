@@ -2,6 +2,7 @@
 // Helpers shared by the diffusion unit tests (diffusion_test.cpp,
 // stability_test.cpp).
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -14,6 +15,18 @@
 #include "sss/diffusion/profile.h"
 
 namespace sss::test {
+
+/// Unpolarised Fresnel reflectance seen from inside a medium of relative
+/// index eta at cosine mu, written independently of the library (total
+/// internal reflection past the critical angle).
+inline double fresnel_inside(double mu, double eta) {
+    double sin_t2 = eta * eta * (1.0 - mu * mu);
+    if (sin_t2 >= 1.0) return 1.0;
+    double ct = std::sqrt(1.0 - sin_t2);
+    double rs = (eta * mu - ct) / (eta * mu + ct);
+    double rp = (mu - eta * ct) / (mu + eta * ct);
+    return 0.5 * (rs * rs + rp * rp);
+}
 
 /// The three channel profiles of a table material (Jensen 2001), lengths
 /// scaled by `unitlength` (scene units per mm).

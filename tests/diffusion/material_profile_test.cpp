@@ -21,6 +21,8 @@
 #include "sss/util/error.h"
 #include "sss/util/math.h"
 
+#include "diffusion_test_util.h"
+
 namespace sss {
 // Readable names for the parameterised tests' ctest entries.
 void PrintTo(ProfileKind kind, std::ostream* os) {
@@ -89,15 +91,7 @@ void integration_range(const sss::Profile& p, double& r0, double& r1) {
     r1 = 80.0 * decay + 100.0 * p.core_length();
 }
 
-/// Fresnel reflectance seen from inside a medium of relative index eta.
-double fresnel_inside(double mu, double eta) {
-    double sin_t2 = eta * eta * (1.0 - mu * mu);
-    if (sin_t2 >= 1.0) return 1.0;
-    double ct = std::sqrt(1.0 - sin_t2);
-    double rs = (eta * mu - ct) / (eta * mu + ct);
-    double rp = (mu - eta * ct) / (mu + eta * ct);
-    return 0.5 * (rs * rs + rp * rp);
-}
+using sss::test::fresnel_inside;
 
 /// 2C1 (power 1, factor 2) and 3C2 (power 2, factor 3). Below the critical
 /// cosine F = 1; above it mu = mu_c + (1 - mu_c) u^2 removes the square-root

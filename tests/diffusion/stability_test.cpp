@@ -234,13 +234,7 @@ double plane_error(const sss::PointCloud& cloud, const std::vector<glm::vec3>& h
 }
 
 // Independent Fresnel moments (for the better dipole's closed-form total).
-double fresnel_inside(double mu, double eta) {
-    double sin_t2 = eta * eta * (1.0 - mu * mu);
-    if (sin_t2 >= 1.0) return 1.0;
-    double ct = std::sqrt(1.0 - sin_t2);
-    double rs = (eta * mu - ct) / (eta * mu + ct), rp = (mu - eta * ct) / (mu + eta * ct);
-    return 0.5 * (rs * rs + rp * rp);
-}
+using sss::test::fresnel_inside;
 double fresnel_moment(double eta, int power) {
     double muc = std::sqrt(1.0 - 1.0 / (eta * eta)); // eta > 1
     const int n = 20000;

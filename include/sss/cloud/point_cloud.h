@@ -60,6 +60,9 @@ struct PointCloud {
     std::size_t size() const { return positions.size(); }
     /// Resizes every per-point array, channels included.
     void resize(std::size_t n);
+    /// The same points (positions, normals, radii) and header, without
+    /// channels: what a tool's output cloud starts from.
+    PointCloud points_only() const;
     /// Channel by name, or nullptr.
     const Channel* find_channel(std::string_view name) const;
     Channel* find_channel(std::string_view name);

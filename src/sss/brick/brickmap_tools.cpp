@@ -190,14 +190,7 @@ PointCloud lookup_brick_map_cloud(const BrickMap& map, const PointCloud& cloud,
     const BrickMapInfo& info = map.info();
     const std::size_t n = cloud.size();
     const int ds = info.data_size;
-    PointCloud out;
-    out.resize(n);
-    out.positions = cloud.positions;
-    out.normals = cloud.normals;
-    out.radii = cloud.radii;
-    out.world_to_eye = cloud.world_to_eye;
-    out.world_to_ndc = cloud.world_to_ndc;
-    out.format = cloud.format;
+    PointCloud out = cloud.points_only();
     for (const auto& [name, type] : info.channels) out.add_channel(name, type);
     // Pointers only once every channel exists (adding one may move the others).
     std::vector<Channel*> channels;

@@ -48,6 +48,17 @@ std::optional<ChannelType> parse_channel_type(std::string_view name) {
     return kChannelTypes.parse(name);
 }
 
+PointCloud PointCloud::points_only() const {
+    PointCloud out;
+    out.positions = positions;
+    out.normals = normals;
+    out.radii = radii;
+    out.world_to_eye = world_to_eye;
+    out.world_to_ndc = world_to_ndc;
+    out.format = format;
+    return out;
+}
+
 void PointCloud::resize(std::size_t n) {
     positions.resize(n, glm::vec3(0.0f));
     normals.resize(n, glm::vec3(0.0f));

@@ -371,13 +371,7 @@ std::vector<glm::vec3> evaluate(const DiffusionProblem& pb, const SsDiffusionOpt
 PointCloud output_cloud(const PointCloud& in, const SsDiffusionOptions& o,
                         const std::vector<glm::vec3>& result) {
     const std::size_t n = in.size();
-    PointCloud out;
-    out.positions = in.positions;
-    out.normals = in.normals;
-    out.radii = in.radii;
-    out.world_to_eye = in.world_to_eye;
-    out.world_to_ndc = in.world_to_ndc;
-    out.format = in.format;
+    PointCloud out = in.points_only();
     if (o.keep_channels)
         for (const Channel& c : in.channels)
             if (c.name != o.output_channel) out.channels.push_back(c);

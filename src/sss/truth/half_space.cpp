@@ -50,15 +50,15 @@ long annulus_of(const std::vector<double>& edges, double r) {
 
 /// The direction a photon has once inside, and its weight (the Fresnel
 /// transmission of diffuse light; 1 for the pencil beam).
-std::pair<Vec, double> entering(const HalfSpaceOptions& o, Uniform& u) {
-    if (o.incidence == Incidence::Pencil) return {{0.0, 0.0, 1.0}, 1.0};
+std::pair<Vec, double> entering(Incidence incidence, double eta, Uniform& u) {
+    if (incidence == Incidence::Pencil) return {{0.0, 0.0, 1.0}, 1.0};
     // Cosine-weighted outside, refracted by Snell's law.
     const double cos_out = std::sqrt(u());
     const double sin_out = std::sqrt(std::max(0.0, 1.0 - cos_out * cos_out));
     const double phi = 2.0 * std::numbers::pi * u();
-    const double sin_in = sin_out / o.eta;
+    const double sin_in = sin_out / eta;
     const double cos_in = std::sqrt(std::max(0.0, 1.0 - sin_in * sin_in));
-    const double t = 1.0 - fresnel_reflectance(cos_out, 1.0, o.eta);
+    const double t = 1.0 - fresnel_reflectance(cos_out, 1.0, eta);
     return {{sin_in * std::cos(phi), sin_in * std::sin(phi), cos_in}, t};
 }
 
@@ -68,10 +68,7 @@ std::pair<Vec, double> entering(const HalfSpaceOptions& o, Uniform& u) {
 template <class Collide, class Leave>
 void walk_path(double eta, Incidence incidence, Uniform& u, double& entered,
                Collide&& collide, Leave&& leave) {
-    HalfSpaceOptions in;
-    in.eta = eta;
-    in.incidence = incidence;
-    auto [d, w] = entering(in, u);
+    auto [d, w] = entering(incidence, eta, u);
     entered += w;
     Vec p{0.0, 0.0, 0.0};
     long order = 0;

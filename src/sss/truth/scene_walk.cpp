@@ -122,13 +122,7 @@ PointCloud walk_scene(const SceneWalkOptions& o, const PointCloud& baked,
         rep.warnings.push_back(
             "light escaped through the geometry (is every object closed?)");
 
-    PointCloud out;
-    out.positions = baked.positions;
-    out.normals = baked.normals;
-    out.radii = baked.radii;
-    out.world_to_eye = baked.world_to_eye;
-    out.world_to_ndc = baked.world_to_ndc;
-    out.format = baked.format;
+    PointCloud out = baked.points_only();
     Channel& value = out.add_channel("_ssdiffusion", ChannelType::Color);
     for (std::size_t i = 0; i < out.size(); ++i)
         for (int c = 0; c < 3; ++c)
