@@ -53,6 +53,8 @@ std::string usage() {
         "                         newer than the RIB, every archive, texture and\n"
         "                         shader it reads\n"
         "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
+        "  -p:N, -t:N             the same as -threads N (prman's spelling)\n"
+        "  -p, -t, -t:all         all usable cores (-threads 0)\n"
         "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
         "  -h, --help             this help\n"
         "  --version              version information\n"
@@ -88,6 +90,8 @@ int run_job(const std::vector<std::string>& argv) {
             }
         } else if (o == "mfpfraction") {
             opt.mfp_fraction = args.positive(o);
+        } else if (sss::prman_thread_option(o, running)) {
+            continue;
         } else if (sss::newer_option(args, o, running)) {
             continue;
         } else if (sss::write_option(args, o, opt.write)) {

@@ -42,7 +42,7 @@ std::string usage() {
            "                         RIB, its archives and the maps its shaders read\n"
            "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
            "  -p:N, -t:N             the same as -threads N (prman's spelling)\n"
-           "  -p                     all usable cores (-threads 0)\n"
+           "  -p, -t, -t:all         all usable cores (-threads 0)\n"
            "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
            "  -h, --help             this help\n"
            "  --version              version information\n"
@@ -68,10 +68,8 @@ int run(const std::vector<std::string>& argv) {
             opt.yres = args.integer(o, 1, INT_MAX);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
-        } else if (o == "p") {
-            running.threads = 0; // prman -p: every core
-        } else if (o.rfind("p:", 0) == 0 || o.rfind("t:", 0) == 0) {
-            running.threads = sss::attached_integer(o, 2, 0, 1024);
+        } else if (sss::prman_thread_option(o, running)) {
+            continue;
         } else if (sss::newer_option(args, o, running)) {
             continue;
         } else if (sss::run_option(args, o, running)) {
@@ -146,8 +144,12 @@ int run(const std::vector<std::string>& argv) {
                     report.camera_rays, report.shadow_rays, report.secondary_rays);
         for (const std::string& f : report.files)
             std::printf("render: wrote %s\n", f.c_str());
-        for (const std::string& f : report.baked_files)
-            std::printf("render: baked %s\n", f.c_str());
+        if (report.files.empty())
+            std::printf("render: every Display is \"null\": no image rendered\n");
+        for (std::size_t i = 0; i < report.baked_files.size(); ++i)
+            std::printf("render: baked %s: %zu points, total area %.6g\n",
+                        report.baked_files[i].c_str(), report.baked_points[i],
+                        report.baked_areas[i]);
         std::printf("render: read %.3f s, setup %.3f s, render %.3f s, write %.3f s, "
                     "total %.3f s, threads %d\n",
                     read_s, report.setup_seconds, report.render_seconds,

@@ -53,7 +53,7 @@ value() {
 # --help lists the thread spellings.
 run "$render" --help
 expect_rc 0 --help || true
-[[ "$out" == *"-p:N, -t:N"* && "$out" == *"-p  "* ]] || fail "--help lacks -p:N, -t:N and -p"
+[[ "$out" == *"-p:N, -t:N"* && "$out" == *"-p, -t, -t:all"* ]] || fail "--help lacks -p:N, -t:N, -p and -t"
 
 # Exact quantisation: the card's corner pixel is 0.2 0.4 0.8 -> 51 102 204.
 scene card.rib 'Display "card.png" "png" "rgba" "float dither" [0]'

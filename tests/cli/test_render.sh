@@ -38,6 +38,10 @@ cat > scene.rib <<'RIB'
 Format 96 72 1
 PixelSamples 2 2
 Projection "perspective" "fov" 35
+DisplayChannel "color ambient"
+DisplayChannel "color diffuse"
+DisplayChannel "color specular"
+DisplayChannel "float occlusion"
 Display "ball.exr" "openexr" "rgba"
 Display "+ball_sss.png" "png" "sss"
 Translate 0 0 6

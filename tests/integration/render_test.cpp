@@ -42,8 +42,12 @@ namespace {
 std::string
 rib_of(const std::string& world, const std::string& options = "",
        const std::string& projection = "Projection \"perspective\" \"fov\" 30\n") {
-    return "Format 64 48 1\nPixelSamples 2 2\n" + projection + options +
-           "Translate 0 0 5\nWorldBegin\n" + world + "WorldEnd\n";
+    // The built-in AOV layers exist only where the scene asks for them.
+    return "Format 64 48 1\nPixelSamples 2 2\n" + projection +
+           "DisplayChannel \"color ambient\"\nDisplayChannel \"color diffuse\"\n"
+           "DisplayChannel \"color specular\"\nDisplayChannel \"color sss\"\n"
+           "DisplayChannel \"float occlusion\"\n" +
+           options + "Translate 0 0 5\nWorldBegin\n" + world + "WorldEnd\n";
 }
 
 sss::Scene

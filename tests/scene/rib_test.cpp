@@ -492,12 +492,21 @@ PointsPolygons [3] [0 1 2] "P" [0 0 0 1 0 0 0 1 0] "uvs" [0 0 1 0 0 1] "vertex f
 }
 
 TEST(RibAttributes, UndeclaredParametersWarnAndWrongCountsFail) {
-    auto scene = parse("WorldBegin\nSurface \"matte\" \"Kd\" 1 \"mystery\" 2\n"
-                       "Sphere 1 -1 1 360\n");
+    // A shader call keeps an undeclared parameter for the shader's own
+    // declaration to type (as PRMan); a primitive's is skipped with a warning.
+    auto scene = parse("WorldBegin\nSurface \"matte\" \"Kd\" 1 \"mystery\" [2 3]\n"
+                       "Sphere 1 -1 1 360 \"enigma\" 4\n");
+    const sss::Param* mystery =
+        scene.primitives[0].attributes->surface->params.find("mystery");
+    ASSERT_TRUE(mystery);
+    EXPECT_FALSE(mystery->declared);
+    EXPECT_EQ(mystery->type, sss::ParamType::Float);
+    EXPECT_EQ(mystery->numbers, (std::vector<double>{2, 3}));
+    EXPECT_TRUE(scene.primitives[0].attributes->surface->params.find("Kd")->declared);
     EXPECT_TRUE(has_warning(
+        scene, "test.rib:3: Sphere: undeclared parameter \"enigma\", skipped"));
+    EXPECT_FALSE(has_warning(
         scene, "test.rib:2: Surface: undeclared parameter \"mystery\", skipped"));
-    EXPECT_FALSE(scene.primitives[0].attributes->surface->params.has("mystery"));
-    EXPECT_TRUE(scene.primitives[0].attributes->surface->params.has("Kd"));
 
     expect_rib_error("WorldBegin\nLightSource \"pointlight\" 1 \"lightcolor\" [1 1]\n",
                      {"2: LightSource", "lightcolor"});

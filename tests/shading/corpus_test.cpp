@@ -446,8 +446,6 @@ TEST(RslCorpusRuntime, ErrorsNameTheRibCallAndTheShaderLine) {
          "component index 4.000000 out of range [0, 4)", 3},
         {"surface t() {\n    Ci = color \"nosuchspace\" (1, 2, 3);\n}\n",
          "unknown colour space \"nosuchspace\"", 2},
-        {"surface t() {\n    Ci = xcomp(transform(\"nowhere\", P));\n}\n",
-         "unknown coordinate system \"nowhere\"", 2},
         {"surface t() {\n    Ci = texture(\"nosuch.tx\");\n}\n", "nosuch.tx", 2},
         {"surface t() {\n    float x;\n    Oi = texture3d(\"nosuch.ptc\", P, N, \"v\", "
          "x);\n}\n",
@@ -463,6 +461,33 @@ TEST(RslCorpusRuntime, ErrorsNameTheRibCallAndTheShaderLine) {
         const std::string where = "scene.rib:7: bad.sl:" + std::to_string(c.line) + ":";
         EXPECT_EQ(what.rfind(where, 0), 0u) << what;
     }
+}
+
+// PRMan is lenient with an unknown coordinate system (the skin shader's
+// vtransform("", dir) with an empty default space): it acts as "current",
+// with one warning per call naming the RIB call and the shader line.
+TEST(RslCorpusRuntime, UnknownSpaceIsCurrentWithOneWarningPerCall) {
+    Engine e;
+    ShadingBatch b = plane_grid(4, 1);
+    const char* source = "surface t(string sp = \"\") {\n"
+                         "    vector d = vtransform(sp, vector(1, 2, 3));\n"
+                         "    point q = transform(\"nowhere\", point(4, 5, 6));\n"
+                         "    Ci = color(xcomp(d), ycomp(d), zcomp(q));\n}\n";
+    ShaderInstance inst(
+        std::make_shared<Program>(compile_text(source, "lenient.sl").shaders.at(0)), {},
+        Matrix4(1.0), "scene.rib:7");
+    e.context.execute(inst, b);
+    e.context.execute(inst, b);
+    ASSERT_EQ(b.Ci.size(), 4u);
+    for (const glm::vec3& c : b.Ci) EXPECT_EQ(c, glm::vec3(1.0f, 2.0f, 6.0f));
+    std::vector<std::string> spaces;
+    for (const std::string& w : e.services.warnings)
+        if (w.find("unknown coordinate system") != std::string::npos) spaces.push_back(w);
+    ASSERT_EQ(spaces.size(), 2u);
+    EXPECT_NE(spaces[0].find("lenient.sl:2"), std::string::npos) << spaces[0];
+    EXPECT_NE(spaces[0].find("\"\""), std::string::npos) << spaces[0];
+    EXPECT_NE(spaces[1].find("lenient.sl:3"), std::string::npos) << spaces[1];
+    EXPECT_NE(spaces[1].find("\"nowhere\""), std::string::npos) << spaces[1];
 }
 
 // Documented (engine.h, docs/shading.md): division by zero and NaN are IEEE

@@ -48,7 +48,7 @@ struct SceneShaders {
 };
 
 /// The scene's shader search path, folders in search order
-/// (resolve_shader_search_path() of its `Option "searchpath" "shader"`).
+/// (resolve_shader_search_path() of search_path(scene, "shader")).
 std::vector<std::string> shader_search_path(const Scene& scene);
 
 /// Whether `program` has an op named `op`.

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "sss/shading/texture_services.h"
 
@@ -46,6 +47,13 @@ public:
                    const float* radius, const uint8_t* mask,
                    std::vector<int>& channel_floats, float* out, uint8_t* found,
                    std::string* error) override;
+
+    /// The folders a relative file name is looked for in, in order (the
+    /// scene's search_path(scene, "texture"); "." is the working folder, "@"
+    /// entries are skipped). Empty (the default): names are used as given.
+    /// A file found nowhere is an error that names the path. Set before the
+    /// first lookup.
+    void set_search_path(std::vector<std::string> path);
 
     /// Forgets what is known of `file` (2-D and 3-D), so that the next call
     /// opens it again: for a file written during the job (bake3d, then

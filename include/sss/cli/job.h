@@ -26,6 +26,11 @@ struct RunOptions {
 /// Parses -threads, -progress, -Progress or -frame into run; false when opt
 /// is none of them.
 bool run_option(ArgScanner& args, const std::string& opt, RunOptions& run);
+/// prman's spellings of the thread count, for the tools that run RIB files
+/// (render, ptbake): -p and -t (every usable core), -p:N (N threads, 0
+/// every core), -t:N (the same, and -N all but N, as -threads), -t:all. False when
+/// opt is none of them; UsageError for a malformed count.
+bool prman_thread_option(const std::string& opt, RunOptions& run);
 /// Parses -newer 0|1 into run (ptfilter, brickmake, ptbake, render); false
 /// when opt is not -newer.
 bool newer_option(ArgScanner& args, const std::string& opt, RunOptions& run);

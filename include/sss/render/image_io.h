@@ -110,6 +110,14 @@ DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
 /// hash of the three, the same for every run and thread count.
 double dither_noise(int x, int y, int k);
 
+/// Whether a Display is RenderMan's "null" driver (any case), which writes
+/// nothing: the usual display of a bake pass.
+bool display_writes_nothing(const DisplaySpec& display);
+
+/// Whether a Display names a window ("it", "framebuffer", "x11"...): there
+/// is none here, and the image goes to display_file() instead.
+bool display_is_window(const DisplaySpec& display);
+
 /// The file a Display writes (resolve_display's path, without the image):
 /// its name, plus ".exr" for an "it"/"framebuffer" display whose name has no
 /// image extension.

@@ -2,8 +2,8 @@
 /// \file render.h
 /// The render module owns the final image: ray tracing, shading and image
 /// output.
-/// May use: binding, shading, rsl, dice, light, brick, image, cloud, scene and util
-/// (OpenEXR and OpenImageIO privately).
+/// May use: bake, binding, shading, rsl, dice, light, diffusion, brick, image, cloud,
+/// scene and util (OpenEXR and OpenImageIO privately).
 ///
 /// The final renderer: ray tracing (Embree) over the shared scene layer,
 /// the scene's RSL shaders run over batches of hits (the shading module;
@@ -40,9 +40,12 @@ struct RenderJobOptions {
 /// What happened.
 struct RenderReport {
     std::vector<std::string> files; ///< images written
-    /// Point clouds the shaders' bake3d calls wrote (a bake RIB rendered:
-    /// the shaded hit points, written at the end of render_image).
+    /// Point clouds the shaders' bake3d calls wrote: a bake RIB rendered
+    /// bakes as ptbake does (BakeJob: every baked primitive diced and
+    /// shaded whole, one point per micropolygon), not the camera's hits.
     std::vector<std::string> baked_files;
+    std::vector<std::size_t> baked_points; ///< per baked file
+    std::vector<double> baked_areas;       ///< per baked file: the sum of _area
     /// Non-fatal problems, counted by kind (a few of each kind kept).
     Warnings warnings;
     std::size_t triangles = 0;
@@ -64,6 +67,8 @@ struct RenderFiles {
 };
 
 struct SceneShaders;
+struct BakeOptions; // sss/bake/bake.h
+class BakeJob;
 
 /// One render job, planned once: the frame resolved (the options', else the
 /// scene's), and the scene's shaders loaded and bound (each shader file read
@@ -71,6 +76,12 @@ struct SceneShaders;
 /// and the render itself use that plan. Construction throws as binding does
 /// (ShaderNotFoundError, ShaderCompileError, ValueError). The scene and the
 /// options must outlive the job.
+///
+/// A scene whose surface shaders call bake3d (a bake RIB) is baked as PRMan
+/// bakes it, by the same job as ptbake's (BakeJob): every such primitive is
+/// diced and shaded whole, view-independent, one point per micropolygon, so
+/// that `render bake.rib` and `ptbake bake.rib` write the same clouds. The
+/// image is rendered as usual; its own shading bakes nothing.
 class RenderJob {
 public:
     RenderJob(const Scene& scene, const RenderJobOptions& options);
@@ -78,8 +89,11 @@ public:
     RenderJob(const RenderJob&) = delete;
     RenderJob& operator=(const RenderJob&) = delete;
 
-    /// The files the job reads and writes (render_files()).
+    /// The files the job reads and writes (render_files()), the bake's clouds
+    /// among the outputs.
     RenderFiles files() const;
+    /// Whether the job bakes point clouds (some surface shader calls bake3d).
+    bool bakes() const { return m_bake != nullptr; }
     /// The image (render_image()).
     Image image(RenderReport* report) const;
     /// Renders and writes every Display (render_scene()).
@@ -90,6 +104,8 @@ private:
     const RenderJobOptions& m_options;
     std::optional<int> m_frame;
     std::unique_ptr<const SceneShaders> m_shaders;
+    std::unique_ptr<BakeOptions> m_bake_options;
+    std::unique_ptr<BakeJob> m_bake; ///< a bake RIB's bake pass, else null
 };
 
 /// Renders the scene into an image with the beauty (R, G, B, A) and the AOV

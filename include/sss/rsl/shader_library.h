@@ -35,11 +35,12 @@ public:
 /// The folder of the standard shaders (see above); "" when it cannot be found.
 std::string standard_shader_dir();
 
-/// A shader search path, folders in search order: `option` is the value of
-/// `Option "searchpath" "shader"` (null when the scene sets none) and
-/// `rib_path` the scene's file (relative folders are taken from its folder).
-std::vector<std::string> resolve_shader_search_path(const std::string& rib_path,
-                                                    const std::string* option);
+/// A shader search path, folders in search order, from a scene's entries
+/// (`Option "searchpath" "shader"`, "&" already expanded): "@" becomes the
+/// standard shaders' folder (dropped when there is none); relative folders
+/// stay relative to the working folder.
+std::vector<std::string>
+resolve_shader_search_path(const std::vector<std::string>& entries);
 
 /// Loads shaders by name along a search path; each once. Thread-safe.
 class ShaderLibrary {

@@ -81,6 +81,10 @@ struct Param {
     int array_size = 1;               ///< "float[2] st" -> 2
     std::vector<double> numbers;      ///< all numbers, in RIB order
     std::vector<std::string> strings; ///< for String parameters
+    /// False for a name neither declared inline nor by Declare in a shader
+    /// call (Surface "x" "Ksub" 0): kept as Float numbers or Strings for the
+    /// shader's own declaration to type, as PRMan does.
+    bool declared = true;
 
     /// Numbers per element = param_type_components(type) * array_size.
     int element_size() const;
@@ -365,6 +369,13 @@ struct RenderOptions {
     std::vector<std::pair<std::string, std::string>> display_channels;
     /// Every `Option "group" params`.
     std::map<std::string, ParamList> groups;
+    /// `Option "searchpath" "kind" ["a:b"]` by kind ("shader", "texture",
+    /// "archive", "procedural"...): the folders in order, "&" replaced by the
+    /// kind's previous path when the Option was read, "@" kept (the standard
+    /// place: the standard shaders for "shader", none for the others).
+    /// Relative folders are relative to the working folder. Kinds not set
+    /// take search_path()'s defaults.
+    std::map<std::string, std::vector<std::string>> search_paths;
     std::string hider;
     PixelFilterSpec pixel_filter; ///< PixelFilter (default gaussian 2 2)
     /// Exposure gain gamma: colour = (gain * colour)^(1/gamma) when written.
@@ -398,6 +409,25 @@ struct Scene {
     /// WorldBegin blocks read (a file with none is an archive, not a scene).
     int worlds = 0;
 };
+
+/// The search path of `kind` ("shader", "texture", "archive",
+/// "procedural"): the scene's Option "searchpath", else the default: the
+/// working folder ".", the RIB's folder (when it is another), and for
+/// shaders "@" (the standard shaders). "@" entries stay for the caller.
+std::vector<std::string> search_path(const Scene& scene, const std::string& kind);
+
+/// The default search path of `kind` for a scene read from `rib_path`.
+std::vector<std::string> default_search_path(const std::string& rib_path,
+                                             const std::string& kind);
+
+/// `name` found along `path`: an absolute name as it is; a relative one
+/// joined to each folder in order ("." leaves it as it is; "@" entries are
+/// skipped), the first that exists. nullopt when none does.
+std::optional<std::string> find_on_search_path(const std::vector<std::string>& path,
+                                               const std::string& name);
+
+/// "a:b:@", for messages.
+std::string search_path_text(const std::vector<std::string>& path);
 
 /// The frame a job works on: `requested` (the tools' -frame) when given, else
 /// the scene's own (the FrameBegin block it read), else none.

@@ -225,6 +225,11 @@ struct ShadingBatch {
     float self_distance = 0.0f;
     /// The primitive being shaded (object space, attributes, RIB location).
     const Primitive* primitive = nullptr;
+    /// Whether dPdu x dPdv already points along the oriented surface normal
+    /// (ray hits, whose u and v are screen steps chosen that way): then
+    /// calculatenormal does not apply RenderMan's parametric rule (flipped
+    /// for a mirroring transform or Orientation "inside") a second time.
+    bool oriented_derivatives = false;
     /// Primitive variables bound to shader parameters of the same name
     /// (type checked as RIB values; uniform or one value per point). Points,
     /// vectors and normals are in object space (the primitive's, world space

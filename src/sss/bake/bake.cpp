@@ -679,6 +679,7 @@ BakeJob::clouds(BakeReport* report_out) const {
     // shadows see the displaced surfaces.
     ShadingResources resources;
     TextureLibrary textures; // every phase's lookups: each file opened once
+    textures.set_search_path(search_path(scene, "texture"));
     BakeServices dice_services(scene, nullptr, frame, textures, options.output);
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;

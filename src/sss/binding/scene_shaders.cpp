@@ -123,11 +123,7 @@ std::optional<std::string> unlit_scene_warning(const Scene& scene,
 }
 
 std::vector<std::string> shader_search_path(const Scene& scene) {
-    auto group = scene.options.groups.find("searchpath");
-    if (group == scene.options.groups.end() || !group->second.has("shader"))
-        return resolve_shader_search_path(scene.path, nullptr);
-    const std::string text = group->second.get_string("shader", "");
-    return resolve_shader_search_path(scene.path, &text);
+    return resolve_shader_search_path(search_path(scene, "shader"));
 }
 
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {

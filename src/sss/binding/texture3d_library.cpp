@@ -146,12 +146,14 @@ std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& f
     return entry;
 }
 
-bool TextureLibrary::texture3d(const std::string& file,
+bool TextureLibrary::texture3d(const std::string& name,
                                std::span<const std::string> channels, std::size_t count,
                                const glm::vec3* P, const glm::vec3* N,
                                const float* radius, const uint8_t* mask,
                                std::vector<int>& channel_floats, float* out,
                                uint8_t* found, std::string* error) {
+    bool not_found = false;
+    const std::string file = m_impl->resolve(name, &not_found);
     channel_floats.assign(channels.size(), 0);
     if (found) std::fill(found, found + count, uint8_t(0));
     // A file this job writes is never read (docs/cli-conventions.md).
@@ -162,7 +164,7 @@ bool TextureLibrary::texture3d(const std::string& file,
     }
     const std::shared_ptr<Texture3dFile> f = m_impl->open3d(file);
     if (!f->error.empty()) {
-        if (error) *error = f->error;
+        if (error) *error = f->error + (not_found ? m_impl->path_note() : std::string());
         return false;
     }
 

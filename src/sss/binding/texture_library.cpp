@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <dlfcn.h>
 
+#include "sss/scene/scene.h"
 #include "sss/util/install_layout.h"
 #include "sss/util/job_files.h"
 #include "texture2d_backend.h"
@@ -75,19 +76,51 @@ Texture2dBackend* TextureLibrary::Impl::textures(std::string* error) {
     return backend.get();
 }
 
+std::string TextureLibrary::Impl::resolve(const std::string& file, bool* missing) {
+    *missing = false;
+    if (search_path.empty() || file.empty() || std::filesystem::path(file).is_absolute())
+        return file;
+    {
+        std::lock_guard lock(mutex);
+        if (auto it = found.find(file); it != found.end()) return it->second;
+    }
+    // Not remembered when missing: a file the job writes later is found then.
+    const std::optional<std::string> where = find_on_search_path(search_path, file);
+    if (!where) {
+        *missing = true;
+        return file;
+    }
+    std::lock_guard lock(mutex);
+    found.emplace(file, *where);
+    return *where;
+}
+
+std::string TextureLibrary::Impl::path_note() const {
+    return " (not found along the texture search path \"" +
+           search_path_text(search_path) + "\", relative to the working folder)";
+}
+
 TextureLibrary::TextureLibrary() : m_impl(std::make_unique<Impl>()) {}
+
+void TextureLibrary::set_search_path(std::vector<std::string> path) {
+    m_impl->search_path = std::move(path);
+}
 
 TextureLibrary::~TextureLibrary() = default;
 
-bool TextureLibrary::texture(const std::string& file, int channel, int nchannels,
+bool TextureLibrary::texture(const std::string& name, int channel, int nchannels,
                              const TextureOptions& options, std::size_t count,
                              const float* s, const float* t, const float* ds_du,
                              const float* dt_du, const float* ds_dv, const float* dt_dv,
                              const uint8_t* mask, float* out, std::string* error) {
+    bool missing = false;
+    const std::string file = m_impl->resolve(name, &missing);
     if (!readable_by_job(file, "a texture lookup", error)) return false;
     Texture2dBackend* b = m_impl->textures(error);
-    return b && b->texture(file, channel, nchannels, options, count, s, t, ds_du, dt_du,
-                           ds_dv, dt_dv, mask, out, error);
+    const bool ok = b && b->texture(file, channel, nchannels, options, count, s, t, ds_du,
+                                    dt_du, ds_dv, dt_dv, mask, out, error);
+    if (!ok && missing && error) *error += m_impl->path_note();
+    return ok;
 }
 
 bool TextureLibrary::texture_quad(const std::string& file, int channel, int nchannels,
@@ -119,20 +152,26 @@ bool TextureLibrary::texture_quad(const std::string& file, int channel, int ncha
                    dt_dv, mask, out, error);
 }
 
-bool TextureLibrary::environment(const std::string& file, int channel, int nchannels,
+bool TextureLibrary::environment(const std::string& name, int channel, int nchannels,
                                  const TextureOptions& options, std::size_t count,
                                  const glm::vec3* dir, const glm::vec3* ddir_du,
                                  const glm::vec3* ddir_dv, const uint8_t* mask,
                                  float* out, std::string* error) {
+    bool missing = false;
+    const std::string file = m_impl->resolve(name, &missing);
     if (!readable_by_job(file, "an environment lookup", error)) return false;
     Texture2dBackend* b = m_impl->textures(error);
-    return b && b->environment(file, channel, nchannels, options, count, dir, ddir_du,
-                               ddir_dv, mask, out, error);
+    const bool ok = b && b->environment(file, channel, nchannels, options, count, dir,
+                                        ddir_du, ddir_dv, mask, out, error);
+    if (!ok && missing && error) *error += m_impl->path_note();
+    return ok;
 }
 
-bool TextureLibrary::texture_info(const std::string& file, const std::string& key,
+bool TextureLibrary::texture_info(const std::string& name, const std::string& key,
                                   int expected_floats, float* numbers,
                                   std::string* text) {
+    bool missing = false;
+    const std::string file = m_impl->resolve(name, &missing);
     if (!readable_by_job(file, "a textureinfo lookup", nullptr)) return false;
     Texture2dBackend* b = m_impl->textures(nullptr);
     return b && b->texture_info(file, key, expected_floats, numbers, text);

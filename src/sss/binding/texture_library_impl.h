@@ -72,6 +72,15 @@ struct TextureLibrary::Impl {
     std::unordered_map<std::string, std::shared_ptr<detail::Texture3dFile>> files3d;
 
     std::shared_ptr<detail::Texture3dFile> open3d(const std::string& file);
+
+    std::vector<std::string> search_path;
+    std::unordered_map<std::string, std::string> found; ///< by name; guarded by mutex
+    /// `file` along search_path (the name itself when the path is empty, the
+    /// name is absolute or found nowhere: *missing then tells the caller to
+    /// name the path in its error).
+    std::string resolve(const std::string& file, bool* missing);
+    /// " (not found along the texture search path \"a:b\")".
+    std::string path_note() const;
 };
 
 } // namespace sss

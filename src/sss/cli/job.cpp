@@ -27,6 +27,19 @@ bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
     return true;
 }
 
+bool prman_thread_option(const std::string& o, RunOptions& run) {
+    if (o == "p" || o == "t" || o == "t:all" || o == "p:all") {
+        run.threads = 0;
+    } else if (o.rfind("p:", 0) == 0) {
+        run.threads = attached_integer(o, 2, 0, 1024); // processes: a count
+    } else if (o.rfind("t:", 0) == 0) {
+        run.threads = attached_integer(o, 2, -1024, 1024); // -t:-N: all but N
+    } else {
+        return false;
+    }
+    return true;
+}
+
 bool outputs_up_to_date(const std::string& tool, const std::vector<std::string>& outputs,
                         const std::vector<std::string>& inputs) {
     namespace fs = std::filesystem;

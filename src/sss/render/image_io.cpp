@@ -214,12 +214,19 @@ std::string display_format(const DisplaySpec& display) {
     return format;
 }
 
+bool display_writes_nothing(const DisplaySpec& display) {
+    return lower(display.type) == "null";
+}
+
+bool display_is_window(const DisplaySpec& display) {
+    const std::string type = lower(display.type);
+    return type == "it" || type == "framebuffer" || type == "x11" || type == "windows";
+}
+
 std::string display_file(const DisplaySpec& display) {
     // There is no window here: "it"/"framebuffer" write an OpenEXR file, and a
     // name without an image extension ("view", "shot.0042") gets ".exr".
-    const std::string type = lower(display.type);
-    if ((type == "it" || type == "framebuffer") &&
-        format_from_extension(display.name).empty())
+    if (display_is_window(display) && format_from_extension(display.name).empty())
         return display.name + ".exr";
     return display.name;
 }

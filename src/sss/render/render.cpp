@@ -125,6 +125,11 @@ void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
         };
         h.dpdx = project(job.camera_x * pixel);
         h.dpdy = project(job.camera_y * pixel);
+        // The hit's u and v directions are screen steps, not the surface's
+        // parameters: v steps the way that makes dPdu x dPdv point along the
+        // oriented normal, as the parametric derivatives do, so that
+        // calculatenormal(P) (and of a displaced P) faces like N.
+        if (glm::dot(glm::cross(h.dpdx, h.dpdy), ng) < 0.0) h.dpdy = -h.dpdy;
         h.triangle = hit.triangle;
         h.b1 = hit.u;
         h.b2 = hit.v;
@@ -192,6 +197,7 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         batch = ShadingBatch{};
         batch.size = m;
         batch.layout = triplets ? BatchLayout::Triplets : BatchLayout::Points;
+        batch.oriented_derivatives = true;
         batch.primitive = &prim;
         batch.P.resize(m);
         batch.N.resize(m);
@@ -369,11 +375,9 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
     if (options.progress) options.progress->set_unit("tiles");
     tbb::enumerable_thread_specific<std::unique_ptr<ShadingContext>> contexts(
         [&] { return std::make_unique<ShadingContext>(*job.resources, *job.services); });
-    job.tile_bakes.assign(tiles, {});
     tbb::parallel_for(std::size_t(0), tiles, [&](std::size_t t) {
         ShadingContext& context = *contexts.local();
         const uint64_t rays_before = context.rays_traced();
-        RenderServices::set_sink(&job.tile_bakes[t]);
         const int x0 = grid.x0(t);
         const int y0 = grid.y0(t);
         const int x1 = std::min(width, x0 + kTile), y1 = std::min(height, y0 + kTile);
@@ -493,7 +497,6 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
                 }
             }
         }
-        RenderServices::set_sink(nullptr);
         job.shadow_rays += context.rays_traced() - rays_before;
         job.camera_rays += camera_count;
         job.bad_samples += bad_count;
@@ -599,19 +602,34 @@ void report_rays(const Renderer& job, RenderReport& report) {
     if (invalid > 0) report.warnings.push_back(invalid_rays_warning(invalid));
 }
 
-/// The point clouds bake3d calls made during the render (a bake RIB
-/// rendered bakes as in PRMan: the shaded hit points), in tile order.
-void write_render_bakes(Renderer& job, const Scene& scene, RenderReport& report) {
-    std::vector<Bake3dRecord> records;
-    for (auto& tile : job.tile_bakes)
-        for (Bake3dRecord& r : tile) records.push_back(std::move(r));
-    job.tile_bakes.clear();
-    if (records.empty()) return;
-    for (const Bake3dRecord& r : records)
-        if (r.file.empty())
-            throw ValueError(scene.path + ": bake3d was called without a file name");
-    report.baked_files =
-        write_bake3d_files(records, scene.options.display_channels, {}, &job.camera);
+/// PRMan bakes only the visible, front-facing micropolygons of a primitive
+/// unless `Attribute "cull" "hidden" 0 "backfacing" 0`; the bake pass bakes
+/// whole objects (as ptbake, and as the pipeline needs): said once, naming
+/// the first such primitive.
+std::optional<std::string> culled_bake_warning(const Scene& scene,
+                                               const SceneShaders& shaders) {
+    std::size_t count = 0;
+    std::string first;
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+        const ShaderInstance* s = shaders.surface_of[i];
+        if (!s || !program_uses(s->program(), "bake3d")) continue;
+        const Attributes& attr = attributes_of(scene.primitives[i]);
+        bool culled = true;
+        if (auto it = attr.groups.find("cull"); it != attr.groups.end()) {
+            const auto off = [&](const char* name) {
+                const Param* p = it->second.find(name);
+                return p && !p->numbers.empty() && p->numbers[0] == 0.0;
+            };
+            culled = !(off("hidden") && off("backfacing"));
+        }
+        if (!culled) continue;
+        if (count++ == 0) first = scene.primitives[i].source;
+    }
+    if (count == 0) return std::nullopt;
+    return first + ": baked whole, hidden and back-facing parts included, as ptbake " +
+           "bakes (" + std::to_string(count) +
+           " baked primitive(s) without Attribute \"cull\" \"hidden\" 0 "
+           "\"backfacing\" 0, with which PRMan would bake only what the camera sees)";
 }
 
 } // namespace
@@ -619,7 +637,17 @@ void write_render_bakes(Renderer& job, const Scene& scene, RenderReport& report)
 RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
     : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
       m_shaders(
-          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
+          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {
+    bool bakes = false;
+    for (const ShaderInstance* s : m_shaders->surface_of)
+        bakes = bakes || (s && program_uses(s->program(), "bake3d"));
+    if (!bakes) return;
+    // The bake pass of a bake RIB: ptbake's job with ptbake's defaults
+    // (ShadingRate micropolygons of the scene's own camera, not -res).
+    m_bake_options = std::make_unique<BakeOptions>();
+    m_bake_options->frame = m_frame;
+    m_bake = std::make_unique<BakeJob>(scene, *m_bake_options);
+}
 
 RenderJob::~RenderJob() = default;
 
@@ -682,7 +710,6 @@ Image RenderJob::image(RenderReport* report_out) const {
 
     report_rays(job, report);
     report.render_seconds = watch.seconds() - report.setup_seconds;
-    write_render_bakes(job, scene, report);
     return image;
 }
 
@@ -745,8 +772,15 @@ RenderFiles RenderJob::files() const {
         if (std::find(files.inputs.begin(), files.inputs.end(), f) == files.inputs.end())
             files.inputs.push_back(f);
     int primary = -1;
+    if (m_bake) {
+        files.outputs = m_bake->output_files();
+        for (const std::string& f : m_bake->input_files())
+            if (std::find(files.inputs.begin(), files.inputs.end(), f) ==
+                files.inputs.end())
+                files.inputs.push_back(f);
+    }
     for (const DisplaySpec& d : job_displays(m_scene, m_options, m_frame, primary))
-        files.outputs.push_back(display_file(d));
+        if (!display_writes_nothing(d)) files.outputs.push_back(display_file(d));
     return files;
 }
 
@@ -770,8 +804,11 @@ RenderReport RenderJob::run() const {
         files.input(scene.sources[i], i < scene.source_uses.size()
                                           ? scene.source_uses[i]
                                           : "\"" + scene.sources[i] + "\"");
+    std::vector<std::size_t> written; // the Displays that write a file
     for (std::size_t i = 0; i < displays.size(); ++i) {
         const DisplaySpec& d = displays[i];
+        if (display_writes_nothing(d)) continue;
+        written.push_back(i);
         const std::string path = display_file(d);
         std::string use;
         if (static_cast<int>(i) == primary && !options.output.empty())
@@ -784,11 +821,47 @@ RenderReport RenderJob::run() const {
         files.output(path, use);
         display_format(d);
         check_output_target(path);
+        if (display_is_window(d))
+            report.warnings.push_back(
+                "Display \"" + d.name + "\" \"" + d.type + "\"" +
+                (d.where.empty() ? "" : " (" + d.where + ")") +
+                ": there is no framebuffer window here; the image is written to \"" +
+                path + "\"");
+    }
+    DisplayDefaults defaults;
+    defaults.exposure_gain = scene.options.exposure_gain;
+    defaults.exposure_gamma = scene.options.exposure_gamma;
+    defaults.quantize = scene.options.quantize;
+    {
+        // Every mode against the channels the image will have (the AOVs the
+        // shaders output), before anything is baked or rendered.
+        const Image probe(1, 1, image_channels(plan_aovs(scene, *m_shaders)));
+        for (std::size_t i : written)
+            resolve_display(displays[i], probe, static_cast<int>(i) == primary, defaults);
     }
 
     // Every file (the shaders' bakes, then the Displays) is written as a
     // temporary first; the set puts them all in place at the end, or none.
     OutputSet outputs;
+    if (m_bake) {
+        // The bake pass first (its clouds join this job's outputs), as
+        // ptbake bakes: the image's own shading bakes nothing.
+        const BakeReport baked = m_bake->run();
+        report.warnings.append(baked.warnings);
+        if (auto w = culled_bake_warning(scene, *m_shaders))
+            report.warnings.push_back(*w);
+        for (const BakeFileReport& f : baked.files) {
+            report.baked_files.push_back(f.path);
+            report.baked_points.push_back(f.points);
+            report.baked_areas.push_back(f.area);
+        }
+    }
+    if (written.empty()) {
+        // Only "null" Displays (a bake pass): no image to render.
+        outputs.commit();
+        if (options.progress) options.progress->finish();
+        return report;
+    }
     Image image = this->image(&report);
     const Stopwatch write_watch;
     ImageMetadata meta;
@@ -810,14 +883,10 @@ RenderReport RenderJob::run() const {
     if (frame) meta.extra.emplace_back("sss:frame", std::to_string(*frame));
     meta.extra.emplace_back("sss:threads",
                             std::to_string(tbb::this_task_arena::max_concurrency()));
-    DisplayDefaults defaults;
-    defaults.exposure_gain = scene.options.exposure_gain;
-    defaults.exposure_gamma = scene.options.exposure_gamma;
-    defaults.quantize = scene.options.quantize;
     // Resolve every Display (an unknown AOV, a mode the format cannot
     // hold) before the first is written.
     std::vector<DisplayTarget> targets;
-    for (std::size_t i = 0; i < displays.size(); ++i)
+    for (std::size_t i : written)
         targets.push_back(resolve_display(displays[i], image,
                                           static_cast<int>(i) == primary, defaults));
     for (const DisplayTarget& target : targets) {

@@ -25,6 +25,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "sss/bake/bake.h"
 #include "sss/binding/bake3d_file.h"
 #include "sss/binding/displacement.h"
 #include "sss/binding/scene_rays.h"
@@ -135,16 +136,13 @@ public:
     using SceneServices::SceneServices;
     const RayTracer* occluders() const override { return m_occluders; }
     void set_occluders(const RayTracer* tracer) { m_occluders = tracer; }
-    /// bake3d in a render (a bake RIB rendered): the records go to the
-    /// current tile's list, so the files come out in tile order.
-    void bake3d(Bake3dRecord&& record) override {
-        if (s_sink) s_sink->push_back(std::move(record));
-    }
-    static void set_sink(std::vector<Bake3dRecord>* sink) { s_sink = sink; }
+    /// bake3d at the camera's hits bakes nothing: a bake RIB's clouds come
+    /// from its bake pass (BakeJob), one point per micropolygon of the whole
+    /// surface, not one per camera sample.
+    void bake3d(Bake3dRecord&& record) override { (void)record; }
 
 private:
     const RayTracer* m_occluders = nullptr;
-    static inline thread_local std::vector<Bake3dRecord>* s_sink = nullptr;
 };
 
 /// Everything the pixel loop reads (immutable once built).
@@ -189,7 +187,6 @@ struct Renderer {
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
     std::atomic<uint64_t> nan_points{0};
-    std::vector<std::vector<Bake3dRecord>> tile_bakes; ///< bake3d records per tile
 };
 
 /// One camera sample of a tile, while its ray goes through the layers.
@@ -225,6 +222,14 @@ struct SurfaceHit {
 /// rays and the pixel size per unit of depth; ValueError (UsageError for a
 /// half-given override) on values that cannot render.
 void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& options);
+
+/// The image's AOVs: every name a Display mode or a DisplayChannel asks for
+/// that is an output variable of a surface shader (its own name and declared
+/// type), else a built-in layer (ambient, diffuse, specular, sss, occlusion:
+/// the standard shaders' _ambient...). A Display mode naming neither is a
+/// ValueError naming the Display; a DisplayChannel naming neither only
+/// declares a channel (bake3d's).
+std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders);
 
 /// Shaders, lights, AOVs and shading resources (textures, brick maps and
 /// point clouds are opened on first use); true when some light or shader

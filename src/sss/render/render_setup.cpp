@@ -57,8 +57,10 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     job.camera_y = glm::normalize(to_world * glm::dvec3(0, 1, 0));
 }
 
-/// The standard AOVs: the output variables of the standard shaders, under
-/// the layer names of the image.
+namespace {
+
+/// The built-in layers: the output variables of the standard shaders, under
+/// the layer names a Display asks for them by ("diffuse" is `_diffuse`).
 struct StandardAov {
     const char* variable;
     const char* layer;
@@ -71,72 +73,108 @@ constexpr StandardAov kStandardAovs[] = {{"_ambient", "ambient", 3, 0.0f},
                                          {"_sss", "sss", 3, 0.0f},
                                          {"_occlusion", "occlusion", 1, 1.0f}};
 
-/// The names a Display mode or DisplayChannel asks for, by their last word.
-std::vector<std::string> requested_outputs(const Scene& scene) {
-    std::vector<std::string> names;
-    const auto add = [&](std::string item) {
+/// A name a Display mode or a DisplayChannel asks for (its last word: the
+/// type of an inline declaration is the shader's business).
+struct AovRequest {
+    std::string name;
+    std::string by;   ///< "display '+x.tif' (scene.rib:9)", or "" for DisplayChannel
+    std::string mode; ///< the Display's mode
+};
+
+std::vector<AovRequest> requested_outputs(const Scene& scene) {
+    std::vector<AovRequest> names;
+    const auto add = [&](std::string item, const std::string& by,
+                         const std::string& mode) {
         const auto b = item.find_first_not_of(" \t");
         if (b == std::string::npos) return;
         item = item.substr(b, item.find_last_not_of(" \t") - b + 1);
         const auto space = item.find_last_of(" \t");
         if (space != std::string::npos) item = item.substr(space + 1);
-        if (std::find(names.begin(), names.end(), item) == names.end())
-            names.push_back(item);
+        for (AovRequest& r : names)
+            if (r.name == item) {
+                if (r.by.empty()) r.by = by, r.mode = mode;
+                return;
+            }
+        names.push_back({item, by, mode});
     };
     for (const DisplaySpec& d : scene.options.displays) {
+        if (display_writes_nothing(d)) continue;
+        const std::string by = "display '" + std::string(d.additional ? "+" : "") +
+                               d.name + "'" +
+                               (d.where.empty() ? "" : " (" + d.where + ")");
         std::size_t start = 0;
         while (true) {
             const std::size_t comma = d.mode.find(',', start);
             add(d.mode.substr(start, comma == std::string::npos ? std::string::npos
-                                                                : comma - start));
+                                                                : comma - start),
+                by, d.mode);
             if (comma == std::string::npos) break;
             start = comma + 1;
         }
     }
-    for (const auto& [name, type] : scene.options.display_channels) add(name);
+    for (const auto& [name, type] : scene.options.display_channels) add(name, "", "");
     return names;
 }
 
-/// The AOVs: the standard ones, then every output variable of a surface
-/// shader that a Display or DisplayChannel names.
+/// The output variable `name` of the first surface shader that declares it
+/// with a type an image can hold (float or a 3-component type); null if none.
+const Symbol* shader_output(const SceneShaders& shaders, const std::string& name) {
+    for (const auto& shader : shaders.surfaces) {
+        const Program& program = shader->program();
+        const int index = program.find(name);
+        if (index < 0) continue;
+        const Symbol& symbol = program.symbols[static_cast<std::size_t>(index)];
+        if (symbol.kind != SymbolKind::OutputParam || symbol.type.is_array() ||
+            symbol.type.type == ShadingType::String)
+            continue;
+        const int floats = shading_type_floats(symbol.type.type);
+        if (floats == 1 || floats == 3) return &symbol;
+    }
+    return nullptr;
+}
+
+} // namespace
+
 std::vector<Aov> plan_aovs(const Scene& scene, const SceneShaders& shaders) {
     std::vector<Aov> aovs;
-    for (const StandardAov& s : kStandardAovs) {
-        Aov a;
-        a.variable = s.variable;
-        a.layer = s.layer;
-        a.floats = s.floats;
-        a.as_rgb = s.floats == 1;
-        a.fallback = s.fallback;
-        aovs.push_back(a);
-    }
-    static const char* const reserved[] = {"rgba", "rgb", "a",    "z",    "Ci",
-                                           "Oi",   "Z",   "rgbz", "rgbaz"};
-    for (const std::string& name : requested_outputs(scene)) {
-        if (std::find(std::begin(reserved), std::end(reserved), name) !=
+    std::string layers;
+    for (const StandardAov& s : kStandardAovs)
+        layers += std::string(layers.empty() ? "" : ", ") + s.layer;
+    for (const AovRequest& request : requested_outputs(scene)) {
+        const std::string& name = request.name;
+        std::string lower = name;
+        for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+        static const char* const reserved[] = {"rgba", "rgb",   "a",  "z",
+                                               "rgbz", "rgbaz", "ci", "oi"};
+        if (std::find(std::begin(reserved), std::end(reserved), lower) !=
             std::end(reserved))
             continue;
-        if (std::any_of(aovs.begin(), aovs.end(), [&](const Aov& a) {
-                return a.layer == name || a.variable == name;
-            }))
-            continue;
-        for (const auto& shader : shaders.surfaces) {
-            const Program& program = shader->program();
-            const int index = program.find(name);
-            if (index < 0) continue;
-            const Symbol& symbol = program.symbols[static_cast<std::size_t>(index)];
-            if (symbol.kind != SymbolKind::OutputParam || symbol.type.is_array())
-                continue;
-            const int floats = shading_type_floats(symbol.type.type);
-            if (floats != 1 && floats != 3) continue;
-            if (symbol.type.type == ShadingType::String) continue;
-            Aov a;
-            a.variable = name;
-            a.layer = name;
-            a.floats = floats;
+        Aov a;
+        a.variable = name;
+        a.layer = name;
+        // The user's own output variable first: its name and its declared type.
+        if (const Symbol* symbol = shader_output(shaders, name)) {
+            a.floats = shading_type_floats(symbol->type.type);
             aovs.push_back(a);
-            break;
+            continue;
         }
+        const StandardAov* standard = nullptr;
+        for (const StandardAov& s : kStandardAovs)
+            if (name == s.layer) standard = &s;
+        if (standard) {
+            a.variable = standard->variable;
+            a.floats = standard->floats;
+            a.as_rgb = standard->floats == 1;
+            a.fallback = standard->fallback;
+            aovs.push_back(a);
+            continue;
+        }
+        // A DisplayChannel alone only declares a channel (for bake3d, say).
+        if (request.by.empty()) continue;
+        throw ValueError(request.by + ": mode '" + request.mode + "' names '" + name +
+                         "', which no surface shader of the scene outputs (as an output "
+                         "parameter) and which is not a built-in layer (" +
+                         layers + ")");
     }
     int offset = 4;
     for (Aov& a : aovs) {
@@ -155,6 +193,7 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
     for (const std::string& w : job.shaders.warnings) report.warnings.push_back(w);
     job.resources = std::make_unique<ShadingResources>();
     job.textures = std::make_unique<TextureLibrary>();
+    job.textures->set_search_path(search_path(scene, "texture"));
     job.services = std::make_unique<RenderServices>(scene, frame, *job.textures);
     job.aovs = plan_aovs(scene, job.shaders);
     job.derivatives.resize(scene.primitives.size());

@@ -3,6 +3,7 @@
 
 #include "sss/rsl/shader_library.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
@@ -19,21 +20,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::vector<std::string> split_path(const std::string& text) {
-    std::vector<std::string> out;
-    std::string cur;
-    for (char c : text) {
-        if (c == ':') {
-            if (!cur.empty()) out.push_back(cur);
-            cur.clear();
-        } else {
-            cur += c;
-        }
-    }
-    if (!cur.empty()) out.push_back(cur);
-    return out;
-}
-
 std::string join_path(const std::vector<std::string>& dirs) {
     std::string out;
     for (const std::string& d : dirs) out += (out.empty() ? "" : ":") + d;
@@ -47,28 +33,14 @@ std::string standard_shader_dir() {
     return data_folder(DataFolder::Shaders);
 }
 
-std::vector<std::string> resolve_shader_search_path(const std::string& rib_path,
-                                                    const std::string* option) {
-    const std::string rib_dir =
-        rib_path.empty() ? std::string(".") : fs::path(rib_path).parent_path().string();
-    const std::string base = rib_dir.empty() ? std::string(".") : rib_dir;
+std::vector<std::string>
+resolve_shader_search_path(const std::vector<std::string>& entries) {
     const std::string standard = standard_shader_dir();
-    std::vector<std::string> defaults = {base};
-    if (!standard.empty()) defaults.push_back(standard);
-
-    if (!option) return defaults;
-    const std::string& text = *option;
     std::vector<std::string> out;
-    for (const std::string& entry : split_path(text)) {
-        if (entry == "&") {
-            out.insert(out.end(), defaults.begin(), defaults.end());
-        } else if (entry == "@") {
-            if (!standard.empty()) out.push_back(standard);
-        } else if (fs::path(entry).is_relative()) {
-            out.push_back((fs::path(base) / entry).lexically_normal().string());
-        } else {
-            out.push_back(entry);
-        }
+    for (const std::string& entry : entries) {
+        const std::string dir = entry == "@" ? standard : entry;
+        if (!dir.empty() && std::find(out.begin(), out.end(), dir) == out.end())
+            out.push_back(dir);
     }
     return out;
 }

@@ -36,15 +36,25 @@ bool ends_with_obj(const std::string& path) {
     return path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".obj";
 }
 
-/// `name` relative to the folder of the file that names it.
-std::string resolve_path(const Statement& s, const std::string& name) {
+} // namespace
+
+std::string Reader::resolve_path(const Statement& s, const std::string& name,
+                                 const char* kind) {
     fs::path p(name);
     if (p.is_absolute()) return name;
-    fs::path base = fs::path(*s.file).parent_path();
-    return (base / p).lexically_normal().string();
+    const std::vector<std::string> path = search_path(m_scene, kind);
+    if (auto found = find_on_search_path(path, name)) return *found;
+    // As before search paths: the folder of the file that names it.
+    const fs::path base = fs::path(*s.file).parent_path();
+    const std::string beside = (base / p).lexically_normal().string();
+    std::error_code ec;
+    if (fs::exists(beside, ec)) return beside;
+    throw IoError(name, std::string("no such file along the ") + kind +
+                            " search path \"" + search_path_text(path) +
+                            "\" (relative to the working folder) or beside " +
+                            sss::quoted(*s.file) + " (" + s.name + " at " + where(s) +
+                            ")");
 }
-
-} // namespace
 
 // --- files -----------------------------------------------------------------
 

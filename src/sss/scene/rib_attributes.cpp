@@ -122,14 +122,14 @@ void Reader::do_shading_interpolation(const Statement& s) {
 void Reader::do_surface(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "shader name");
-    ParamList params = take_params(s, i, true);
+    ParamList params = take_params(s, i, true, true);
     attrs_mut().surface = make_shader(s, name, std::move(params));
 }
 
 void Reader::do_displacement(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "shader name");
-    ParamList params = take_params(s, i, true);
+    ParamList params = take_params(s, i, true, true);
     attrs_mut().displacement = make_shader(s, name, std::move(params));
 }
 
@@ -142,7 +142,7 @@ void Reader::do_light_source(const Statement& s) {
         handle = take_handle(s, i);
     else
         handle = "unnamed " + std::to_string(m_scene.lights.size());
-    ParamList params = take_params(s, i, true);
+    ParamList params = take_params(s, i, true, true);
     if (!m_in_world) fail(s, "light sources must be inside WorldBegin/WorldEnd");
     if (m_object) fail(s, "light sources cannot be part of an object definition");
     LightInstance light;

@@ -248,8 +248,31 @@ void Reader::do_option(const Statement& s) {
     std::size_t i = 0;
     std::string group = take_string(s, i, "option name");
     ParamList params = take_params(s, i, true);
+    if (group == "searchpath") set_search_paths(s, params);
     ParamList& dst = m_scene.options.groups[group];
     for (Param& p : params.items) dst.set(std::move(p));
+}
+
+void Reader::set_search_paths(const Statement& s, const ParamList& params) {
+    for (const Param& p : params.items) {
+        if (p.type != ParamType::String || p.strings.size() != 1)
+            fail(s, "searchpath " + sss::quoted(p.name) + " needs one string");
+        const std::vector<std::string> previous = search_path(m_scene, p.name);
+        std::vector<std::string> path;
+        const std::string& text = p.strings[0];
+        std::size_t start = 0;
+        while (start <= text.size()) {
+            std::size_t end = text.find(':', start);
+            if (end == std::string::npos) end = text.size();
+            const std::string entry = text.substr(start, end - start);
+            if (entry == "&")
+                path.insert(path.end(), previous.begin(), previous.end());
+            else if (!entry.empty())
+                path.push_back(entry);
+            start = end + 1;
+        }
+        m_scene.options.search_paths[p.name] = std::move(path);
+    }
 }
 
 void Reader::do_color_samples(const Statement& s) {

@@ -159,7 +159,8 @@ void read_numbers(const Statement& s, const Value& value, const std::string& lab
 
 } // namespace
 
-ParamList Reader::take_params(const Statement& s, std::size_t i, bool single) {
+ParamList Reader::take_params(const Statement& s, std::size_t i, bool single,
+                              bool shader) {
     ParamList list;
     while (i < s.args.size()) {
         const Value& key = s.args[i];
@@ -182,6 +183,21 @@ ParamList Reader::take_params(const Statement& s, std::size_t i, bool single) {
             if (!err.empty()) fail(s, err);
         } else {
             auto it = m_decls.find(spelled);
+            if (it == m_decls.end() && shader) {
+                // Typed later by the shader's own declaration (binding).
+                p.name = spelled;
+                p.declared = false;
+                const bool strings =
+                    value.is_string() || (value.is_array() && value.string_array);
+                p.type = strings ? ParamType::String : ParamType::Float;
+                const std::string label = "parameter " + sss::quoted(p.name);
+                if (strings)
+                    read_strings(s, value, label, false, p);
+                else
+                    read_numbers(s, value, label, false, p);
+                list.set(std::move(p));
+                continue;
+            }
             if (it == m_decls.end()) {
                 if (m_warned.insert("undeclared " + spelled).second)
                     warn(s, s.name + ": undeclared parameter " + sss::quoted(spelled) +

@@ -83,12 +83,22 @@ private:
     /// The "name" value pairs from argument i on. `single`: every parameter
     /// must hold exactly one element (shader calls, options); otherwise any
     /// whole number of elements (primitives, checked against the topology).
-    ParamList take_params(const Statement& s, std::size_t i, bool single);
+    /// `shader`: a shader call's parameters, where an undeclared name is
+    /// kept (Param::declared false) for the shader's declaration to type.
+    ParamList take_params(const Statement& s, std::size_t i, bool single,
+                          bool shader = false);
 
     // --- rib_archives.cpp: files, frames and archives -------------------------
 
     void run_text(std::string_view text, std::shared_ptr<const std::string> path);
     void run_file(const Statement& from, const std::string& path);
+    /// Option "searchpath": each kind's folders, "&" expanded.
+    void set_search_paths(const Statement& s, const ParamList& params);
+    /// An archive's file: absolute as it is, else found along the archive
+    /// (or procedural) search path, else relative to the folder of the file
+    /// that names it; an error naming the search path when none exists.
+    std::string resolve_path(const Statement& s, const std::string& name,
+                             const char* kind = "archive");
     /// One more level of archives is within Limit::ArchiveDepth.
     void check_archive_depth(const Statement& from, const std::string& name);
     void read_archive(const Statement& s, const std::string& name);

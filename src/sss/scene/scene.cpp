@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "sss/util/error.h"
 #include "sss/util/math.h"
@@ -286,6 +287,44 @@ bool Attributes::visible_to(const char* kind) const {
         return p->strings.empty() ||
                (p->strings[0] != "transparent" && p->strings[0] != "0");
     return p->numbers.empty() || p->numbers[0] != 0.0;
+}
+
+std::vector<std::string> default_search_path(const std::string& rib_path,
+                                             const std::string& kind) {
+    std::vector<std::string> out = {"."};
+    const std::string dir = std::filesystem::path(rib_path).parent_path().string();
+    if (!dir.empty() && dir != ".") out.push_back(dir);
+    if (kind == "shader") out.push_back("@");
+    return out;
+}
+
+std::vector<std::string> search_path(const Scene& scene, const std::string& kind) {
+    if (auto it = scene.options.search_paths.find(kind);
+        it != scene.options.search_paths.end())
+        return it->second;
+    return default_search_path(scene.path, kind);
+}
+
+std::optional<std::string> find_on_search_path(const std::vector<std::string>& path,
+                                               const std::string& name) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (name.empty()) return std::nullopt;
+    if (fs::path(name).is_absolute())
+        return fs::exists(name, ec) ? std::optional<std::string>(name) : std::nullopt;
+    for (const std::string& dir : path) {
+        if (dir == "@" || dir.empty()) continue;
+        const std::string candidate =
+            dir == "." ? name : (fs::path(dir) / name).lexically_normal().string();
+        if (fs::exists(candidate, ec)) return candidate;
+    }
+    return std::nullopt;
+}
+
+std::string search_path_text(const std::vector<std::string>& path) {
+    std::string text;
+    for (const std::string& dir : path) text += (text.empty() ? "" : ":") + dir;
+    return text;
 }
 
 Matrix4 Camera::world_to_ndc() const {

@@ -20,6 +20,14 @@
 
 namespace sss::detail {
 
+glm::dmat4 named_space_to_current(Frame& f, const BoundOp& b, const std::string& space) {
+    glm::dmat4 m(1.0);
+    if (f.ctx->space_to_current(space, f, m)) return m;
+    f.warn_once(b, "unknown coordinate system \"" + space +
+                       "\": taken as \"current\", as PRMan does");
+    return glm::dmat4(1.0);
+}
+
 // --- derivatives --------------------------------------------------------------
 
 void derivative(Frame& f, const Slot& x, int comps, int dir, const std::string& name,
@@ -205,7 +213,8 @@ void op_calculatenormal(Frame& f, const BoundOp& b) {
     const bool inside =
         batch && batch->primitive && attributes_of(*batch->primitive).orientation_inside;
     const bool mirror = glm::determinant(glm::dmat3(f.ctx->object_to_current)) < 0.0;
-    const float sign = (mirror != inside) ? -1.0f : 1.0f;
+    const bool oriented = batch && batch->oriented_derivatives;
+    const float sign = (!oriented && mirror != inside) ? -1.0f : 1.0f;
     f.each(d.varying, [&](std::size_t i) {
         glm::vec3 c = glm::cross(ld3(&du[i * 3]), ld3(&dv[i * 3])) * sign;
         const float len = glm::length(c);
@@ -472,10 +481,7 @@ struct XformSpec {
 };
 
 glm::dmat4 space_matrix(Frame& f, const BoundOp& b, const std::string& space) {
-    glm::dmat4 m;
-    if (!f.ctx->space_to_current(space, f, m))
-        f.fail(b, "unknown coordinate system \"" + space + "\"");
-    return m;
+    return named_space_to_current(f, b, space);
 }
 
 template <int Kind> // 0 point, 1 vector, 2 normal

@@ -243,6 +243,10 @@ struct Frame {
     void warn_once(const BoundOp& b, const std::string& what) const;
 };
 
+/// The matrix from the named space to "current". An unknown name acts, as
+/// in PRMan, as "current", with a warning naming the call (once per call).
+glm::dmat4 named_space_to_current(Frame& f, const BoundOp& b, const std::string& space);
+
 /// Cached results of one light for a batch.
 struct LightState {
     const ShaderInstance* instance = nullptr;

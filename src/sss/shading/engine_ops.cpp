@@ -388,8 +388,7 @@ SpaceConv space_conv(Frame& f, const BoundOp& b, ShadingType t,
         return c;
     }
     if (space.empty() || space == "current") return c;
-    if (!f.ctx->space_to_current(space, f, c.m))
-        f.fail(b, "unknown coordinate system \"" + space + "\"");
+    c.m = named_space_to_current(f, b, space);
     c.identity = false;
     return c;
 }
@@ -431,9 +430,7 @@ void op_construct3(Frame& f, const BoundOp& b) {
 glm::dmat4 matrix_in_space(Frame& f, const BoundOp& b, const std::string& space,
                            const glm::dmat4& m) {
     if (space.empty() || space == "current") return m;
-    glm::dmat4 to;
-    if (!f.ctx->space_to_current(space, f, to))
-        f.fail(b, "unknown coordinate system \"" + space + "\"");
+    const glm::dmat4 to = named_space_to_current(f, b, space);
     return m * glm::inverse(to);
 }
 

@@ -122,6 +122,10 @@ struct RayParams {
 RayParams ray_params(Frame& f, const BoundOp& b, int first) {
     RayParams o;
     const std::size_t i0 = f.first_active();
+    // PRMan ignores the options it does not know; so do we, loudly.
+    const auto ignored = [&](const std::string& name) {
+        f.warn_once(b, b.op->name + " option \"" + name + "\" is not supported; ignored");
+    };
     for_options(f, b, first, [&](const std::string& name, int k) {
         const Symbol& sym = f.program->symbols[b.op->args[k]];
         if (sym.type.type == ShadingType::String && !sym.type.is_array()) {
@@ -132,6 +136,8 @@ RayParams ray_params(Frame& f, const BoundOp& b, int first) {
                 o.distribution = v;
             else if (name == "environmentmap")
                 o.envmap = v;
+            else
+                ignored(name);
             return;
         }
         if (name == "environmentcolor" && b.op->writes >> k & 1u) {
@@ -146,9 +152,15 @@ RayParams ray_params(Frame& f, const BoundOp& b, int first) {
             o.out_occlusion = k;
             return;
         }
-        if (f.slot(b, k).nf != 1) return;
+        if (f.slot(b, k).nf != 1) return ignored(name);
         const float v = *f.ptr(b, k, i0);
-        if (!std::isfinite(v)) return;
+        if (name == "samples" || name == "samplecone" || name == "blur" ||
+            name == "bias" || name == "maxdist" || name == "coneangle" ||
+            name == "samplebase" || name == "adaptive") {
+            if (!std::isfinite(v)) return;
+        } else {
+            return ignored(name);
+        }
         if (name == "samples")
             o.samples = std::clamp(static_cast<int>(v), 1, 4096);
         else if (name == "samplecone" || name == "blur")
@@ -161,7 +173,7 @@ RayParams ray_params(Frame& f, const BoundOp& b, int first) {
             o.coneangle = std::clamp(v, 0.0f, kHalfPi);
         else if (name == "samplebase")
             o.samplebase = std::max(0.0f, v);
-        else if (name == "adaptive")
+        else
             o.adaptive = v;
     });
     return o;

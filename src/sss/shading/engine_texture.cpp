@@ -513,10 +513,7 @@ bool bind_query(const BindInfo& in, BoundOp& b, std::string&) {
 // --- texture3d and bake3d ----------------------------------------------------------
 
 glm::dmat4 current_to(Frame& f, const BoundOp& b, const std::string& space) {
-    glm::dmat4 m;
-    if (!f.ctx->space_to_current(space, f, m))
-        f.fail(b, "unknown coordinate system \"" + space + "\"");
-    return glm::inverse(m);
+    return glm::inverse(named_space_to_current(f, b, space));
 }
 
 void op_texture3d(Frame& f, const BoundOp& b) {

@@ -31,8 +31,8 @@ float finite_or_zero(float x) {
 }
 
 /// RSL options -> OIIO's. The wrap modes stay WrapDefault: OIIO then takes
-/// them from the file's "wrapmodes" metadata (maketx writes it), and black
-/// where the file says nothing, as RenderMan does.
+/// them from the file's "wrapmodes" metadata (maketx writes it); the caller
+/// makes a file that says nothing periodic (TextureFile::periodic).
 OIIO::TextureOpt oiio_options(const TextureOptions& options, int channel) {
     OIIO::TextureOpt opt;
     opt.firstchannel = std::max(channel, 0);
@@ -149,6 +149,11 @@ struct TextureFile {
     std::string format; ///< OIIO "textureformat" ("" for plain images)
     /// "oiio:sampleborder": s = 0 and 1 are the border pixels' centres.
     bool sample_border = false;
+    /// The file names no wrap modes (a plain image, not made by maketx):
+    /// looked up periodic in s and t, so that filters reaching across s = 0
+    /// or 1 (the seam of a sphere, a torus, a cylinder) find the other edge
+    /// of the map, not black.
+    bool periodic = false;
     EnvLayout env = EnvLayout::LatLong;
     std::string env_error; ///< "file: reason" when env is Invalid
 };
@@ -274,6 +279,7 @@ std::shared_ptr<TextureFile> OiioTextures::open(const std::string& file) {
         entry->height = spec.full_height > 0 ? spec.full_height : spec.height;
         entry->format = spec.get_string_attribute("textureformat");
         entry->sample_border = spec.get_int_attribute("oiio:sampleborder") != 0;
+        entry->periodic = spec.get_string_attribute("wrapmodes").empty();
         decide_env_layout(*entry, file, spec);
     });
     return entry;
@@ -291,6 +297,7 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
     }
     OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
     OIIO::TextureOpt opt = oiio_options(options, channel);
+    if (tex->periodic) opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
     // A grey map read as colour gives grey (RenderMan); other channels past
     // the file's last get the fill value (OIIO).
     const bool replicate = tex->nchannels == 1 && channel == 0 && nchannels == 3;
