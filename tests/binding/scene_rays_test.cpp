@@ -154,13 +154,26 @@ TEST(SceneRays, DepthLimitsFollowTheShootingPrimitive) {
     EXPECT_EQ(s1.values[0][0], 0.0f);
 }
 
-TEST(SceneRays, OneSidedBackFacesAreNotSeen) {
+TEST(SceneRays, OneSidedFacesAreHitAsHitsidesSays) {
     RayScene s("", "Sides 1\n" + std::string(kSphere));
-    // From inside the sphere every face is a back face.
-    RayQuery q =
-        query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});
+    // From inside the sphere every face is a back face: PRMan's rays hit both
+    // sides of one-sided surfaces unless "hitsides" says otherwise (the
+    // application note's gather from inside a Sides 1 teapot finds its exits).
+    const ShadowRay inside{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf};
+    RayQuery q = query(RayKind::Specular, 1, {inside});
     s.rays->trace(q);
-    EXPECT_EQ(q.hit[0], 0);
+    EXPECT_EQ(q.hit[0], 1);
+    EXPECT_NEAR(q.length[0], 1.0f, 1e-3f);
+    RayQuery front = query(RayKind::Specular, 1, {inside});
+    front.hitsides = HitSides::Front;
+    s.rays->trace(front);
+    EXPECT_EQ(front.hit[0], 0);
+    RayQuery back = query(RayKind::Specular, 1, {inside, kHitRay});
+    back.hitsides = HitSides::Back;
+    s.rays->trace(back);
+    EXPECT_EQ(back.hit[0], 1);
+    EXPECT_EQ(back.hit[1], 1); // through the front face, to the back one
+    EXPECT_NEAR(back.length[1], 6.0f, 1e-3f);
     RayScene two("", kSphere);
     RayQuery q2 =
         query(RayKind::Specular, 1, {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}});

@@ -46,6 +46,7 @@
 #include "sss/light/ray_tracer.h"
 #include "sss/scene/scene.h"
 #include "sss/shading/engine.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -71,7 +72,8 @@ std::optional<float> trace_bias(const Primitive& prim);
 class SceneRays;
 
 /// The services of a tool's run (ptbake, render): the scene, the frame,
-/// shader printf output on stdout one message at a time, the job's
+/// shader printf output on stdout one message at a time, shader run-time
+/// warnings kept for the job's report (take_warnings()), the job's
 /// TextureLibrary (one per job, shared by every SceneServices of the job, so
 /// that each file is opened once), and the ray-tracing
 /// shadeops through a SceneRays once one is set (before that,
@@ -84,6 +86,11 @@ public:
     const Scene& scene() const override { return m_scene; }
     std::optional<int> frame() const override { return m_frame; }
     void message(const std::string& text) override;
+    /// Kept (the engine gives each text once per job) for the job's report,
+    /// which the tool prints as "<tool> WARNING: ..." on stderr.
+    void warning(const std::string& text) override;
+    /// The warnings kept so far; the list is emptied.
+    Warnings take_warnings();
     TextureServices* textures() override { return &m_textures; }
     void trace(RayQuery& query) override;
     void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
@@ -96,6 +103,7 @@ private:
     std::optional<int> m_frame;
     const SceneRays* m_rays = nullptr;
     std::mutex m_mutex;
+    Warnings m_warnings; ///< guarded by m_mutex
     TextureLibrary& m_textures;
 };
 

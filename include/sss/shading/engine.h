@@ -245,6 +245,11 @@ struct ShadingBatch {
 /// shade with the hit object's own surface shader (ShadingServices::trace).
 /// Everything is in world space except the returned shader values, which
 /// are in the current (camera) space like every shading value.
+/// Which faces of one-sided (`Sides 1`) surfaces rays hit (the ray-tracing
+/// shadeops' "hitsides"; PRMan's default is both; two-sided surfaces are
+/// always hit).
+enum class HitSides { Both, Front, Back };
+
 struct RayQuery {
     // --- request
     RayKind kind = RayKind::Specular;
@@ -269,6 +274,7 @@ struct RayQuery {
     bool need_length = true;
     /// Hits on `origin` closer than this are ignored (ShadingBatch::self_distance).
     float self_distance = 0.0f;
+    HitSides hitsides = HitSides::Both;
     /// Seed of the hit shaders' random numbers (ray r's batch point draws
     /// from hash(seed, r)): results never depend on the thread count.
     uint64_t seed = 0;

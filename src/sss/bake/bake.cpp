@@ -578,6 +578,7 @@ std::vector<std::vector<Bake3dRecord>> shade_points(
         report.warnings.push_back(std::to_string(nonfinite.load()) +
                                   " shading points gave NaN or infinite values, "
                                   "written as 0");
+    report.warnings.append(services.take_warnings());
     return records;
 }
 
@@ -689,6 +690,7 @@ BakeJob::clouds(BakeReport* report_out) const {
     check_dicing(scene, options, plan, requests, report);
     const std::vector<DicedSurface> diced = dice_all(scene, requests);
     for (const std::string& w : displacer.warnings()) report.warnings.push_back(w);
+    report.warnings.append(dice_services.take_warnings());
     report.dice_seconds = watch.seconds();
 
     check_spacing(scene, plan, diced, report);
@@ -722,6 +724,7 @@ BakeJob::clouds(BakeReport* report_out) const {
     report.light_seconds =
         watch.seconds() - report.dice_seconds - report.trace_build_seconds;
 
+    report.warnings.append(dice_services.take_warnings()); // the rays' hit shaders
     return gather_clouds(scene, plan.jobs, records, report);
 }
 

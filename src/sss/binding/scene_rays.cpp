@@ -203,8 +203,9 @@ struct SceneRays::Impl {
         return q.depth <= limit;
     }
 
-    /// The nearest shaded surface along `ray` (skipping one-sided back faces
-    /// and transparent surfaces); false for a miss.
+    /// The nearest shaded surface along `ray` (skipping transparent surfaces,
+    /// and the faces of one-sided surfaces the query's hitsides excludes);
+    /// false for a miss.
     bool find_hit(const RayTracer& rt, const std::vector<uint32_t>& mesh_to_prim,
                   ShadowRay ray, const RayQuery& q, Hit& out) const {
         const float skip_base = 1e-6f * extent;
@@ -217,11 +218,12 @@ struct SceneRays::Impl {
             const Attributes& attr = attributes_of(scene.primitives[prim]);
             bool skip = glm::clamp(attr.opacity, 0.0, 1.0) == glm::dvec3(0.0) ||
                         (h.t < q.self_distance && q.origin == &scene.primitives[prim]);
-            if (!skip && attr.sides == 1) {
+            if (!skip && attr.sides == 1 && q.hitsides != HitSides::Both) {
                 const glm::vec3 n = interpolated_normal(prim, h.triangle, h.u, h.v);
                 glm::vec3 ng = h.geometric_normal;
                 if (glm::dot(ng, n) < 0.0f) ng = -ng;
-                skip = glm::dot(ng, ray.direction) > 0.0f;
+                const bool back = glm::dot(ng, ray.direction) > 0.0f;
+                skip = back == (q.hitsides == HitSides::Front);
             }
             if (skip) {
                 ray.tnear = h.t + skip_base + 1e-6f * h.t;
@@ -638,6 +640,18 @@ void SceneServices::message(const std::string& text) {
     std::fputs(text.c_str(), stdout);
     if (text.empty() || text.back() != '\n') std::fputc('\n', stdout);
     flush_standard_output();
+}
+
+void SceneServices::warning(const std::string& text) {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_warnings.push_back(text);
+}
+
+Warnings SceneServices::take_warnings() {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    Warnings out = std::move(m_warnings);
+    m_warnings = Warnings();
+    return out;
 }
 
 void SceneServices::trace(RayQuery& query) {

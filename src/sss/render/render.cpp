@@ -709,6 +709,7 @@ Image RenderJob::image(RenderReport* report_out) const {
                    "See the camera transform, Projection and ScreenWindow)");
 
     report_rays(job, report);
+    report.warnings.append(job.services->take_warnings());
     report.render_seconds = watch.seconds() - report.setup_seconds;
     return image;
 }

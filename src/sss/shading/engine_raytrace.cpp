@@ -116,8 +116,21 @@ struct RayParams {
     std::string label;
     std::string distribution;
     std::string envmap;
+    HitSides hitsides = HitSides::Both;
     int out_envcolor = -1, out_envdir = -1, out_occlusion = -1; ///< argument index
 };
+
+/// "hitsides" "front" | "back" | "both" (the default).
+void set_hitsides(Frame& f, const BoundOp& b, const std::string& v, RayParams& o) {
+    if (v == "both")
+        o.hitsides = HitSides::Both;
+    else if (v == "front")
+        o.hitsides = HitSides::Front;
+    else if (v == "back")
+        o.hitsides = HitSides::Back;
+    else
+        f.warn_once(b, "hitsides \"" + v + "\" is not front, back or both; both is used");
+}
 
 RayParams ray_params(Frame& f, const BoundOp& b, int first) {
     RayParams o;
@@ -136,6 +149,8 @@ RayParams ray_params(Frame& f, const BoundOp& b, int first) {
                 o.distribution = v;
             else if (name == "environmentmap")
                 o.envmap = v;
+            else if (name == "hitsides")
+                set_hitsides(f, b, v, o);
             else
                 ignored(name);
             return;
@@ -376,6 +391,8 @@ GatherArgs read_gather_args(Frame& f, const BoundOp& b, std::size_t i0) {
             o.label = f.str(b, v, i0);
         else if (name == "environmentmap" && is_str)
             o.envmap = f.str(b, v, i0);
+        else if (name == "hitsides" && is_str)
+            set_hitsides(f, b, f.str(b, v, i0), o);
         else if (name == "bias" && !is_str)
             o.bias = x;
         else if (name == "maxdist" && !is_str)
@@ -393,6 +410,19 @@ GatherArgs read_gather_args(Frame& f, const BoundOp& b, std::size_t i0) {
     return g;
 }
 
+/// A query of `kind` from the batch's points: the call's label and hitsides,
+/// the ray depth, the shooter (its own triangles close by are skipped).
+RayQuery start_query(Frame& f, const RayParams& o, const RayEnv& re, RayKind kind) {
+    RayQuery q;
+    q.kind = kind;
+    q.label = o.label;
+    q.hitsides = o.hitsides;
+    q.depth = re.depth();
+    q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
+    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
+    return q;
+}
+
 /// One query for every running point (`entry`) and sample: point i's rays
 /// start at first[i].
 RayQuery gather_query(Frame& f, const BoundOp& b, const GatherArgs& g, RayEnv& re,
@@ -400,12 +430,8 @@ RayQuery gather_query(Frame& f, const BoundOp& b, const GatherArgs& g, RayEnv& r
                       bool cosine, std::vector<std::size_t>& first) {
     const std::size_t n = f.n;
     const RayParams& o = g.o;
-    RayQuery q;
-    q.kind = env || cosine ? RayKind::Diffuse : RayKind::Specular;
-    q.label = o.label;
-    q.depth = re.depth();
-    q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
-    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
+    RayQuery q =
+        start_query(f, o, re, env || cosine ? RayKind::Diffuse : RayKind::Specular);
     q.seed = re.query_seed();
     if (!env) {
         q.outputs = g.qnames;
@@ -565,12 +591,7 @@ void specular_rays(Frame& f, const BoundOp& b, const RayParams& o, const Slot* P
     const int* g = f.bound->globals;
     const Slot* Pg = g[G_P] >= 0 ? &f.slots[g[G_P]] : nullptr;
     const int samples = o.cone > 0.0f ? o.samples : 1;
-    RayQuery q;
-    q.kind = RayKind::Specular;
-    q.label = o.label;
-    q.depth = re.depth();
-    q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
-    q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
+    RayQuery q = start_query(f, o, re, RayKind::Specular);
     q.seed = re.query_seed();
     q.outputs = {"Ci"};
     q.output_floats = {3};
@@ -679,12 +700,7 @@ void op_hemisphere(Frame& f, const BoundOp& b) {
     // Pass 0: every 4th stratum of adaptive points with >= 16 samples (and
     // every stratum of the others); pass 1: the rest where still needed.
     for (int pass = 0; pass < 2; ++pass) {
-        RayQuery q;
-        q.kind = RayKind::Diffuse;
-        q.label = o.label;
-        q.depth = re.depth();
-        q.origin = f.ctx->batch ? f.ctx->batch->primitive : nullptr;
-        q.self_distance = f.ctx->batch ? f.ctx->batch->self_distance : 0.0f;
+        RayQuery q = start_query(f, o, re, RayKind::Diffuse);
         q.seed = splitmix64(re.query_seed() + pass);
         q.spread = ray_spread(o.coneangle, max_samples);
         if (Indirect) {
