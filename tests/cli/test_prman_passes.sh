@@ -339,4 +339,44 @@ if expect_rc 0 "render seam.rib"; then
     is "v > -0.002" "$v" || fail "a dark seam: R - 0.8 A down to $v"
 fi
 
+# ---------------------------------------------------------------------------
+# 9. Rays hit both faces of a one-sided surface (PRMan's default "hitsides"):
+#    a gather from inside a Sides 1 ball finds where it leaves it (the
+#    application note's absorption pass); "hitsides" "front" does not.
+cat >inside.sl <<'SL'
+surface inside(string sides = "both";)
+{
+    float hits = 0, depth = 0;
+    rayinfo("depth", depth);
+    if (depth == 0) {
+        gather("illuminance", P, -normalize(N), PI / 4, 16, "hitsides", sides,
+               "label", "subsurf") {
+            hits += 1;
+        }
+    }
+    Oi = 1;
+    Ci = hits / 16;
+}
+SL
+cat >inside.rib <<'RIB'
+Format 16 16 1
+PixelSamples 1 1
+Display "inside.exr" "openexr" "rgba"
+ScreenWindow -0.1 0.1 -0.1 0.1
+Translate 0 0 5
+WorldBegin
+  Sides 1
+  Surface "inside"
+  Sphere 1 -1 1 360
+WorldEnd
+RIB
+run "$render" inside.rib
+expect_rc 0 "render inside.rib" && { v="$(stats inside.exr R Min)"
+    is "v == 1" "$v" || fail "gather from inside a Sides 1 ball: only $v of the rays hit"; }
+sed -e 's/Surface "inside"/Surface "inside" "string sides" ["front"]/' -e 's/inside.exr/front.exr/' \
+    inside.rib >front.rib
+run "$render" front.rib
+expect_rc 0 "render front.rib" && { v="$(stats front.exr R Max)"
+    is "v == 0" "$v" || fail "hitsides front: $v of the rays hit back faces"; }
+
 finish_checks prman_passes
