@@ -864,6 +864,16 @@ RenderReport RenderJob::run() const {
         return report;
     }
     Image image = this->image(&report);
+    if (m_bake) {
+        // The bake and the image bind the same shaders: their warnings once.
+        Warnings unique;
+        std::set<std::string> seen;
+        for (const std::string& w : report.warnings)
+            if (seen.insert(w).second) unique.push_back(w);
+        for (const Warnings::Omitted& o : report.warnings.omitted())
+            unique.add_omitted(o.label, o.count);
+        report.warnings = std::move(unique);
+    }
     const Stopwatch write_watch;
     ImageMetadata meta;
     meta.software = std::string("render (sss) ") + version_string();
