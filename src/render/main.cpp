@@ -135,26 +135,29 @@ int run(const std::vector<std::string>& argv) {
             opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[0];
         const int ny =
             opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[1];
-        std::printf(
-            "render: %s: %zu primitives, %zu lights, %zu triangles, %dx%d pixels, "
-            "%dx%d samples\n",
-            rib.c_str(), scene.primitives.size(), scene.lights.size(), report.triangles,
-            xres, yres, nx, ny);
-        std::printf("render: %zu camera rays, %zu shadow and occlusion rays, %zu "
-                    "secondary rays\n",
-                    report.camera_rays, report.shadow_rays, report.secondary_rays);
-        for (const std::string& f : report.files)
-            std::printf("render: wrote %s\n", f.c_str());
-        if (report.files.empty())
-            std::printf("render: every Display is \"null\": no image rendered\n");
         for (std::size_t i = 0; i < report.baked_files.size(); ++i)
             std::printf("render: baked %s: %zu points, total area %.6g\n",
                         report.baked_files[i].c_str(), report.baked_points[i],
                         report.baked_areas[i]);
-        std::printf("render: read %.3f s, setup %.3f s, render %.3f s, write %.3f s, "
-                    "total %.3f s, threads %d\n",
-                    read_s, report.setup_seconds, report.render_seconds,
-                    report.write_seconds, job.seconds(), job.threads());
+        if (report.files.empty()) {
+            std::printf("render: every Display is \"null\": no image rendered\n");
+        } else {
+            std::printf(
+                "render: %s: %zu primitives, %zu lights, %zu triangles, %dx%d pixels, "
+                "%dx%d samples\n",
+                rib.c_str(), scene.primitives.size(), scene.lights.size(),
+                report.triangles, xres, yres, nx, ny);
+            std::printf("render: %zu camera rays, %zu shadow and occlusion rays, %zu "
+                        "secondary rays\n",
+                        report.camera_rays, report.shadow_rays, report.secondary_rays);
+        }
+        for (const std::string& f : report.files)
+            std::printf("render: wrote %s\n", f.c_str());
+        std::printf("render: read %.3f s, bake %.3f s, setup %.3f s, render %.3f s, "
+                    "write %.3f s, total %.3f s, threads %d\n",
+                    read_s, report.bake_seconds, report.setup_seconds,
+                    report.render_seconds, report.write_seconds, job.seconds(),
+                    job.threads());
         sss::flush_standard_output();
     }
     return 0;

@@ -150,6 +150,25 @@ if expect_rc 0 "render aovs.rib"; then
     [[ "$c" == "A B G R _occlusion.B _occlusion.G _occlusion.R _sss mine.B mine.G mine.R " ]] ||
         fail "aovs.exr holds $c"
 fi
+# One output name declared a colour by one shader and a float by another: the
+# float fills the colour layer as a grey.
+cat >floatocc.sl <<'SL'
+surface floatocc(output varying float _occlusion = 0;) { _occlusion = 0.5; Oi = 1; Ci = 1; }
+SL
+cat >mixed.rib <<'RIB'
+Format 16 16 1
+PixelSamples 1 1
+Display "mixed.exr" "openexr" "_occlusion"
+ScreenWindow -0.1 0.1 -0.1 0.1
+Translate 0 0 5
+WorldBegin
+  AttributeBegin Surface "aovs" Translate 0 0 -20 Sphere 1 -1 1 360 AttributeEnd
+  AttributeBegin Surface "floatocc" Sphere 1 -1 1 360 AttributeEnd
+WorldEnd
+RIB
+run "$render" mixed.rib
+expect_rc 0 "render mixed.rib" && { v="$(stats mixed.exr _occlusion.R Min) $(stats mixed.exr _occlusion.B Max)"
+    [[ "$v" == "0.500000 0.500000" ]] || fail "a float _occlusion in a colour layer reads $v, not 0.5"; }
 sed -e '/^Display "+/d' aovs.rib >plain.rib
 run "$render" -o plain.exr plain.rib
 expect_rc 0 "render plain.rib" && { [[ "$(channels plain.exr)" == "R,G,B,A" ]] ||

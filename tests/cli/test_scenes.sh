@@ -19,6 +19,18 @@
 #            direct light only, and redder on the side facing the red wall
 #   domelight  the envdome dome lights skin1 (red diffusion), envlight lights
 #            the same ear about as brightly
+#   appnote  the application note's workflow baked with render -p:2: the
+#            clouds are ptbake's, the bake passes write no image; the three
+#            material forms agree; the varying teapot's colour varies; the
+#            blocker's ring is darker than the slab around it; the
+#            absorption-only pass: thin parts glow, the body stays dark
+#   skinstudy  seven AOVs of a user shader, each in a file of its own with the
+#            declared channels and equal to its layer of the beauty's EXR; the
+#            bumped diffuse (calculatenormal) as bright as a matte's; one
+#            warning for vtransform("", ...)
+#   calcite  the 8-bit and 16-bit TIFFs of the AOVs _occlusion and _sss hold
+#            the EXR's values within their quantization; _occlusion comes from
+#            occlusion(), not the 1.0 of a shader without it
 # Usage: test_scenes.sh [PART...]: the scenes above (by name) and "guard" (an
 # output folder inside scenes/ is refused); all of them without arguments.
 # Needs SSS_BIN_DIR (the folder with ptbake, ptfilter, brickmake and render) and
@@ -37,6 +49,7 @@ work="$(mktemp -d "${TMPDIR:-/tmp}/sss_test_scenes.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 cd "$work"
 
+ptinfo="$bin/ptinfo" # for points() (checks.sh) and cloud_stats
 # shellcheck source=SCRIPTDIR/lib.sh
 source "$here/lib.sh"
 # shellcheck source=SCRIPTDIR/checks.sh
@@ -78,6 +91,29 @@ is() {
         args+=(-v "$kv")
     done
     awk "${args[@]}" "BEGIN { exit !($cond) }"
+}
+# format FILE: the pixel type oiiotool reports (uint8, uint16, half, float...).
+format() {
+    oiiotool --info "$1" 2>/dev/null | sed -n 's/^.* channel, \([a-z0-9]*\) .*$/\1/p'
+}
+# maxdiff A.. -- B..: the largest absolute difference, over the pixels and
+# channels, between two oiiotool images given as argument lists (e.g.
+# "x.tif" and "x.exr --ch _sss.R,_sss.G,_sss.B").
+maxdiff() {
+    local first=()
+    while [[ "$1" != -- ]]; do first+=("$1"); shift; done
+    shift
+    oiiotool "${first[@]}" "$@" --sub --abs --printstats 2>/dev/null |
+        sed -n 's/^ *Stats Max: *//p' | sed 's/ *(float)//' | tr ' ' '\n' |
+        awk 'NF { if ($1 > m) m = $1; n++ } END { if (n) printf "%.6g\n", m }'
+}
+# cloud_stats FILE CHANNEL: ptinfo's min, mean and max of each component of a
+# colour channel, "rmin rmean rmax gmin gmean gmax bmin bmean bmax".
+cloud_stats() {
+    "$ptinfo" "$1" 2>/dev/null | awk -v ch="$2" '
+        $1 == "color" && $2 == ch { on = 1; next }
+        on && $1 ~ /^[rgb]:$/ { printf "%s %s %s ", $3, $5, $7; if ($1 == "b:") exit; next }
+        { on = 0 }'
 }
 # image_ok FILE W H LABEL: exists, readable, of that size.
 image_ok() {
@@ -315,6 +351,193 @@ scene_domelight() {
 }
 
 # ---------------------------------------------------------------------------
+# The application note's workflow: bakes by render -p:2, 160 x 120 renders
+# (the slab 128 x 128).
+scene_appnote() {
+    run_scene appnote || return 0
+    d=appnote
+    # The bake passes: render -p:2 writes the clouds ptbake writes from the
+    # same RIBs (the quick run's copies), and no image (Display "null").
+    local rib cloud n1 n2 m1 m2 file
+    for rib in teapot:direct_rad_t varying:varying_rad_t blocker:blocker_rad_t; do
+        cloud=${rib#*:}
+        rib=${rib%:*}_bake.rib
+        run bash -c "cd $d && '$bin/ptbake' -p:2 -o '$work/ptbake_$cloud.ptc' $rib"
+        expect_rc 0 "appnote: ptbake $rib" || continue
+        n1="$(points "$d/$cloud.ptc")"
+        n2="$(points "ptbake_$cloud.ptc")"
+        is "n1 == n2 && n1 > 10000" n1="$n1" n2="$n2" ||
+            fail "appnote: render -p:2 $rib baked $n1 points, ptbake $n2"
+        read -r _ m1 _ <<<"$(cloud_stats "$d/$cloud.ptc" _radiance_t)"
+        read -r _ m2 _ <<<"$(cloud_stats "ptbake_$cloud.ptc" _radiance_t)"
+        is "m1 == m2 && m1 != 0" m1="$m1" m2="$m2" ||
+            fail "appnote: $rib: mean _radiance_t $m1 from render, $m2 from ptbake"
+        for file in "$d/$cloud"*; do
+            [[ "$file" == "$d/$cloud.ptc" || "$file" == "$d/$cloud.bkm" ]] ||
+                fail "appnote: the null display of $rib wrote $file"
+        done
+    done
+    # The three forms of marble: -scattering/-absorption are the table's own
+    # numbers (the same cloud, byte for byte); -albedo/-diffusemeanfreepath
+    # are rounded to 3 digits (min, mean and max within 0.5 %).
+    cmp -s $d/ssdiffusion.ptc $d/ssdiffusion_coeffs.ptc ||
+        fail "appnote: -scattering/-absorption of marble gives another cloud than -material marble"
+    local marble rounded
+    read -r -a marble <<<"$(cloud_stats $d/ssdiffusion.ptc _ssdiffusion)"
+    read -r -a rounded <<<"$(cloud_stats $d/ssdiffusion_albedo.ptc _ssdiffusion)"
+    if ((${#marble[@]} != 9 || ${#rounded[@]} != 9)); then
+        fail "appnote: no _ssdiffusion statistics: '${marble[*]}' '${rounded[*]}'"
+    else
+        for i in 0 1 2 3 4 5 6 7 8; do
+            is "x > 0 && y > 0.995 * x && y < 1.005 * x" x="${marble[$i]}" y="${rounded[$i]}" ||
+                fail "appnote: -albedo/-diffusemeanfreepath differs from -material marble: ${rounded[*]} vs ${marble[*]}"
+        done
+    fi
+    # Marble teapot: the beauty and the shader's AOVs, by their own names.
+    image_ok $d/teapot_render.exr 160 120 "appnote teapot"
+    c="$(channels $d/teapot_render.exr)"
+    for want in R G B A _ambient.R _diffuse.R _sss.R _ssdiffusion.B; do
+        [[ ",$c," == *",$want,"* ]] || fail "appnote: teapot_render.exr lacks $want (has $c)"
+    done
+    [[ ",$c," != *",specular.R,"* && ",$c," != *",occlusion.R,"* ]] ||
+        fail "appnote: teapot_render.exr has layers nobody asked for: $c"
+    image_ok $d/teapot_sss.tif 160 120 "appnote teapot sss"
+    [[ "$(format $d/teapot_sss.tif)" == uint8 ]] || fail "appnote: teapot_sss.tif is $(format $d/teapot_sss.tif), not 8-bit"
+    sum="$(oiiotool $d/teapot_render.exr --ch _ambient.R $d/teapot_render.exr --ch _diffuse.R --add \
+        $d/teapot_render.exr --ch _sss.R --add --printstats 2>/dev/null | sed -n 's/^ *Stats Avg: *\([^ ]*\).*/\1/p')"
+    r="$(mean $d/teapot_render.exr R 0 0 1 1)"
+    is "r > 0.1 && sum > 0.99 * r && sum < 1.01 * r" r="$r" sum="$sum" ||
+        fail "appnote: teapot beauty mean $r is not the sum of _ambient, _diffuse, _sss ($sum)"
+    z="$(mean $d/teapot_render.exr _sss.R 0.3 0.3 0.7 0.8)"
+    is "z > 0.1" z="$z" || fail "appnote: the _sss layer is dark ($z) over the teapot"
+    # Varying teapot: G / R over the body follows the per-point albedo; the
+    # marble teapot's hardly varies.
+    image_ok $d/varying_render.exr 160 120 "appnote varying"
+    vs="$(stat $d/varying_render.exr G/R StdDev 0.4 0.45 0.6 0.7)"
+    vm="$(stat $d/teapot_render.exr G/R StdDev 0.4 0.45 0.6 0.7)"
+    is "vs > 0.025 && vs > 2 * vm" vs="$vs" vm="$vm" ||
+        fail "appnote: the varying teapot's G/R should vary (stddev $vs) more than marble's ($vm)"
+    # Blocker: lit from below, seen from above. The ring's left arc, the slab
+    # outside it and inside it.
+    image_ok $d/blocker_render.exr 128 128 "appnote blocker"
+    ring="$(mean $d/blocker_render.exr _sss.R 0.31 0.5 0.36 0.6)"
+    outside="$(mean $d/blocker_render.exr _sss.R 0.16 0.5 0.22 0.6)"
+    inside="$(mean $d/blocker_render.exr _sss.R 0.47 0.5 0.53 0.56)"
+    is "outside > 0.3 && ring < 0.9 * outside && ring < 0.95 * inside" ring="$ring" outside="$outside" inside="$inside" ||
+        fail "appnote: the blocker's ring ($ring) should be darker than the slab outside ($outside) and inside it ($inside)"
+    # Absorption only (the note's one-sided teapot): spout and handle glow,
+    # the thick body stays dark, red gets through best, and the rays into the
+    # body find where they leave it.
+    image_ok $d/noscatter.exr 160 120 "appnote noscatter"
+    read -r sr sg sb <<<"$(mean $d/noscatter.exr _sss.R,_sss.G,_sss.B 0.72 0.38 0.81 0.5)"
+    read -r hr _ _ <<<"$(mean $d/noscatter.exr _sss.R,_sss.G,_sss.B 0.16 0.42 0.31 0.58)"
+    read -r br _ _ <<<"$(mean $d/noscatter.exr _sss.R,_sss.G,_sss.B 0.47 0.54 0.59 0.66)"
+    is "sr > 3 * br && hr > 1.5 * br && br > 0" sr="$sr" hr="$hr" br="$br" ||
+        fail "appnote noscatter: spout ($sr) and handle ($hr) should glow far more than the body ($br)"
+    is "sr > sg && sg > sb" sr="$sr" sg="$sg" sb="$sb" ||
+        fail "appnote noscatter: red should get through best: $sr $sg $sb"
+    m="$(mean $d/noscatter.exr _missed 0.47 0.54 0.59 0.66)"
+    is "m < 0.05" m="$m" || fail "appnote noscatter: $m of the rays into the body find no exit"
+}
+
+# ---------------------------------------------------------------------------
+# Skin study: 120 x 150; seven AOVs of skin_pass.sl.
+scene_skinstudy() {
+    run_scene skinstudy || return 0
+    d=skinstudy
+    log="$out$err"
+    image_ok $d/skin_render.exr 120 150 skinstudy || return 0
+    [[ -s $d/textures/skin_bump.tif && -s $d/ear_rad_t.ptc && -s $d/ear_ssd.bkm ]] ||
+        fail "skinstudy: the bump map or the intermediate files are missing: $(ls $d)"
+    for file in "$d"/skin_bake*; do
+        [[ "$file" == "$d/skin_bake.rib" ]] || fail "skinstudy: the null display of skin_bake.rib wrote $file"
+    done
+    # Each AOV: its own file, with the channels its declaration gives (a
+    # colour R, G, B; a float one channel), equal to its layer of the beauty.
+    c="$(channels $d/skin_render.exr)"
+    local aov file want layer diff
+    for aov in ambient:color diffuse:color specular:color sss:color albedo:color occlusion:float bump:float; do
+        file=$d/skin_${aov%:*}.exr
+        image_ok "$file" 120 150 "skinstudy ${aov%:*}" || continue
+        if [[ ${aov#*:} == color ]]; then
+            want="R,G,B" layer="_${aov%:*}.R,_${aov%:*}.G,_${aov%:*}.B"
+        else
+            want="_${aov%:*}" layer="_${aov%:*}"
+        fi
+        [[ "$(channels "$file")" == "$want" ]] || fail "skinstudy: $file has channels $(channels "$file"), not $want"
+        [[ ",$c," == *",${layer%%,*},"* ]] || fail "skinstudy: skin_render.exr lacks ${layer%%,*} (has $c)"
+        diff="$(maxdiff "$file" -- $d/skin_render.exr --ch "$layer")"
+        is "diff == 0" diff="$diff" || fail "skinstudy: $file differs from its layer of skin_render.exr by $diff"
+    done
+    # The bump map was read and moves the specular highlights.
+    bs="$(stat $d/skin_render.exr _bump StdDev 0.35 0.3 0.55 0.65)"
+    is "bs > 0.03" bs="$bs" || fail "skinstudy: the _bump AOV hardly varies ($bs): was the map found?"
+    # The bumped normal (calculatenormal of the moved P) faces out: the
+    # diffuse is as bright as a matte's with the same Kd (facing in, it would
+    # be black: the lights are outside).
+    awk '/^ *Display "\+/ { next }
+         /^ *Display "skin_render.exr"/ { print "Display \"skin_matte.exr\" \"openexr\" \"rgba,_diffuse\""; next }
+         /Surface "skin_pass"/ { print "    Surface \"matte\" \"Ka\" [1] \"Kd\" [0.1]"; skip = 1; next }
+         skip && /^ *"/ { next }
+         { skip = 0; print }' $d/skin_render.rib >$d/skin_matte.rib
+    run bash -c "cd $d && '$bin/render' -p:2 -res 120 150 -samples 1 skin_matte.rib"
+    if expect_rc 0 "skinstudy: the matte copy"; then
+        db="$(mean $d/skin_render.exr _diffuse.R 0.35 0.3 0.55 0.65)"
+        dm="$(mean $d/skin_matte.exr _diffuse.R 0.35 0.3 0.55 0.65)"
+        is "dm > 0.01 && db > 0.85 * dm && db < 1.15 * dm" db="$db" dm="$dm" ||
+            fail "skinstudy: the bumped diffuse ($db) should be about the matte's ($dm)"
+    fi
+    read -r sr sg sb <<<"$(mean $d/skin_render.exr _sss.R,_sss.G,_sss.B 0.35 0.3 0.55 0.65)"
+    is "sr > 0.1 && sr > sg && sg > sb" sr="$sr" sg="$sg" sb="$sb" ||
+        fail "skinstudy: the skin1 diffusion should be bright and red: $sr $sg $sb"
+    # dispSPACE "": one warning for its vtransform call.
+    n="$(grep -c 'unknown coordinate system ""' <<<"$log" || true)"
+    [[ "$n" == 1 ]] || fail "skinstudy: $n warnings about the space \"\", not 1: ${log: -600}"
+}
+
+# ---------------------------------------------------------------------------
+# Calcite: 120 x 150; _occlusion and _sss as 8-bit and 16-bit TIFFs.
+scene_calcite() {
+    run_scene calcite || return 0
+    d=calcite
+    image_ok $d/calcite.exr 120 150 calcite || return 0
+    c="$(channels $d/calcite.exr)"
+    [[ "$c" == "R,G,B,A,_occlusion.R,_occlusion.G,_occlusion.B,_sss.R,_sss.G,_sss.B" ]] ||
+        fail "calcite: calcite.exr has channels $c"
+    [[ -s $d/calcite_rad_t.ptc && -s $d/calcite_ssd.bkm ]] || fail "calcite: the intermediate files are missing: $(ls $d)"
+    for file in "$d"/calcite_bake*; do
+        [[ ! -e "$file" ]] || fail "calcite: the null display of crystal_bake.rib wrote $file"
+    done
+    image_ok $d/calcite_occlusion.tif 120 150 "calcite occlusion"
+    image_ok $d/calcite_sss.tif 120 150 "calcite sss"
+    f8="$(format $d/calcite_occlusion.tif)" f16="$(format $d/calcite_sss.tif)"
+    [[ "$f8" == uint8 && "$f16" == uint16 ]] ||
+        fail "calcite: the TIFFs are $f8 and $f16, not uint8 and uint16"
+    [[ "$(channels $d/calcite_occlusion.tif)" == R,G,B ]] ||
+        fail "calcite: calcite_occlusion.tif has channels $(channels $d/calcite_occlusion.tif)"
+    # Quantization: 8 bits within one step (rounding and a dither of half a
+    # step) plus the EXR's half floats; 16 bits within the half floats'
+    # rounding, far below an 8-bit step.
+    e8="$(maxdiff $d/calcite_occlusion.tif -- $d/calcite.exr --ch _occlusion.R,_occlusion.G,_occlusion.B)"
+    is "e8 < 1.02 / 255 + 0.0005" e8="$e8" ||
+        fail "calcite: calcite_occlusion.tif differs from the EXR's _occlusion by $e8 (more than an 8-bit step)"
+    e16="$(maxdiff $d/calcite_sss.tif -- $d/calcite.exr --ch _sss.R,_sss.G,_sss.B --clamp:min=0:max=1)"
+    is "e16 < 0.0005" e16="$e16" ||
+        fail "calcite: calcite_sss.tif differs from the EXR's _sss (clamped to 1) by $e16"
+    # _occlusion on the big crystal comes from occlusion(): open (about 1) at
+    # the top, darker down by the rock; not the 1 of a shader without it.
+    otop="$(mean $d/calcite.exr _occlusion.R 0.3 0.36 0.4 0.42)"
+    olow="$(mean $d/calcite.exr _occlusion.R 0.35 0.62 0.48 0.68)"
+    omin="$(stat $d/calcite.exr _occlusion.R Min 0.32 0.42 0.43 0.64)"
+    omax="$(stat $d/calcite.exr _occlusion.R Max 0 0 1 1)"
+    is "otop > 0.9 && olow < 0.8 && omin > 0.3 && omin < 0.75 && omax <= 1" otop="$otop" olow="$olow" omin="$omin" omax="$omax" ||
+        fail "calcite: _occlusion of the big crystal: top $otop, by the rock $olow, min $omin (inside it), max $omax"
+    # The diffusion lights the crystals.
+    s="$(mean $d/calcite.exr _sss.R 0.32 0.4 0.48 0.65)"
+    is "s > 0.1" s="$s" || fail "calcite: the crystals' _sss is dark ($s)"
+}
+
+# ---------------------------------------------------------------------------
 # An output folder inside scenes/ is refused, and nothing is created there.
 scene_guard() {
     run "$scenes/teapot/run" "$scenes/teapot/out"
@@ -326,7 +549,7 @@ scene_guard() {
 
 # The parts to run: the arguments (CTest runs one per test, cli.test_scenes.<part>,
 # tests/CMakeLists.txt), or all of them.
-all_parts=(teapot thinbox skin varying orbit absorption gibake domelight guard)
+all_parts=(teapot thinbox skin varying orbit absorption gibake domelight appnote skinstudy calcite guard)
 parts=("$@")
 ((${#parts[@]})) || parts=("${all_parts[@]}")
 for part in "${parts[@]}"; do

@@ -55,6 +55,7 @@ struct RenderReport {
     /// (trace, gather, occlusion, indirectdiffuse, transmission with
     /// opacity), the hit shaders' own rays included.
     std::size_t secondary_rays = 0;
+    double bake_seconds = 0.0;   ///< a bake RIB's bake pass
     double setup_seconds = 0.0;  ///< dicing, Embree build, maps opened
     double render_seconds = 0.0; ///< pixels
     double write_seconds = 0.0;

@@ -270,16 +270,35 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         context.execute(shader, batch, LightList(lights.data(), lights.size()));
         job.nan_points += context.nonfinite_points();
 
-        // AOVs this shader has.
+        // AOVs this shader has, as the AOV's floats: a float replicated into a
+        // colour layer, a colour's mean into a float one (shaders may declare
+        // one output variable with either type).
         std::vector<std::vector<float>> aov_values(job.aovs.size());
         std::vector<char> has(job.aovs.size(), 0);
         for (std::size_t a = 0; a < job.aovs.size(); ++a) {
             TypeSpec type;
-            if (context.output(job.aovs[a].variable, type, aov_values[a]) &&
-                !type.is_array() &&
-                shading_type_floats(type.type) == job.aovs[a].floats &&
-                type.type != ShadingType::String)
+            std::vector<float>& values = aov_values[a];
+            if (!context.output(job.aovs[a].variable, type, values) || type.is_array() ||
+                type.type == ShadingType::String)
+                continue;
+            const int floats = shading_type_floats(type.type);
+            const int want = job.aovs[a].floats;
+            if (floats == want) {
                 has[a] = 1;
+            } else if (floats == 1 && want == 3) {
+                std::vector<float> wide(values.size() * 3);
+                for (std::size_t i = 0; i < values.size(); ++i)
+                    wide[3 * i] = wide[3 * i + 1] = wide[3 * i + 2] = values[i];
+                values.swap(wide);
+                has[a] = 1;
+            } else if (floats == 3 && want == 1) {
+                std::vector<float> mean(values.size() / 3);
+                for (std::size_t i = 0; i < mean.size(); ++i)
+                    mean[i] =
+                        (values[3 * i] + values[3 * i + 1] + values[3 * i + 2]) / 3.0f;
+                values.swap(mean);
+                has[a] = 1;
+            }
         }
         for (std::size_t k = 0; k < n; ++k) {
             const SurfaceHit& h = hits[begin + k];
@@ -847,7 +866,9 @@ RenderReport RenderJob::run() const {
     if (m_bake) {
         // The bake pass first (its clouds join this job's outputs), as
         // ptbake bakes: the image's own shading bakes nothing.
+        const Stopwatch bake_watch;
         const BakeReport baked = m_bake->run();
+        report.bake_seconds = bake_watch.seconds();
         report.warnings.append(baked.warnings);
         if (auto w = culled_bake_warning(scene, *m_shaders))
             report.warnings.push_back(*w);
