@@ -166,6 +166,37 @@ std::array<glm::dvec4, 3> hit_uvst(const DicedSurface& d, const SurfaceHit& h) {
     return out;
 }
 
+/// The AOVs the shader just run has (values[a], has[a]), as each AOV's
+/// floats: a float replicated into a colour layer, a colour's mean into a
+/// float one (shaders may declare one output variable with either type).
+void shader_aovs(ShadingContext& context, const std::vector<Aov>& aovs,
+                 std::vector<std::vector<float>>& aov_values, std::vector<char>& has) {
+    for (std::size_t a = 0; a < aovs.size(); ++a) {
+        TypeSpec type;
+        std::vector<float>& values = aov_values[a];
+        if (!context.output(aovs[a].variable, type, values) || type.is_array() ||
+            type.type == ShadingType::String)
+            continue;
+        const int floats = shading_type_floats(type.type);
+        const int want = aovs[a].floats;
+        if (floats == want) {
+            has[a] = 1;
+        } else if (floats == 1 && want == 3) {
+            std::vector<float> wide(values.size() * 3);
+            for (std::size_t i = 0; i < values.size(); ++i)
+                wide[3 * i] = wide[3 * i + 1] = wide[3 * i + 2] = values[i];
+            values.swap(wide);
+            has[a] = 1;
+        } else if (floats == 3 && want == 1) {
+            std::vector<float> mean(values.size() / 3);
+            for (std::size_t i = 0; i < mean.size(); ++i)
+                mean[i] = (values[3 * i] + values[3 * i + 1] + values[3 * i + 2]) / 3.0f;
+            values.swap(mean);
+            has[a] = 1;
+        }
+    }
+}
+
 /// Shades the hits of one pass, primitive by primitive in batches, and
 /// composites each into its sample (front to back).
 void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>& hits,
@@ -270,36 +301,9 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         context.execute(shader, batch, LightList(lights.data(), lights.size()));
         job.nan_points += context.nonfinite_points();
 
-        // AOVs this shader has, as the AOV's floats: a float replicated into a
-        // colour layer, a colour's mean into a float one (shaders may declare
-        // one output variable with either type).
         std::vector<std::vector<float>> aov_values(job.aovs.size());
         std::vector<char> has(job.aovs.size(), 0);
-        for (std::size_t a = 0; a < job.aovs.size(); ++a) {
-            TypeSpec type;
-            std::vector<float>& values = aov_values[a];
-            if (!context.output(job.aovs[a].variable, type, values) || type.is_array() ||
-                type.type == ShadingType::String)
-                continue;
-            const int floats = shading_type_floats(type.type);
-            const int want = job.aovs[a].floats;
-            if (floats == want) {
-                has[a] = 1;
-            } else if (floats == 1 && want == 3) {
-                std::vector<float> wide(values.size() * 3);
-                for (std::size_t i = 0; i < values.size(); ++i)
-                    wide[3 * i] = wide[3 * i + 1] = wide[3 * i + 2] = values[i];
-                values.swap(wide);
-                has[a] = 1;
-            } else if (floats == 3 && want == 1) {
-                std::vector<float> mean(values.size() / 3);
-                for (std::size_t i = 0; i < mean.size(); ++i)
-                    mean[i] =
-                        (values[3 * i] + values[3 * i + 1] + values[3 * i + 2]) / 3.0f;
-                values.swap(mean);
-                has[a] = 1;
-            }
-        }
+        shader_aovs(context, job.aovs, aov_values, has);
         for (std::size_t k = 0; k < n; ++k) {
             const SurfaceHit& h = hits[begin + k];
             CameraSample& cs = samples[h.sample];
