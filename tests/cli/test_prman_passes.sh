@@ -50,6 +50,7 @@ for pass in teapot:direct_rad_t varying:varying_rad_t blocker:blocker_rad_t; do
     grep -q "render: baked $cloud: [0-9]* points" <<<"$out" || fail "render $rib: no 'baked' line: $out"
     grep -q 'every Display is "null": no image rendered' <<<"$out" ||
         fail "render $rib: a null-only pass rendered an image: $out"
+    grep -q '^ALF_PROGRESS 100%' <<<"$out$err" || fail "render $rib: no progress of the bake"
     mv "$cloud" "render_$cloud"
     run "$ptbake" -t:2 "$rib"
     expect_rc 0 "ptbake -t:2 $rib" || continue

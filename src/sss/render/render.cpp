@@ -657,21 +657,6 @@ std::optional<std::string> culled_bake_warning(const Scene& scene,
 
 } // namespace
 
-RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
-    : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
-      m_shaders(
-          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {
-    bool bakes = false;
-    for (const ShaderInstance* s : m_shaders->surface_of)
-        bakes = bakes || (s && program_uses(s->program(), "bake3d"));
-    if (!bakes) return;
-    // The bake pass of a bake RIB: ptbake's job with ptbake's defaults
-    // (ShadingRate micropolygons of the scene's own camera, not -res).
-    m_bake_options = std::make_unique<BakeOptions>();
-    m_bake_options->frame = m_frame;
-    m_bake = std::make_unique<BakeJob>(scene, *m_bake_options);
-}
-
 RenderJob::~RenderJob() = default;
 
 Image RenderJob::image(RenderReport* report_out) const {
@@ -788,6 +773,28 @@ std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions
 }
 
 } // namespace
+
+RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
+    : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
+      m_shaders(
+          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {
+    bool bakes = false;
+    for (const ShaderInstance* s : m_shaders->surface_of)
+        bakes = bakes || (s && program_uses(s->program(), "bake3d"));
+    if (!bakes) return;
+    // The bake pass of a bake RIB: ptbake's job with ptbake's defaults
+    // (ShadingRate micropolygons of the scene's own camera, not -res).
+    m_bake_options = std::make_unique<BakeOptions>();
+    m_bake_options->frame = m_frame;
+    // A pass that renders no image (only "null" Displays) reports the bake's
+    // progress; otherwise the image's (one 0-100 % run per job).
+    int primary = -1;
+    bool image = false;
+    for (const DisplaySpec& d : job_displays(scene, options, m_frame, primary))
+        image = image || !display_writes_nothing(d);
+    if (!image) m_bake_options->progress = options.progress;
+    m_bake = std::make_unique<BakeJob>(scene, *m_bake_options);
+}
 
 RenderFiles RenderJob::files() const {
     RenderFiles files;
