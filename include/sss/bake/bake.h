@@ -122,6 +122,10 @@ struct SceneShaders;
 class BakeJob {
 public:
     BakeJob(const Scene& scene, const BakeOptions& options);
+    /// The same job with the scene's shaders already bound for the job's
+    /// frame (a render job's: each shader is loaded and compiled once).
+    BakeJob(const Scene& scene, const BakeOptions& options,
+            std::shared_ptr<const SceneShaders> shaders);
     ~BakeJob();
     BakeJob(const BakeJob&) = delete;
     BakeJob& operator=(const BakeJob&) = delete;
@@ -147,7 +151,7 @@ private:
     const Scene& m_scene;
     const BakeOptions& m_options;
     std::optional<int> m_frame;
-    std::unique_ptr<const SceneShaders> m_shaders;
+    std::shared_ptr<const SceneShaders> m_shaders;
 };
 
 /// BakeJob(scene, options).run().

@@ -104,7 +104,7 @@ private:
     const Scene& m_scene;
     const RenderJobOptions& m_options;
     std::optional<int> m_frame;
-    std::unique_ptr<const SceneShaders> m_shaders;
+    std::shared_ptr<const SceneShaders> m_shaders; ///< shared with m_bake
     std::unique_ptr<BakeOptions> m_bake_options;
     std::unique_ptr<BakeJob> m_bake; ///< a bake RIB's bake pass, else null
 };

@@ -637,7 +637,12 @@ double material_mean_free_path(const MaterialSpec& material) {
 BakeJob::BakeJob(const Scene& scene, const BakeOptions& options)
     : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
       m_shaders(
-          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
+          std::make_shared<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {}
+
+BakeJob::BakeJob(const Scene& scene, const BakeOptions& options,
+                 std::shared_ptr<const SceneShaders> shaders)
+    : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
+      m_shaders(std::move(shaders)) {}
 
 BakeJob::~BakeJob() = default;
 

@@ -777,7 +777,7 @@ std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions
 RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
     : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
       m_shaders(
-          std::make_unique<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {
+          std::make_shared<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {
     bool bakes = false;
     for (const ShaderInstance* s : m_shaders->surface_of)
         bakes = bakes || (s && program_uses(s->program(), "bake3d"));
@@ -793,7 +793,7 @@ RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
     for (const DisplaySpec& d : job_displays(scene, options, m_frame, primary))
         image = image || !display_writes_nothing(d);
     if (!image) m_bake_options->progress = options.progress;
-    m_bake = std::make_unique<BakeJob>(scene, *m_bake_options);
+    m_bake = std::make_unique<BakeJob>(scene, *m_bake_options, m_shaders);
 }
 
 RenderFiles RenderJob::files() const {
@@ -897,7 +897,7 @@ RenderReport RenderJob::run() const {
     }
     Image image = this->image(&report);
     if (m_bake) {
-        // The bake and the image bind the same shaders: their warnings once.
+        // The bake and the image report the same shaders' warnings: once.
         Warnings unique;
         std::set<std::string> seen;
         for (const std::string& w : report.warnings)

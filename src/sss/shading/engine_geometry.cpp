@@ -480,10 +480,6 @@ struct XformSpec {
     int value = 0;   // arg index of the value
 };
 
-glm::dmat4 space_matrix(Frame& f, const BoundOp& b, const std::string& space) {
-    return named_space_to_current(f, b, space);
-}
-
 template <int Kind> // 0 point, 1 vector, 2 normal
 void op_transform(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
@@ -494,8 +490,9 @@ void op_transform(Frame& f, const BoundOp& b) {
     s.value = b.id;
     auto matrix_at = [&](std::size_t i) {
         glm::dmat4 m(1.0);
-        if (s.from >= 0) m = space_matrix(f, b, f.str(b, s.from, i));
-        if (s.to >= 0) m = glm::inverse(space_matrix(f, b, f.str(b, s.to, i))) * m;
+        if (s.from >= 0) m = named_space_to_current(f, b, f.str(b, s.from, i));
+        if (s.to >= 0)
+            m = glm::inverse(named_space_to_current(f, b, f.str(b, s.to, i))) * m;
         if (s.matrix >= 0) m = ldm(f.ptr(b, s.matrix, i)) * m;
         return m;
     };

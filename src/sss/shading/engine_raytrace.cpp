@@ -169,27 +169,24 @@ RayParams ray_params(Frame& f, const BoundOp& b, int first) {
         }
         if (f.slot(b, k).nf != 1) return ignored(name);
         const float v = *f.ptr(b, k, i0);
-        if (name == "samples" || name == "samplecone" || name == "blur" ||
-            name == "bias" || name == "maxdist" || name == "coneangle" ||
-            name == "samplebase" || name == "adaptive") {
-            if (!std::isfinite(v)) return;
+        const bool finite = std::isfinite(v); // a non-finite value keeps the default
+        if (name == "samples") {
+            if (finite) o.samples = std::clamp(static_cast<int>(v), 1, 4096);
+        } else if (name == "samplecone" || name == "blur") {
+            if (finite) o.cone = std::clamp(v, 0.0f, 6.2831853f);
+        } else if (name == "bias") {
+            if (finite) o.bias = v;
+        } else if (name == "maxdist") {
+            if (finite) o.maxdist = v;
+        } else if (name == "coneangle") {
+            if (finite) o.coneangle = std::clamp(v, 0.0f, kHalfPi);
+        } else if (name == "samplebase") {
+            if (finite) o.samplebase = std::max(0.0f, v);
+        } else if (name == "adaptive") {
+            if (finite) o.adaptive = v;
         } else {
-            return ignored(name);
+            ignored(name);
         }
-        if (name == "samples")
-            o.samples = std::clamp(static_cast<int>(v), 1, 4096);
-        else if (name == "samplecone" || name == "blur")
-            o.cone = std::clamp(v, 0.0f, 6.2831853f);
-        else if (name == "bias")
-            o.bias = v;
-        else if (name == "maxdist")
-            o.maxdist = v;
-        else if (name == "coneangle")
-            o.coneangle = std::clamp(v, 0.0f, kHalfPi);
-        else if (name == "samplebase")
-            o.samplebase = std::max(0.0f, v);
-        else
-            o.adaptive = v;
     });
     return o;
 }
