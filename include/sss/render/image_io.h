@@ -99,8 +99,8 @@ std::string display_format(const DisplaySpec& display);
 /// `"quantize" [zero one min max]` and
 /// `"dither" [amplitude]` (else `defaults.quantize`, else PRMan's 0 255 0 255
 /// and 0.5; ignored for OpenEXR), the exposure from `defaults`. For the
-/// primary (non-'+') OpenEXR display, every AOV layer of
-/// `image` (channels with a '.') is appended as layer.channel. Throws
+/// primary (non-'+') OpenEXR display, every AOV of `image` (every channel
+/// but R, G, B, A, Z: the AOVs the scene asks for) is appended. Throws
 /// ValueError, naming the display, for a mode naming a channel the image does
 /// not have or channels the format cannot hold.
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
