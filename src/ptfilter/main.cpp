@@ -19,7 +19,7 @@ namespace {
 const char* kTool = "ptfilter";
 
 std::string usage() {
-    char buf[4096];
+    char buf[5120];
     std::snprintf(
         buf, sizeof buf,
         "usage: ptfilter -ssdiffusion [options] in.ptc [more.ptc ...] out.ptc\n"
@@ -43,6 +43,12 @@ std::string usage() {
         "                            accurate (default 1)\n"
         "  -profile NAME             classic (default, PRMan's), better, burley, pbd\n"
         "                            (photon beam diffusion), mc (Monte-Carlo table)\n"
+        "  -volume 0|1               1: light carried through the volume the cloud\n"
+        "                            encloses (thin parts, small objects; "
+        "docs/volume.md)\n"
+        "  -blocker FILE             a cloud on the surface of an absorbing inclusion\n"
+        "                            (bone), normals out of it; repeatable; implies\n"
+        "                            -volume 1\n"
         "  -criterion NAME           error (default), bbox (PRMan), centroid (J&B)\n"
         "  -exact                    all pairs (slow reference)\n"
         "Channels and output:\n"
@@ -72,6 +78,10 @@ std::string usage() {
         "  --help, --version\n",
         sss::material_names().c_str());
     return buf;
+}
+
+double share(double part, double whole) {
+    return whole > 0 ? part / whole : 0.0;
 }
 
 /// The report lines of a finished run (-progress 1 and 2).
@@ -106,6 +116,21 @@ void print_report(const sss::FilterJob& fj, const sss::FilterJobReport& r,
         for (const std::string& line :
              sss::describe_values(r.diffusion.values, opt.output_channel))
             std::printf("ptfilter: %s\n", line.c_str());
+    const sss::VolumeReport& v = r.diffusion.volume;
+    if (v.needed)
+        std::printf(
+            "ptfilter: volume: %zu of %zu points thin, voxel %.4g mm, grid %dx%dx%d, "
+            "%zu medium voxels, %d levels, %d/%d/%d CG steps, %.3f s; scattered "
+            "light out %.4f %.4f %.4f, blocked %.4f %.4f %.4f of what entered\n",
+            v.thin_points, r.points, v.voxel, v.dims[0], v.dims[1], v.dims[2], v.unknowns,
+            v.levels, v.iterations[0], v.iterations[1], v.iterations[2], v.seconds,
+            share(v.flux_out.x, v.flux_in.x), share(v.flux_out.y, v.flux_in.y),
+            share(v.flux_out.z, v.flux_in.z), share(v.flux_blocked.x, v.flux_in.x),
+            share(v.flux_blocked.y, v.flux_in.y), share(v.flux_blocked.z, v.flux_in.z));
+    else if (opt.volume || !opt.blockers.empty())
+        std::printf(
+            "ptfilter: volume: every point is thick against the material (%.3f s)\n",
+            v.seconds);
     std::printf("ptfilter: read %.3f s, diffusion %.3f s, write %.3f s, total %.3f s\n",
                 r.read_seconds, r.filter_seconds, r.write_seconds, job.seconds());
     if (job.detailed()) {

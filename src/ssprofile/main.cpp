@@ -62,7 +62,16 @@ In a scene's own geometry (-scene):
   -spacing S                edge length the objects are diced to (scene units;
                             default 1/500 of the cloud's diagonal)
   -compare FILE             a ptfilter result on the same points: prints its
-                            flux-weighted L1 error and total against the walk
+                            flux-weighted L1 error and total against the walk;
+                            repeatable
+  -region NAME X0 Y0 Z0 X1 Y1 Z1
+                            prints the area-weighted mean exitance of the walk
+                            and of each -compare cloud over the points inside
+                            the box (e.g. a slab's lit face); repeatable
+  -incidence normal|diffuse light enters refracted straight in, or diffuse
+                            (cosine-weighted outside; the default)
+  -scattered 0|1            1: light that leaves without a collision is not
+                            tallied (the part a diffusion model describes)
 Table:
   -maketable FILE           walk every (ior, albedo) node of the Monte-Carlo
                             profile table and write it (scripts/make-mc-table)
@@ -108,20 +117,51 @@ std::vector<sss::ProfileKind> profile_list(const std::string& text) {
     return out;
 }
 
+/// A box whose points' mean exitance -region prints.
+struct Region {
+    std::string name;
+    glm::dvec3 lo{0.0}, hi{0.0};
+};
+
+/// What -scene is told besides the material.
+struct SceneArgs {
+    std::string scene;
+    std::vector<std::string> blockers, compare;
+    std::vector<Region> regions;
+    double spacing = 0.0;
+    bool normal_incidence = false, scattered_only = false;
+};
+
+Region region_value(sss::ArgScanner& args, const std::string& o) {
+    Region r;
+    r.name = args.value(o);
+    for (int a = 0; a < 3; ++a) r.lo[a] = args.number(o);
+    for (int a = 0; a < 3; ++a) r.hi[a] = args.number(o);
+    for (int a = 0; a < 3; ++a)
+        if (!(r.lo[a] <= r.hi[a]))
+            throw sss::UsageError("option -region " + r.name +
+                                  ": the box's low corner "
+                                  "is above its high corner");
+    return r;
+}
+
 /// -scene: the walk in the scene's geometry, lit by the baked cloud.
-int run_scene(const std::string& scene, const std::vector<std::string>& blockers,
-              double spacing, const std::string& compare,
-              const sss::ProfileReportOptions& report,
+int run_scene(const SceneArgs& sa, const sss::ProfileReportOptions& report,
               const std::vector<std::string>& files, bool photons_given, uint64_t photons,
               bool seed_given, uint64_t seed, sss::Job& job) {
     sss::SceneWalkOptions w;
-    w.scene = scene;
-    w.blockers = blockers;
+    w.scene = sa.scene;
+    w.blockers = sa.blockers;
     w.material = report.material;
-    w.spacing = spacing;
+    w.spacing = sa.spacing;
+    w.normal_incidence = sa.normal_incidence;
+    w.scattered_only = sa.scattered_only;
     if (photons_given) w.photons = photons;
     if (seed_given) w.seed = seed;
     const sss::PointCloud baked = sss::read_point_cloud(files[0]);
+    // The clouds compared are read first: a wrong name fails before the walk.
+    std::vector<sss::PointCloud> others;
+    for (const std::string& c : sa.compare) others.push_back(sss::read_point_cloud(c));
     sss::SceneWalkReport rep;
     const sss::PointCloud truth = sss::walk_scene(w, baked, &rep);
     for (const std::string& warning : rep.warnings) sss::warn(kTool, warning);
@@ -137,18 +177,38 @@ int run_scene(const std::string& scene, const std::vector<std::string>& blockers
         const double in = r.flux_in[c] > 0.0 ? r.flux_in[c] : 1.0;
         std::printf(
             "ssprofile: %c: flux in %.6g; out %.4f +- %.4f, blocked %.4f, absorbed "
-            "%.4f of it\n",
+            "%.4f of it",
             names[c], r.flux_in[c], r.flux_out[c] / in, r.flux_out_error[c] / in,
             r.flux_blocked[c] / in, r.flux_absorbed[c] / in);
+        if (sa.scattered_only)
+            std::printf(", unscattered %.4f", r.flux_unscattered[c] / in);
+        std::printf("\n");
     }
-    if (!compare.empty()) {
-        const sss::PointCloud other = sss::read_point_cloud(compare);
-        const sss::CloudComparison cmp = sss::compare_with_truth(
-            other, truth, sss::cloud_areas(baked, w.area_channel));
+    const std::vector<float> areas = sss::cloud_areas(baked, w.area_channel);
+    for (std::size_t k = 0; k < others.size(); ++k) {
+        const sss::CloudComparison cmp = sss::compare_with_truth(others[k], truth, areas);
         for (int c = 0; c < 3; ++c)
             std::printf(
                 "ssprofile: %s %c: flux-weighted L1 %.1f%%, total x%.3f of the walk's\n",
-                compare.c_str(), names[c], 100.0 * cmp.l1[c], cmp.total_ratio[c]);
+                sa.compare[k].c_str(), names[c], 100.0 * cmp.l1[c], cmp.total_ratio[c]);
+    }
+    for (const Region& g : sa.regions) {
+        const sss::RegionMean t = sss::region_mean(truth, areas, g.lo, g.hi);
+        if (t.points == 0)
+            throw sss::ValueError("region " + g.name + ": no point with area inside it");
+        std::printf("ssprofile: region %s: %zu points, walk %.6g %.6g %.6g\n",
+                    g.name.c_str(), t.points, t.mean.x, t.mean.y, t.mean.z);
+        for (std::size_t k = 0; k < others.size(); ++k) {
+            const sss::RegionMean m = sss::region_mean(others[k], areas, g.lo, g.hi);
+            glm::dvec3 ratio(0.0);
+            for (int c = 0; c < 3; ++c)
+                ratio[c] = t.mean[c] > 0 ? m.mean[c] / t.mean[c] : 0.0;
+            std::printf(
+                "ssprofile: region %s: %s %.6g %.6g %.6g, x%.3f x%.3f x%.3f of the "
+                "walk's\n",
+                g.name.c_str(), sa.compare[k].c_str(), m.mean.x, m.mean.y, m.mean.z,
+                ratio.x, ratio.y, ratio.z);
+        }
     }
     sss::flush_standard_output();
     return 0;
@@ -159,9 +219,8 @@ int run(const std::vector<std::string>& argv) {
     sss::ProfileReportOptions report;
     sss::McTableOptions table = sss::default_mc_table_options();
     sss::RunOptions running;
-    std::string csv, svg, tsv, table_path, scene, compare, o;
-    std::vector<std::string> blockers;
-    double spacing = 0.0;
+    std::string csv, svg, tsv, table_path, o;
+    SceneArgs sa;
     std::vector<std::string> positional;
     bool photons_given = false, seed_given = false;
     uint64_t photons = 0, seed = 0;
@@ -185,28 +244,41 @@ int run(const std::vector<std::string>& argv) {
         else if (o == "maketable")
             table_path = args.value(o);
         else if (o == "scene")
-            scene = args.value(o);
+            sa.scene = args.value(o);
         else if (o == "blocker")
-            blockers.push_back(args.value(o));
+            sa.blockers.push_back(args.value(o));
         else if (o == "spacing")
-            spacing = args.positive(o);
+            sa.spacing = args.positive(o);
         else if (o == "compare")
-            compare = args.value(o);
+            sa.compare.push_back(args.value(o));
+        else if (o == "region")
+            sa.regions.push_back(region_value(args, o));
+        else if (o == "incidence") {
+            const std::string v = args.value(o);
+            if (v != "normal" && v != "diffuse")
+                throw sss::UsageError("option -incidence: 'normal' or 'diffuse', not '" +
+                                      v + "'");
+            sa.normal_incidence = v == "normal";
+        } else if (o == "scattered")
+            sa.scattered_only = args.integer(o, 0, 1) == 1;
         else
             throw sss::UsageError("unknown option -" + o);
     }
     sss::Job job(kTool, running);
-    if (!scene.empty()) {
+    if (!sa.scene.empty()) {
         if (positional.size() != 2)
             throw sss::UsageError("-scene needs the baked cloud and the output cloud");
         if (!table_path.empty() || !csv.empty() || !svg.empty() || !tsv.empty())
             throw sss::UsageError(
                 "-scene writes a cloud (no -maketable, -csv, -svg or -tsv)");
-        return run_scene(scene, blockers, spacing, compare, report, positional,
-                         photons_given, photons, seed_given, seed, job);
+        return run_scene(sa, report, positional, photons_given, photons, seed_given, seed,
+                         job);
     }
-    if (!blockers.empty() || spacing > 0.0 || !compare.empty())
-        throw sss::UsageError("-blocker, -spacing and -compare belong to -scene");
+    if (!sa.blockers.empty() || sa.spacing > 0.0 || !sa.compare.empty() ||
+        !sa.regions.empty() || sa.normal_incidence || sa.scattered_only)
+        throw sss::UsageError(
+            "-blocker, -spacing, -compare, -region, -incidence and -scattered belong to "
+            "-scene");
     if (!positional.empty())
         throw sss::UsageError("unexpected argument '" + positional.front() + "'");
     if (!table_path.empty()) {

@@ -14,6 +14,7 @@
 #include "sss/diffusion/diffusion.h"
 #include "sss/diffusion/material.h"
 #include "sss/diffusion/profile.h"
+#include "sss/diffusion/volume.h"
 #include "sss/util/error.h"
 
 namespace sss {
@@ -30,6 +31,13 @@ struct SsDiffusionOptions {
     std::string dmfp_channel = "_diffusemeanfreepath";
     std::string output_channel = "_ssdiffusion";
     bool keep_channels = false; ///< copy the input channels to the output
+    /// Light carried through the volume the cloud encloses (volume.h):
+    /// thin parts, small objects, blockers. Off: the surface profile alone.
+    bool volume = false;
+    /// Clouds sampling absorbing inclusions (bones), normals pointing out of
+    /// them; any blocker turns the volume diffusion on.
+    std::vector<std::string> blockers;
+    VolumeOptions volume_options;
 };
 
 /// The computed values at a glance (ptfilter -progress 2): per channel over
@@ -49,6 +57,7 @@ struct SsDiffusionReport {
     DiffusionStats stats;
     double seconds = 0;
     ValueSummary values; ///< the output channel's values (a part's: the part's)
+    VolumeReport volume; ///< the volume diffusion's (volume or blockers)
 };
 
 /// Describes the constant material (albedo, dmfp, sigma_s', sigma_a, ior in

@@ -56,6 +56,13 @@ struct MeshWalkOptions {
     /// A path is stopped after this many collisions; its weight is counted
     /// as `flux_truncated`.
     long max_collisions = 1'000'000;
+    /// Light entering at normal incidence (refracted straight in), else
+    /// diffuse (cosine-weighted outside times the Fresnel transmission).
+    bool normal_incidence = false;
+    /// Light that leaves without a single collision (through a thin part)
+    /// is not tallied at the points but as `flux_unscattered`: the
+    /// scattered light a diffusion model describes.
+    bool scattered_only = false;
 };
 
 /// Fluxes per channel, with standard errors from the batch means.
@@ -74,6 +81,8 @@ struct MeshWalkResult {
     /// box; 0 for a closed mesh).
     glm::dvec3 flux_in{0.0}, flux_out{0.0}, flux_blocked{0.0}, flux_absorbed{0.0},
         flux_truncated{0.0}, flux_lost{0.0};
+    /// With scattered_only: the light that left without a collision.
+    glm::dvec3 flux_unscattered{0.0};
     /// Standard errors of the totals.
     glm::dvec3 flux_out_error{0.0}, flux_blocked_error{0.0}, flux_absorbed_error{0.0},
         flux_truncated_error{0.0};

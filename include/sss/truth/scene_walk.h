@@ -35,6 +35,8 @@ struct SceneWalkOptions {
     int batches = 64;
     std::string area_channel = "_area";           ///< else pi radius^2
     std::string radiance_channel = "_radiance_t"; ///< transmitted irradiance
+    bool normal_incidence = false; ///< as MeshWalkOptions
+    bool scattered_only = false;   ///< as MeshWalkOptions
 };
 
 struct SceneWalkReport {
@@ -65,5 +67,14 @@ CloudComparison compare_with_truth(const PointCloud& result, const PointCloud& t
 
 /// The areas of a cloud's points: `area_channel` if it has one, else pi r^2.
 std::vector<float> cloud_areas(const PointCloud& cloud, const std::string& area_channel);
+
+/// The area-weighted mean `_ssdiffusion` of the points with area inside the
+/// box [lo, hi] (e.g. the middle of a slab's lit face).
+struct RegionMean {
+    std::size_t points = 0;
+    glm::dvec3 mean{0.0};
+};
+RegionMean region_mean(const PointCloud& cloud, const std::vector<float>& areas,
+                       const glm::dvec3& lo, const glm::dvec3& hi);
 
 } // namespace sss

@@ -63,6 +63,10 @@ bool ssdiffusion_option(ArgScanner& args, const std::string& o, SsDiffusionOptio
         if (!parse_profile_kind(p, opt.profile))
             throw UsageError("option -profile: unknown profile '" + p +
                              "' (classic, better, burley, pbd, mc)");
+    } else if (o == "volume") {
+        opt.volume = args.integer(o, 0, 1) == 1;
+    } else if (o == "blocker") {
+        opt.blockers.push_back(args.value(o));
     } else if (o == "criterion") {
         std::string c = args.value(o);
         if (!parse_criterion(c.c_str(), opt.diffusion.criterion))

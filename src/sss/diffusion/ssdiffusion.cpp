@@ -24,6 +24,7 @@
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"
+#include "ssdiffusion_volume.h"
 
 namespace sss {
 
@@ -537,6 +538,7 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
     SsDiffusionReport local;
     SsDiffusionReport& rep = report ? *report : local;
     rep.material_lines = describe_material(o);
+    diffusion_detail::check_volume_options(o);
     const MaterialSpec& m = o.material;
 
     // Per-point materials: their channels with data, the others without.
@@ -583,6 +585,7 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
     DiffusionProblem pb = points.finish(m_merged, rep);
     assign_profiles(materials, n, o, pb, rep);
     materials = PointCloud{};
+    diffusion_detail::VolumeInput volume = diffusion_detail::volume_input(pb, o);
 
     if (o.exact) {
         m_result = evaluate(pb, o, rep);
@@ -590,6 +593,7 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
         m_result = evaluate_diffusion(std::move(pb), o.diffusion, &rep.stats);
         if (o.diffusion.progress) o.diffusion.progress->finish();
     }
+    diffusion_detail::apply_volume(o, std::move(volume), m_result, rep);
     if (report) rep.values = summarize_values(m_result, [](std::size_t k) { return k; });
     m_filtered = true;
     rep.seconds = watch.seconds();
@@ -643,8 +647,10 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
     SsDiffusionReport local;
     SsDiffusionReport& rep = report ? *report : local;
     rep.material_lines = describe_material(o);
+    diffusion_detail::check_volume_options(o);
     DiffusionProblem pb = read_points(in, o, rep);
     assign_profiles(in, in.size(), o, pb, rep);
+    diffusion_detail::VolumeInput volume = diffusion_detail::volume_input(pb, o);
     std::vector<glm::vec3> result;
     if (o.exact) {
         result = evaluate(pb, o, rep);
@@ -652,6 +658,7 @@ PointCloud ssdiffusion(const PointCloud& in, const SsDiffusionOptions& o,
         result = evaluate_diffusion(std::move(pb), o.diffusion, &rep.stats);
         if (o.diffusion.progress) o.diffusion.progress->finish();
     }
+    diffusion_detail::apply_volume(o, std::move(volume), result, rep);
     if (report) rep.values = summarize_values(result, [](std::size_t k) { return k; });
     PointCloud out = output_cloud(in, o, result);
     rep.seconds = watch.seconds();
@@ -666,6 +673,9 @@ SsDiffusionPart ssdiffusion_part(PointCloud in, const SsDiffusionOptions& o,
     SsDiffusionReport& rep = report ? *report : local;
     rep.material_lines = describe_material(o);
     part_range(in.size(), part, parts); // validates part and parts first
+    if (o.volume || !o.blockers.empty())
+        throw ValueError("the volume diffusion (-volume, -blocker) couples every point with "
+                         "every other through the volume: it cannot run in parts");
     DiffusionProblem pb = read_points(in, o, rep);
     assign_profiles(in, in.size(), o, pb, rep);
     SsDiffusionPart out;

@@ -270,7 +270,8 @@ struct Walk {
 /// One batch's tallies, in units of a path's starting weight.
 struct BatchTally {
     std::unordered_map<uint32_t, double> exits; ///< weight leaving nearest each point
-    double out = 0.0, blocked = 0.0, absorbed = 0.0, truncated = 0.0, lost = 0.0;
+    double out = 0.0, blocked = 0.0, absorbed = 0.0, truncated = 0.0, lost = 0.0,
+           unscattered = 0.0;
     uint64_t collisions = 0;
 };
 
@@ -305,6 +306,10 @@ void start(const Walk& w, Uniform& u, glm::dvec3& p, glm::dvec3& d) {
     // Cosine-weighted outside times the Fresnel transmission, by rejection so
     // that every path carries the same weight; then refracted in.
     const double eta = w.options.eta;
+    if (w.options.normal_incidence) {
+        d = -n;
+        return;
+    }
     double cos_out = 0.0;
     do {
         cos_out = std::sqrt(u());
@@ -320,7 +325,7 @@ void start(const Walk& w, Uniform& u, glm::dvec3& p, glm::dvec3& d) {
 /// d: true if it is reflected back into the medium (p and d updated), false
 /// if it ends there (absorbed by a blocker, or out through the surface).
 bool at_surface(const Walk& w, Uniform& u, const RayHit& hit, glm::dvec3& p,
-                glm::dvec3& d, double weight, BatchTally& t) {
+                glm::dvec3& d, double weight, bool unscattered, BatchTally& t) {
     const glm::dvec3 h = p + d * double(hit.t);
     if (hit.mesh >= w.scene.medium_meshes) {
         t.blocked += weight;
@@ -338,6 +343,10 @@ bool at_surface(const Walk& w, Uniform& u, const RayHit& hit, glm::dvec3& p,
         // way the mesh is oriented.
         p = h - std::copysign(w.scene.offset, c) * n;
         return true;
+    }
+    if (unscattered && w.options.scattered_only) {
+        t.unscattered += weight;
+        return false;
     }
     t.out += weight;
     t.exits[w.nearest.nearest(h)] += weight;
@@ -361,7 +370,7 @@ void walk_path(const Walk& w, Uniform& u, BatchTally& t) {
         const ShadowRay ray{glm::vec3(p), glm::vec3(d), 0.0f, float(s + off)};
         const RayHit hit = w.scene.tracer.intersect(ray);
         if (hit.hit && double(hit.t) <= s) {
-            if (!at_surface(w, u, hit, p, d, weight, t)) return;
+            if (!at_surface(w, u, hit, p, d, weight, collisions == 0, t)) return;
             continue;
         }
         // No surface along an endless ray: the path is outside the medium.
@@ -459,6 +468,7 @@ void walk_channel(const Walk& w, MeshWalkResult& r) {
     total(&BatchTally::absorbed, r.flux_absorbed[k], &r.flux_absorbed_error[k]);
     total(&BatchTally::truncated, r.flux_truncated[k], &r.flux_truncated_error[k]);
     total(&BatchTally::lost, r.flux_lost[k], nullptr);
+    total(&BatchTally::unscattered, r.flux_unscattered[k], nullptr);
     for (const BatchTally& t : tallies) r.collisions += t.collisions;
 }
 

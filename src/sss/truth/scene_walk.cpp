@@ -69,6 +69,8 @@ PointCloud walk_scene(const SceneWalkOptions& o, const PointCloud& baked,
     w.eta = o.material.resolved_ior();
     w.photons = o.photons;
     w.seed = o.seed;
+    w.normal_incidence = o.normal_incidence;
+    w.scattered_only = o.scattered_only;
     w.batches = o.batches;
 
     MeshWalkSource src;
@@ -159,6 +161,27 @@ CloudComparison compare_with_truth(const PointCloud& result, const PointCloud& t
         r.l1[c] = sum_t[c] > 0.0 ? diff[c] / sum_t[c] : 0.0;
         r.total_ratio[c] = sum_t[c] > 0.0 ? sum_a[c] / sum_t[c] : 0.0;
     }
+    return r;
+}
+
+RegionMean region_mean(const PointCloud& cloud, const std::vector<float>& areas,
+                       const glm::dvec3& lo, const glm::dvec3& hi) {
+    if (areas.size() != cloud.size())
+        throw ValueError("region mean: " + std::to_string(areas.size()) + " areas for " +
+                         std::to_string(cloud.size()) + " points");
+    const Channel& v = color_channel(cloud, "_ssdiffusion");
+    RegionMean r;
+    double area = 0.0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const glm::dvec3 p(cloud.positions[i]);
+        if (!(areas[i] > 0.0f) || glm::any(glm::lessThan(p, lo)) ||
+            glm::any(glm::greaterThan(p, hi)))
+            continue;
+        ++r.points;
+        area += areas[i];
+        for (int c = 0; c < 3; ++c) r.mean[c] += double(v.data[3 * i + c]) * areas[i];
+    }
+    if (area > 0.0) r.mean /= area;
     return r;
 }
 

@@ -1,0 +1,78 @@
+#pragma once
+/// \file volume.h
+/// Diffusion in the volume a point cloud encloses (ptfilter -volume 1): the
+/// cloud is taken as the closed, outward-oriented surface of the medium, the
+/// diffusion equation is solved on a voxel grid of the enclosed volume with
+/// the surface irradiance as source and Robin (partial-current) boundaries,
+/// and absorbing blockers (bones) as black inclusions. Thin parts transmit,
+/// small objects keep their light, and the light that leaves is never more
+/// than the light that entered. See docs/volume.md.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "sss/diffusion/material.h"
+
+namespace sss {
+
+class Progress;
+
+/// Oriented samples of a closed surface: positions, outward normals and the
+/// area each point stands for, all lengths in one unit.
+struct SurfaceSamples {
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;
+    std::vector<float> areas;
+};
+
+/// How finely and how long the volume is solved.
+struct VolumeOptions {
+    /// Voxels per transport mean free path l = 1 / sigma_t' of the channel
+    /// with the shortest one: the voxel size is l / this.
+    double voxels_per_mfp = 2.0;
+    /// At most this many voxels in the finest grid's box; a larger object
+    /// gets larger voxels (and a warning when they exceed l).
+    std::size_t max_voxels = 12'000'000;
+    /// A point whose medium is thicker than thick_dmfp diffuse mean free
+    /// paths below it keeps the surface profile's result; one thinner than
+    /// thin_dmfp takes the volume's; in between the two are blended.
+    double thin_dmfp = 4.0, thick_dmfp = 6.0;
+    /// Stop when the residual is below this fraction of the source.
+    double tolerance = 1e-3;
+    Progress* progress = nullptr;
+};
+
+/// What the volume solve did, per channel.
+struct VolumeReport {
+    bool needed = false;           ///< some point is thin or a blocker was given
+    double voxel = 0;              ///< finest voxel edge (the problem's unit)
+    int dims[3] = {0, 0, 0};       ///< finest grid
+    std::size_t unknowns = 0;      ///< medium voxels of the finest grid
+    std::size_t thin_points = 0;   ///< points whose result is (partly) the volume's
+    int levels = 0;                ///< grids of the cascade
+    int iterations[3] = {0, 0, 0}; ///< conjugate-gradient steps, all levels
+    /// Fluxes of the volume solve: scattered light entering, leaving through
+    /// the surface, absorbed in the medium, absorbed by the blockers.
+    glm::dvec3 flux_in{0.0}, flux_out{0.0}, flux_absorbed{0.0}, flux_blocked{0.0};
+    double seconds = 0;
+    std::vector<std::string> warnings;
+};
+
+/// The exitance at every surface point (the problem's positions, normals,
+/// areas, transmitted irradiance, lengths in the unit of `channels`'
+/// coefficients), blended with `profile_result` (the surface profile's
+/// exitance at the same points) by each point's thickness. Points the volume
+/// does not concern keep profile_result bit for bit. Throws ValueError for
+/// arrays of different sizes or a medium without scattering.
+std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
+                                        const std::vector<glm::vec3>& irradiance,
+                                        const ChannelCoefficients (&channels)[3],
+                                        const std::vector<SurfaceSamples>& blockers,
+                                        const std::vector<glm::vec3>& profile_result,
+                                        const VolumeOptions& options,
+                                        VolumeReport* report = nullptr);
+
+} // namespace sss

@@ -1,0 +1,559 @@
+#include "sss/diffusion/volume.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include <glm/geometric.hpp>
+#include <glm/vector_relational.hpp>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "sss/util/error.h"
+#include "sss/util/progress.h"
+#include "volume_grid.h"
+
+namespace sss {
+
+using namespace volume_detail;
+
+namespace {
+
+// One channel's medium in the diffusion approximation.
+struct Medium {
+    double sigma_t = 0; // sigma_t' = sigma_s' + sigma_a
+    double alpha = 0;   // sigma_s' / sigma_t'
+    double sigma_a = 0;
+    double D = 0;    // 1 / (3 sigma_t')
+    double A = 1;    // boundary mismatch (1 + F_dr) / (1 - F_dr)
+    double dmfp = 0; // 1 / sigma_tr (inf without absorption)
+};
+
+Medium medium_of(const ChannelCoefficients& c) {
+    Medium m;
+    m.sigma_t = c.sigma_s_prime + c.sigma_a;
+    if (!(c.sigma_s_prime > 0) || !std::isfinite(m.sigma_t))
+        throw ValueError("volume diffusion needs a scattering medium (sigma_s' > 0)");
+    m.alpha = c.sigma_s_prime / m.sigma_t;
+    m.sigma_a = c.sigma_a;
+    m.D = 1.0 / (3.0 * m.sigma_t);
+    const double fdr = fresnel_diffuse_reflectance(c.ior);
+    m.A = (1.0 + fdr) / (1.0 - fdr);
+    const double sigma_tr = std::sqrt(3.0 * c.sigma_a * m.sigma_t);
+    m.dmfp = sigma_tr > 0 ? 1.0 / sigma_tr : std::numeric_limits<double>::infinity();
+    return m;
+}
+
+// Depths of the first collisions along a beam entering at normal incidence:
+// the midpoint quantiles of the exponential free path.
+constexpr int kBeamSamples = 8;
+double beam_depth(int k, double sigma_t) {
+    return -std::log(1.0 - (k + 0.5) / kBeamSamples) / sigma_t;
+}
+
+// The surface at the resolution of voxels of edge h: the points of one voxel
+// that face one way (the sign of their normal's largest component) merged
+// into one sample, with their summed area and flux and area-weighted position
+// and normal. The volume's cost then follows its voxels, not the density of
+// the cloud.
+struct Surfels {
+    SurfaceSamples samples;
+    std::vector<glm::dvec3> flux;   // sum of A E per channel
+    std::vector<uint32_t> of_point; // the surfel each input point went into
+};
+
+Surfels make_surfels(const SurfaceSamples& in, const std::vector<glm::vec3>* irradiance,
+                     const VoxelGrid& grid) {
+    const std::size_t n = in.positions.size();
+    std::vector<uint64_t> key(n);
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        const glm::vec3& nr = in.normals[j];
+        const glm::vec3 a = glm::abs(nr);
+        const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+        const int face = 2 * axis + (nr[axis] < 0.0f ? 1 : 0);
+        const glm::ivec3 c = grid.cell_of(glm::dvec3(in.positions[j]));
+        key[j] = uint64_t(grid.voxel(c.x, c.y, c.z)) * 6u + uint64_t(face);
+    });
+    // Points in key order, each key's points in index order: a counting
+    // sort when the keys are few against the points, else a sort.
+    std::vector<uint32_t> order(n);
+    const std::size_t keys = grid.count() * 6;
+    if (keys <= std::max<std::size_t>(4 * n, std::size_t(1) << 22)) {
+        std::vector<uint32_t> start(keys + 1, 0);
+        for (std::size_t j = 0; j < n; ++j) ++start[key[j] + 1];
+        for (std::size_t k = 0; k < keys; ++k) start[k + 1] += start[k];
+        for (std::size_t j = 0; j < n; ++j) order[start[key[j]]++] = uint32_t(j);
+    } else {
+        for (std::size_t j = 0; j < n; ++j) order[j] = uint32_t(j);
+        std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+            return key[a] != key[b] ? key[a] < key[b] : a < b;
+        });
+    }
+    Surfels s;
+    s.of_point.resize(n);
+    for (std::size_t k = 0; k < n;) {
+        std::size_t e = k;
+        glm::dvec3 p(0.0), nr(0.0), flux(0.0), mean(0.0);
+        double area = 0;
+        for (; e < n && key[order[e]] == key[order[k]]; ++e) {
+            const uint32_t j = order[e];
+            const double a = double(in.areas[j]);
+            p += a * glm::dvec3(in.positions[j]);
+            mean += glm::dvec3(in.positions[j]);
+            nr += std::max(a, 1e-30) * glm::normalize(glm::dvec3(in.normals[j]));
+            area += a;
+            if (irradiance) flux += a * glm::dvec3((*irradiance)[j]);
+            s.of_point[j] = uint32_t(s.flux.size());
+        }
+        const double count = double(e - k);
+        s.samples.positions.push_back(glm::vec3(area > 0 ? p / area : mean / count));
+        const double len = glm::length(nr);
+        s.samples.normals.push_back(len > 0 ? glm::vec3(nr / len) : in.normals[order[k]]);
+        s.samples.areas.push_back(float(area));
+        s.flux.push_back(flux);
+        k = e;
+    }
+    return s;
+}
+
+// One grid of the cascade with what the system needs of it.
+struct Level {
+    VoxelGrid grid;
+    Unknowns u;
+    // Per surface point: the medium voxel it leaks through (-1: none) and
+    // that voxel centre's depth below the point's tangent plane.
+    std::vector<int32_t> leak_voxel;
+    std::vector<double> leak_depth;
+};
+
+Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
+                 const SurfaceSamples& surface,
+                 const std::vector<SurfaceSamples>& blockers) {
+    Level l;
+    l.grid = make_grid(lo, hi, h, 2);
+    std::vector<int8_t> in = inside_voxels(l.grid, surface);
+    l.grid.label.assign(l.grid.count(), kOutside);
+    for (std::size_t v = 0; v < in.size(); ++v)
+        if (in[v] == 1) l.grid.label[v] = kMedium;
+    for (const SurfaceSamples& b : blockers) {
+        const std::vector<int8_t> bin = inside_voxels(l.grid, b);
+        for (std::size_t v = 0; v < bin.size(); ++v)
+            if (bin[v] == 1 && l.grid.label[v] == kMedium) l.grid.label[v] = kBlocker;
+    }
+    l.u = number_unknowns(l.grid);
+    const std::size_t n = surface.positions.size();
+    l.leak_voxel.assign(n, -1);
+    l.leak_depth.assign(n, 0.0);
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        const glm::dvec3 p(surface.positions[j]);
+        const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
+        // The medium voxel nearest to the point half a voxel below it.
+        const glm::dvec3 q = p - 0.5 * h * nrm;
+        const glm::ivec3 c = l.grid.cell_of(q);
+        double best = std::numeric_limits<double>::infinity();
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const glm::ivec3 e = c + glm::ivec3(dx, dy, dz);
+                    if (glm::any(glm::lessThan(e, glm::ivec3(0))) ||
+                        glm::any(glm::greaterThanEqual(e, l.grid.dim)))
+                        continue;
+                    const int32_t k = l.u.index[l.grid.voxel(e.x, e.y, e.z)];
+                    if (k < 0) continue;
+                    const glm::dvec3 d = l.grid.centre(e.x, e.y, e.z) - q;
+                    const double d2 = glm::dot(d, d);
+                    if (d2 < best) {
+                        best = d2;
+                        l.leak_voxel[j] = k;
+                        l.leak_depth[j] = std::max(
+                            0.0, glm::dot(p - l.grid.centre(e.x, e.y, e.z), nrm));
+                    }
+                }
+    });
+    return l;
+}
+
+// The deterministic parallel sum of f(i) over [0, n): fixed chunks summed in
+// order, so that the result does not depend on the thread count.
+template <class F>
+double chunked_sum(std::size_t n, F f) {
+    constexpr std::size_t kChunk = 8192;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<double> part(chunks, 0.0);
+    oneapi::tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        double s = 0;
+        const std::size_t end = std::min(n, (c + 1) * kChunk);
+        for (std::size_t i = c * kChunk; i < end; ++i) s += f(i);
+        part[c] = s;
+    });
+    double s = 0;
+    for (double p : part) s += p;
+    return s;
+}
+
+// The diffusion system of one channel on one level:
+// diag_k phi_k - D h sum_{medium neighbours} phi_n = source_k, where diag
+// holds the absorption, the exchange with the neighbours, the black
+// blocker faces and the Robin leaks of the surface points.
+struct System {
+    const Level* level = nullptr;
+    double off = 0;   // D h
+    double black = 0; // conductance of a blocker face
+    std::vector<double> diag;
+    std::vector<double> leak; // per unknown: sum of its points' leak conductances
+    std::vector<double> source;
+
+    void apply(const std::vector<double>& x, std::vector<double>& y) const {
+        const auto& nb = level->u.neighbours;
+        oneapi::tbb::parallel_for(std::size_t(0), x.size(), [&](std::size_t k) {
+            double s = diag[k] * x[k];
+            for (int32_t m : nb[k])
+                if (m >= 0) s -= off * x[std::size_t(m)];
+            y[k] = s;
+        });
+    }
+};
+
+System make_system(const Level& l, const Medium& m, const SurfaceSamples& surface,
+                   const std::vector<glm::dvec3>& flux_in, int channel) {
+    System s;
+    s.level = &l;
+    const double h = l.grid.h;
+    s.off = m.D * h;
+    s.black = h * h * m.D / (0.5 * h + 2.0 * m.D);
+    const std::size_t nu = l.u.voxels.size();
+    s.leak.assign(nu, 0.0);
+    s.source.assign(nu, 0.0);
+    const std::size_t n = surface.positions.size();
+    // Sequential: each point adds into shared voxels in a fixed order.
+    for (std::size_t j = 0; j < n; ++j) {
+        const int32_t k = l.leak_voxel[j];
+        if (k < 0) continue;
+        s.leak[std::size_t(k)] +=
+            double(surface.areas[j]) / (2.0 * m.A + l.leak_depth[j] / m.D);
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+        const double flux = flux_in[j][channel];
+        if (flux == 0.0) continue;
+        const glm::dvec3 p(surface.positions[j]);
+        const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
+        for (int b = 0; b < kBeamSamples; ++b) {
+            const glm::dvec3 q = p - beam_depth(b, m.sigma_t) * nrm;
+            // Collisions outside the medium are light that crossed it
+            // unscattered or reached a blocker: not a source.
+            if (l.grid.label_at(q) != kMedium) continue;
+            Stencil st;
+            if (!medium_stencil(l.grid, l.u, q, st)) continue;
+            const double q_flux = m.alpha * flux / kBeamSamples;
+            for (int i = 0; i < st.n; ++i)
+                s.source[std::size_t(st.unknown[i])] += q_flux * st.weight[i];
+        }
+    }
+    s.diag.assign(nu, 0.0);
+    oneapi::tbb::parallel_for(std::size_t(0), nu, [&](std::size_t k) {
+        double d = m.sigma_a * h * h * h + s.leak[k];
+        for (int32_t nbk : l.u.neighbours[k]) {
+            if (nbk >= 0) d += s.off;
+            if (nbk == Unknowns::kBlack) d += s.black;
+        }
+        s.diag[k] = d;
+    });
+    return s;
+}
+
+// Jacobi-preconditioned conjugate gradients from x; returns the steps.
+int solve(const System& s, std::vector<double>& x, double tolerance, int max_steps) {
+    const std::size_t n = x.size();
+    std::vector<double> r(n), z(n), p(n), ap(n);
+    s.apply(x, ap);
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
+        r[k] = s.source[k] - ap[k];
+        z[k] = r[k] / s.diag[k];
+        p[k] = z[k];
+    });
+    const double bnorm = std::sqrt(
+        chunked_sum(n, [&](std::size_t k) { return s.source[k] * s.source[k]; }));
+    if (!(bnorm > 0)) {
+        std::fill(x.begin(), x.end(), 0.0);
+        return 0;
+    }
+    double rz = chunked_sum(n, [&](std::size_t k) { return r[k] * z[k]; });
+    int step = 0;
+    for (; step < max_steps; ++step) {
+        const double rnorm =
+            std::sqrt(chunked_sum(n, [&](std::size_t k) { return r[k] * r[k]; }));
+        if (rnorm <= tolerance * bnorm) break;
+        s.apply(p, ap);
+        const double pap = chunked_sum(n, [&](std::size_t k) { return p[k] * ap[k]; });
+        if (!(pap > 0)) break;
+        const double a = rz / pap;
+        oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
+            x[k] += a * p[k];
+            r[k] -= a * ap[k];
+            z[k] = r[k] / s.diag[k];
+        });
+        const double rz_new = chunked_sum(n, [&](std::size_t k) { return r[k] * z[k]; });
+        const double beta = rz_new / rz;
+        rz = rz_new;
+        oneapi::tbb::parallel_for(std::size_t(0), n,
+                                  [&](std::size_t k) { p[k] = z[k] + beta * p[k]; });
+    }
+    return step;
+}
+
+// phi of a coarser level read at the finer level's unknowns (the cascade's
+// starting guess).
+std::vector<double> prolong(const Level& coarse, const std::vector<double>& phi,
+                            const Level& fine) {
+    std::vector<double> x(fine.u.voxels.size(), 0.0);
+    oneapi::tbb::parallel_for(std::size_t(0), x.size(), [&](std::size_t k) {
+        const std::size_t v = fine.u.voxels[k];
+        const VoxelGrid& g = fine.grid;
+        const int xi = int(v % std::size_t(g.dim.x));
+        const int yi = int((v / std::size_t(g.dim.x)) % std::size_t(g.dim.y));
+        const int zi = int(v / (std::size_t(g.dim.x) * std::size_t(g.dim.y)));
+        Stencil st;
+        if (!medium_stencil(coarse.grid, coarse.u, g.centre(xi, yi, zi), st)) return;
+        double s = 0;
+        for (int i = 0; i < st.n; ++i)
+            s += st.weight[i] * phi[std::size_t(st.unknown[i])];
+        x[k] = s;
+    });
+    return x;
+}
+
+// The depth of the medium below each point: the distance along -N to the
+// first voxel that is not medium (outside or blocker), at most `limit`.
+std::vector<double> thickness(const Level& l, const SurfaceSamples& surface,
+                              double limit) {
+    const std::size_t n = surface.positions.size();
+    std::vector<double> t(n, limit);
+    const double step = 0.5 * l.grid.h;
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        const glm::dvec3 p(surface.positions[j]);
+        const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
+        // Start a voxel in, past the surface's own staircase.
+        for (double d = l.grid.h; d < limit; d += step)
+            if (l.grid.label_at(p - d * nrm) != kMedium) {
+                t[j] = d;
+                return;
+            }
+    });
+    return t;
+}
+
+} // namespace
+
+std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
+                                        const std::vector<glm::vec3>& irradiance,
+                                        const ChannelCoefficients (&channels)[3],
+                                        const std::vector<SurfaceSamples>& blockers,
+                                        const std::vector<glm::vec3>& profile_result,
+                                        const VolumeOptions& o, VolumeReport* report) {
+    VolumeReport local;
+    VolumeReport& rep = report ? *report : local;
+    const auto start = std::chrono::steady_clock::now();
+    struct Timer {
+        VolumeReport& rep;
+        std::chrono::steady_clock::time_point start;
+        ~Timer() {
+            rep.seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+                    .count();
+        }
+    } timer{rep, start};
+    const std::size_t n = surface.positions.size();
+    if (surface.normals.size() != n || surface.areas.size() != n ||
+        irradiance.size() != n || profile_result.size() != n)
+        throw ValueError("volume diffusion: arrays of different sizes");
+    for (const SurfaceSamples& b : blockers)
+        if (b.normals.size() != b.positions.size() ||
+            b.areas.size() != b.positions.size())
+            throw ValueError("volume diffusion: blocker arrays of different sizes");
+    std::vector<glm::vec3> out = profile_result;
+    if (n == 0) return out;
+    Medium med[3];
+    double l_min = std::numeric_limits<double>::infinity(), dmfp_max = 0;
+    for (int c = 0; c < 3; ++c) {
+        med[c] = medium_of(channels[c]);
+        l_min = std::min(l_min, 1.0 / med[c].sigma_t);
+        dmfp_max = std::max(dmfp_max, med[c].dmfp);
+    }
+    glm::dvec3 lo(surface.positions[0]), hi = lo;
+    for (const glm::vec3& p : surface.positions) {
+        lo = glm::min(lo, glm::dvec3(p));
+        hi = glm::max(hi, glm::dvec3(p));
+    }
+    const glm::dvec3 size = glm::max(hi - lo, glm::dvec3(l_min));
+    const double box = size.x * size.y * size.z;
+    bool channel_needed[3] = {false, false, false};
+    std::vector<glm::vec3> w(n, glm::vec3(0.0f)); // the volume's share per point
+
+    // The finest voxels resolve the shortest transport mean free path within
+    // the voxel budget.
+    double h = l_min / o.voxels_per_mfp;
+    const bool over_budget = box / (h * h * h) > double(o.max_voxels);
+    if (over_budget) h = std::cbrt(box / double(o.max_voxels));
+    // Each grid sees the surface merged to its voxels.
+    const auto merged = [&](double edge) {
+        const VoxelGrid g = make_grid(lo, hi, edge, 2);
+        auto sf = std::make_shared<Surfels>(make_surfels(surface, &irradiance, g));
+        std::vector<SurfaceSamples> bl;
+        for (const SurfaceSamples& b : blockers)
+            bl.push_back(make_surfels(b, nullptr, g).samples);
+        return std::make_pair(sf, bl);
+    };
+
+    // The coarsest grid of the cascade (at most 2^18 voxels in the box) is
+    // built first: it decides which points and channels need the volume at
+    // all, so that a shape thick against every channel's dmfp costs no more.
+    int coarse_steps = 0;
+    while (coarse_steps < 7 &&
+           box / std::pow(h * double(1 << coarse_steps), 3) > 262144.0)
+        ++coarse_steps;
+    std::vector<std::unique_ptr<Level>> levels; // coarsest first
+    std::vector<std::shared_ptr<const Surfels>> level_surfels;
+    {
+        auto [sf, bl] = merged(h * double(1 << coarse_steps));
+        levels.push_back(std::make_unique<Level>(
+            make_level(lo, hi, h * double(1 << coarse_steps), sf->samples, bl)));
+        level_surfels.push_back(sf);
+    }
+    const double limit = o.thick_dmfp * dmfp_max;
+    {
+        const Surfels& cs = *level_surfels[0];
+        const std::vector<double> depth =
+            thickness(*levels[0], cs.samples,
+                      std::isfinite(limit) ? limit : 2.0 * glm::length(size));
+        std::fill(std::begin(channel_needed), std::end(channel_needed), false);
+        for (std::size_t j = 0; j < n; ++j) {
+            const double d = depth[cs.of_point[j]];
+            for (int c = 0; c < 3; ++c) {
+                double wc =
+                    (o.thick_dmfp - d / med[c].dmfp) / (o.thick_dmfp - o.thin_dmfp);
+                if (!blockers.empty() && d < limit) wc = 1.0; // a blocker below
+                wc = std::clamp(wc, 0.0, 1.0);
+                w[j][c] = float(wc);
+                if (wc > 0) channel_needed[c] = true;
+            }
+            if (w[j] != glm::vec3(0.0f)) ++rep.thin_points;
+        }
+    }
+    rep.needed = rep.thin_points > 0;
+    if (!rep.needed) return out;
+    if (over_budget)
+        rep.warnings.push_back(
+            "the object is large against the mean free path: voxels of " +
+            std::to_string(h) + " (" + std::to_string(h / l_min) + " mean free paths)");
+
+    // The finer grids, down to h; a grid that loses surface the finer one
+    // has is not a good start for it and is dropped.
+    // The surface area that finds a medium voxel below it.
+    const auto leaking = [](const Level& l, const Surfels& sf) {
+        double a = 0;
+        for (std::size_t k = 0; k < l.leak_voxel.size(); ++k)
+            if (l.leak_voxel[k] >= 0) a += double(sf.samples.areas[k]);
+        return a;
+    };
+    for (int k = coarse_steps - 1; k >= 0; --k) {
+        auto [sf, bl] = merged(h * double(1 << k));
+        auto finer = std::make_unique<Level>(
+            make_level(lo, hi, h * double(1 << k), sf->samples, bl));
+        if (leaking(*levels.back(), *level_surfels.back()) <
+                0.95 * leaking(*finer, *sf) ||
+            levels.back()->u.voxels.size() < 512) {
+            levels.pop_back();
+            level_surfels.pop_back();
+        }
+        levels.push_back(std::move(finer));
+        level_surfels.push_back(sf);
+    }
+    std::reverse(levels.begin(), levels.end()); // finest first
+    std::reverse(level_surfels.begin(), level_surfels.end());
+    const Level& fine = *levels.front();
+    const Surfels& surfels = *level_surfels.front();
+    rep.voxel = fine.grid.h;
+    for (int a = 0; a < 3; ++a) rep.dims[a] = fine.grid.dim[a];
+    rep.unknowns = fine.u.voxels.size();
+    rep.levels = int(levels.size());
+    if (rep.unknowns == 0) {
+        rep.warnings.push_back(
+            "the cloud encloses no volume: the profile's result is kept");
+        rep.needed = false;
+        rep.thin_points = 0;
+        return out;
+    }
+    std::size_t unused = 0;
+    for (std::size_t j = 0; j < n; ++j)
+        unused += fine.leak_voxel[surfels.of_point[j]] < 0;
+    if (unused > 0)
+        rep.warnings.push_back(std::to_string(unused) +
+                               " points have no medium voxel below them: they keep the "
+                               "profile's result");
+
+    for (int c = 0; c < 3; ++c) {
+        if (!channel_needed[c]) continue;
+        const Medium& m = med[c];
+        std::vector<double> phi;
+        const Level* prev = nullptr;
+        for (std::size_t li = levels.size(); li-- > 0;) {
+            const Level& l = *levels[li];
+            const Surfels& ls = *level_surfels[li];
+            const System s = make_system(l, m, ls.samples, ls.flux, c);
+            phi = prev ? prolong(*prev, phi, l)
+                       : std::vector<double>(l.u.voxels.size(), 0.0);
+            rep.iterations[c] += solve(s, phi, o.tolerance, 50000);
+            prev = &l;
+            if (li == 0) {
+                // Fluxes: what went in, left, was absorbed in the medium and
+                // by the blockers (they balance to the solver's tolerance).
+                const std::size_t nu = phi.size();
+                rep.flux_in[c] =
+                    chunked_sum(nu, [&](std::size_t k) { return s.source[k]; });
+                rep.flux_out[c] =
+                    chunked_sum(nu, [&](std::size_t k) { return s.leak[k] * phi[k]; });
+                const double hv = l.grid.h * l.grid.h * l.grid.h;
+                rep.flux_absorbed[c] = chunked_sum(
+                    nu, [&](std::size_t k) { return m.sigma_a * hv * phi[k]; });
+                rep.flux_blocked[c] = chunked_sum(nu, [&](std::size_t k) {
+                    int faces = 0;
+                    for (int32_t nb : l.u.neighbours[k]) faces += nb == Unknowns::kBlack;
+                    return faces * s.black * phi[k];
+                });
+            }
+        }
+        if (o.progress) o.progress->update(uint64_t(c + 1), 3);
+        // Exitance at each point: the fluence read a voxel below it, carried
+        // to the surface by the Robin condition; then scaled so that the
+        // points give off exactly the flux the solve lets out.
+        std::vector<double> exitance(n, 0.0);
+        oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+            const int32_t leak = fine.leak_voxel[surfels.of_point[j]];
+            if (leak < 0) return;
+            const glm::dvec3 p(surface.positions[j]);
+            const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
+            const double d = fine.grid.h;
+            Stencil st;
+            double f = phi[std::size_t(leak)];
+            if (medium_stencil(fine.grid, fine.u, p - d * nrm, st)) {
+                f = 0;
+                for (int i = 0; i < st.n; ++i)
+                    f += st.weight[i] * phi[std::size_t(st.unknown[i])];
+            }
+            exitance[j] = std::max(0.0, f) / (2.0 * m.A + d / m.D);
+        });
+        const double read = chunked_sum(
+            n, [&](std::size_t j) { return double(surface.areas[j]) * exitance[j]; });
+        const double scale = read > 0 ? rep.flux_out[c] / read : 0.0;
+        for (std::size_t j = 0; j < n; ++j) {
+            if (fine.leak_voxel[surfels.of_point[j]] < 0 || w[j][c] == 0.0f) continue;
+            const double v = double(w[j][c]) * exitance[j] * scale +
+                             (1.0 - double(w[j][c])) * double(profile_result[j][c]);
+            out[j][c] = std::isfinite(v) ? float(v) : 0.0f;
+        }
+    }
+    return out;
+}
+
+} // namespace sss

@@ -1,0 +1,208 @@
+#include "volume_grid.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <deque>
+
+#include <glm/geometric.hpp>
+#include <glm/vector_relational.hpp>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "sss/util/error.h"
+
+namespace sss::volume_detail {
+
+glm::ivec3 VoxelGrid::cell_of(const glm::dvec3& p) const {
+    glm::ivec3 c;
+    for (int a = 0; a < 3; ++a) {
+        const double t = std::floor((p[a] - origin[a]) / h + 0.5);
+        c[a] = int(std::clamp(t, 0.0, double(dim[a] - 1)));
+    }
+    return c;
+}
+
+int8_t VoxelGrid::label_at(const glm::dvec3& p) const {
+    const glm::ivec3 c = cell_of(p);
+    return label[voxel(c.x, c.y, c.z)];
+}
+
+VoxelGrid make_grid(const glm::dvec3& lo, const glm::dvec3& hi, double h, int pad) {
+    VoxelGrid g;
+    g.h = h;
+    for (int a = 0; a < 3; ++a) {
+        const double cells = std::ceil((hi[a] - lo[a]) / h);
+        if (!(cells < 1e6)) throw ValueError("volume diffusion: the grid is too large");
+        g.dim[a] = int(cells) + 1 + 2 * pad;
+    }
+    g.origin = lo - double(pad) * h;
+    return g;
+}
+
+namespace {
+
+// A voxel's nearest sample so far, as one ordered key: the squared distance's
+// float bits (monotonic for non-negative floats) above the sample's index, so
+// that concurrent minimums give the same winner at any thread count.
+uint64_t sample_key(float d2, uint32_t j) {
+    uint32_t bits;
+    std::memcpy(&bits, &d2, sizeof bits);
+    return (uint64_t(bits) << 32) | j;
+}
+
+void atomic_min(std::atomic<uint64_t>& a, uint64_t v) {
+    uint64_t cur = a.load(std::memory_order_relaxed);
+    while (v < cur && !a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) {
+    }
+}
+
+} // namespace
+
+std::vector<int8_t> inside_voxels(const VoxelGrid& g, const SurfaceSamples& s) {
+    const std::size_t nv = g.count();
+    constexpr uint64_t kEmpty = ~uint64_t(0);
+    std::vector<std::atomic<uint64_t>> nearest(nv);
+    for (auto& a : nearest) a.store(kEmpty, std::memory_order_relaxed);
+    const std::size_t n = s.positions.size();
+    // Each sample claims the voxels within its reach; the reach covers the
+    // gaps between neighbouring samples and the voxel diagonal, so the
+    // claimed band is a closed shell the flood fill cannot cross.
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        const glm::dvec3 p(s.positions[j]);
+        const double r = std::sqrt(std::max(0.0, double(s.areas[j])) / M_PI);
+        const double reach = std::max(2.0 * r, g.h) + g.h;
+        glm::ivec3 lo, hi;
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::max(0, int(std::ceil((p[a] - reach - g.origin[a]) / g.h)));
+            hi[a] = std::min(g.dim[a] - 1,
+                             int(std::floor((p[a] + reach - g.origin[a]) / g.h)));
+        }
+        for (int z = lo.z; z <= hi.z; ++z)
+            for (int y = lo.y; y <= hi.y; ++y)
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    const glm::dvec3 d = g.centre(x, y, z) - p;
+                    const double d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+                    if (d2 > reach * reach) continue;
+                    atomic_min(nearest[g.voxel(x, y, z)],
+                               sample_key(float(d2), uint32_t(j)));
+                }
+    });
+    std::vector<int8_t> inside(nv, -1);
+    for (int z = 0; z < g.dim.z; ++z)
+        for (int y = 0; y < g.dim.y; ++y)
+            for (int x = 0; x < g.dim.x; ++x) {
+                const std::size_t v = g.voxel(x, y, z);
+                const uint64_t key = nearest[v].load(std::memory_order_relaxed);
+                if (key == kEmpty) continue;
+                const uint32_t j = uint32_t(key & 0xffffffffu);
+                const glm::dvec3 d = g.centre(x, y, z) - glm::dvec3(s.positions[j]);
+                inside[v] = glm::dot(d, glm::dvec3(s.normals[j])) < 0.0 ? 1 : 0;
+            }
+    std::vector<std::atomic<uint64_t>>().swap(nearest);
+    // The grid's border is outside; the rest takes the side of the claimed
+    // voxels it is connected to (breadth first, in voxel order).
+    std::deque<std::size_t> queue;
+    for (int z = 0; z < g.dim.z; ++z)
+        for (int y = 0; y < g.dim.y; ++y)
+            for (int x = 0; x < g.dim.x; ++x) {
+                const std::size_t v = g.voxel(x, y, z);
+                const bool border = x == 0 || y == 0 || z == 0 || x == g.dim.x - 1 ||
+                                    y == g.dim.y - 1 || z == g.dim.z - 1;
+                if (inside[v] < 0 && border) inside[v] = 0;
+                if (inside[v] >= 0) queue.push_back(v);
+            }
+    const std::ptrdiff_t step[3] = {1, g.dim.x, std::ptrdiff_t(g.dim.x) * g.dim.y};
+    while (!queue.empty()) {
+        const std::size_t v = queue.front();
+        queue.pop_front();
+        const std::size_t x = v % std::size_t(g.dim.x);
+        const std::size_t y = (v / std::size_t(g.dim.x)) % std::size_t(g.dim.y);
+        const std::size_t z = v / (std::size_t(g.dim.x) * std::size_t(g.dim.y));
+        const std::size_t c[3] = {x, y, z};
+        for (int a = 0; a < 3; ++a)
+            for (int sgn = -1; sgn <= 1; sgn += 2) {
+                if ((sgn < 0 && c[a] == 0) ||
+                    (sgn > 0 && c[a] + 1 >= std::size_t(g.dim[a])))
+                    continue;
+                const std::size_t w = std::size_t(std::ptrdiff_t(v) + sgn * step[a]);
+                if (inside[w] < 0) {
+                    inside[w] = inside[v];
+                    queue.push_back(w);
+                }
+            }
+    }
+    return inside;
+}
+
+Unknowns number_unknowns(const VoxelGrid& g) {
+    Unknowns u;
+    u.index.assign(g.count(), -1);
+    for (std::size_t v = 0; v < g.count(); ++v)
+        if (g.label[v] == kMedium) {
+            u.index[v] = int32_t(u.voxels.size());
+            u.voxels.push_back(uint32_t(v));
+        }
+    u.neighbours.resize(u.voxels.size());
+    const std::ptrdiff_t step[3] = {1, g.dim.x, std::ptrdiff_t(g.dim.x) * g.dim.y};
+    oneapi::tbb::parallel_for(std::size_t(0), u.voxels.size(), [&](std::size_t k) {
+        const std::size_t v = u.voxels[k];
+        const std::size_t c[3] = {v % std::size_t(g.dim.x),
+                                  (v / std::size_t(g.dim.x)) % std::size_t(g.dim.y),
+                                  v / (std::size_t(g.dim.x) * std::size_t(g.dim.y))};
+        for (int a = 0; a < 3; ++a)
+            for (int side = 0; side < 2; ++side) {
+                int32_t& nb = u.neighbours[k][std::size_t(2 * a + side)];
+                nb = Unknowns::kNone;
+                if ((side == 0 && c[a] == 0) ||
+                    (side == 1 && c[a] + 1 >= std::size_t(g.dim[a])))
+                    continue;
+                const std::size_t w =
+                    std::size_t(std::ptrdiff_t(v) + (side == 0 ? -step[a] : step[a]));
+                if (g.label[w] == kMedium)
+                    nb = u.index[w];
+                else if (g.label[w] == kBlocker)
+                    nb = Unknowns::kBlack;
+            }
+    });
+    return u;
+}
+
+bool medium_stencil(const VoxelGrid& g, const Unknowns& u, const glm::dvec3& p,
+                    Stencil& out) {
+    const glm::dvec3 t = (p - g.origin) / g.h;
+    glm::ivec3 base;
+    glm::dvec3 f;
+    for (int a = 0; a < 3; ++a) {
+        const double fl = std::floor(t[a]);
+        base[a] = int(fl);
+        f[a] = t[a] - fl;
+    }
+    out.n = 0;
+    double total = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::ivec3 c =
+            base + glm::ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        if (c.x < 0 || c.y < 0 || c.z < 0 || c.x >= g.dim.x || c.y >= g.dim.y ||
+            c.z >= g.dim.z)
+            continue;
+        const int32_t k = u.index[g.voxel(c.x, c.y, c.z)];
+        if (k < 0) continue;
+        const double w = ((corner & 1) ? f.x : 1 - f.x) *
+                         (((corner >> 1) & 1) ? f.y : 1 - f.y) *
+                         (((corner >> 2) & 1) ? f.z : 1 - f.z);
+        if (w <= 0) continue;
+        out.unknown[out.n] = k;
+        out.weight[out.n] = w;
+        ++out.n;
+        total += w;
+    }
+    if (out.n == 0 || !(total > 0)) {
+        out.n = 0;
+        return false;
+    }
+    for (int i = 0; i < out.n; ++i) out.weight[i] /= total;
+    return true;
+}
+
+} // namespace sss::volume_detail

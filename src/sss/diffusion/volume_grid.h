@@ -1,0 +1,72 @@
+#pragma once
+// Voxel grids of the volume a cloud of oriented surface points encloses, for
+// the volume diffusion (volume.cpp): classification of voxels as medium,
+// outside or blocker, and trilinear reads of a field stored on the medium
+// voxels.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "sss/diffusion/volume.h"
+
+namespace sss::volume_detail {
+
+enum Label : int8_t { kOutside = 0, kMedium = 1, kBlocker = 2 };
+
+/// A regular grid of cubic voxels; voxel (x, y, z) is centred at
+/// origin + h (x, y, z).
+struct VoxelGrid {
+    glm::dvec3 origin{0.0};
+    double h = 1.0;
+    glm::ivec3 dim{0};
+    std::vector<int8_t> label; ///< Label per voxel
+
+    std::size_t count() const { return std::size_t(dim.x) * dim.y * dim.z; }
+    std::size_t voxel(int x, int y, int z) const {
+        return (std::size_t(z) * std::size_t(dim.y) + std::size_t(y)) *
+                   std::size_t(dim.x) +
+               std::size_t(x);
+    }
+    glm::dvec3 centre(int x, int y, int z) const {
+        return origin + h * glm::dvec3(x, y, z);
+    }
+    /// The voxel containing p, clamped to the grid.
+    glm::ivec3 cell_of(const glm::dvec3& p) const;
+    int8_t label_at(const glm::dvec3& p) const;
+};
+
+/// A grid of edge h over [lo, hi] with `pad` voxels around.
+VoxelGrid make_grid(const glm::dvec3& lo, const glm::dvec3& hi, double h, int pad);
+
+/// Per voxel, 1 where it lies inside the closed surface the samples stand
+/// for: the side of the nearest sample's tangent plane near the surface
+/// (Hoppe et al. 1992), flood-filled from there into the rest of the grid;
+/// the grid's border counts as outside.
+std::vector<int8_t> inside_voxels(const VoxelGrid& grid, const SurfaceSamples& samples);
+
+/// The grid's medium voxels as unknowns of the diffusion system.
+struct Unknowns {
+    std::vector<int32_t> index;   ///< per voxel: its unknown, or -1
+    std::vector<uint32_t> voxels; ///< per unknown: its voxel
+    /// Per unknown, its six neighbours: an unknown (>= 0), kNone (outside:
+    /// no flux crosses) or kBlack (a blocker voxel).
+    std::vector<std::array<int32_t, 6>> neighbours;
+    static constexpr int32_t kNone = -1, kBlack = -2;
+};
+Unknowns number_unknowns(const VoxelGrid& grid);
+
+/// Trilinear weights of the medium voxels around p, renormalised over those
+/// that are unknowns; false when none is.
+struct Stencil {
+    int32_t unknown[8];
+    double weight[8];
+    int n = 0;
+};
+bool medium_stencil(const VoxelGrid& grid, const Unknowns& u, const glm::dvec3& p,
+                    Stencil& out);
+
+} // namespace sss::volume_detail
