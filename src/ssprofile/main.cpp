@@ -63,7 +63,7 @@ In a scene's own geometry (-scene):
                             default 1/500 of the cloud's diagonal)
   -compare FILE             a ptfilter result on the same points: prints its
                             flux-weighted L1 error and total against the walk;
-                            repeatable
+                            repeatable (a cloud of other points: regions only)
   -region NAME X0 Y0 Z0 X1 Y1 Z1
                             prints the area-weighted mean exitance of the walk
                             and of each -compare cloud over the points inside
@@ -186,6 +186,11 @@ int run_scene(const SceneArgs& sa, const sss::ProfileReportOptions& report,
     }
     const std::vector<float> areas = sss::cloud_areas(baked, w.area_channel);
     for (std::size_t k = 0; k < others.size(); ++k) {
+        if (others[k].size() != truth.size()) {
+            std::printf("ssprofile: %s has other points than the walk's: regions only\n",
+                        sa.compare[k].c_str());
+            continue;
+        }
         const sss::CloudComparison cmp = sss::compare_with_truth(others[k], truth, areas);
         for (int c = 0; c < 3; ++c)
             std::printf(
@@ -199,7 +204,8 @@ int run_scene(const SceneArgs& sa, const sss::ProfileReportOptions& report,
         std::printf("ssprofile: region %s: %zu points, walk %.6g %.6g %.6g\n",
                     g.name.c_str(), t.points, t.mean.x, t.mean.y, t.mean.z);
         for (std::size_t k = 0; k < others.size(); ++k) {
-            const sss::RegionMean m = sss::region_mean(others[k], areas, g.lo, g.hi);
+            const sss::RegionMean m = sss::region_mean(
+                others[k], sss::cloud_areas(others[k], "_area"), g.lo, g.hi);
             glm::dvec3 ratio(0.0);
             for (int c = 0; c < 3; ++c)
                 ratio[c] = t.mean[c] > 0 ? m.mean[c] / t.mean[c] : 0.0;

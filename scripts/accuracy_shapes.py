@@ -1,0 +1,330 @@
+"""The diffusion on real shapes against the light (scripts/accuracy-report --shapes).
+
+Every case is a scene: a RIB is written, baked with ptbake, filtered with ptfilter
+(the surface profiles alone and with -volume 1 / -blocker) and walked with the
+project's Monte-Carlo in the same geometry (ssprofile -scene). The report,
+docs/accuracy-shapes.md, and its data, docs/accuracy/shapes/*.tsv, are written
+from the results; the commands are in the report.
+"""
+import csv
+import datetime
+import os
+import re
+import statistics
+import subprocess
+import sys
+import time
+
+# Jensen et al. 2001 (the material table of src/sss/diffusion/material.cpp).
+MATERIALS = {
+    "skin1": ((0.74, 0.88, 1.01), (0.032, 0.17, 0.48), 1.3),
+    "marble": ((2.19, 2.62, 3.00), (0.0021, 0.0041, 0.0071), 1.5),
+}
+CHANNELS = "rgb"
+
+# What ptfilter is asked, per method: the surface profiles alone (classic is
+# PRMan's and the default) and with the volume.
+METHODS = {
+    "classic": [],
+    "pbd": ["-profile", "pbd"],
+    "classic+volume": ["-volume", "1"],
+    "pbd+volume": ["-profile", "pbd", "-volume", "1"],
+}
+
+
+def mfp(material, c):
+    ss, sa, _ = MATERIALS[material]
+    return 1.0 / (ss[c] + sa[c])
+
+
+def dmfp(material, c):
+    ss, sa, _ = MATERIALS[material]
+    return 1.0 / (3.0 * sa[c] * (ss[c] + sa[c])) ** 0.5
+
+
+class Runner:
+    def __init__(self, bin_dir, work, photons):
+        self.bin = bin_dir
+        self.work = work
+        self.photons = photons
+        os.makedirs(work, exist_ok=True)
+
+    def run(self, tool, args, cwd=None):
+        cmd = [os.path.join(self.bin, tool)] + [str(a) for a in args]
+        print("+ " + " ".join(cmd), file=sys.stderr, flush=True)
+        t = time.perf_counter()
+        out = subprocess.run(cmd, check=True, text=True, stdout=subprocess.PIPE,
+                             cwd=cwd or self.work).stdout
+        return out, time.perf_counter() - t
+
+    def bake(self, name, rib_text, spacing):
+        rib = os.path.join(self.work, name + ".rib")
+        with open(rib, "w") as f:
+            f.write(rib_text)
+        args = ["-spacing", spacing] if spacing else []
+        self.run("ptbake", args + [name + ".rib"])
+        return rib
+
+    def filter(self, material, cloud, out, extra):
+        self.run("ptfilter", ["-ssdiffusion", "-material", material, "-threads", 2] + extra +
+                 [cloud, out])
+        return out
+
+    def walk(self, rib, material, cloud, compare, regions, blockers=(), incidence="diffuse",
+             photons=None):
+        args = ["-scene", rib, "-material", material, "-photons", photons or self.photons,
+                "-scattered", 1, "-incidence", incidence, "-seed", 1001]
+        for b in blockers:
+            args += ["-blocker", b]
+        for c in compare:
+            args += ["-compare", c]
+        for name, box in regions.items():
+            args += ["-region", name] + list(box)
+        text, seconds = self.run("ssprofile", args + [cloud, "truth_" + os.path.basename(cloud)])
+        return parse_walk(text), seconds
+
+
+def parse_walk(text):
+    """The walk's totals, each compared cloud's total and L1, and the regions."""
+    r = {"out": {}, "blocked": {}, "compare": {}, "regions": {}}
+    for line in text.splitlines():
+        m = re.match(r"ssprofile: ([rgb]): flux in \S+; out ([0-9.]+) \+- [0-9.]+, blocked "
+                     r"([0-9.]+)", line)
+        if m:
+            r["out"][m.group(1)] = float(m.group(2))
+            r["blocked"][m.group(1)] = float(m.group(3))
+            continue
+        m = re.match(r"ssprofile: (\S+) ([rgb]): flux-weighted L1 ([0-9.]+)%, total x([0-9.]+)",
+                     line)
+        if m:
+            r["compare"].setdefault(os.path.basename(m.group(1)), {})[m.group(2)] = (
+                float(m.group(3)) / 100, float(m.group(4)))
+            continue
+        m = re.match(r"ssprofile: region (\S+): \d+ points, walk (\S+) (\S+) (\S+)", line)
+        if m:
+            r["regions"].setdefault(m.group(1), {})["walk"] = [float(m.group(i))
+                                                              for i in (2, 3, 4)]
+            continue
+        m = re.match(r"ssprofile: region (\S+): (\S+) (\S+) (\S+) (\S+), x", line)
+        if m:
+            r["regions"].setdefault(m.group(1), {})[os.path.basename(m.group(2))] = [
+                float(m.group(i)) for i in (3, 4, 5)]
+    return r
+
+
+def ratio(a, b):
+    return a / b if b > 0 else float("nan")
+
+
+def box_rib(cloud, w, d, h, light_from="0 0 1"):
+    """A w x d x h box, its top face at z = 0, lit from above."""
+    x0, x1, y0, y1, z0, z1 = -w / 2, w / 2, -d / 2, d / 2, -h, 0
+    v = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0), (x0, y0, z1), (x1, y0, z1),
+         (x1, y1, z1), (x0, y1, z1)]
+    faces = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (2, 3, 7, 6), (1, 2, 6, 5), (0, 4, 7, 3)]
+    polys = "\n".join('Polygon "P" [%s]' % " ".join("%g %g %g" % v[i] for i in f) for f in faces)
+    return f"""Attribute "dice" "rasterorient" 0
+WorldBegin
+Attribute "cull" "hidden" 0 "backfacing" 0
+LightSource "distantlight" 1 "intensity" [1] "from" [{light_from}] "to" [0 0 0]
+AttributeBegin
+Attribute "identifier" "name" ["medium"]
+Surface "bake_radiance_t" "string filename" ["{cloud}"]
+{polys}
+AttributeEnd
+"""
+
+
+def slabs(r, quick):
+    rows = []
+    thick = [1, 2, 5]
+    for material in ("skin1", "marble"):
+        for d in thick:
+            name = f"slab_{material}_{d}mm"
+            rib = r.bake(name, box_rib(name + ".ptc", 40, 40, d) + "WorldEnd\n",
+                         0.5 if quick else 0.25)
+            outs = {}
+            for method, extra in METHODS.items():
+                outs[method] = r.filter(material, name + ".ptc", f"{name}_{method}.ptc", extra)
+            regions = {"R": (-5, -5, -0.01, 5, 5, 0.01), "T": (-5, -5, -d - 0.01, 5, 5, -d + 0.01)}
+            for incidence in ("normal", "diffuse"):
+                w, _ = r.walk(rib, material, name + ".ptc", list(outs.values()), regions,
+                              incidence=incidence)
+                for method, out in outs.items():
+                    for c, ch in enumerate(CHANNELS):
+                        reg = w["regions"]
+                        rows.append({
+                            "material": material, "d_mm": d, "incidence": incidence,
+                            "channel": ch, "d_over_l": round(d / mfp(material, c), 2),
+                            "method": method,
+                            "R": ratio(reg["R"][out][c], reg["R"]["walk"][c]),
+                            "T": ratio(reg["T"][out][c], reg["T"]["walk"][c]),
+                            "out_per_in": w["compare"][out][ch][1] * w["out"][ch],
+                            "walk_out_per_in": w["out"][ch],
+                        })
+    return rows
+
+
+def spheres(r, quick):
+    rows = []
+    for material in ("skin1", "marble"):
+        for radius in (2, 5, 20):
+            name = f"sphere_{material}_{radius}mm"
+            rib = r.bake(name, f"""Attribute "dice" "rasterorient" 0
+WorldBegin
+Attribute "cull" "hidden" 0 "backfacing" 0
+LightSource "distantlight" 1 "intensity" [1] "from" [0 0 1] "to" [0 0 0]
+Attribute "identifier" "name" ["medium"]
+Surface "bake_radiance_t" "string filename" ["{name}.ptc"]
+Sphere {radius} -{radius} {radius} 360
+WorldEnd
+""", radius / (8 if quick else 12))
+            outs, times = {}, {}
+            for method, extra in METHODS.items():
+                t = time.perf_counter()
+                outs[method] = r.filter(material, name + ".ptc", f"{name}_{method}.ptc", extra)
+                times[method] = time.perf_counter() - t
+            photons = r.photons if radius < 20 else max(r.photons // 4, 50000)
+            w, _ = r.walk(rib, material, name + ".ptc", list(outs.values()), {}, photons=photons)
+            for method, out in outs.items():
+                for c, ch in enumerate(CHANNELS):
+                    l1, total = w["compare"][out][ch]
+                    rows.append({"material": material, "radius_mm": radius, "channel": ch,
+                                 "radius_over_dmfp": round(radius / dmfp(material, c), 2),
+                                 "method": method, "flux": total, "l1w": l1,
+                                 "seconds": round(times[method], 3)})
+    return rows
+
+
+BONE = """AttributeBegin
+Attribute "identifier" "name" ["bone"]
+Surface "bake_constant" "string filename" ["{cloud}"]
+Translate 0 0 -4
+Rotate 90 0 1 0
+Cylinder 2.5 -12 12 360
+Translate 0 0 12
+Disk 0 2.5 360
+Translate 0 0 -24
+Disk 0 2.5 -360
+AttributeEnd
+"""
+
+
+def bone_box(r, quick):
+    rows = []
+    regions = {f"top{o}": (-5, o - 0.5, -0.01, 5, o + 0.5, 0.01) for o in ("0", "2.5", "5")}
+    regions["bottom"] = (-5, -1, -10.01, 5, 1, -9.99)
+    for material in ("skin1", "marble"):
+        name = f"bonebox_{material}"
+        rib = r.bake(name, box_rib(name + ".ptc", 30, 30, 10) +
+                     BONE.format(cloud=name + "_bone.ptc") + "WorldEnd\n", 0.5 if quick else 0.3)
+        with_bone = {
+            "classic": [],
+            "pbd+volume+blocker": ["-profile", "pbd", "-blocker", name + "_bone.ptc"],
+            "classic+volume+blocker": ["-blocker", name + "_bone.ptc"],
+        }
+        outs = {m: r.filter(material, name + ".ptc", f"{name}_{m}.ptc", e)
+                for m, e in with_bone.items()}
+        w, _ = r.walk(rib, material, name + ".ptc", list(outs.values()), regions,
+                      blockers=["bone"])
+        # The same box without the bone, for how much the bone darkens it.
+        free, _ = r.walk(rib, material, name + ".ptc", [], regions)
+        for method, out in outs.items():
+            for c, ch in enumerate(CHANNELS):
+                row = {"material": material, "channel": ch, "method": method}
+                for reg in regions:
+                    row[reg] = ratio(w["regions"][reg][out][c], w["regions"][reg]["walk"][c])
+                    row["bone_darkens_" + reg] = ratio(w["regions"][reg]["walk"][c],
+                                                       free["regions"][reg]["walk"][c])
+                rows.append(row)
+    return rows
+
+
+def thin_box(r, root, quick):
+    """The thin box scene (scenes/thinbox) with its torus baked as a blocker
+    cloud of its own, against the old negative-light fake."""
+    with open(os.path.join(root, "scenes", "thinbox", "bake.rib")) as f:
+        fake = f.read()
+    real = fake.replace("Color [-1 -1 -1]", "").replace(
+        'Surface "bake_constant" "string filename" ["thinbox.ptc"]',
+        'Surface "bake_constant" "string filename" ["torus.ptc"]')
+    fake = fake.replace('["thinbox.ptc"]', '["fake.ptc"]')
+    spacing = 0.3 if quick else None
+    r.bake("thinbox_fake", fake, spacing)
+    rib = r.bake("thinbox", real, spacing)
+    methods = {"classic (no blocker)": ("thinbox.ptc", []),
+               "classic, negative-light torus": ("fake.ptc", []),
+               "classic+volume+blocker": ("thinbox.ptc", ["-blocker", "torus.ptc"]),
+               "pbd+volume+blocker": ("thinbox.ptc", ["-profile", "pbd", "-blocker",
+                                                      "torus.ptc"])}
+    outs = {}
+    for i, (m, (cloud, extra)) in enumerate(methods.items()):
+        outs[m] = r.filter("skin1", cloud, f"thinbox_{i}.ptc", extra)
+    # The fake's cloud holds the torus's points too: it is compared on the
+    # regions only.
+    regions = {"top": (-3, 1.99, -3, 3, 2.01, 3), "under_centre": (-2, -2.01, -2, 2, -1.99, 2),
+               "under_ring": (5.2, -2.01, -0.8, 6.8, -1.99, 0.8)}
+    w, _ = r.walk(rib, "skin1", "thinbox.ptc", list(outs.values()), regions,
+                  blockers=["blocker"])
+    rows = []
+    for m, out in outs.items():
+        for c, ch in enumerate(CHANNELS):
+            row = {"method": m, "channel": ch}
+            for reg in regions:
+                row[reg] = ratio(w["regions"][reg][out][c], w["regions"][reg]["walk"][c])
+            rows.append(row)
+    return rows
+
+
+def cost(r, quick):
+    """Wall time of ptfilter with and without the volume (median of three)."""
+    rows = []
+    n = 100000 if quick else 1000000
+    r.run("ptsynth", ["-n", n, "-size", 50, "-light", 1, 1, 1, "bench_sphere.ptc"])
+    cases = [("sphere r 50 mm, %d points, marble" % n, "marble", "bench_sphere.ptc",
+              ["-volume", "1"]),
+             ("thin box (scenes/thinbox), skin1", "skin1", "thinbox.ptc",
+              ["-blocker", "torus.ptc"])]
+    for label, material, cloud, extra in cases:
+        t = {}
+        for name, args in (("classic", []), ("volume", extra)):
+            times = []
+            for _ in range(3):
+                _, s = r.run("ptfilter", ["-ssdiffusion", "-material", material, "-threads", 2]
+                             + args + [cloud, "cost.ptc"])
+                times.append(s)
+            t[name] = statistics.median(times)
+        rows.append({"case": label, "classic_s": round(t["classic"], 3),
+                     "volume_s": round(t["volume"], 3),
+                     "ratio": round(t["volume"] / t["classic"], 2),
+                     "command": "ptfilter -ssdiffusion -material %s -threads 2 %s %s out.ptc" %
+                                (material, " ".join(extra), cloud)})
+    return rows
+
+
+def write_tsv(path, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()), delimiter="\t")
+        w.writeheader()
+        for row in rows:
+            w.writerow({k: (f"{v:.4f}" if isinstance(v, float) else v) for k, v in row.items()})
+
+
+def read_tsv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f, delimiter="\t"))
+
+
+def run_cases(bin_dir, root, data_dir, work, photons, quick):
+    r = Runner(bin_dir, work, photons)
+    os.makedirs(data_dir, exist_ok=True)
+    write_tsv(os.path.join(data_dir, "slabs.tsv"), slabs(r, quick))
+    write_tsv(os.path.join(data_dir, "spheres.tsv"), spheres(r, quick))
+    write_tsv(os.path.join(data_dir, "bone.tsv"), bone_box(r, quick))
+    write_tsv(os.path.join(data_dir, "thinbox.tsv"), thin_box(r, root, quick))
+    write_tsv(os.path.join(data_dir, "cost.tsv"), cost(r, quick))
+
+
+def write_report(path, data_dir, photons, commit):
+    """Placeholder replaced below once the data are known."""
+    raise SystemExit("write_report: not written yet")
