@@ -212,7 +212,7 @@ AttributeEnd
 
 def bone_box(r, quick):
     rows = []
-    regions = {f"top{o}": (-5, o - 0.5, -0.01, 5, o + 0.5, 0.01) for o in ("0", "2.5", "5")}
+    regions = {f"top{o:g}": (-5, o - 0.5, -0.01, 5, o + 0.5, 0.01) for o in (0.0, 2.5, 5.0)}
     regions["bottom"] = (-5, -1, -10.01, 5, 1, -9.99)
     for material in ("skin1", "marble"):
         name = f"bonebox_{material}"

@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "sss/diffusion/material.h"
+#include "sss/diffusion/profile.h"
 #include "sss/diffusion/volume.h"
 #include "sss/truth/mesh_walk.h"
 
@@ -69,11 +70,15 @@ TEST(VolumeTruth, SlabReflectanceAndTransmittanceMatchTheWalk) {
 
     SurfaceSamples surface{src.positions, src.normals, src.areas};
     ChannelCoefficients ch[3];
-    for (int k = 0; k < 3; ++k) ch[k] = {m->sigma_s_prime[k], m->sigma_a[k], m->ior};
+    glm::dvec3 reflectance;
+    for (int k = 0; k < 3; ++k) {
+        ch[k] = {m->sigma_s_prime[k], m->sigma_a[k], m->ior};
+        reflectance[k] = Profile::from_coefficients(ProfileKind::Pbd, ch[k]).total();
+    }
     const std::vector<glm::vec3> zero(src.positions.size(), glm::vec3(0.0f));
     VolumeReport rep;
     const std::vector<glm::vec3> vol =
-        volume_diffusion(surface, src.irradiance, ch, {}, zero, {}, &rep);
+        volume_diffusion(surface, src.irradiance, ch, reflectance, {}, zero, {}, &rep);
     ASSERT_EQ(rep.thin_points, src.positions.size());
 
     // The middle of the lit face (R) and of the back face (T).

@@ -57,6 +57,8 @@ struct VolumeReport {
     /// Fluxes of the volume solve: scattered light entering, leaving through
     /// the surface, absorbed in the medium, absorbed by the blockers.
     glm::dvec3 flux_in{0.0}, flux_out{0.0}, flux_absorbed{0.0}, flux_blocked{0.0};
+    /// The profile's half-space reflectance less the grid's, per channel.
+    glm::dvec3 reflectance_correction{0.0};
     double seconds = 0;
     std::vector<std::string> warnings;
 };
@@ -65,11 +67,15 @@ struct VolumeReport {
 /// areas, transmitted irradiance, lengths in the unit of `channels`'
 /// coefficients), blended with `profile_result` (the surface profile's
 /// exitance at the same points) by each point's thickness. Points the volume
-/// does not concern keep profile_result bit for bit. Throws ValueError for
+/// does not concern keep profile_result bit for bit. `profile_reflectance`:
+/// the profile's total diffuse reflectance per channel (Profile::total());
+/// the volume's own half-space reflectance is corrected to it at each point
+/// in proportion to the point's irradiance (a negative value: no correction). Throws ValueError for
 /// arrays of different sizes or a medium without scattering.
 std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
                                         const std::vector<glm::vec3>& irradiance,
                                         const ChannelCoefficients (&channels)[3],
+                                        const glm::dvec3& profile_reflectance,
                                         const std::vector<SurfaceSamples>& blockers,
                                         const std::vector<glm::vec3>& profile_result,
                                         const VolumeOptions& options,

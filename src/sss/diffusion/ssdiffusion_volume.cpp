@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/diffusion/profile.h"
 #include "sss/util/error.h"
 #include "sss/util/limits.h"
 #include "sss/util/math.h"
@@ -107,8 +108,19 @@ void apply_volume(const SsDiffusionOptions& o, VolumeInput&& in,
     if (const char* e = std::getenv("SSS_VPM")) vo.voxels_per_mfp = std::atof(e);
     if (const char* e = std::getenv("SSS_TOL")) vo.tolerance = std::atof(e);
     rep.volume = VolumeReport{};
-    result =
-        volume_diffusion(in.surface, in.irradiance, c, blockers, result, vo, &rep.volume);
+    // The profile's half-space reflectance: the albedo itself when the
+    // material is given so (each profile inverts its own), else the profile's.
+    glm::dvec3 reflectance(0.0);
+    if (o.material.uses_albedo_form()) {
+        glm::dvec3 albedo, dmfp;
+        o.material.resolve_albedo_dmfp(albedo, dmfp);
+        reflectance = albedo;
+    } else {
+        for (int k = 0; k < 3; ++k)
+            reflectance[k] = Profile::from_coefficients(o.profile, c[k]).total();
+    }
+    result = volume_diffusion(in.surface, in.irradiance, c, reflectance, blockers, result, vo,
+                              &rep.volume);
     for (const std::string& w : rep.volume.warnings)
         rep.warnings.push_back("volume: " + w);
     in = VolumeInput{};

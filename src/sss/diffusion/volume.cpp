@@ -343,11 +343,51 @@ std::vector<double> thickness(const Level& l, const SurfaceSamples& surface,
     return t;
 }
 
+// The total diffuse reflectance of a uniformly lit half-space in the same
+// discretisation as the grids (voxels of edge h below the surface, the leak
+// half a voxel above the first centre, the beam's collisions shared between
+// the nearest centres): a column of voxels, solved exactly (Thomas).
+double halfspace_reflectance(const Medium& m, double h) {
+    const double l = 1.0 / m.sigma_t;
+    const double reach = std::max(40.0 * l, 12.0 * std::min(m.dmfp, 1e3 * l));
+    const std::size_t k_max = std::size_t(std::clamp(std::ceil(reach / h), 8.0, 2e5));
+    const double off = m.D / h, leak = 1.0 / (2.0 * m.A + 0.5 * h / m.D);
+    std::vector<double> diag(k_max), rhs(k_max, 0.0);
+    for (std::size_t k = 0; k < k_max; ++k)
+        diag[k] = m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) + (k == 0 ? leak : 0.0);
+    for (int b = 0; b < kBeamSamples; ++b) {
+        const double t = beam_depth(b, m.sigma_t) / h - 0.5; // in voxel centres
+        const double q = m.alpha / kBeamSamples;
+        if (t <= 0) {
+            rhs[0] += q;
+            continue;
+        }
+        const std::size_t k = std::size_t(t);
+        if (k + 1 >= k_max) continue;
+        const double f = t - double(k);
+        rhs[k] += (1 - f) * q;
+        rhs[k + 1] += f * q;
+    }
+    // Forward elimination and back substitution (off-diagonals all -off).
+    std::vector<double> c(k_max, 0.0), d(k_max, 0.0);
+    c[0] = -off / diag[0];
+    d[0] = rhs[0] / diag[0];
+    for (std::size_t k = 1; k < k_max; ++k) {
+        const double den = diag[k] + off * c[k - 1];
+        c[k] = -off / den;
+        d[k] = (rhs[k] + off * d[k - 1]) / den;
+    }
+    double phi = d[k_max - 1];
+    for (std::size_t k = k_max - 1; k-- > 0;) phi = d[k] - c[k] * phi;
+    return leak * phi; // phi is now phi_0
+}
+
 } // namespace
 
 std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
                                         const std::vector<glm::vec3>& irradiance,
                                         const ChannelCoefficients (&channels)[3],
+                                        const glm::dvec3& profile_reflectance,
                                         const std::vector<SurfaceSamples>& blockers,
                                         const std::vector<glm::vec3>& profile_result,
                                         const VolumeOptions& o, VolumeReport* report) {
@@ -546,9 +586,27 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         const double read = chunked_sum(
             n, [&](std::size_t j) { return double(surface.areas[j]) * exitance[j]; });
         const double scale = read > 0 ? rep.flux_out[c] / read : 0.0;
+        // What a voxel diffusion misses near where light enters (single
+        // scattering, the near field): the profile's half-space reflectance
+        // less the grid's own, in proportion to each point's irradiance.
+        const double missing = profile_reflectance[c] >= 0.0
+                                   ? profile_reflectance[c] - halfspace_reflectance(m, fine.grid.h)
+                                   : 0.0;
+        rep.reflectance_correction[c] = missing;
+        std::vector<double> volume(n, 0.0);
+        for (std::size_t j = 0; j < n; ++j)
+            volume[j] = std::max(0.0, exitance[j] * scale + missing * double(irradiance[j][c]));
+        // Light out never more than light in: the correction is local, so a
+        // shape small against the light's spread could take more than came in.
+        const double in = chunked_sum(n, [&](std::size_t j) {
+            return double(surface.areas[j]) * std::max(0.0, double(irradiance[j][c]));
+        });
+        const double given =
+            chunked_sum(n, [&](std::size_t j) { return double(surface.areas[j]) * volume[j]; });
+        const double cap = given > in && given > 0 ? in / given : 1.0;
         for (std::size_t j = 0; j < n; ++j) {
             if (fine.leak_voxel[surfels.of_point[j]] < 0 || w[j][c] == 0.0f) continue;
-            const double v = double(w[j][c]) * exitance[j] * scale +
+            const double v = double(w[j][c]) * volume[j] * cap +
                              (1.0 - double(w[j][c])) * double(profile_result[j][c]);
             out[j][c] = std::isfinite(v) ? float(v) : 0.0f;
         }
