@@ -36,10 +36,12 @@ struct VolumeOptions {
     /// At most this many voxels in the finest grid's box; a larger object
     /// gets larger voxels (and a warning when they exceed l).
     std::size_t max_voxels = 12'000'000;
-    /// A point whose medium is thicker than thick_dmfp diffuse mean free
-    /// paths below it keeps the surface profile's result; one thinner than
-    /// thin_dmfp takes the volume's; in between the two are blended.
-    double thin_dmfp = 4.0, thick_dmfp = 6.0;
+    /// A point whose medium is thicker than thick_dmfp spread lengths below
+    /// it keeps the surface profile's result; one thinner than thin_dmfp
+    /// takes the volume's; in between the two are blended. A channel's
+    /// spread length is its diffuse mean free path, but at least spread_mfp
+    /// transport mean free paths.
+    double thin_dmfp = 4.0, thick_dmfp = 6.0, spread_mfp = 5.0;
     /// Stop when the residual is below this fraction of the source.
     double tolerance = 1e-3;
     Progress* progress = nullptr;

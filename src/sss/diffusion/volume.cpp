@@ -63,8 +63,55 @@ struct Surfels {
     std::vector<uint32_t> of_point; // the surfel each input point went into
 };
 
-Surfels make_surfels(const SurfaceSamples& in, const std::vector<glm::vec3>* irradiance,
-                     const VoxelGrid& grid) {
+// Points whose disk is wider than a voxel, split into squares of about a
+// voxel on their tangent plane (the square of the disk's area), so that a
+// coarse cloud lets light out and in all over its surface, not through one
+// voxel per point. owner: the input point of each sample.
+struct Split {
+    SurfaceSamples samples;
+    std::vector<glm::vec3> irradiance;
+    std::vector<uint32_t> owner;
+};
+
+Split split_large(const SurfaceSamples& in, const std::vector<glm::vec3>* irradiance, double h) {
+    Split out;
+    const std::size_t n = in.positions.size();
+    for (std::size_t j = 0; j < n; ++j) {
+        const double area = std::max(0.0, double(in.areas[j]));
+        const double side = std::sqrt(area);
+        const int k = std::clamp(int(std::ceil(side / h)), 1, 64);
+        const glm::vec3 e = irradiance ? (*irradiance)[j] : glm::vec3(0.0f);
+        if (k == 1) {
+            out.samples.positions.push_back(in.positions[j]);
+            out.samples.normals.push_back(in.normals[j]);
+            out.samples.areas.push_back(in.areas[j]);
+            out.irradiance.push_back(e);
+            out.owner.push_back(uint32_t(j));
+            continue;
+        }
+        const glm::dvec3 nr = glm::normalize(glm::dvec3(in.normals[j]));
+        const glm::dvec3 helper = std::abs(nr.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+        const glm::dvec3 t1 = glm::normalize(glm::cross(nr, helper)), t2 = glm::cross(nr, t1);
+        for (int v = 0; v < k; ++v)
+            for (int u = 0; u < k; ++u) {
+                const double a = ((u + 0.5) / k - 0.5) * side, b = ((v + 0.5) / k - 0.5) * side;
+                out.samples.positions.push_back(
+                    glm::vec3(glm::dvec3(in.positions[j]) + a * t1 + b * t2));
+                out.samples.normals.push_back(in.normals[j]);
+                out.samples.areas.push_back(float(area / double(k * k)));
+                out.irradiance.push_back(e);
+                out.owner.push_back(uint32_t(j));
+            }
+    }
+    return out;
+}
+
+Surfels make_surfels(const SurfaceSamples& original,
+                     const std::vector<glm::vec3>* original_irradiance, const VoxelGrid& grid) {
+    const Split split = split_large(original, original_irradiance, grid.h);
+    const SurfaceSamples& in = split.samples;
+    const std::vector<glm::vec3>* irradiance =
+        original_irradiance ? &split.irradiance : nullptr;
     const std::size_t n = in.positions.size();
     std::vector<uint64_t> key(n);
     oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
@@ -91,7 +138,7 @@ Surfels make_surfels(const SurfaceSamples& in, const std::vector<glm::vec3>* irr
         });
     }
     Surfels s;
-    s.of_point.resize(n);
+    s.of_point.assign(original.positions.size(), ~uint32_t(0));
     for (std::size_t k = 0; k < n;) {
         std::size_t e = k;
         glm::dvec3 p(0.0), nr(0.0), flux(0.0), mean(0.0);
@@ -104,7 +151,8 @@ Surfels make_surfels(const SurfaceSamples& in, const std::vector<glm::vec3>* irr
             nr += std::max(a, 1e-30) * glm::normalize(glm::dvec3(in.normals[j]));
             area += a;
             if (irradiance) flux += a * glm::dvec3((*irradiance)[j]);
-            s.of_point[j] = uint32_t(s.flux.size());
+            uint32_t& of = s.of_point[split.owner[j]];
+            of = std::min(of, uint32_t(s.flux.size()));
         }
         const double count = double(e - k);
         s.samples.positions.push_back(glm::vec3(area > 0 ? p / area : mean / count));
@@ -323,40 +371,20 @@ std::vector<double> prolong(const Level& coarse, const std::vector<double>& phi,
     return x;
 }
 
-// The depth of the medium below each point: the distance along -N to the
-// first voxel that is not medium (outside or blocker), at most `limit`.
-std::vector<double> thickness(const Level& l, const SurfaceSamples& surface,
-                              double limit) {
-    const std::size_t n = surface.positions.size();
-    std::vector<double> t(n, limit);
-    const double step = 0.5 * l.grid.h;
-    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
-        const glm::dvec3 p(surface.positions[j]);
-        const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
-        // Start a voxel in, past the surface's own staircase.
-        for (double d = l.grid.h; d < limit; d += step)
-            if (l.grid.label_at(p - d * nrm) != kMedium) {
-                t[j] = d;
-                return;
-            }
-    });
-    return t;
-}
-
 // The total diffuse reflectance of a uniformly lit half-space in the same
 // discretisation as the grids (voxels of edge h below the surface, the leak
 // half a voxel above the first centre, the beam's collisions shared between
 // the nearest centres): a column of voxels, solved exactly (Thomas).
-double halfspace_reflectance(const Medium& m, double h) {
+double halfspace_reflectance(const Medium& m, double h, double first) {
     const double l = 1.0 / m.sigma_t;
     const double reach = std::max(40.0 * l, 12.0 * std::min(m.dmfp, 1e3 * l));
     const std::size_t k_max = std::size_t(std::clamp(std::ceil(reach / h), 8.0, 2e5));
-    const double off = m.D / h, leak = 1.0 / (2.0 * m.A + 0.5 * h / m.D);
+    const double off = m.D / h, leak = 1.0 / (2.0 * m.A + first / m.D);
     std::vector<double> diag(k_max), rhs(k_max, 0.0);
     for (std::size_t k = 0; k < k_max; ++k)
         diag[k] = m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) + (k == 0 ? leak : 0.0);
     for (int b = 0; b < kBeamSamples; ++b) {
-        const double t = beam_depth(b, m.sigma_t) / h - 0.5; // in voxel centres
+        const double t = (beam_depth(b, m.sigma_t) - first) / h; // in voxel centres
         const double q = m.alpha / kBeamSamples;
         if (t <= 0) {
             rhs[0] += q;
@@ -454,25 +482,35 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         ++coarse_steps;
     std::vector<std::unique_ptr<Level>> levels; // coarsest first
     std::vector<std::shared_ptr<const Surfels>> level_surfels;
+    std::vector<SurfaceSamples> coarse_blockers;
     {
         auto [sf, bl] = merged(h * double(1 << coarse_steps));
         levels.push_back(std::make_unique<Level>(
             make_level(lo, hi, h * double(1 << coarse_steps), sf->samples, bl)));
         level_surfels.push_back(sf);
+        coarse_blockers = std::move(bl);
     }
-    const double limit = o.thick_dmfp * dmfp_max;
+    // The length over which each channel's light spreads: its diffuse mean
+    // free path, but at least spread_mfp transport mean free paths (a small
+    // object loses light to its curvature even where it hardly absorbs).
+    double spread[3], spread_max = 0;
+    for (int c = 0; c < 3; ++c) {
+        spread[c] = std::max(med[c].dmfp, o.spread_mfp / med[c].sigma_t);
+        spread_max = std::max(spread_max, spread[c]);
+    }
+    const double limit = o.thick_dmfp * spread_max;
     {
         const Surfels& cs = *level_surfels[0];
         const std::vector<double> depth =
-            thickness(*levels[0], cs.samples,
-                      std::isfinite(limit) ? limit : 2.0 * glm::length(size));
+            ray_thickness(levels[0]->grid, cs.samples, coarse_blockers,
+                          std::isfinite(limit) ? limit : 2.0 * glm::length(size));
         std::fill(std::begin(channel_needed), std::end(channel_needed), false);
         for (std::size_t j = 0; j < n; ++j) {
             const double d = depth[cs.of_point[j]];
             for (int c = 0; c < 3; ++c) {
                 double wc =
-                    (o.thick_dmfp - d / med[c].dmfp) / (o.thick_dmfp - o.thin_dmfp);
-                if (!blockers.empty() && d < limit) wc = 1.0; // a blocker below
+                    (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
+                if (d >= limit) wc = 0.0; // no way out found within the limit
                 wc = std::clamp(wc, 0.0, 1.0);
                 w[j][c] = float(wc);
                 if (wc > 0) channel_needed[c] = true;
@@ -513,6 +551,19 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     std::reverse(level_surfels.begin(), level_surfels.end());
     const Level& fine = *levels.front();
     const Surfels& surfels = *level_surfels.front();
+    // How deep below the lit surface the finest grid's first voxels lie
+    // (flux-weighted): the column the grid's own reflectance is taken from.
+    double lit_depth = 0.5 * fine.grid.h;
+    {
+        double sum = 0, weight = 0;
+        for (std::size_t k = 0; k < surfels.flux.size(); ++k) {
+            const double f = std::max(0.0, surfels.flux[k].x + surfels.flux[k].y + surfels.flux[k].z);
+            if (fine.leak_voxel[k] < 0 || f <= 0) continue;
+            sum += f * fine.leak_depth[k];
+            weight += f;
+        }
+        if (weight > 0) lit_depth = sum / weight;
+    }
     rep.voxel = fine.grid.h;
     for (int a = 0; a < 3; ++a) rep.dims[a] = fine.grid.dim[a];
     rep.unknowns = fine.u.voxels.size();
@@ -590,7 +641,8 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         // scattering, the near field): the profile's half-space reflectance
         // less the grid's own, in proportion to each point's irradiance.
         const double missing = profile_reflectance[c] >= 0.0
-                                   ? profile_reflectance[c] - halfspace_reflectance(m, fine.grid.h)
+                                   ? profile_reflectance[c] -
+                                         halfspace_reflectance(m, fine.grid.h, lit_depth)
                                    : 0.0;
         rep.reflectance_correction[c] = missing;
         std::vector<double> volume(n, 0.0);

@@ -135,6 +135,92 @@ std::vector<int8_t> inside_voxels(const VoxelGrid& g, const SurfaceSamples& s) {
     return inside;
 }
 
+std::vector<double> ray_thickness(const VoxelGrid& g, const SurfaceSamples& surface,
+                                  const std::vector<SurfaceSamples>& blockers, double limit) {
+    std::vector<const SurfaceSamples*> sets = {&surface};
+    for (const SurfaceSamples& b : blockers) sets.push_back(&b);
+    const auto reach = [&](const SurfaceSamples& s, std::size_t k) {
+        return 1.5 * std::max(std::sqrt(std::max(0.0, double(s.areas[k])) / M_PI), 0.5 * g.h);
+    };
+    // Every voxel lists the disks that reach into it (set, sample).
+    const std::size_t nv = g.count();
+    std::vector<uint32_t> start(nv + 1, 0);
+    std::vector<std::pair<uint32_t, uint32_t>> refs;
+    for (int pass = 0; pass < 2; ++pass) {
+        for (uint32_t set = 0; set < sets.size(); ++set) {
+            const SurfaceSamples& s = *sets[set];
+            for (std::size_t k = 0; k < s.positions.size(); ++k) {
+                const glm::dvec3 p(s.positions[k]);
+                const double r = reach(s, k);
+                const glm::ivec3 lo = g.cell_of(p - glm::dvec3(r)), hi = g.cell_of(p + glm::dvec3(r));
+                for (int z = lo.z; z <= hi.z; ++z)
+                    for (int y = lo.y; y <= hi.y; ++y)
+                        for (int x = lo.x; x <= hi.x; ++x) {
+                            const std::size_t v = g.voxel(x, y, z);
+                            if (pass == 0)
+                                ++start[v + 1];
+                            else
+                                refs[start[v]++] = {set, uint32_t(k)};
+                        }
+            }
+        }
+        if (pass == 0) {
+            for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+            refs.resize(start[nv]);
+        } else {
+            for (std::size_t v = nv; v > 0; --v) start[v] = start[v - 1];
+            start[0] = 0;
+        }
+    }
+    const std::size_t n = surface.positions.size();
+    std::vector<double> t(n, limit);
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        const glm::dvec3 p(surface.positions[j]);
+        const glm::dvec3 dir = -glm::normalize(glm::dvec3(surface.normals[j]));
+        // Amanatides and Woo's walk through the voxels, in voxel units.
+        const glm::dvec3 q = (p - g.origin) / g.h + 0.5;
+        glm::ivec3 c, step;
+        glm::dvec3 next, delta;
+        for (int a = 0; a < 3; ++a) {
+            c[a] = int(std::floor(q[a]));
+            step[a] = dir[a] > 0 ? 1 : -1;
+            delta[a] = dir[a] != 0 ? std::abs(1.0 / dir[a]) : 1e300;
+            const double edge = dir[a] > 0 ? std::floor(q[a]) + 1 - q[a] : q[a] - std::floor(q[a]);
+            next[a] = dir[a] != 0 ? edge * delta[a] : 1e300;
+        }
+        double best = limit;
+        double travelled = 0; // voxel units
+        while (travelled * g.h < best) {
+            if (glm::any(glm::lessThan(c, glm::ivec3(0))) ||
+                glm::any(glm::greaterThanEqual(c, g.dim)))
+                break;
+            const std::size_t v = g.voxel(c.x, c.y, c.z);
+            for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
+                const auto [set, k] = refs[i];
+                if (set == 0 && k == j) continue;
+                const SurfaceSamples& s = *sets[set];
+                const glm::dvec3 nq = glm::normalize(glm::dvec3(s.normals[k]));
+                const double denom = glm::dot(dir, nq);
+                // Out of the medium through a surface facing along the ray,
+                // into a blocker through one facing against it.
+                if (set == 0 ? denom < 0.2 : denom > -0.2) continue;
+                const glm::dvec3 pq(s.positions[k]);
+                const double tk = glm::dot(pq - p, nq) / denom;
+                if (!(tk > 0.05 * g.h) || tk >= best) continue;
+                const glm::dvec3 hit = p + tk * dir - pq;
+                const double r = reach(s, k);
+                if (glm::dot(hit, hit) <= r * r) best = tk;
+            }
+            const int a = next.x < next.y ? (next.x < next.z ? 0 : 2) : (next.y < next.z ? 1 : 2);
+            travelled = next[a];
+            next[a] += delta[a];
+            c[a] += step[a];
+        }
+        t[j] = best;
+    });
+    return t;
+}
+
 Unknowns number_unknowns(const VoxelGrid& g) {
     Unknowns u;
     u.index.assign(g.count(), -1);

@@ -48,6 +48,15 @@ VoxelGrid make_grid(const glm::dvec3& lo, const glm::dvec3& hi, double h, int pa
 /// the grid's border counts as outside.
 std::vector<int8_t> inside_voxels(const VoxelGrid& grid, const SurfaceSamples& samples);
 
+/// The depth of the medium below each sample of `surface`: the distance
+/// along its inward normal to the first sample disk the ray leaves the
+/// medium through (a surface sample facing along the ray) or enters a
+/// blocker through, at most `limit`. Disks are taken a little wider than
+/// their area, so that rays do not slip between samples; the grid indexes
+/// them.
+std::vector<double> ray_thickness(const VoxelGrid& grid, const SurfaceSamples& surface,
+                                  const std::vector<SurfaceSamples>& blockers, double limit);
+
 /// The grid's medium voxels as unknowns of the diffusion system.
 struct Unknowns {
     std::vector<int32_t> index;   ///< per voxel: its unknown, or -1
