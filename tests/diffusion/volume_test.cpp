@@ -73,7 +73,8 @@ Case slab(const char* material, float w, float d, float spacing) {
     const NamedMaterial* m = find_material(material);
     for (int k = 0; k < 3; ++k) {
         c.channels[k] = {m->sigma_s_prime[k], m->sigma_a[k], m->ior};
-        c.reflectance[k] = Profile::from_coefficients(ProfileKind::Classic, c.channels[k]).total();
+        c.reflectance[k] =
+            Profile::from_coefficients(ProfileKind::Classic, c.channels[k]).total();
     }
     return c;
 }
@@ -117,7 +118,8 @@ TEST(Volume, LightOutNeverExceedsLightInAndTheFluxesBalance) {
             EXPECT_NEAR(balance / rep.flux_in[ch], 1.0, 0.01);
             // The points give off what the solve lets out, and the profile's
             // reflectance where the grid's falls short of it.
-            const double expected = rep.flux_out[ch] + rep.reflectance_correction[ch] * in;
+            const double expected =
+                rep.flux_out[ch] + rep.reflectance_correction[ch] * in;
             EXPECT_NEAR(flux_of(c, out, ch) / expected, 1.0, 1e-3);
         }
     }
@@ -130,10 +132,12 @@ TEST(Volume, AThinSlabTransmitsMoreThanAThickOne) {
     VolumeOptions o;
     o.thin_dmfp = 100.0;
     o.thick_dmfp = 200.0;
-    const std::vector<glm::vec3> a = volume_diffusion(thin.surface, thin.irradiance,
-                                                      thin.channels, thin.reflectance, {}, thin.profile, o);
-    const std::vector<glm::vec3> b = volume_diffusion(
-        thick.surface, thick.irradiance, thick.channels, thick.reflectance, {}, thick.profile, o);
+    const std::vector<glm::vec3> a =
+        volume_diffusion(thin.surface, thin.irradiance, thin.channels, thin.reflectance,
+                         {}, thin.profile, o);
+    const std::vector<glm::vec3> b =
+        volume_diffusion(thick.surface, thick.irradiance, thick.channels,
+                         thick.reflectance, {}, thick.profile, o);
     const glm::dvec3 ta = mean_where(thin, a, -1.0f, 3.0f),
                      tb = mean_where(thick, b, -4.0f, 3.0f);
     const glm::dvec3 ra = mean_where(thin, a, 0.0f, 3.0f),
@@ -150,8 +154,8 @@ TEST(Volume, AThickShapeKeepsTheProfilesResultBitForBit) {
     // 60 mm of skin1 is 16 dmfp in red: nothing is thin.
     const Case c = slab("skin1", 60.0f, 60.0f, 2.0f);
     VolumeReport rep;
-    const std::vector<glm::vec3> out =
-        volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {}, c.profile, {}, &rep);
+    const std::vector<glm::vec3> out = volume_diffusion(
+        c.surface, c.irradiance, c.channels, c.reflectance, {}, c.profile, {}, &rep);
     EXPECT_FALSE(rep.needed);
     EXPECT_EQ(rep.thin_points, 0u);
     ASSERT_EQ(out.size(), c.profile.size());
@@ -163,10 +167,10 @@ TEST(Volume, ABlockerAbsorbsLightAndDarkensTheSurfaceAboveIt) {
     SurfaceSamples bone;
     box(bone, nullptr, {-3.0f, -3.0f, -4.0f}, {3.0f, 3.0f, -1.5f}, 0.25f);
     VolumeReport with, without;
-    const std::vector<glm::vec3> a = volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance,
-                                                      {bone}, c.profile, {}, &with);
-    const std::vector<glm::vec3> b = volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance,
-                                                      {}, c.profile, {}, &without);
+    const std::vector<glm::vec3> a = volume_diffusion(
+        c.surface, c.irradiance, c.channels, c.reflectance, {bone}, c.profile, {}, &with);
+    const std::vector<glm::vec3> b = volume_diffusion(
+        c.surface, c.irradiance, c.channels, c.reflectance, {}, c.profile, {}, &without);
     const glm::dvec3 above_a = mean_where(c, a, 0.0f, 2.0f),
                      above_b = mean_where(c, b, 0.0f, 2.0f);
     const glm::dvec3 below_a = mean_where(c, a, -6.0f, 2.0f),
@@ -189,11 +193,13 @@ TEST(Volume, ResultsDoNotDependOnTheThreadCount) {
     std::vector<glm::vec3> one, two;
     {
         ThreadLimit limit(1);
-        one = volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {}, c.profile, {});
+        one = volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {},
+                               c.profile, {});
     }
     {
         ThreadLimit limit(2);
-        two = volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {}, c.profile, {});
+        two = volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {},
+                               c.profile, {});
     }
     ASSERT_EQ(one.size(), two.size());
     for (std::size_t j = 0; j < one.size(); ++j) ASSERT_EQ(one[j], two[j]) << j;
@@ -202,11 +208,12 @@ TEST(Volume, ResultsDoNotDependOnTheThreadCount) {
 TEST(Volume, Refuses) {
     Case c = slab("marble", 4.0f, 1.0f, 0.5f);
     std::vector<glm::vec3> short_profile(c.profile.begin(), c.profile.end() - 1);
-    EXPECT_THROW(
-        volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {}, short_profile, {}),
-        ValueError);
+    EXPECT_THROW(volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {},
+                                  short_profile, {}),
+                 ValueError);
     c.channels[1].sigma_s_prime = 0.0;
-    EXPECT_THROW(volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {}, c.profile, {}),
+    EXPECT_THROW(volume_diffusion(c.surface, c.irradiance, c.channels, c.reflectance, {},
+                                  c.profile, {}),
                  ValueError);
 }
 

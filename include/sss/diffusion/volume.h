@@ -72,8 +72,8 @@ struct VolumeReport {
 /// does not concern keep profile_result bit for bit. `profile_reflectance`:
 /// the profile's total diffuse reflectance per channel (Profile::total());
 /// the volume's own half-space reflectance is corrected to it at each point
-/// in proportion to the point's irradiance (a negative value: no correction). Throws ValueError for
-/// arrays of different sizes or a medium without scattering.
+/// in proportion to the point's irradiance (a negative value: no correction). Throws
+/// ValueError for arrays of different sizes or a medium without scattering.
 std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
                                         const std::vector<glm::vec3>& irradiance,
                                         const ChannelCoefficients (&channels)[3],

@@ -1,7 +1,6 @@
 #include "ssdiffusion_volume.h"
 
 #include <cmath>
-#include <cstdlib>
 
 #include <glm/geometric.hpp>
 
@@ -104,9 +103,7 @@ void apply_volume(const SsDiffusionOptions& o, VolumeInput&& in,
     coefficients_mm(o.material, c);
     std::vector<SurfaceSamples> blockers;
     for (const std::string& path : o.blockers) blockers.push_back(read_blocker(path, o));
-    VolumeOptions vo = o.volume_options;
-    if (const char* e = std::getenv("SSS_VPM")) vo.voxels_per_mfp = std::atof(e);
-    if (const char* e = std::getenv("SSS_TOL")) vo.tolerance = std::atof(e);
+    const VolumeOptions& vo = o.volume_options;
     rep.volume = VolumeReport{};
     // The profile's half-space reflectance: the albedo itself when the
     // material is given so (each profile inverts its own), else the profile's.
@@ -119,8 +116,8 @@ void apply_volume(const SsDiffusionOptions& o, VolumeInput&& in,
         for (int k = 0; k < 3; ++k)
             reflectance[k] = Profile::from_coefficients(o.profile, c[k]).total();
     }
-    result = volume_diffusion(in.surface, in.irradiance, c, reflectance, blockers, result, vo,
-                              &rep.volume);
+    result = volume_diffusion(in.surface, in.irradiance, c, reflectance, blockers, result,
+                              vo, &rep.volume);
     for (const std::string& w : rep.volume.warnings)
         rep.warnings.push_back("volume: " + w);
     in = VolumeInput{};

@@ -73,7 +73,8 @@ struct Split {
     std::vector<uint32_t> owner;
 };
 
-Split split_large(const SurfaceSamples& in, const std::vector<glm::vec3>* irradiance, double h) {
+Split split_large(const SurfaceSamples& in, const std::vector<glm::vec3>* irradiance,
+                  double h) {
     Split out;
     const std::size_t n = in.positions.size();
     for (std::size_t j = 0; j < n; ++j) {
@@ -90,11 +91,14 @@ Split split_large(const SurfaceSamples& in, const std::vector<glm::vec3>* irradi
             continue;
         }
         const glm::dvec3 nr = glm::normalize(glm::dvec3(in.normals[j]));
-        const glm::dvec3 helper = std::abs(nr.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
-        const glm::dvec3 t1 = glm::normalize(glm::cross(nr, helper)), t2 = glm::cross(nr, t1);
+        const glm::dvec3 helper =
+            std::abs(nr.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+        const glm::dvec3 t1 = glm::normalize(glm::cross(nr, helper)),
+                         t2 = glm::cross(nr, t1);
         for (int v = 0; v < k; ++v)
             for (int u = 0; u < k; ++u) {
-                const double a = ((u + 0.5) / k - 0.5) * side, b = ((v + 0.5) / k - 0.5) * side;
+                const double a = ((u + 0.5) / k - 0.5) * side,
+                             b = ((v + 0.5) / k - 0.5) * side;
                 out.samples.positions.push_back(
                     glm::vec3(glm::dvec3(in.positions[j]) + a * t1 + b * t2));
                 out.samples.normals.push_back(in.normals[j]);
@@ -107,7 +111,8 @@ Split split_large(const SurfaceSamples& in, const std::vector<glm::vec3>* irradi
 }
 
 Surfels make_surfels(const SurfaceSamples& original,
-                     const std::vector<glm::vec3>* original_irradiance, const VoxelGrid& grid) {
+                     const std::vector<glm::vec3>* original_irradiance,
+                     const VoxelGrid& grid) {
     const Split split = split_large(original, original_irradiance, grid.h);
     const SurfaceSamples& in = split.samples;
     const std::vector<glm::vec3>* irradiance =
@@ -173,11 +178,14 @@ struct Level {
     // that voxel centre's depth below the point's tangent plane.
     std::vector<int32_t> leak_voxel;
     std::vector<double> leak_depth;
+    // Per surface point: where its beam leaves the medium or meets a blocker
+    // (at most the deepest collision the source samples).
+    std::vector<double> beam_exit;
 };
 
 Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
                  const SurfaceSamples& surface,
-                 const std::vector<SurfaceSamples>& blockers) {
+                 const std::vector<SurfaceSamples>& blockers, double beam_limit) {
     Level l;
     l.grid = make_grid(lo, hi, h, 2);
     std::vector<int8_t> in = inside_voxels(l.grid, surface);
@@ -190,6 +198,7 @@ Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
             if (bin[v] == 1 && l.grid.label[v] == kMedium) l.grid.label[v] = kBlocker;
     }
     l.u = number_unknowns(l.grid);
+    l.beam_exit = ray_thickness(l.grid, surface, blockers, beam_limit);
     const std::size_t n = surface.positions.size();
     l.leak_voxel.assign(n, -1);
     l.leak_depth.assign(n, 0.0);
@@ -287,10 +296,11 @@ System make_system(const Level& l, const Medium& m, const SurfaceSamples& surfac
         const glm::dvec3 p(surface.positions[j]);
         const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
         for (int b = 0; b < kBeamSamples; ++b) {
-            const glm::dvec3 q = p - beam_depth(b, m.sigma_t) * nrm;
-            // Collisions outside the medium are light that crossed it
-            // unscattered or reached a blocker: not a source.
-            if (l.grid.label_at(q) != kMedium) continue;
+            const double depth = beam_depth(b, m.sigma_t);
+            // Collisions beyond where the beam leaves the medium are light
+            // that crossed it unscattered or reached a blocker: no source.
+            if (depth >= l.beam_exit[j]) continue;
+            const glm::dvec3 q = p - depth * nrm;
             Stencil st;
             if (!medium_stencil(l.grid, l.u, q, st)) continue;
             const double q_flux = m.alpha * flux / kBeamSamples;
@@ -382,7 +392,8 @@ double halfspace_reflectance(const Medium& m, double h, double first) {
     const double off = m.D / h, leak = 1.0 / (2.0 * m.A + first / m.D);
     std::vector<double> diag(k_max), rhs(k_max, 0.0);
     for (std::size_t k = 0; k < k_max; ++k)
-        diag[k] = m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) + (k == 0 ? leak : 0.0);
+        diag[k] =
+            m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) + (k == 0 ? leak : 0.0);
     for (int b = 0; b < kBeamSamples; ++b) {
         const double t = (beam_depth(b, m.sigma_t) - first) / h; // in voxel centres
         const double q = m.alpha / kBeamSamples;
@@ -480,13 +491,18 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     while (coarse_steps < 7 &&
            box / std::pow(h * double(1 << coarse_steps), 3) > 262144.0)
         ++coarse_steps;
+    // The deepest first collision the sources sample, in any channel.
+    double beam_limit = 0;
+    for (int c = 0; c < 3; ++c)
+        beam_limit =
+            std::max(beam_limit, 1.01 * beam_depth(kBeamSamples - 1, med[c].sigma_t));
     std::vector<std::unique_ptr<Level>> levels; // coarsest first
     std::vector<std::shared_ptr<const Surfels>> level_surfels;
     std::vector<SurfaceSamples> coarse_blockers;
     {
         auto [sf, bl] = merged(h * double(1 << coarse_steps));
-        levels.push_back(std::make_unique<Level>(
-            make_level(lo, hi, h * double(1 << coarse_steps), sf->samples, bl)));
+        levels.push_back(std::make_unique<Level>(make_level(
+            lo, hi, h * double(1 << coarse_steps), sf->samples, bl, beam_limit)));
         level_surfels.push_back(sf);
         coarse_blockers = std::move(bl);
     }
@@ -508,8 +524,7 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         for (std::size_t j = 0; j < n; ++j) {
             const double d = depth[cs.of_point[j]];
             for (int c = 0; c < 3; ++c) {
-                double wc =
-                    (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
+                double wc = (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
                 if (d >= limit) wc = 0.0; // no way out found within the limit
                 wc = std::clamp(wc, 0.0, 1.0);
                 w[j][c] = float(wc);
@@ -537,7 +552,7 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     for (int k = coarse_steps - 1; k >= 0; --k) {
         auto [sf, bl] = merged(h * double(1 << k));
         auto finer = std::make_unique<Level>(
-            make_level(lo, hi, h * double(1 << k), sf->samples, bl));
+            make_level(lo, hi, h * double(1 << k), sf->samples, bl, beam_limit));
         if (leaking(*levels.back(), *level_surfels.back()) <
                 0.95 * leaking(*finer, *sf) ||
             levels.back()->u.voxels.size() < 512) {
@@ -557,7 +572,8 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     {
         double sum = 0, weight = 0;
         for (std::size_t k = 0; k < surfels.flux.size(); ++k) {
-            const double f = std::max(0.0, surfels.flux[k].x + surfels.flux[k].y + surfels.flux[k].z);
+            const double f =
+                std::max(0.0, surfels.flux[k].x + surfels.flux[k].y + surfels.flux[k].z);
             if (fine.leak_voxel[k] < 0 || f <= 0) continue;
             sum += f * fine.leak_depth[k];
             weight += f;
@@ -647,14 +663,15 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         rep.reflectance_correction[c] = missing;
         std::vector<double> volume(n, 0.0);
         for (std::size_t j = 0; j < n; ++j)
-            volume[j] = std::max(0.0, exitance[j] * scale + missing * double(irradiance[j][c]));
+            volume[j] =
+                std::max(0.0, exitance[j] * scale + missing * double(irradiance[j][c]));
         // Light out never more than light in: the correction is local, so a
         // shape small against the light's spread could take more than came in.
         const double in = chunked_sum(n, [&](std::size_t j) {
             return double(surface.areas[j]) * std::max(0.0, double(irradiance[j][c]));
         });
-        const double given =
-            chunked_sum(n, [&](std::size_t j) { return double(surface.areas[j]) * volume[j]; });
+        const double given = chunked_sum(
+            n, [&](std::size_t j) { return double(surface.areas[j]) * volume[j]; });
         const double cap = given > in && given > 0 ? in / given : 1.0;
         for (std::size_t j = 0; j < n; ++j) {
             if (fine.leak_voxel[surfels.of_point[j]] < 0 || w[j][c] == 0.0f) continue;

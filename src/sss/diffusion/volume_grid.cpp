@@ -136,11 +136,13 @@ std::vector<int8_t> inside_voxels(const VoxelGrid& g, const SurfaceSamples& s) {
 }
 
 std::vector<double> ray_thickness(const VoxelGrid& g, const SurfaceSamples& surface,
-                                  const std::vector<SurfaceSamples>& blockers, double limit) {
+                                  const std::vector<SurfaceSamples>& blockers,
+                                  double limit) {
     std::vector<const SurfaceSamples*> sets = {&surface};
     for (const SurfaceSamples& b : blockers) sets.push_back(&b);
     const auto reach = [&](const SurfaceSamples& s, std::size_t k) {
-        return 1.5 * std::max(std::sqrt(std::max(0.0, double(s.areas[k])) / M_PI), 0.5 * g.h);
+        return 1.5 *
+               std::max(std::sqrt(std::max(0.0, double(s.areas[k])) / M_PI), 0.5 * g.h);
     };
     // Every voxel lists the disks that reach into it (set, sample).
     const std::size_t nv = g.count();
@@ -152,7 +154,8 @@ std::vector<double> ray_thickness(const VoxelGrid& g, const SurfaceSamples& surf
             for (std::size_t k = 0; k < s.positions.size(); ++k) {
                 const glm::dvec3 p(s.positions[k]);
                 const double r = reach(s, k);
-                const glm::ivec3 lo = g.cell_of(p - glm::dvec3(r)), hi = g.cell_of(p + glm::dvec3(r));
+                const glm::ivec3 lo = g.cell_of(p - glm::dvec3(r)),
+                                 hi = g.cell_of(p + glm::dvec3(r));
                 for (int z = lo.z; z <= hi.z; ++z)
                     for (int y = lo.y; y <= hi.y; ++y)
                         for (int x = lo.x; x <= hi.x; ++x) {
@@ -185,7 +188,8 @@ std::vector<double> ray_thickness(const VoxelGrid& g, const SurfaceSamples& surf
             c[a] = int(std::floor(q[a]));
             step[a] = dir[a] > 0 ? 1 : -1;
             delta[a] = dir[a] != 0 ? std::abs(1.0 / dir[a]) : 1e300;
-            const double edge = dir[a] > 0 ? std::floor(q[a]) + 1 - q[a] : q[a] - std::floor(q[a]);
+            const double edge =
+                dir[a] > 0 ? std::floor(q[a]) + 1 - q[a] : q[a] - std::floor(q[a]);
             next[a] = dir[a] != 0 ? edge * delta[a] : 1e300;
         }
         double best = limit;
@@ -211,7 +215,8 @@ std::vector<double> ray_thickness(const VoxelGrid& g, const SurfaceSamples& surf
                 const double r = reach(s, k);
                 if (glm::dot(hit, hit) <= r * r) best = tk;
             }
-            const int a = next.x < next.y ? (next.x < next.z ? 0 : 2) : (next.y < next.z ? 1 : 2);
+            const int a =
+                next.x < next.y ? (next.x < next.z ? 0 : 2) : (next.y < next.z ? 1 : 2);
             travelled = next[a];
             next[a] += delta[a];
             c[a] += step[a];

@@ -55,7 +55,8 @@ std::vector<int8_t> inside_voxels(const VoxelGrid& grid, const SurfaceSamples& s
 /// their area, so that rays do not slip between samples; the grid indexes
 /// them.
 std::vector<double> ray_thickness(const VoxelGrid& grid, const SurfaceSamples& surface,
-                                  const std::vector<SurfaceSamples>& blockers, double limit);
+                                  const std::vector<SurfaceSamples>& blockers,
+                                  double limit);
 
 /// The grid's medium voxels as unknowns of the diffusion system.
 struct Unknowns {
