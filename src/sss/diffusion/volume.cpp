@@ -381,6 +381,62 @@ std::vector<double> prolong(const Level& coarse, const std::vector<double>& phi,
     return x;
 }
 
+// Each channel's blend weights averaged over the surface within about its
+// spread length (a box filter on the grid, area-weighted), so that the
+// result passes from the profile's to the volume's gradually rather than at
+// a seam where the thickness below the surface jumps (the edge of a bone).
+void smooth_weights(const VoxelGrid& g, const SurfaceSamples& surface,
+                    const double (&spread)[3], std::vector<glm::vec3>& w) {
+    const std::size_t nv = g.count(), n = surface.positions.size();
+    std::vector<double> num(nv), den(nv), tmp(nv);
+    const std::ptrdiff_t stride[3] = {1, g.dim.x, std::ptrdiff_t(g.dim.x) * g.dim.y};
+    // A running box sum of half-width r along axis a, in place.
+    const auto box = [&](std::vector<double>& f, int a, int r) {
+        const int len = g.dim[a];
+        const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+        for (int v = 0; v < g.dim[b2]; ++v)
+            for (int u = 0; u < g.dim[b1]; ++u) {
+                glm::ivec3 c(0);
+                c[b1] = u;
+                c[b2] = v;
+                const std::size_t base = g.voxel(c.x, c.y, c.z);
+                double run = 0;
+                for (int i = 0; i < std::min(r, len); ++i)
+                    run += f[base + std::size_t(i * stride[a])];
+                for (int i = 0; i < len; ++i) {
+                    if (i + r < len) run += f[base + std::size_t((i + r) * stride[a])];
+                    if (i - r - 1 >= 0)
+                        run -= f[base + std::size_t((i - r - 1) * stride[a])];
+                    tmp[base + std::size_t(i * stride[a])] = run;
+                }
+                for (int i = 0; i < len; ++i)
+                    f[base + std::size_t(i * stride[a])] =
+                        tmp[base + std::size_t(i * stride[a])];
+            }
+    };
+    for (int c = 0; c < 3; ++c) {
+        std::fill(num.begin(), num.end(), 0.0);
+        std::fill(den.begin(), den.end(), 0.0);
+        for (std::size_t j = 0; j < n; ++j) {
+            const glm::ivec3 v = g.cell_of(glm::dvec3(surface.positions[j]));
+            const std::size_t k = g.voxel(v.x, v.y, v.z);
+            const double a = std::max(0.0, double(surface.areas[j]));
+            num[k] += a * double(w[j][c]);
+            den[k] += a;
+        }
+        const int r = std::clamp(int(std::lround(0.5 * spread[c] / g.h)), 1, 32);
+        for (int a = 0; a < 3; ++a) {
+            box(num, a, r);
+            box(den, a, r);
+        }
+        for (std::size_t j = 0; j < n; ++j) {
+            const glm::ivec3 v = g.cell_of(glm::dvec3(surface.positions[j]));
+            const std::size_t k = g.voxel(v.x, v.y, v.z);
+            if (den[k] > 0) w[j][c] = float(std::clamp(num[k] / den[k], 0.0, 1.0));
+        }
+    }
+}
+
 // The total diffuse reflectance of a uniformly lit half-space in the same
 // discretisation as the grids (voxels of edge h below the surface, the leak
 // half a voxel above the first centre, the beam's collisions shared between
@@ -520,16 +576,20 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         const std::vector<double> depth =
             ray_thickness(levels[0]->grid, cs.samples, coarse_blockers,
                           std::isfinite(limit) ? limit : 2.0 * glm::length(size));
-        std::fill(std::begin(channel_needed), std::end(channel_needed), false);
+        bool any = false;
         for (std::size_t j = 0; j < n; ++j) {
             const double d = depth[cs.of_point[j]];
             for (int c = 0; c < 3; ++c) {
                 double wc = (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
                 if (d >= limit) wc = 0.0; // no way out found within the limit
-                wc = std::clamp(wc, 0.0, 1.0);
-                w[j][c] = float(wc);
-                if (wc > 0) channel_needed[c] = true;
+                w[j][c] = float(std::clamp(wc, 0.0, 1.0));
+                any = any || w[j][c] > 0.0f;
             }
+        }
+        if (any) smooth_weights(levels[0]->grid, surface, spread, w);
+        for (std::size_t j = 0; j < n; ++j) {
+            for (int c = 0; c < 3; ++c)
+                if (w[j][c] > 0.0f) channel_needed[c] = true;
             if (w[j] != glm::vec3(0.0f)) ++rep.thin_points;
         }
     }
