@@ -7,6 +7,8 @@
 #            equal where the key light falls; beauty = sum of the AOVs
 #   thinbox  the blocker's ring darker the stronger the blocker; nothing of it
 #            without sss
+#   bone     the bone baked as a blocker cloud (-blocker) darkens the skin
+#            above it; without the blocker the lit face is even
 #   skin     the thin rim lit from behind is red (R > G, B) and much brighter
 #            than the thick middle with sss, not without
 #   varying  the colour varies with the per-point albedo (fromfile) with sss,
@@ -223,6 +225,27 @@ scene_thinbox() {
     # Without sss the underside has the ambient light only (0.03), and no ring.
     is "n < 0.04 && a25 > n + 0.04 && nr < 1.1 * n + 0.001 && nr > 0.9 * n - 0.001" a25="$a25" n="$n" nr="$nr" ||
         fail "thinbox: without sss the underside should be dark and even ($n, ring $nr; with sss $a25)"
+}
+
+# ---------------------------------------------------------------------------
+# Bone: 128 x 128, the block with and without the bone as a blocker.
+scene_bone() {
+    run_scene bone || return 0
+    d=bone
+    exr_ok $d/bone.exr 128 128 "bone"
+    exr_ok $d/bone_noblocker.exr 128 128 "bone without the blocker"
+    exr_ok $d/bone_nosss.exr 128 128 "bone no sss"
+    image_ok $d/bone_compare.png 384 128 "bone compare"
+    # A strip of the lit face above the bone, and one nearer the back edge.
+    above() { mean "$1" R 0.35 0.47 0.65 0.53; }
+    beside() { mean "$1" R 0.35 0.30 0.65 0.36; }
+    b="$(above $d/bone.exr)" bb="$(beside $d/bone.exr)"
+    n="$(above $d/bone_noblocker.exr)" nb="$(beside $d/bone_noblocker.exr)"
+    # (measured: 0.29 above against 0.43 beside; without the blocker 0.46 and 0.44)
+    is "bb > 0.2 && b < 0.8 * bb" b="$b" bb="$bb" ||
+        fail "bone: the skin above the bone ($b) should be darker than beside it ($bb)"
+    is "n > 0.9 * nb && n < 1.15 * nb" n="$n" nb="$nb" ||
+        fail "bone: without the blocker the lit face should be even ($n above, $nb beside)"
 }
 
 # ---------------------------------------------------------------------------
@@ -551,7 +574,7 @@ scene_guard() {
 
 # The parts to run: the arguments (CTest runs one per test, cli.test_scenes.<part>,
 # tests/CMakeLists.txt), or all of them.
-all_parts=(teapot thinbox skin varying orbit absorption gibake domelight appnote skinstudy calcite guard)
+all_parts=(teapot thinbox bone skin varying orbit absorption gibake domelight appnote skinstudy calcite guard)
 parts=("$@")
 ((${#parts[@]})) || parts=("${all_parts[@]}")
 for part in "${parts[@]}"; do
