@@ -260,16 +260,6 @@ struct System {
     std::vector<double> diag;
     std::vector<double> leak; // per unknown: sum of its points' leak conductances
     std::vector<double> source;
-
-    void apply(const std::vector<double>& x, std::vector<double>& y) const {
-        const auto& nb = level->u.neighbours;
-        oneapi::tbb::parallel_for(std::size_t(0), x.size(), [&](std::size_t k) {
-            double s = diag[k] * x[k];
-            for (int32_t m : nb[k])
-                if (m >= 0) s -= off * x[std::size_t(m)];
-            y[k] = s;
-        });
-    }
 };
 
 System make_system(const Level& l, const Medium& m, const SurfaceSamples& surface,
@@ -320,40 +310,92 @@ System make_system(const Level& l, const Medium& m, const SurfaceSamples& surfac
     return s;
 }
 
-// Jacobi-preconditioned conjugate gradients from x; returns the steps.
-int solve(const System& s, std::vector<double>& x, double tolerance, int max_steps) {
-    const std::size_t n = x.size();
-    std::vector<double> r(n), z(n), p(n), ap(n);
-    s.apply(x, ap);
-    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
-        r[k] = s.source[k] - ap[k];
-        z[k] = r[k] / s.diag[k];
-        p[k] = z[k];
+// Up to three sums of a pass over [0, n) in fixed chunks, added in order:
+// parallel, and the same at any thread count.
+struct Sums {
+    double a = 0, b = 0, c = 0;
+};
+template <class F>
+Sums chunked_pass(std::size_t n, F f) {
+    constexpr std::size_t kChunk = 8192;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<Sums> part(chunks);
+    oneapi::tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        part[c] = f(c * kChunk, std::min(n, (c + 1) * kChunk));
     });
-    const double bnorm = std::sqrt(
-        chunked_sum(n, [&](std::size_t k) { return s.source[k] * s.source[k]; }));
+    Sums t;
+    for (const Sums& q : part) {
+        t.a += q.a;
+        t.b += q.b;
+        t.c += q.c;
+    }
+    return t;
+}
+
+// Jacobi-preconditioned conjugate gradients from x; returns the steps. The
+// vectors are floats (the result is wanted to 1e-3), the sums doubles.
+int solve(const System& s, std::vector<float>& x, double tolerance, int max_steps) {
+    const std::size_t n = x.size();
+    const auto& nb = s.level->u.neighbours;
+    std::vector<float> r(n), z(n), p(n), ap(n), inv(n), diag(n);
+    const float off = float(s.off);
+    for (std::size_t k = 0; k < n; ++k) {
+        diag[k] = float(s.diag[k]);
+        inv[k] = float(1.0 / s.diag[k]);
+    }
+    // y = A v over [b, e), and sum v.y.
+    const auto apply = [&](const std::vector<float>& v, std::vector<float>& y,
+                           std::size_t b, std::size_t e) {
+        double dot = 0;
+        for (std::size_t k = b; k < e; ++k) {
+            float t = diag[k] * v[k];
+            for (int32_t m : nb[k])
+                if (m >= 0) t -= off * v[std::size_t(m)];
+            y[k] = t;
+            dot += double(v[k]) * double(t);
+        }
+        return dot;
+    };
+    Sums t = chunked_pass(n, [&](std::size_t b, std::size_t e) {
+        apply(x, ap, b, e);
+        Sums q;
+        for (std::size_t k = b; k < e; ++k) {
+            r[k] = float(s.source[k]) - ap[k];
+            z[k] = r[k] * inv[k];
+            p[k] = z[k];
+            q.a += double(r[k]) * z[k];
+            q.b += double(r[k]) * r[k];
+            q.c += s.source[k] * s.source[k];
+        }
+        return q;
+    });
+    const double bnorm = std::sqrt(t.c);
     if (!(bnorm > 0)) {
-        std::fill(x.begin(), x.end(), 0.0);
+        std::fill(x.begin(), x.end(), 0.0f);
         return 0;
     }
-    double rz = chunked_sum(n, [&](std::size_t k) { return r[k] * z[k]; });
+    double rz = t.a, rr = t.b;
     int step = 0;
-    for (; step < max_steps; ++step) {
-        const double rnorm =
-            std::sqrt(chunked_sum(n, [&](std::size_t k) { return r[k] * r[k]; }));
-        if (rnorm <= tolerance * bnorm) break;
-        s.apply(p, ap);
-        const double pap = chunked_sum(n, [&](std::size_t k) { return p[k] * ap[k]; });
+    for (; step < max_steps && std::sqrt(rr) > tolerance * bnorm; ++step) {
+        const double pap = chunked_pass(n, [&](std::size_t b, std::size_t e) {
+                               return Sums{apply(p, ap, b, e), 0, 0};
+                           }).a;
         if (!(pap > 0)) break;
-        const double a = rz / pap;
-        oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t k) {
-            x[k] += a * p[k];
-            r[k] -= a * ap[k];
-            z[k] = r[k] / s.diag[k];
+        const float alpha = float(rz / pap);
+        t = chunked_pass(n, [&](std::size_t b, std::size_t e) {
+            Sums q;
+            for (std::size_t k = b; k < e; ++k) {
+                x[k] += alpha * p[k];
+                r[k] -= alpha * ap[k];
+                z[k] = r[k] * inv[k];
+                q.a += double(r[k]) * z[k];
+                q.b += double(r[k]) * r[k];
+            }
+            return q;
         });
-        const double rz_new = chunked_sum(n, [&](std::size_t k) { return r[k] * z[k]; });
-        const double beta = rz_new / rz;
-        rz = rz_new;
+        const float beta = float(t.a / rz);
+        rz = t.a;
+        rr = t.b;
         oneapi::tbb::parallel_for(std::size_t(0), n,
                                   [&](std::size_t k) { p[k] = z[k] + beta * p[k]; });
     }
@@ -362,9 +404,9 @@ int solve(const System& s, std::vector<double>& x, double tolerance, int max_ste
 
 // phi of a coarser level read at the finer level's unknowns (the cascade's
 // starting guess).
-std::vector<double> prolong(const Level& coarse, const std::vector<double>& phi,
-                            const Level& fine) {
-    std::vector<double> x(fine.u.voxels.size(), 0.0);
+std::vector<float> prolong(const Level& coarse, const std::vector<float>& phi,
+                           const Level& fine) {
+    std::vector<float> x(fine.u.voxels.size(), 0.0f);
     oneapi::tbb::parallel_for(std::size_t(0), x.size(), [&](std::size_t k) {
         const std::size_t v = fine.u.voxels[k];
         const VoxelGrid& g = fine.grid;
@@ -376,7 +418,7 @@ std::vector<double> prolong(const Level& coarse, const std::vector<double>& phi,
         double s = 0;
         for (int i = 0; i < st.n; ++i)
             s += st.weight[i] * phi[std::size_t(st.unknown[i])];
-        x[k] = s;
+        x[k] = float(s);
     });
     return x;
 }
@@ -595,7 +637,7 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     }
     rep.needed = rep.thin_points > 0;
     if (!rep.needed) return out;
-    if (over_budget)
+    if (over_budget && h > l_min)
         rep.warnings.push_back(
             "the object is large against the mean free path: voxels of " +
             std::to_string(h) + " (" + std::to_string(h / l_min) + " mean free paths)");
@@ -662,14 +704,14 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     for (int c = 0; c < 3; ++c) {
         if (!channel_needed[c]) continue;
         const Medium& m = med[c];
-        std::vector<double> phi;
+        std::vector<float> phi;
         const Level* prev = nullptr;
         for (std::size_t li = levels.size(); li-- > 0;) {
             const Level& l = *levels[li];
             const Surfels& ls = *level_surfels[li];
             const System s = make_system(l, m, ls.samples, ls.flux, c);
             phi = prev ? prolong(*prev, phi, l)
-                       : std::vector<double>(l.u.voxels.size(), 0.0);
+                       : std::vector<float>(l.u.voxels.size(), 0.0f);
             rep.iterations[c] += solve(s, phi, o.tolerance, 50000);
             prev = &l;
             if (li == 0) {
