@@ -363,6 +363,21 @@ py::dict report_dict(const sss::SsDiffusionReport& r) {
     d["build_seconds"] = r.stats.build_seconds;
     d["eval_seconds"] = r.stats.eval_seconds;
     d["isa"] = sss::isa_name(r.stats.isa);
+    if (r.volume.needed || r.volume.seconds > 0) {
+        const sss::VolumeReport& v = r.volume;
+        py::dict vd;
+        vd["thin_points"] = v.thin_points;
+        vd["voxel"] = v.voxel;
+        vd["unknowns"] = v.unknowns;
+        vd["seconds"] = v.seconds;
+        const auto rgb = [](const glm::dvec3& x) {
+            return py::make_tuple(x.x, x.y, x.z);
+        };
+        vd["flux_in"] = rgb(v.flux_in);
+        vd["flux_out"] = rgb(v.flux_out);
+        vd["flux_blocked"] = rgb(v.flux_blocked);
+        d["volume"] = vd;
+    }
     return d;
 }
 

@@ -175,6 +175,10 @@ def write_cloud(path, cloud, *, types=None, ptcversion=0, compress=False):
 _FLAGS = {"exact"}
 
 
+# Options that may be given more than once (ptfilter -blocker).
+_REPEATED = {"blocker"}
+
+
 def _values(key, value):
     if isinstance(value, (str, bytes, os.PathLike)):
         return [os.fsdecode(value)]
@@ -201,6 +205,10 @@ def _words(options):
         if key in _FLAGS:
             if value:
                 words.append("-" + key)
+            continue
+        if key in _REPEATED and not isinstance(value, (str, bytes, os.PathLike)):
+            for v in value:  # blocker=["a.ptc", "b.ptc"]: -blocker a.ptc -blocker b.ptc
+                words.extend(["-" + key] + _values(key, v))
             continue
         words.append("-" + key)
         words.extend(_values(key, value))

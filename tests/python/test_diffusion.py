@@ -28,6 +28,8 @@ CASES = [
     ({"albedo": (0.8, 0.6, 0.4), "diffusemeanfreepath": (1.5, 0.7, 0.3), "profile": "mc"},
      ["-albedo", "0.8", "0.6", "0.4", "-diffusemeanfreepath", "1.5", "0.7", "0.3",
       "-profile", "mc"]),
+    ({"material": "skin1", "profile": "pbd", "volume": 1},
+     ["-material", "skin1", "-profile", "pbd", "-volume", "1"]),
 ]
 
 
@@ -227,3 +229,22 @@ def test_ctrl_c_cancels(tool, tmp_path, threads):
     whole = time.perf_counter() - start
     # The signal came during the run, which stopped well before its end.
     assert whole > 0.3 and interrupted < 0.8 * whole
+
+
+def test_volume_with_blockers_as_ptfilter(tmp_path, tool, sphere):
+    # Two small balls inside the 2 mm sphere, given as a list: one -blocker each.
+    blockers = []
+    for i in range(2):
+        path = tmp_path / f"bone{i}.ptc"
+        tool("ptsynth", "-n", 500, "-size", 0.4, path)
+        blockers.append(str(path))
+    out = tmp_path / "exe.ptc"
+    tool("ptfilter", "-ssdiffusion", "-material", "skin1", "-blocker", blockers[0],
+         "-blocker", blockers[1], sphere, out)
+    got = sss.ssdiffusion(sphere, material="skin1", blocker=blockers)
+    assert_clouds_identical(got, sss.read_cloud(out))
+    volume = got.report["volume"]
+    assert volume["thin_points"] > 0 and volume["unknowns"] > 0
+    assert all(b > 0 for b in volume["flux_blocked"])
+    assert all(o <= i for o, i in zip(volume["flux_out"], volume["flux_in"]))
+

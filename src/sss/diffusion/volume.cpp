@@ -77,10 +77,15 @@ Split split_large(const SurfaceSamples& in, const std::vector<glm::vec3>* irradi
                   double h) {
     Split out;
     const std::size_t n = in.positions.size();
+    // Bounded for any areas: past this many samples points stay whole.
+    const std::size_t cap = std::max<std::size_t>(4 * n, std::size_t(1) << 25);
+    std::size_t total = 0;
     for (std::size_t j = 0; j < n; ++j) {
         const double area = std::max(0.0, double(in.areas[j]));
         const double side = std::sqrt(area);
-        const int k = std::clamp(int(std::ceil(side / h)), 1, 64);
+        int k = std::clamp(int(std::ceil(side / h)), 1, 64);
+        if (total + std::size_t(k * k) + (n - j) > cap) k = 1;
+        total += std::size_t(k * k);
         const glm::vec3 e = irradiance ? (*irradiance)[j] : glm::vec3(0.0f);
         if (k == 1) {
             out.samples.positions.push_back(in.positions[j]);
@@ -767,18 +772,36 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         for (std::size_t j = 0; j < n; ++j)
             volume[j] =
                 std::max(0.0, exitance[j] * scale + missing * double(irradiance[j][c]));
-        // Light out never more than light in: the correction is local, so a
-        // shape small against the light's spread could take more than came in.
-        const double in = chunked_sum(n, [&](std::size_t j) {
-            return double(surface.areas[j]) * std::max(0.0, double(irradiance[j][c]));
-        });
-        const double given = chunked_sum(
-            n, [&](std::size_t j) { return double(surface.areas[j]) * volume[j]; });
-        const double cap = given > in && given > 0 ? in / given : 1.0;
+        std::vector<double> blended(n, 0.0);
+        std::vector<char> mine(n, 0); // the points whose value is (partly) the volume's
         for (std::size_t j = 0; j < n; ++j) {
             if (fine.leak_voxel[surfels.of_point[j]] < 0 || w[j][c] == 0.0f) continue;
-            const double v = double(w[j][c]) * volume[j] * cap +
-                             (1.0 - double(w[j][c])) * double(profile_result[j][c]);
+            mine[j] = 1;
+            blended[j] = double(w[j][c]) * volume[j] +
+                         (1.0 - double(w[j][c])) * double(profile_result[j][c]);
+        }
+        // Light out never more than light in: the correction is local and the
+        // blend keeps some of the profile's light, so a shape small against
+        // the light's spread could give off more than came in; then the
+        // volume's points are scaled down (the others keep the profile's).
+        const Sums t = chunked_pass(n, [&](std::size_t b, std::size_t e) {
+            Sums q;
+            for (std::size_t j = b; j < e; ++j) {
+                const double a = double(surface.areas[j]);
+                q.a += a * std::max(0.0, double(irradiance[j][c]));
+                if (mine[j])
+                    q.b += a * blended[j];
+                else
+                    q.c += a * double(profile_result[j][c]);
+            }
+            return q;
+        });
+        const double cap = t.a + t.b + t.c > 0 && t.b + t.c > t.a && t.b > 0
+                               ? std::max(0.0, t.a - std::max(0.0, t.c)) / t.b
+                               : 1.0;
+        for (std::size_t j = 0; j < n; ++j) {
+            if (!mine[j]) continue;
+            const double v = blended[j] * cap;
             out[j][c] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
