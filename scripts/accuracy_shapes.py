@@ -95,11 +95,11 @@ def parse_walk(text):
             r["out"][m.group(1)] = float(m.group(2))
             r["blocked"][m.group(1)] = float(m.group(3))
             continue
-        m = re.match(r"ssprofile: (\S+) ([rgb]): flux-weighted L1 ([0-9.]+)%, total x([0-9.]+)",
-                     line)
+        m = re.match(r"ssprofile: (\S+) ([rgb]): flux-weighted L1 ([0-9.]+)% \(walk noise "
+                     r"([0-9.]+)%\), total x([0-9.]+)", line)
         if m:
             r["compare"].setdefault(os.path.basename(m.group(1)), {})[m.group(2)] = (
-                float(m.group(3)) / 100, float(m.group(4)))
+                float(m.group(3)) / 100, float(m.group(5)), float(m.group(4)) / 100)
             continue
         m = re.match(r"ssprofile: region (\S+): \d+ points, walk (\S+) (\S+) (\S+)", line)
         if m:
@@ -189,10 +189,10 @@ WorldEnd
             w, _ = r.walk(rib, material, name + ".ptc", list(outs.values()), {}, photons=photons)
             for method, out in outs.items():
                 for c, ch in enumerate(CHANNELS):
-                    l1, total = w["compare"][out][ch]
+                    l1, total, noise = w["compare"][out][ch]
                     rows.append({"material": material, "radius_mm": radius, "channel": ch,
                                  "radius_over_dmfp": round(radius / dmfp(material, c), 2),
-                                 "method": method, "flux": total, "l1w": l1,
+                                 "method": method, "flux": total, "l1w": l1, "noise": noise,
                                  "seconds": round(times[method], 3)})
     return rows
 
@@ -381,7 +381,8 @@ cloud as `-blocker`.
             f"{max((float(r['out_per_in']) for r in sel), default=float('nan')):.3f}",
             f"{100 * worst(big, 'flux'):.0f} %",
             f"{100 * worst(small, 'flux'):.0f} %",
-            f"{100 * max((float(r['l1w']) for r in ss), default=float('nan')):.0f} %",
+            f"{100 * max((float(r['l1w']) for r in ss), default=float('nan')):.0f} % "
+            f"(noise {100 * max((float(r['noise']) for r in ss), default=float('nan')):.0f} %)",
             f"{100 * max((abs(float(r[k]) - 1) for r in bb for k in ('top0', 'top2.5', 'top5')), default=float('nan')):.0f} %",
         ]
     labels = [("slabs, d >= 2 l", "abs(R - 1), abs(T - 1)", "10 %"),
@@ -423,12 +424,13 @@ cloud as `-blocker`.
     w("")
     w("## Spheres\n")
     w("Spheres lit from one side by a distant light; `flux` is the light the result gives off "
-      "over the walk's, `L1w` the flux-weighted L1 error per point (it includes the walk's own "
-      "noise per point); `s` is ptfilter's wall time.\n")
+      "over the walk's, `L1w` the flux-weighted L1 error per point, which includes the walk's "
+      "own noise per point (`noise`: what a perfect result would score); `s` is ptfilter's "
+      "wall time.\n")
     methods = list(dict.fromkeys(r["method"] for r in sph))
-    w("| material | radius | channel | radius / dmfp | " +
+    w("| material | radius | channel | radius / dmfp | noise | " +
       " | ".join(f"{m} flux / L1w / s" for m in methods) + " |")
-    w("|---|---|---|---|" + "---|" * len(methods))
+    w("|---|---|---|---|---|" + "---|" * len(methods))
     keyed = {}
     for r in sph:
         keyed.setdefault((r["material"], r["radius_mm"], r["channel"], r["radius_over_dmfp"]),
@@ -436,7 +438,9 @@ cloud as `-blocker`.
     for k, by in keyed.items():
         cells = [f"x{float(by[m]['flux']):.2f} / {100 * float(by[m]['l1w']):.0f} % / "
                  f"{by[m]['seconds']}" for m in methods]
-        w(f"| {k[0]} | {k[1]} mm | {k[2]} | {k[3]} | " + " | ".join(cells) + " |")
+        noise = by[methods[0]]["noise"]
+        w(f"| {k[0]} | {k[1]} mm | {k[2]} | {k[3]} | {100 * float(noise):.0f} % | " +
+          " | ".join(cells) + " |")
     w("")
     w("## A bone under the skin\n")
     w("A 30 x 30 x 10 mm box lit on top with an absorbing cylinder inside (radius 2.5 mm, axis "

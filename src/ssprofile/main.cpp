@@ -62,7 +62,8 @@ In a scene's own geometry (-scene):
   -spacing S                edge length the objects are diced to (scene units;
                             default 1/500 of the cloud's diagonal)
   -compare FILE             a ptfilter result on the same points: prints its
-                            flux-weighted L1 error and total against the walk;
+                            flux-weighted L1 error (and the walk's own noise in
+                            it) and total against the walk;
                             repeatable (a cloud of other points: regions only)
   -region NAME X0 Y0 Z0 X1 Y1 Z1
                             prints the area-weighted mean exitance of the walk
@@ -194,8 +195,10 @@ int run_scene(const SceneArgs& sa, const sss::ProfileReportOptions& report,
         const sss::CloudComparison cmp = sss::compare_with_truth(others[k], truth, areas);
         for (int c = 0; c < 3; ++c)
             std::printf(
-                "ssprofile: %s %c: flux-weighted L1 %.1f%%, total x%.3f of the walk's\n",
-                sa.compare[k].c_str(), names[c], 100.0 * cmp.l1[c], cmp.total_ratio[c]);
+                "ssprofile: %s %c: flux-weighted L1 %.1f%% (walk noise %.1f%%), total "
+                "x%.3f of the walk's\n",
+                sa.compare[k].c_str(), names[c], 100.0 * cmp.l1[c], 100.0 * cmp.noise[c],
+                cmp.total_ratio[c]);
     }
     for (const Region& g : sa.regions) {
         const sss::RegionMean t = sss::region_mean(truth, areas, g.lo, g.hi);

@@ -85,7 +85,7 @@ grep -q 'color _ssdiffusion_error$' "$tmp/truth.txt" || fail "-scene: no _ssdiff
 grep -Eq '^ssprofile: r: flux in [0-9.]+; out 0\.[0-9]+ \+- 0\.[0-9]+, blocked 0\.[0-9]*[1-9]' \
     "$tmp/scene.txt" || { cat "$tmp/scene.txt" >&2; fail "-scene: no light blocked by the bone"; }
 # (measured x0.38 of the walk's total at 200000 paths)
-grep -Eq 'pf.ptc r: flux-weighted L1 [0-9.]+%, total x0\.[0-6]' "$tmp/scene.txt" ||
+grep -Eq 'pf.ptc r: flux-weighted L1 [0-9.]+% \(walk noise [0-9.]+%\), total x0\.[0-6]' "$tmp/scene.txt" ||
     { cat "$tmp/scene.txt" >&2; fail "-scene: ptfilter should lose light in a 2 mm ball"; }
 rc="$(status "$tmp/o" "$tmp/e" "$ssprofile" -scene "$tmp/ball.rib" -blocker nosuch -photons 1000 \
     "$tmp/ball.ptc" "$tmp/x.ptc")"

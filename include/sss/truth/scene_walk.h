@@ -35,8 +35,8 @@ struct SceneWalkOptions {
     int batches = 64;
     std::string area_channel = "_area";           ///< else pi radius^2
     std::string radiance_channel = "_radiance_t"; ///< transmitted irradiance
-    bool normal_incidence = false; ///< as MeshWalkOptions
-    bool scattered_only = false;   ///< as MeshWalkOptions
+    bool normal_incidence = false;                ///< as MeshWalkOptions
+    bool scattered_only = false;                  ///< as MeshWalkOptions
 };
 
 struct SceneWalkReport {
@@ -58,9 +58,12 @@ PointCloud walk_scene(const SceneWalkOptions& options, const PointCloud& baked,
 
 /// A result against the walk's, per channel: the flux-weighted L1 error
 /// sum |a_i - t_i| A_i / sum t_i A_i and the ratio of the totals
-/// sum a_i A_i / sum t_i A_i, over the points with area.
+/// sum a_i A_i / sum t_i A_i, over the points with area. `noise` is the L1
+/// error a perfect result would score against the walk's noise,
+/// sqrt(2 / pi) sum s_i A_i / sum t_i A_i from the walk's standard errors s_i
+/// (`_ssdiffusion_error`; 0 when the truth has none).
 struct CloudComparison {
-    glm::dvec3 l1{0.0}, total_ratio{0.0};
+    glm::dvec3 l1{0.0}, total_ratio{0.0}, noise{0.0};
 };
 CloudComparison compare_with_truth(const PointCloud& result, const PointCloud& truth,
                                    const std::vector<float>& areas);

@@ -143,7 +143,9 @@ CloudComparison compare_with_truth(const PointCloud& result, const PointCloud& t
                          " and " + std::to_string(truth.size()) + " points");
     const Channel& a = color_channel(result, "_ssdiffusion");
     const Channel& t = color_channel(truth, "_ssdiffusion");
-    glm::dvec3 diff(0.0), sum_a(0.0), sum_t(0.0);
+    const Channel* err = truth.find_channel("_ssdiffusion_error");
+    if (err && err->components() != 3) err = nullptr;
+    glm::dvec3 diff(0.0), sum_a(0.0), sum_t(0.0), sum_e(0.0);
     for (std::size_t i = 0; i < truth.size(); ++i) {
         if (!(areas[i] > 0.0f)) continue;
         if (glm::length(result.positions[i] - truth.positions[i]) >
@@ -154,12 +156,14 @@ CloudComparison compare_with_truth(const PointCloud& result, const PointCloud& t
             diff[c] += std::abs(double(a.data[3 * i + c]) - t.data[3 * i + c]) * areas[i];
             sum_a[c] += double(a.data[3 * i + c]) * areas[i];
             sum_t[c] += double(t.data[3 * i + c]) * areas[i];
+            if (err) sum_e[c] += double(err->data[3 * i + c]) * areas[i];
         }
     }
     CloudComparison r;
     for (int c = 0; c < 3; ++c) {
         r.l1[c] = sum_t[c] > 0.0 ? diff[c] / sum_t[c] : 0.0;
         r.total_ratio[c] = sum_t[c] > 0.0 ? sum_a[c] / sum_t[c] : 0.0;
+        r.noise[c] = sum_t[c] > 0.0 ? std::sqrt(2.0 / kPi) * sum_e[c] / sum_t[c] : 0.0;
     }
     return r;
 }
