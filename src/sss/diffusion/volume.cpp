@@ -526,6 +526,271 @@ double halfspace_reflectance(const Medium& m, double h, double first) {
 
 } // namespace
 
+namespace {
+
+// The state of one volume_diffusion() call, built step by step.
+struct Run {
+    const SurfaceSamples& surface;
+    const std::vector<glm::vec3>& irradiance;
+    const std::vector<SurfaceSamples>& blockers;
+    const VolumeOptions& o;
+    VolumeReport& rep;
+    std::size_t n = 0;
+    Medium med[3];
+    double l_min = 0, box = 0, h = 0, beam_limit = 0;
+    glm::dvec3 lo{0.0}, hi{0.0}, size{0.0};
+    bool over_budget = false;
+    int coarse_steps = 0;
+    std::vector<std::unique_ptr<Level>> levels; // coarsest first, then finest first
+    std::vector<std::shared_ptr<const Surfels>> level_surfels;
+    std::vector<SurfaceSamples> coarse_blockers;
+    std::vector<glm::vec3> w; // the volume's share per point and channel
+    bool channel_needed[3] = {false, false, false};
+
+    // The surface (and the blockers) merged to the voxels of a grid of edge e.
+    std::pair<std::shared_ptr<Surfels>, std::vector<SurfaceSamples>>
+    merged(double e) const {
+        const VoxelGrid g = make_grid(lo, hi, e, 2);
+        auto sf = std::make_shared<Surfels>(make_surfels(surface, &irradiance, g));
+        std::vector<SurfaceSamples> bl;
+        for (const SurfaceSamples& b : blockers)
+            bl.push_back(make_surfels(b, nullptr, g).samples);
+        return {sf, bl};
+    }
+};
+
+// The media, the object's box, the finest voxel size and the coarsest grid
+// of the cascade (at most 2^18 voxels in the box), built first: it decides
+// which points and channels need the volume at all, so that a shape thick
+// against every channel costs no more.
+void plan(Run& r, const ChannelCoefficients (&channels)[3]) {
+    r.l_min = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 3; ++c) {
+        r.med[c] = medium_of(channels[c]);
+        r.l_min = std::min(r.l_min, 1.0 / r.med[c].sigma_t);
+        // The deepest first collision the sources sample, in any channel.
+        r.beam_limit =
+            std::max(r.beam_limit, 1.01 * beam_depth(kBeamSamples - 1, r.med[c].sigma_t));
+    }
+    r.lo = r.hi = glm::dvec3(r.surface.positions[0]);
+    for (const glm::vec3& p : r.surface.positions) {
+        r.lo = glm::min(r.lo, glm::dvec3(p));
+        r.hi = glm::max(r.hi, glm::dvec3(p));
+    }
+    r.size = glm::max(r.hi - r.lo, glm::dvec3(r.l_min));
+    r.box = r.size.x * r.size.y * r.size.z;
+    // The finest voxels resolve the shortest transport mean free path within
+    // the voxel budget.
+    r.h = r.l_min / r.o.voxels_per_mfp;
+    r.over_budget = r.box / (r.h * r.h * r.h) > double(r.o.max_voxels);
+    if (r.over_budget) r.h = std::cbrt(r.box / double(r.o.max_voxels));
+    while (r.coarse_steps < 7 &&
+           r.box / std::pow(r.h * double(1 << r.coarse_steps), 3) > 262144.0)
+        ++r.coarse_steps;
+    const double e = r.h * double(1 << r.coarse_steps);
+    auto [sf, bl] = r.merged(e);
+    r.levels.push_back(std::make_unique<Level>(
+        make_level(r.lo, r.hi, e, sf->samples, bl, r.beam_limit)));
+    r.level_surfels.push_back(sf);
+    r.coarse_blockers = std::move(bl);
+}
+
+// Each point's share of the volume per channel, from the thickness below it
+// against the channel's spread length: its diffuse mean free path, but at
+// least spread_mfp transport mean free paths (a small object loses light to
+// its curvature even where it hardly absorbs).
+void weigh(Run& r) {
+    const VolumeOptions& o = r.o;
+    double spread[3], spread_max = 0;
+    for (int c = 0; c < 3; ++c) {
+        spread[c] = std::max(r.med[c].dmfp, o.spread_mfp / r.med[c].sigma_t);
+        spread_max = std::max(spread_max, spread[c]);
+    }
+    const double limit = o.thick_dmfp * spread_max;
+    const Surfels& cs = *r.level_surfels[0];
+    const std::vector<double> depth =
+        ray_thickness(r.levels[0]->grid, cs.samples, r.coarse_blockers,
+                      std::isfinite(limit) ? limit : 2.0 * glm::length(r.size));
+    r.w.assign(r.n, glm::vec3(0.0f));
+    bool any = false;
+    for (std::size_t j = 0; j < r.n; ++j) {
+        const double d = depth[cs.of_point[j]];
+        for (int c = 0; c < 3; ++c) {
+            double wc = (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
+            if (d >= limit) wc = 0.0; // no way out found within the limit
+            r.w[j][c] = float(std::clamp(wc, 0.0, 1.0));
+            any = any || r.w[j][c] > 0.0f;
+        }
+    }
+    if (any) smooth_weights(r.levels[0]->grid, r.surface, spread, r.w);
+    for (std::size_t j = 0; j < r.n; ++j) {
+        for (int c = 0; c < 3; ++c)
+            if (r.w[j][c] > 0.0f) r.channel_needed[c] = true;
+        if (r.w[j] != glm::vec3(0.0f)) ++r.rep.thin_points;
+    }
+    r.rep.needed = r.rep.thin_points > 0;
+}
+
+// The finer grids, down to h, finest first afterwards; a grid that loses
+// surface the finer one has is not a good start for it and is dropped.
+void refine(Run& r) {
+    // The surface area that finds a medium voxel below it.
+    const auto leaking = [](const Level& l, const Surfels& sf) {
+        double a = 0;
+        for (std::size_t k = 0; k < l.leak_voxel.size(); ++k)
+            if (l.leak_voxel[k] >= 0) a += double(sf.samples.areas[k]);
+        return a;
+    };
+    for (int k = r.coarse_steps - 1; k >= 0; --k) {
+        const double e = r.h * double(1 << k);
+        auto [sf, bl] = r.merged(e);
+        auto finer = std::make_unique<Level>(
+            make_level(r.lo, r.hi, e, sf->samples, bl, r.beam_limit));
+        if (leaking(*r.levels.back(), *r.level_surfels.back()) <
+                0.95 * leaking(*finer, *sf) ||
+            r.levels.back()->u.voxels.size() < 512) {
+            r.levels.pop_back();
+            r.level_surfels.pop_back();
+        }
+        r.levels.push_back(std::move(finer));
+        r.level_surfels.push_back(sf);
+    }
+    std::reverse(r.levels.begin(), r.levels.end());
+    std::reverse(r.level_surfels.begin(), r.level_surfels.end());
+}
+
+// One channel's fluence on the finest grid, solved down the cascade; the
+// fluxes go to the report.
+std::vector<float> solve_channel(Run& r, int c) {
+    const Medium& m = r.med[c];
+    VolumeReport& rep = r.rep;
+    std::vector<float> phi;
+    const Level* prev = nullptr;
+    for (std::size_t li = r.levels.size(); li-- > 0;) {
+        const Level& l = *r.levels[li];
+        const Surfels& ls = *r.level_surfels[li];
+        const System s = make_system(l, m, ls.samples, ls.flux, c);
+        phi = prev ? prolong(*prev, phi, l) : std::vector<float>(l.u.voxels.size(), 0.0f);
+        rep.iterations[c] += solve(s, phi, r.o.tolerance, 50000);
+        prev = &l;
+        if (li > 0) continue;
+        // Fluxes: what went in, left, was absorbed in the medium and by the
+        // blockers (they balance to the solver's tolerance).
+        const std::size_t nu = phi.size();
+        rep.flux_in[c] = chunked_sum(nu, [&](std::size_t k) { return s.source[k]; });
+        rep.flux_out[c] =
+            chunked_sum(nu, [&](std::size_t k) { return s.leak[k] * phi[k]; });
+        const double hv = l.grid.h * l.grid.h * l.grid.h;
+        rep.flux_absorbed[c] =
+            chunked_sum(nu, [&](std::size_t k) { return m.sigma_a * hv * phi[k]; });
+        rep.flux_blocked[c] = chunked_sum(nu, [&](std::size_t k) {
+            int faces = 0;
+            for (int32_t nb : l.u.neighbours[k]) faces += nb == Unknowns::kBlack;
+            return faces * s.black * phi[k];
+        });
+    }
+    return phi;
+}
+
+// How deep below the lit surface the finest grid's first voxels lie
+// (flux-weighted): the column the grid's own reflectance is taken from.
+double lit_depth(const Level& fine, const Surfels& surfels) {
+    double sum = 0, weight = 0;
+    for (std::size_t k = 0; k < surfels.flux.size(); ++k) {
+        const double f =
+            std::max(0.0, surfels.flux[k].x + surfels.flux[k].y + surfels.flux[k].z);
+        if (fine.leak_voxel[k] < 0 || f <= 0) continue;
+        sum += f * fine.leak_depth[k];
+        weight += f;
+    }
+    return weight > 0 ? sum / weight : 0.5 * fine.grid.h;
+}
+
+// The volume's exitance at each point: the fluence read a voxel below it,
+// carried to the surface by the Robin condition, scaled so that the points
+// give off exactly the flux the solve lets out; plus what a voxel diffusion
+// misses near where light enters (single scattering, the near field): the
+// profile's half-space reflectance less the grid's own, in proportion to
+// each point's irradiance.
+std::vector<double> volume_exitance(Run& r, int c, const std::vector<float>& phi,
+                                    double profile_reflectance) {
+    const Level& fine = *r.levels.front();
+    const Surfels& surfels = *r.level_surfels.front();
+    const Medium& m = r.med[c];
+    const std::size_t n = r.n;
+    std::vector<double> exitance(n, 0.0);
+    oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
+        const int32_t leak = fine.leak_voxel[surfels.of_point[j]];
+        if (leak < 0) return;
+        const glm::dvec3 p(r.surface.positions[j]);
+        const glm::dvec3 nrm = glm::normalize(glm::dvec3(r.surface.normals[j]));
+        const double d = fine.grid.h;
+        Stencil st;
+        double f = phi[std::size_t(leak)];
+        if (medium_stencil(fine.grid, fine.u, p - d * nrm, st)) {
+            f = 0;
+            for (int i = 0; i < st.n; ++i)
+                f += st.weight[i] * phi[std::size_t(st.unknown[i])];
+        }
+        exitance[j] = std::max(0.0, f) / (2.0 * m.A + d / m.D);
+    });
+    const double read = chunked_sum(
+        n, [&](std::size_t j) { return double(r.surface.areas[j]) * exitance[j]; });
+    const double scale = read > 0 ? r.rep.flux_out[c] / read : 0.0;
+    const double missing =
+        profile_reflectance >= 0.0
+            ? profile_reflectance -
+                  halfspace_reflectance(m, fine.grid.h, lit_depth(fine, surfels))
+            : 0.0;
+    r.rep.reflectance_correction[c] = missing;
+    for (std::size_t j = 0; j < n; ++j)
+        exitance[j] =
+            std::max(0.0, exitance[j] * scale + missing * double(r.irradiance[j][c]));
+    return exitance;
+}
+
+// Channel c of `out`: the volume's exitance blended with the profile's by
+// each point's share. Light out never more than light in: the correction is
+// local and the blend keeps some of the profile's light, so a shape small
+// against the light's spread could give off more than came in; then the
+// volume's points are scaled down (the others keep the profile's).
+void blend_channel(const Run& r, int c, const std::vector<double>& volume,
+                   const std::vector<glm::vec3>& profile_result,
+                   std::vector<glm::vec3>& out) {
+    const Level& fine = *r.levels.front();
+    const Surfels& surfels = *r.level_surfels.front();
+    const std::size_t n = r.n;
+    std::vector<double> blended(n, 0.0);
+    std::vector<char> mine(n, 0); // the points whose value is (partly) the volume's
+    for (std::size_t j = 0; j < n; ++j) {
+        if (fine.leak_voxel[surfels.of_point[j]] < 0 || r.w[j][c] == 0.0f) continue;
+        mine[j] = 1;
+        blended[j] = double(r.w[j][c]) * volume[j] +
+                     (1.0 - double(r.w[j][c])) * double(profile_result[j][c]);
+    }
+    const Sums t = chunked_pass(n, [&](std::size_t b, std::size_t e) {
+        Sums q;
+        for (std::size_t j = b; j < e; ++j) {
+            const double a = double(r.surface.areas[j]);
+            q.a += a * std::max(0.0, double(r.irradiance[j][c]));
+            if (mine[j])
+                q.b += a * blended[j];
+            else
+                q.c += a * double(profile_result[j][c]);
+        }
+        return q;
+    });
+    const double cap =
+        t.b + t.c > t.a && t.b > 0 ? std::max(0.0, t.a - std::max(0.0, t.c)) / t.b : 1.0;
+    for (std::size_t j = 0; j < n; ++j) {
+        if (!mine[j]) continue;
+        const double v = blended[j] * cap;
+        out[j][c] = std::isfinite(v) ? float(v) : 0.0f;
+    }
+}
+
+} // namespace
+
 std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
                                         const std::vector<glm::vec3>& irradiance,
                                         const ChannelCoefficients (&channels)[3],
@@ -535,16 +800,15 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
                                         const VolumeOptions& o, VolumeReport* report) {
     VolumeReport local;
     VolumeReport& rep = report ? *report : local;
-    const auto start = std::chrono::steady_clock::now();
     struct Timer {
         VolumeReport& rep;
-        std::chrono::steady_clock::time_point start;
+        std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
         ~Timer() {
             rep.seconds =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
                     .count();
         }
-    } timer{rep, start};
+    } timer{rep};
     const std::size_t n = surface.positions.size();
     if (surface.normals.size() != n || surface.areas.size() != n ||
         irradiance.size() != n || profile_result.size() != n)
@@ -555,142 +819,23 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
             throw ValueError("volume diffusion: blocker arrays of different sizes");
     std::vector<glm::vec3> out = profile_result;
     if (n == 0) return out;
-    Medium med[3];
-    double l_min = std::numeric_limits<double>::infinity(), dmfp_max = 0;
-    for (int c = 0; c < 3; ++c) {
-        med[c] = medium_of(channels[c]);
-        l_min = std::min(l_min, 1.0 / med[c].sigma_t);
-        dmfp_max = std::max(dmfp_max, med[c].dmfp);
-    }
-    glm::dvec3 lo(surface.positions[0]), hi = lo;
-    for (const glm::vec3& p : surface.positions) {
-        lo = glm::min(lo, glm::dvec3(p));
-        hi = glm::max(hi, glm::dvec3(p));
-    }
-    const glm::dvec3 size = glm::max(hi - lo, glm::dvec3(l_min));
-    const double box = size.x * size.y * size.z;
-    bool channel_needed[3] = {false, false, false};
-    std::vector<glm::vec3> w(n, glm::vec3(0.0f)); // the volume's share per point
-
-    // The finest voxels resolve the shortest transport mean free path within
-    // the voxel budget.
-    double h = l_min / o.voxels_per_mfp;
-    const bool over_budget = box / (h * h * h) > double(o.max_voxels);
-    if (over_budget) h = std::cbrt(box / double(o.max_voxels));
-    // Each grid sees the surface merged to its voxels.
-    const auto merged = [&](double edge) {
-        const VoxelGrid g = make_grid(lo, hi, edge, 2);
-        auto sf = std::make_shared<Surfels>(make_surfels(surface, &irradiance, g));
-        std::vector<SurfaceSamples> bl;
-        for (const SurfaceSamples& b : blockers)
-            bl.push_back(make_surfels(b, nullptr, g).samples);
-        return std::make_pair(sf, bl);
-    };
-
-    // The coarsest grid of the cascade (at most 2^18 voxels in the box) is
-    // built first: it decides which points and channels need the volume at
-    // all, so that a shape thick against every channel's dmfp costs no more.
-    int coarse_steps = 0;
-    while (coarse_steps < 7 &&
-           box / std::pow(h * double(1 << coarse_steps), 3) > 262144.0)
-        ++coarse_steps;
-    // The deepest first collision the sources sample, in any channel.
-    double beam_limit = 0;
-    for (int c = 0; c < 3; ++c)
-        beam_limit =
-            std::max(beam_limit, 1.01 * beam_depth(kBeamSamples - 1, med[c].sigma_t));
-    std::vector<std::unique_ptr<Level>> levels; // coarsest first
-    std::vector<std::shared_ptr<const Surfels>> level_surfels;
-    std::vector<SurfaceSamples> coarse_blockers;
-    {
-        auto [sf, bl] = merged(h * double(1 << coarse_steps));
-        levels.push_back(std::make_unique<Level>(make_level(
-            lo, hi, h * double(1 << coarse_steps), sf->samples, bl, beam_limit)));
-        level_surfels.push_back(sf);
-        coarse_blockers = std::move(bl);
-    }
-    // The length over which each channel's light spreads: its diffuse mean
-    // free path, but at least spread_mfp transport mean free paths (a small
-    // object loses light to its curvature even where it hardly absorbs).
-    double spread[3], spread_max = 0;
-    for (int c = 0; c < 3; ++c) {
-        spread[c] = std::max(med[c].dmfp, o.spread_mfp / med[c].sigma_t);
-        spread_max = std::max(spread_max, spread[c]);
-    }
-    const double limit = o.thick_dmfp * spread_max;
-    {
-        const Surfels& cs = *level_surfels[0];
-        const std::vector<double> depth =
-            ray_thickness(levels[0]->grid, cs.samples, coarse_blockers,
-                          std::isfinite(limit) ? limit : 2.0 * glm::length(size));
-        bool any = false;
-        for (std::size_t j = 0; j < n; ++j) {
-            const double d = depth[cs.of_point[j]];
-            for (int c = 0; c < 3; ++c) {
-                double wc = (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
-                if (d >= limit) wc = 0.0; // no way out found within the limit
-                w[j][c] = float(std::clamp(wc, 0.0, 1.0));
-                any = any || w[j][c] > 0.0f;
-            }
-        }
-        if (any) smooth_weights(levels[0]->grid, surface, spread, w);
-        for (std::size_t j = 0; j < n; ++j) {
-            for (int c = 0; c < 3; ++c)
-                if (w[j][c] > 0.0f) channel_needed[c] = true;
-            if (w[j] != glm::vec3(0.0f)) ++rep.thin_points;
-        }
-    }
-    rep.needed = rep.thin_points > 0;
+    Run r{surface, irradiance, blockers, o, rep};
+    r.n = n;
+    plan(r, channels);
+    weigh(r);
     if (!rep.needed) return out;
-    if (over_budget && h > l_min)
+    if (r.over_budget && r.h > r.l_min)
         rep.warnings.push_back(
             "the object is large against the mean free path: voxels of " +
-            std::to_string(h) + " (" + std::to_string(h / l_min) + " mean free paths)");
-
-    // The finer grids, down to h; a grid that loses surface the finer one
-    // has is not a good start for it and is dropped.
-    // The surface area that finds a medium voxel below it.
-    const auto leaking = [](const Level& l, const Surfels& sf) {
-        double a = 0;
-        for (std::size_t k = 0; k < l.leak_voxel.size(); ++k)
-            if (l.leak_voxel[k] >= 0) a += double(sf.samples.areas[k]);
-        return a;
-    };
-    for (int k = coarse_steps - 1; k >= 0; --k) {
-        auto [sf, bl] = merged(h * double(1 << k));
-        auto finer = std::make_unique<Level>(
-            make_level(lo, hi, h * double(1 << k), sf->samples, bl, beam_limit));
-        if (leaking(*levels.back(), *level_surfels.back()) <
-                0.95 * leaking(*finer, *sf) ||
-            levels.back()->u.voxels.size() < 512) {
-            levels.pop_back();
-            level_surfels.pop_back();
-        }
-        levels.push_back(std::move(finer));
-        level_surfels.push_back(sf);
-    }
-    std::reverse(levels.begin(), levels.end()); // finest first
-    std::reverse(level_surfels.begin(), level_surfels.end());
-    const Level& fine = *levels.front();
-    const Surfels& surfels = *level_surfels.front();
-    // How deep below the lit surface the finest grid's first voxels lie
-    // (flux-weighted): the column the grid's own reflectance is taken from.
-    double lit_depth = 0.5 * fine.grid.h;
-    {
-        double sum = 0, weight = 0;
-        for (std::size_t k = 0; k < surfels.flux.size(); ++k) {
-            const double f =
-                std::max(0.0, surfels.flux[k].x + surfels.flux[k].y + surfels.flux[k].z);
-            if (fine.leak_voxel[k] < 0 || f <= 0) continue;
-            sum += f * fine.leak_depth[k];
-            weight += f;
-        }
-        if (weight > 0) lit_depth = sum / weight;
-    }
+            std::to_string(r.h) + " (" + std::to_string(r.h / r.l_min) +
+            " mean free paths)");
+    refine(r);
+    const Level& fine = *r.levels.front();
+    const Surfels& surfels = *r.level_surfels.front();
     rep.voxel = fine.grid.h;
     for (int a = 0; a < 3; ++a) rep.dims[a] = fine.grid.dim[a];
     rep.unknowns = fine.u.voxels.size();
-    rep.levels = int(levels.size());
+    rep.levels = int(r.levels.size());
     if (rep.unknowns == 0) {
         rep.warnings.push_back(
             "the cloud encloses no volume: the profile's result is kept");
@@ -705,105 +850,12 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         rep.warnings.push_back(std::to_string(unused) +
                                " points have no medium voxel below them: they keep the "
                                "profile's result");
-
     for (int c = 0; c < 3; ++c) {
-        if (!channel_needed[c]) continue;
-        const Medium& m = med[c];
-        std::vector<float> phi;
-        const Level* prev = nullptr;
-        for (std::size_t li = levels.size(); li-- > 0;) {
-            const Level& l = *levels[li];
-            const Surfels& ls = *level_surfels[li];
-            const System s = make_system(l, m, ls.samples, ls.flux, c);
-            phi = prev ? prolong(*prev, phi, l)
-                       : std::vector<float>(l.u.voxels.size(), 0.0f);
-            rep.iterations[c] += solve(s, phi, o.tolerance, 50000);
-            prev = &l;
-            if (li == 0) {
-                // Fluxes: what went in, left, was absorbed in the medium and
-                // by the blockers (they balance to the solver's tolerance).
-                const std::size_t nu = phi.size();
-                rep.flux_in[c] =
-                    chunked_sum(nu, [&](std::size_t k) { return s.source[k]; });
-                rep.flux_out[c] =
-                    chunked_sum(nu, [&](std::size_t k) { return s.leak[k] * phi[k]; });
-                const double hv = l.grid.h * l.grid.h * l.grid.h;
-                rep.flux_absorbed[c] = chunked_sum(
-                    nu, [&](std::size_t k) { return m.sigma_a * hv * phi[k]; });
-                rep.flux_blocked[c] = chunked_sum(nu, [&](std::size_t k) {
-                    int faces = 0;
-                    for (int32_t nb : l.u.neighbours[k]) faces += nb == Unknowns::kBlack;
-                    return faces * s.black * phi[k];
-                });
-            }
-        }
+        if (!r.channel_needed[c]) continue;
+        const std::vector<float> phi = solve_channel(r, c);
         if (o.progress) o.progress->update(uint64_t(c + 1), 3);
-        // Exitance at each point: the fluence read a voxel below it, carried
-        // to the surface by the Robin condition; then scaled so that the
-        // points give off exactly the flux the solve lets out.
-        std::vector<double> exitance(n, 0.0);
-        oneapi::tbb::parallel_for(std::size_t(0), n, [&](std::size_t j) {
-            const int32_t leak = fine.leak_voxel[surfels.of_point[j]];
-            if (leak < 0) return;
-            const glm::dvec3 p(surface.positions[j]);
-            const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
-            const double d = fine.grid.h;
-            Stencil st;
-            double f = phi[std::size_t(leak)];
-            if (medium_stencil(fine.grid, fine.u, p - d * nrm, st)) {
-                f = 0;
-                for (int i = 0; i < st.n; ++i)
-                    f += st.weight[i] * phi[std::size_t(st.unknown[i])];
-            }
-            exitance[j] = std::max(0.0, f) / (2.0 * m.A + d / m.D);
-        });
-        const double read = chunked_sum(
-            n, [&](std::size_t j) { return double(surface.areas[j]) * exitance[j]; });
-        const double scale = read > 0 ? rep.flux_out[c] / read : 0.0;
-        // What a voxel diffusion misses near where light enters (single
-        // scattering, the near field): the profile's half-space reflectance
-        // less the grid's own, in proportion to each point's irradiance.
-        const double missing = profile_reflectance[c] >= 0.0
-                                   ? profile_reflectance[c] -
-                                         halfspace_reflectance(m, fine.grid.h, lit_depth)
-                                   : 0.0;
-        rep.reflectance_correction[c] = missing;
-        std::vector<double> volume(n, 0.0);
-        for (std::size_t j = 0; j < n; ++j)
-            volume[j] =
-                std::max(0.0, exitance[j] * scale + missing * double(irradiance[j][c]));
-        std::vector<double> blended(n, 0.0);
-        std::vector<char> mine(n, 0); // the points whose value is (partly) the volume's
-        for (std::size_t j = 0; j < n; ++j) {
-            if (fine.leak_voxel[surfels.of_point[j]] < 0 || w[j][c] == 0.0f) continue;
-            mine[j] = 1;
-            blended[j] = double(w[j][c]) * volume[j] +
-                         (1.0 - double(w[j][c])) * double(profile_result[j][c]);
-        }
-        // Light out never more than light in: the correction is local and the
-        // blend keeps some of the profile's light, so a shape small against
-        // the light's spread could give off more than came in; then the
-        // volume's points are scaled down (the others keep the profile's).
-        const Sums t = chunked_pass(n, [&](std::size_t b, std::size_t e) {
-            Sums q;
-            for (std::size_t j = b; j < e; ++j) {
-                const double a = double(surface.areas[j]);
-                q.a += a * std::max(0.0, double(irradiance[j][c]));
-                if (mine[j])
-                    q.b += a * blended[j];
-                else
-                    q.c += a * double(profile_result[j][c]);
-            }
-            return q;
-        });
-        const double cap = t.a + t.b + t.c > 0 && t.b + t.c > t.a && t.b > 0
-                               ? std::max(0.0, t.a - std::max(0.0, t.c)) / t.b
-                               : 1.0;
-        for (std::size_t j = 0; j < n; ++j) {
-            if (!mine[j]) continue;
-            const double v = blended[j] * cap;
-            out[j][c] = std::isfinite(v) ? float(v) : 0.0f;
-        }
+        blend_channel(r, c, volume_exitance(r, c, phi, profile_reflectance[c]),
+                      profile_result, out);
     }
     return out;
 }
