@@ -196,7 +196,10 @@ int run(const std::vector<std::string>& argv) {
     const std::vector<std::string> material = sss::prepare_filter_job(fj, running.frame);
 
     sss::Job job(kTool, running);
-    if (job.up_to_date({fj.output}, fj.inputs)) return 0;
+    // A blocker is an input too: a newer one makes the output stale.
+    std::vector<std::string> sources = fj.inputs;
+    sources.insert(sources.end(), fj.options.blockers.begin(), fj.options.blockers.end());
+    if (job.up_to_date({fj.output}, sources)) return 0;
     fj.options.diffusion.progress = job.progress();
     for (const std::string& line : material)
         if (job.verbose()) std::printf("ptfilter: %s\n", line.c_str());

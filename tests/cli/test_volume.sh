@@ -106,6 +106,20 @@ t="$(awk '$3 == "top:" && $6 == "walk" { print $7 }' "$tmp/walk.txt")"
 is "$b < 0.8 * $a" || fail "bone: the top is $b with the blocker, $a without"
 is "$b > 0.6 * $t && $b < 1.3 * $t" || fail "bone: the top is $b, the walk's $t"
 
+# -newer 1: the blocker is an input; a newer one makes the output stale.
+newer() {
+    "$bin/ptfilter" -ssdiffusion -material skin1 -blocker "$tmp/bone.ptc" -newer 1 \
+        "$tmp/ball.ptc" "$tmp/bone_out.ptc" >/dev/null
+}
+touch -d '-30 seconds' "$tmp/ball.ptc" "$tmp/bone.ptc"
+touch -d '-20 seconds' "$tmp/bone_out.ptc"
+touch -d '-5 seconds' "$tmp/mark"
+newer
+[[ "$tmp/mark" -nt "$tmp/bone_out.ptc" ]] || fail "-newer 1: an up-to-date output was remade"
+touch -d '-10 seconds' "$tmp/bone.ptc"
+newer
+[[ "$tmp/bone_out.ptc" -nt "$tmp/mark" ]] || fail "-newer 1: a newer blocker did not remake the output"
+
 # --- refused --------------------------------------------------------------------
 rc="$(status "$tmp/o" "$tmp/e" "$bin/ptfilter" -ssdiffusion -volume 2 "$tmp/slab.ptc" "$tmp/x.ptc")"
 [[ "$rc" == 2 ]] || fail "-volume 2: exit $rc, expected 2"
