@@ -132,6 +132,12 @@ rc="$(status "$tmp/o" "$tmp/e" "$bin/ptfilter" -ssdiffusion -blocker "$tmp/nosuc
 [[ "$rc" == 1 ]] || fail "missing blocker: exit $rc, expected 1"
 grep -q "^ptfilter ERROR: .*nosuch.ptc" "$tmp/e" || fail "missing blocker: the ERROR line names the file"
 [[ ! -e "$tmp/x.ptc" ]] || fail "missing blocker: an output was written"
+echo "not a cloud" >"$tmp/bad.ptc"
+rc="$(status "$tmp/o" "$tmp/e" "$bin/ptfilter" -ssdiffusion -blocker "$tmp/bad.ptc" \
+    "$tmp/slab.ptc" "$tmp/x.ptc")"
+[[ "$rc" == 1 ]] || fail "corrupt blocker: exit $rc, expected 1"
+grep -q "^ptfilter ERROR: .*bad.ptc" "$tmp/e" || fail "corrupt blocker: the ERROR line names the file"
+[[ ! -e "$tmp/x.ptc" ]] || fail "corrupt blocker: an output was written"
 rc="$(status "$tmp/o" "$tmp/e" "$bin/ptfilter" -ssdiffusion -volume 1 -albedo fromfile \
     "$tmp/slab.ptc" "$tmp/x.ptc")"
 [[ "$rc" == 1 ]] || fail "-volume 1 with fromfile: exit $rc, expected 1"

@@ -93,6 +93,13 @@ void check_volume_options(const SsDiffusionOptions& o) {
         if (!(c[k].sigma_s_prime > 0))
             throw ValueError("-volume needs a scattering medium (sigma_s' > 0 in every "
                              "channel)");
+    // The blockers' headers now, so that a missing or broken file stops the
+    // job before the diffusion, not after it.
+    for (const std::string& path : o.blockers) {
+        const PointCloudReader reader(path);
+        if (reader.size() == 0)
+            throw ValueError("blocker " + path + ": the cloud has no points");
+    }
 }
 
 void apply_volume(const SsDiffusionOptions& o, VolumeInput&& in,

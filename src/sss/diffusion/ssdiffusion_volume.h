@@ -23,7 +23,8 @@ struct VolumeInput {
 VolumeInput volume_input(const DiffusionProblem& pb, const SsDiffusionOptions& options);
 
 /// Checks that the options' volume settings can run (a constant material,
-/// readable blockers): throws ValueError, IoError, FormatError before any work.
+/// blockers whose headers read and that hold points): throws ValueError,
+/// IoError, FormatError before any work.
 void check_volume_options(const SsDiffusionOptions& options);
 
 /// Replaces `result` (the profile's exitance, the problem's order) by the
