@@ -167,8 +167,10 @@ std::vector<std::string> prepare_filter_job(FilterJob& job, std::optional<int> f
     std::vector<std::string> material;
     if (job.mode != FilterJob::Mode::Merge) material = describe_material(job.options);
     for (std::string& f : job.inputs) f = expand_frame_pattern(f, frame, "file name");
-    for (std::string& f : job.options.blockers) f = expand_frame_pattern(f, frame, "file name");
-    if (job.mode == FilterJob::Mode::Part && (job.options.volume || !job.options.blockers.empty()))
+    for (std::string& f : job.options.blockers)
+        f = expand_frame_pattern(f, frame, "file name");
+    if (job.mode == FilterJob::Mode::Part &&
+        (job.options.volume || !job.options.blockers.empty()))
         throw UsageError("-volume and -blocker cannot run in parts (-part): the volume "
                          "couples every point with every other");
     job.output = expand_frame_pattern(job.output, frame, "file name");

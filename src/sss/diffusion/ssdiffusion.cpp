@@ -19,12 +19,12 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "ssdiffusion_volume.h"
 #include "sss/util/error.h"
 #include "sss/util/limits.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"
-#include "ssdiffusion_volume.h"
 
 namespace sss {
 
@@ -674,8 +674,9 @@ SsDiffusionPart ssdiffusion_part(PointCloud in, const SsDiffusionOptions& o,
     rep.material_lines = describe_material(o);
     part_range(in.size(), part, parts); // validates part and parts first
     if (o.volume || !o.blockers.empty())
-        throw ValueError("the volume diffusion (-volume, -blocker) couples every point with "
-                         "every other through the volume: it cannot run in parts");
+        throw ValueError(
+            "the volume diffusion (-volume, -blocker) couples every point with "
+            "every other through the volume: it cannot run in parts");
     DiffusionProblem pb = read_points(in, o, rep);
     assign_profiles(in, in.size(), o, pb, rep);
     SsDiffusionPart out;
