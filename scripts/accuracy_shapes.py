@@ -339,6 +339,14 @@ def f2(x):
     return f"{float(x):.2f}"
 
 
+def by_case(rows, keys):
+    """(the case's key values, {method: row}) per case, in the rows' order."""
+    cases = {}
+    for r in rows:
+        cases.setdefault(tuple(r[k] for k in keys), {})[r["method"]] = r
+    return cases.items()
+
+
 def write_report(path, data_dir, photons, commit):
     slab = read_tsv(os.path.join(data_dir, "slabs.tsv"))
     sph = read_tsv(os.path.join(data_dir, "spheres.tsv"))
@@ -417,11 +425,7 @@ cloud as `-blocker`.
     w("| material | d | incidence | channel | d / l | " +
       " | ".join(f"{m} R / T / out/in" for m in methods) + " |")
     w("|---|---|---|---|---|" + "---|" * len(methods))
-    keyed = {}
-    for r in slab:
-        keyed.setdefault((r["material"], r["d_mm"], r["incidence"], r["channel"], r["d_over_l"]),
-                         {})[r["method"]] = r
-    for k, by in keyed.items():
+    for k, by in by_case(slab, ("material", "d_mm", "incidence", "channel", "d_over_l")):
         cells = [f"{pct(by[m]['R'])} / {pct(by[m]['T'])} / {f2(by[m]['out_per_in'])}"
                  for m in methods]
         w(f"| {k[0]} | {k[1]} mm | {k[2]} | {k[3]} | {k[4]} | " + " | ".join(cells) + " |")
@@ -435,11 +439,7 @@ cloud as `-blocker`.
     w("| material | radius | channel | radius / dmfp | noise | " +
       " | ".join(f"{m} flux / L1w / s" for m in methods) + " |")
     w("|---|---|---|---|---|" + "---|" * len(methods))
-    keyed = {}
-    for r in sph:
-        keyed.setdefault((r["material"], r["radius_mm"], r["channel"], r["radius_over_dmfp"]),
-                         {})[r["method"]] = r
-    for k, by in keyed.items():
+    for k, by in by_case(sph, ("material", "radius_mm", "channel", "radius_over_dmfp")):
         cells = [f"x{float(by[m]['flux']):.2f} / {100 * float(by[m]['l1w']):.0f} % / "
                  f"{by[m]['seconds']}" for m in methods]
         noise = by[methods[0]]["noise"]

@@ -236,22 +236,38 @@ Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
     return l;
 }
 
-// The deterministic parallel sum of f(i) over [0, n): fixed chunks summed in
-// order, so that the result does not depend on the thread count.
+// Up to three sums of a pass over [0, n) in fixed chunks, added in order:
+// parallel, and the same at any thread count.
+struct Sums {
+    double a = 0, b = 0, c = 0;
+};
 template <class F>
-double chunked_sum(std::size_t n, F f) {
+Sums chunked_pass(std::size_t n, F f) {
     constexpr std::size_t kChunk = 8192;
     const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<double> part(chunks, 0.0);
+    std::vector<Sums> part(chunks);
     oneapi::tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-        double s = 0;
-        const std::size_t end = std::min(n, (c + 1) * kChunk);
-        for (std::size_t i = c * kChunk; i < end; ++i) s += f(i);
-        part[c] = s;
+        part[c] = f(c * kChunk, std::min(n, (c + 1) * kChunk));
     });
-    double s = 0;
-    for (double p : part) s += p;
-    return s;
+    Sums t;
+    for (const Sums& q : part) {
+        t.a += q.a;
+        t.b += q.b;
+        t.c += q.c;
+    }
+    return t;
+}
+
+// The deterministic parallel sum of f(i) over [0, n) (chunked_pass()).
+template <class F>
+double chunked_sum(std::size_t n, F f) {
+    return chunked_pass(n,
+                        [&](std::size_t b, std::size_t e) {
+                            Sums q;
+                            for (std::size_t i = b; i < e; ++i) q.a += f(i);
+                            return q;
+                        })
+        .a;
 }
 
 // The diffusion system of one channel on one level:
@@ -313,28 +329,6 @@ System make_system(const Level& l, const Medium& m, const SurfaceSamples& surfac
         s.diag[k] = d;
     });
     return s;
-}
-
-// Up to three sums of a pass over [0, n) in fixed chunks, added in order:
-// parallel, and the same at any thread count.
-struct Sums {
-    double a = 0, b = 0, c = 0;
-};
-template <class F>
-Sums chunked_pass(std::size_t n, F f) {
-    constexpr std::size_t kChunk = 8192;
-    const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<Sums> part(chunks);
-    oneapi::tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-        part[c] = f(c * kChunk, std::min(n, (c + 1) * kChunk));
-    });
-    Sums t;
-    for (const Sums& q : part) {
-        t.a += q.a;
-        t.b += q.b;
-        t.c += q.c;
-    }
-    return t;
 }
 
 // Jacobi-preconditioned conjugate gradients from x; returns the steps. The
