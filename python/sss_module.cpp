@@ -376,6 +376,8 @@ py::dict report_dict(const sss::SsDiffusionReport& r) {
         vd["flux_in"] = rgb(v.flux_in);
         vd["flux_out"] = rgb(v.flux_out);
         vd["flux_blocked"] = rgb(v.flux_blocked);
+        vd["transmission_min"] = rgb(v.transmission_min);
+        vd["transmission_max"] = rgb(v.transmission_max);
         d["volume"] = vd;
     }
     return d;

@@ -49,6 +49,9 @@ std::string usage() {
         "  -blocker FILE             a cloud on the surface of an absorbing inclusion\n"
         "                            (bone), normals out of it; repeatable; implies\n"
         "                            -volume 1\n"
+        "  -incidence normal|diffuse how the baked light entered (a distant light\n"
+        "                            overhead, default; or a dome): how much thin\n"
+        "                            parts transmit with -volume 1\n"
         "  -criterion NAME           error (default), bbox (PRMan), centroid (J&B)\n"
         "  -exact                    all pairs (slow reference)\n"
         "Channels and output:\n"
@@ -121,12 +124,17 @@ void print_report(const sss::FilterJob& fj, const sss::FilterJobReport& r,
         std::printf(
             "ptfilter: volume: %zu of %zu points thin, voxel %.4g mm, grid %dx%dx%d, "
             "%zu medium voxels, %d levels, %d/%d/%d CG steps, %.3f s; scattered "
-            "light out %.4f %.4f %.4f, blocked %.4f %.4f %.4f of what entered\n",
+            "light out %.4f %.4f %.4f, blocked %.4f %.4f %.4f of what entered; "
+            "transmission through thin parts x%.2f-%.2f x%.2f-%.2f x%.2f-%.2f (%s "
+            "light)\n",
             v.thin_points, r.points, v.voxel, v.dims[0], v.dims[1], v.dims[2], v.unknowns,
             v.levels, v.iterations[0], v.iterations[1], v.iterations[2], v.seconds,
             share(v.flux_out.x, v.flux_in.x), share(v.flux_out.y, v.flux_in.y),
             share(v.flux_out.z, v.flux_in.z), share(v.flux_blocked.x, v.flux_in.x),
-            share(v.flux_blocked.y, v.flux_in.y), share(v.flux_blocked.z, v.flux_in.z));
+            share(v.flux_blocked.y, v.flux_in.y), share(v.flux_blocked.z, v.flux_in.z),
+            v.transmission_min.x, v.transmission_max.x, v.transmission_min.y,
+            v.transmission_max.y, v.transmission_min.z, v.transmission_max.z,
+            opt.volume_options.diffuse_light ? "diffuse" : "normal");
     else if (opt.volume || !opt.blockers.empty())
         std::printf(
             "ptfilter: volume: every point is thick against the material (%.3f s)\n",

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # ptfilter -volume 1 and -blocker on real files: a thin marble slab gives off
-# no more light than entered (the surface profile alone gives more), a shape
+# no more light than entered (the surface profile alone gives more), a slab of
+# skin transmits more blue under straight light than under diffuse light
+# (-incidence), a shape
 # thick against the material keeps the profile's output byte for byte, a bone
 # baked into its own cloud darkens the skin above it, the output does not
 # depend on the thread count, and what is refused. Also ssprofile -region on
@@ -36,6 +38,7 @@ is() { awk "BEGIN { exit !($1) }"; }
 
 "$bin/ptfilter" --help | grep -q -- '-volume 0|1' || fail "--help does not name -volume"
 "$bin/ptfilter" --help | grep -q -- '-blocker FILE' || fail "--help does not name -blocker"
+"$bin/ptfilter" --help | grep -q -- '-incidence normal|diffuse' || fail "--help does not name -incidence"
 
 # --- a thin slab ----------------------------------------------------------------
 # 20 x 20 x 1 mm of marble lit on top: the profile alone gives off more light
@@ -58,6 +61,47 @@ is "$v < $e && $c > 1.2 * $v" ||
 "$bin/ptfilter" -ssdiffusion -material marble -volume 1 -threads 1 "$tmp/slab.ptc" "$tmp/v1.ptc"
 "$bin/ptfilter" -ssdiffusion -material marble -volume 1 -threads 2 "$tmp/slab.ptc" "$tmp/v2.ptc"
 cmp -s "$tmp/v1.ptc" "$tmp/v2.ptc" || fail "-volume 1: the output depends on the thread count"
+
+# --- how the light entered ---------------------------------------------------------
+# 3 mm of skin1 (4.5 transport mean free paths in blue) lit on top: straight
+# light first scatters deeper than diffuse light and gets through more
+# (measured: x1.21 in blue); the volume is told which with -incidence.
+cat >"$tmp/slab3.rib" <<'RIB'
+Attribute "dice" "rasterorient" 0
+WorldBegin
+Attribute "cull" "hidden" 0 "backfacing" 0
+LightSource "distantlight" 1 "intensity" [1] "from" [0 0 1] "to" [0 0 0]
+Attribute "identifier" "name" ["slab"]
+Surface "bake_radiance_t" "string filename" ["slab3.ptc"]
+Polygon "P" [-10 -10 -3  -10 10 -3  10 10 -3  10 -10 -3]
+Polygon "P" [-10 -10 0  10 -10 0  10 10 0  -10 10 0]
+Polygon "P" [-10 -10 -3  10 -10 -3  10 -10 0  -10 -10 0]
+Polygon "P" [10 10 -3  -10 10 -3  -10 10 0  10 10 0]
+Polygon "P" [10 -10 -3  10 10 -3  10 10 0  10 -10 0]
+Polygon "P" [-10 -10 -3  -10 -10 0  -10 10 0  -10 10 -3]
+WorldEnd
+RIB
+(cd "$tmp" && "$bin/ptbake" -spacing 0.4 slab3.rib >/dev/null)
+"$bin/ptfilter" -ssdiffusion -material skin1 -volume 1 -progress 1 "$tmp/slab3.ptc" \
+    "$tmp/straight.ptc" >"$tmp/straight.txt"
+grep -q 'transmission through thin parts x.*(normal light)' "$tmp/straight.txt" ||
+    fail "-progress 1: no transmission factors"
+"$bin/ptfilter" -ssdiffusion -material skin1 -volume 1 -incidence diffuse "$tmp/slab3.ptc" \
+    "$tmp/diffuse.ptc"
+"$bin/ssprofile" -scene "$tmp/slab3.rib" -material skin1 -photons 1000 -compare \
+    "$tmp/straight.ptc" -compare "$tmp/diffuse.ptc" -region back -4 -4 -3.01 4 4 -2.99 \
+    "$tmp/slab3.ptc" "$tmp/truth3.ptc" >"$tmp/walk3.txt"
+ts="$(awk '$3 == "back:" && $4 ~ /straight/ { print $7 + 0 }' "$tmp/walk3.txt")"
+td="$(awk '$3 == "back:" && $4 ~ /diffuse/ { print $7 + 0 }' "$tmp/walk3.txt")"
+[[ -n "$ts" && -n "$td" ]] || { cat "$tmp/walk3.txt" >&2; fail "-incidence: no figures"; }
+is "$ts > 1.1 * $td" || fail "-incidence: blue through 3 mm $ts straight, $td diffuse"
+rc="$(status "$tmp/o" "$tmp/e" "$bin/ptfilter" -ssdiffusion -incidence diffuse "$tmp/slab3.ptc" \
+    "$tmp/x.ptc")"
+[[ "$rc" == 2 ]] || fail "-incidence without -volume: exit $rc, expected 2"
+grep -q 'add -volume 1' "$tmp/e" || fail "-incidence without -volume: message"
+rc="$(status "$tmp/o" "$tmp/e" "$bin/ptfilter" -ssdiffusion -volume 1 -incidence oblique \
+    "$tmp/slab3.ptc" "$tmp/x.ptc")"
+[[ "$rc" == 2 ]] || fail "-incidence oblique: exit $rc, expected 2"
 
 # --- a thick shape --------------------------------------------------------------
 # A 50 mm sphere of skin1 is thick against every channel: -volume 1 changes nothing.

@@ -30,6 +30,8 @@ CASES = [
       "-profile", "mc"]),
     ({"material": "skin1", "profile": "pbd", "volume": 1},
      ["-material", "skin1", "-profile", "pbd", "-volume", "1"]),
+    ({"material": "skin1", "volume": 1, "incidence": "diffuse"},
+     ["-material", "skin1", "-volume", "1", "-incidence", "diffuse"]),
 ]
 
 
@@ -247,4 +249,6 @@ def test_volume_with_blockers_as_ptfilter(tmp_path, tool, sphere):
     assert volume["thin_points"] > 0 and volume["unknowns"] > 0
     assert all(b > 0 for b in volume["flux_blocked"])
     assert all(o <= i for o, i in zip(volume["flux_out"], volume["flux_in"]))
+    assert all(0.2 <= lo <= hi <= 5 for lo, hi in
+               zip(volume["transmission_min"], volume["transmission_max"]))
 

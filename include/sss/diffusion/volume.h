@@ -44,6 +44,13 @@ struct VolumeOptions {
     double thin_dmfp = 4.0, thick_dmfp = 6.0, spread_mfp = 5.0;
     /// Stop when the residual is below this fraction of the source.
     double tolerance = 1e-3;
+    /// How the light entered, which decides how deep it first scatters and so
+    /// how much a thin part transmits: a straight beam along the normal (a
+    /// distant light overhead; the dipole's assumption) or diffuse light
+    /// (cosine-weighted, a dome or an overcast sky). The irradiance alone
+    /// does not say. Diffuse light also raises the profile's result (and the
+    /// reflectance the volume is corrected to) by diffuse_reflectance_ratio().
+    bool diffuse_light = false;
     Progress* progress = nullptr;
 };
 
@@ -61,6 +68,12 @@ struct VolumeReport {
     glm::dvec3 flux_in{0.0}, flux_out{0.0}, flux_absorbed{0.0}, flux_blocked{0.0};
     /// The profile's half-space reflectance less the grid's, per channel.
     glm::dvec3 reflectance_correction{0.0};
+    /// Under diffuse light: the factor the profile's result and reflectance
+    /// were raised by (diffuse_reflectance_ratio()); 1 under straight light.
+    glm::dvec3 diffuse_ratio{1.0};
+    /// The range of the factors that bring the grid's transmission through a
+    /// slab to transport theory's, over the thicknesses present, per channel.
+    glm::dvec3 transmission_min{1.0}, transmission_max{1.0};
     double seconds = 0;
     std::vector<std::string> warnings;
 };
@@ -69,11 +82,11 @@ struct VolumeReport {
 /// areas, transmitted irradiance, lengths in the unit of `channels`'
 /// coefficients), blended with `profile_result` (the surface profile's
 /// exitance at the same points) by each point's thickness. Points the volume
-/// does not concern keep profile_result bit for bit. `profile_reflectance`:
-/// the profile's total diffuse reflectance per channel (Profile::total());
-/// the volume's own half-space reflectance is corrected to it at each point
-/// in proportion to the point's irradiance (a negative value: no correction). Throws
-/// ValueError for arrays of different sizes or a medium without scattering.
+/// does not concern keep profile_result bit for bit (under straight light).
+/// `profile_reflectance`: the profile's total diffuse reflectance per channel
+/// (Profile::total()); the volume's own half-space reflectance is corrected to it at each
+/// point in proportion to the point's irradiance (a negative value: no correction).
+/// Throws ValueError for arrays of different sizes or a medium without scattering.
 std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
                                         const std::vector<glm::vec3>& irradiance,
                                         const ChannelCoefficients (&channels)[3],

@@ -67,6 +67,11 @@ bool ssdiffusion_option(ArgScanner& args, const std::string& o, SsDiffusionOptio
         opt.volume = args.integer(o, 0, 1) == 1;
     } else if (o == "blocker") {
         opt.blockers.push_back(args.value(o));
+    } else if (o == "incidence") {
+        const std::string v = args.value(o);
+        if (v != "normal" && v != "diffuse")
+            throw UsageError("option -incidence: '" + v + "' is not normal or diffuse");
+        opt.volume_options.diffuse_light = v == "diffuse";
     } else if (o == "criterion") {
         std::string c = args.value(o);
         if (!parse_criterion(c.c_str(), opt.diffusion.criterion))

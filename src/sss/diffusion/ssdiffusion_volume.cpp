@@ -82,6 +82,8 @@ VolumeInput volume_input(const DiffusionProblem& pb, const SsDiffusionOptions& o
 }
 
 void check_volume_options(const SsDiffusionOptions& o) {
+    if (!volume_on(o) && o.volume_options.diffuse_light)
+        throw UsageError("-incidence applies to the volume diffusion: add -volume 1");
     if (!volume_on(o)) return;
     if (o.material.albedo_from_file || o.material.dmfp_from_file)
         throw ValueError(

@@ -1,6 +1,7 @@
 #include "sss/diffusion/volume.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -10,6 +11,7 @@
 #include <glm/vector_relational.hpp>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "sss/diffusion/slab_transport.h"
 #include "sss/util/error.h"
 #include "sss/util/progress.h"
 #include "volume_grid.h"
@@ -28,9 +30,17 @@ struct Medium {
     double D = 0;    // 1 / (3 sigma_t')
     double A = 1;    // boundary mismatch (1 + F_dr) / (1 - F_dr)
     double dmfp = 0; // 1 / sigma_tr (inf without absorption)
+    double eta = 1;  // relative index of refraction
+    // Diffuse light: the share of the first collisions above depth i
+    // kShareStep (in l), and the depth (in l) above which the share i /
+    // (kQuantiles - 1) of them lies. Empty: straight light (exponential).
+    std::vector<double> share, quantile;
 };
 
-Medium medium_of(const ChannelCoefficients& c) {
+constexpr double kShareStep = 0.01;
+constexpr int kShareSteps = 1000, kQuantiles = 1025;
+
+Medium medium_of(const ChannelCoefficients& c, bool diffuse) {
     Medium m;
     m.sigma_t = c.sigma_s_prime + c.sigma_a;
     if (!(c.sigma_s_prime > 0) || !std::isfinite(m.sigma_t))
@@ -40,16 +50,59 @@ Medium medium_of(const ChannelCoefficients& c) {
     m.D = 1.0 / (3.0 * m.sigma_t);
     const double fdr = fresnel_diffuse_reflectance(c.ior);
     m.A = (1.0 + fdr) / (1.0 - fdr);
+    m.eta = c.ior;
     const double sigma_tr = std::sqrt(3.0 * c.sigma_a * m.sigma_t);
     m.dmfp = sigma_tr > 0 ? 1.0 / sigma_tr : std::numeric_limits<double>::infinity();
+    if (diffuse) {
+        for (int i = 0; i <= kShareSteps; ++i)
+            m.share.push_back(first_collision_share(m.eta, i * kShareStep, true));
+        std::size_t i = 0;
+        for (int k = 0; k < kQuantiles; ++k) {
+            const double u = std::min(double(k) / (kQuantiles - 1), m.share.back());
+            while (i + 1 < m.share.size() && m.share[i + 1] < u) ++i;
+            const double span =
+                i + 1 < m.share.size() ? m.share[i + 1] - m.share[i] : 0.0;
+            const double f =
+                span > 0 ? std::clamp((u - m.share[i]) / span, 0.0, 1.0) : 0.0;
+            m.quantile.push_back((double(i) + f) * kShareStep);
+        }
+    }
     return m;
 }
 
-// Depths of the first collisions along a beam entering at normal incidence:
-// the midpoint quantiles of the exponential free path.
+// Depths of the first collisions of the light entering at a point: the
+// midpoint quantiles of their distribution (the exponential free path along
+// the normal for straight light), within the share `inside` of them that
+// lies before the light leaves the medium (so that the source, and what a
+// thin part transmits, changes smoothly with the thickness).
 constexpr int kBeamSamples = 8;
-double beam_depth(int k, double sigma_t) {
-    return -std::log(1.0 - (k + 0.5) / kBeamSamples) / sigma_t;
+double beam_depth(int k, const Medium& m, double inside = 1.0) {
+    const double u = inside * (k + 0.5) / kBeamSamples;
+    if (m.quantile.empty()) return -std::log(1.0 - u) / m.sigma_t;
+    const double t = u * (kQuantiles - 1);
+    const std::size_t i = std::min(std::size_t(t), std::size_t(kQuantiles - 2));
+    const double f = t - double(i);
+    return ((1 - f) * m.quantile[i] + f * m.quantile[i + 1]) / m.sigma_t;
+}
+
+// Past this many mean free paths the remaining collisions are negligible
+// (e^-8): light that meets no exit within them is not cut.
+constexpr double kBeamReach = 8.0;
+
+// The share of the first collisions above depth z.
+double collided_above(const Medium& m, double z) {
+    if (m.share.empty()) return -std::expm1(-m.sigma_t * z);
+    const double t = std::max(0.0, z * m.sigma_t / kShareStep);
+    if (t >= kShareSteps) return m.share.back();
+    const std::size_t i = std::size_t(t);
+    const double f = t - double(i);
+    return (1 - f) * m.share[i] + f * m.share[i + 1];
+}
+
+// The share of the first collisions before the light leaves the medium at
+// depth `exit` (at `limit`: none found).
+double beam_inside(double exit, double limit, const Medium& m) {
+    return exit >= limit ? 1.0 : collided_above(m, exit);
 }
 
 // The surface at the resolution of voxels of edge h: the points of one voxel
@@ -186,6 +239,7 @@ struct Level {
     // Per surface point: where its beam leaves the medium or meets a blocker
     // (at most the deepest collision the source samples).
     std::vector<double> beam_exit;
+    double beam_limit = 0; // beam_exit's value where no exit was found
 };
 
 Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
@@ -204,6 +258,7 @@ Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
     }
     l.u = number_unknowns(l.grid);
     l.beam_exit = ray_thickness(l.grid, surface, blockers, beam_limit);
+    l.beam_limit = beam_limit;
     const std::size_t n = surface.positions.size();
     l.leak_voxel.assign(n, -1);
     l.leak_depth.assign(n, 0.0);
@@ -306,15 +361,14 @@ System make_system(const Level& l, const Medium& m, const SurfaceSamples& surfac
         if (flux == 0.0) continue;
         const glm::dvec3 p(surface.positions[j]);
         const glm::dvec3 nrm = glm::normalize(glm::dvec3(surface.normals[j]));
+        // Light that crosses unscattered or reaches a blocker first is no
+        // source.
+        const double inside = beam_inside(l.beam_exit[j], l.beam_limit, m);
         for (int b = 0; b < kBeamSamples; ++b) {
-            const double depth = beam_depth(b, m.sigma_t);
-            // Collisions beyond where the beam leaves the medium are light
-            // that crossed it unscattered or reached a blocker: no source.
-            if (depth >= l.beam_exit[j]) continue;
-            const glm::dvec3 q = p - depth * nrm;
+            const glm::dvec3 q = p - beam_depth(b, m, inside) * nrm;
             Stencil st;
             if (!medium_stencil(l.grid, l.u, q, st)) continue;
-            const double q_flux = m.alpha * flux / kBeamSamples;
+            const double q_flux = m.alpha * flux * inside / kBeamSamples;
             for (int i = 0; i < st.n; ++i)
                 s.source[std::size_t(st.unknown[i])] += q_flux * st.weight[i];
         }
@@ -492,7 +546,7 @@ double halfspace_reflectance(const Medium& m, double h, double first) {
         diag[k] =
             m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) + (k == 0 ? leak : 0.0);
     for (int b = 0; b < kBeamSamples; ++b) {
-        const double t = (beam_depth(b, m.sigma_t) - first) / h; // in voxel centres
+        const double t = (beam_depth(b, m) - first) / h; // in voxel centres
         const double q = m.alpha / kBeamSamples;
         if (t <= 0) {
             rhs[0] += q;
@@ -518,6 +572,105 @@ double halfspace_reflectance(const Medium& m, double h, double first) {
     return leak * phi; // phi is now phi_0
 }
 
+// The grid's own transmission through a slab of thickness d lit uniformly
+// on one face, in the same discretisation as the grids (voxel centres h
+// apart, the last one `phase` h above the far face) and read as
+// volume_exitance reads it: a voxel deep, scaled to what the leaks let out.
+// A column of voxels, solved exactly.
+double column_transmission(const Medium& m, double h, double d, double phase) {
+    const double far = phase * h;
+    const std::size_t k_max =
+        std::size_t(std::clamp(std::floor(std::max(0.0, d - far) / h) + 1.0, 1.0, 2e5));
+    const double first = std::max(0.0, d - far - double(k_max - 1) * h);
+    const double off = m.D / h, leak_top = 1.0 / (2.0 * m.A + first / m.D),
+                 leak_far = 1.0 / (2.0 * m.A + std::min(far, d) / m.D);
+    std::vector<double> diag(k_max), rhs(k_max, 0.0);
+    for (std::size_t k = 0; k < k_max; ++k)
+        diag[k] = m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) +
+                  (k == 0 ? leak_top : 0.0) + (k + 1 == k_max ? leak_far : 0.0);
+    const double inside = collided_above(m, d);
+    for (int b = 0; b < kBeamSamples; ++b) {
+        const double z = beam_depth(b, m, inside);
+        const double t = std::clamp((z - first) / h, 0.0, double(k_max - 1));
+        const std::size_t k = std::min(std::size_t(t), k_max - 1);
+        const double f = t - double(k), q = m.alpha * inside / kBeamSamples;
+        rhs[k] += (1 - f) * q;
+        if (f > 0) rhs[k + 1] += f * q;
+    }
+    std::vector<double> c(k_max, 0.0), e(k_max, 0.0), phi(k_max);
+    c[0] = -off / diag[0];
+    e[0] = rhs[0] / diag[0];
+    for (std::size_t k = 1; k < k_max; ++k) {
+        const double den = diag[k] + off * c[k - 1];
+        c[k] = -off / den;
+        e[k] = (rhs[k] + off * e[k - 1]) / den;
+    }
+    phi[k_max - 1] = e[k_max - 1];
+    for (std::size_t k = k_max - 1; k-- > 0;) phi[k] = e[k] - c[k] * phi[k + 1];
+    const auto at = [&](double z) { // phi at depth z, linear between centres
+        const double t = std::clamp((z - first) / h, 0.0, double(k_max - 1));
+        const std::size_t k = std::min(std::size_t(t), k_max - 1);
+        const double f = t - double(k);
+        return f > 0 ? (1 - f) * phi[k] + f * phi[k + 1] : phi[k];
+    };
+    const double top = at(h), bottom = at(d - h);
+    const double out = leak_top * phi[0] + leak_far * phi[k_max - 1];
+    return top + bottom > 0 ? out * bottom / (top + bottom) : 0.0;
+}
+
+// What a voxel diffusion gets wrong through thin parts: it carries light
+// with the diffusion's decay and no transient, so an absorbing medium lets
+// too much through a few mean free paths and too little through many. The
+// factors that bring the grid's slab transmission to transport theory's, at
+// thicknesses 1.25x apart from l/4 to d_max (at most 30 l; past the ends the
+// end's factor) and for kPhases ways the far face can lie between voxel
+// centres (the grid's own transmission depends on it by several percent).
+constexpr int kPhases = 4;
+struct SlabFactors {
+    double lo = 0, log_step = std::log(1.25);
+    std::vector<std::array<double, kPhases>> factor;
+    // At thickness d, the nearest voxel centre `depth` below the far face;
+    // from 1 at d = 0 (light from beside the point) to the first node's.
+    double at(double d, double depth, double h) const {
+        if (factor.empty()) return 1.0;
+        if (d < lo) return 1.0 + d / lo * (at(lo, depth, h) - 1.0);
+        const double t = std::clamp(std::log(std::max(d, lo) / lo) / log_step, 0.0,
+                                    double(factor.size() - 1));
+        const std::size_t k = std::min(std::size_t(t), factor.size() - 1);
+        const double f = t - double(k);
+        const double u = std::clamp(depth / h * kPhases - 0.5, 0.0, kPhases - 1.0);
+        const int p = std::min(int(u), kPhases - 2);
+        const double g = u - p;
+        const auto in_phase = [&](std::size_t i) {
+            return (1 - g) * factor[i][std::size_t(p)] +
+                   g * factor[i][std::size_t(p + 1)];
+        };
+        return f > 0 ? (1 - f) * in_phase(k) + f * in_phase(k + 1) : in_phase(k);
+    }
+};
+
+SlabFactors slab_factors(const Medium& m, double h, double d_max, bool diffuse) {
+    SlabFactors s;
+    const double l = 1.0 / m.sigma_t;
+    s.lo = 0.25 * l;
+    const double hi = std::clamp(d_max, s.lo, 30.0 * l);
+    std::array<double, kPhases> last;
+    last.fill(1.0);
+    for (double d = s.lo;; d *= 1.25) {
+        const double t =
+            slab_transport(std::min(m.alpha, 1.0 - 1e-9), m.eta, d * m.sigma_t, diffuse)
+                .transmittance;
+        for (int p = 0; p < kPhases; ++p) {
+            const double g = column_transmission(m, h, d, (p + 0.5) / kPhases);
+            // Where either is too faint to compare, the thinner slab's factor.
+            if (t > 1e-9 && g > 1e-9) last[std::size_t(p)] = std::clamp(t / g, 0.2, 5.0);
+        }
+        s.factor.push_back(last);
+        if (d >= hi) break;
+    }
+    return s;
+}
+
 } // namespace
 
 namespace {
@@ -538,7 +691,8 @@ struct Run {
     std::vector<std::unique_ptr<Level>> levels; // coarsest first, then finest first
     std::vector<std::shared_ptr<const Surfels>> level_surfels;
     std::vector<SurfaceSamples> coarse_blockers;
-    std::vector<glm::vec3> w; // the volume's share per point and channel
+    std::vector<glm::vec3> w;     // the volume's share per point and channel
+    std::vector<float> thickness; // the medium below each point (capped)
     bool channel_needed[3] = {false, false, false};
 
     // The surface (and the blockers) merged to the voxels of a grid of edge e.
@@ -560,11 +714,9 @@ struct Run {
 void plan(Run& r, const ChannelCoefficients (&channels)[3]) {
     r.l_min = std::numeric_limits<double>::infinity();
     for (int c = 0; c < 3; ++c) {
-        r.med[c] = medium_of(channels[c]);
+        r.med[c] = medium_of(channels[c], r.o.diffuse_light);
         r.l_min = std::min(r.l_min, 1.0 / r.med[c].sigma_t);
-        // The deepest first collision the sources sample, in any channel.
-        r.beam_limit =
-            std::max(r.beam_limit, 1.01 * beam_depth(kBeamSamples - 1, r.med[c].sigma_t));
+        r.beam_limit = std::max(r.beam_limit, kBeamReach / r.med[c].sigma_t);
     }
     r.lo = r.hi = glm::dvec3(r.surface.positions[0]);
     for (const glm::vec3& p : r.surface.positions) {
@@ -589,6 +741,39 @@ void plan(Run& r, const ChannelCoefficients (&channels)[3]) {
     r.coarse_blockers = std::move(bl);
 }
 
+// How far the light a point gives off beyond its own has come at least: the
+// distance to the nearest well-lit part of the surface (irradiance above a
+// quarter of the lit surface's mean). Through a slab it is the thickness;
+// on the dark side of a ball, near the terminator, much less than the
+// chord below the point; 0 on a well-lit point (what it gives off beyond its
+// own came from beside it).
+std::vector<double> lit_distance(const VoxelGrid& g, const Surfels& cs,
+                                 const SurfaceSamples& surface) {
+    const std::size_t m = cs.flux.size();
+    std::vector<double> e(m, 0.0);
+    double sum = 0, area = 0;
+    for (std::size_t k = 0; k < m; ++k) {
+        const double a = double(cs.samples.areas[k]);
+        if (!(a > 0)) continue;
+        e[k] = (cs.flux[k].x + cs.flux[k].y + cs.flux[k].z) / a;
+        if (e[k] > 0) {
+            sum += e[k] * a;
+            area += a;
+        }
+    }
+    std::vector<glm::dvec3> lit;
+    std::vector<char> is_lit(m, 0);
+    for (std::size_t k = 0; k < m; ++k)
+        if (area > 0 && e[k] > 0.25 * sum / area) {
+            lit.push_back(glm::dvec3(cs.samples.positions[k]));
+            is_lit[k] = 1;
+        }
+    std::vector<double> d = nearest_source_distance(g, lit, surface.positions);
+    for (std::size_t j = 0; j < d.size(); ++j)
+        if (is_lit[cs.of_point[j]]) d[j] = 0.0;
+    return d;
+}
+
 // Each point's share of the volume per channel, from the thickness below it
 // against the channel's spread length: its diffuse mean free path, but at
 // least spread_mfp transport mean free paths (a small object loses light to
@@ -605,10 +790,13 @@ void weigh(Run& r) {
     const std::vector<double> depth =
         ray_thickness(r.levels[0]->grid, cs.samples, r.coarse_blockers,
                       std::isfinite(limit) ? limit : 2.0 * glm::length(r.size));
+    const std::vector<double> lit = lit_distance(r.levels[0]->grid, cs, r.surface);
     r.w.assign(r.n, glm::vec3(0.0f));
+    r.thickness.assign(r.n, 0.0f);
     bool any = false;
     for (std::size_t j = 0; j < r.n; ++j) {
         const double d = depth[cs.of_point[j]];
+        r.thickness[j] = float(std::min(d, lit[j]));
         for (int c = 0; c < 3; ++c) {
             double wc = (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
             if (d >= limit) wc = 0.0; // no way out found within the limit
@@ -731,15 +919,35 @@ std::vector<double> volume_exitance(Run& r, int c, const std::vector<float>& phi
     const double read = chunked_sum(
         n, [&](std::size_t j) { return double(r.surface.areas[j]) * exitance[j]; });
     const double scale = read > 0 ? r.rep.flux_out[c] / read : 0.0;
+    const double grid_reflectance =
+        halfspace_reflectance(m, fine.grid.h, lit_depth(fine, surfels));
     const double missing =
-        profile_reflectance >= 0.0
-            ? profile_reflectance -
-                  halfspace_reflectance(m, fine.grid.h, lit_depth(fine, surfels))
-            : 0.0;
+        profile_reflectance >= 0.0 ? profile_reflectance - grid_reflectance : 0.0;
     r.rep.reflectance_correction[c] = missing;
+    // The light a point gives off beyond what its own irradiance sends back
+    // came through the medium below it: corrected as through a slab of the
+    // point's thickness.
+    double d_max = 0;
     for (std::size_t j = 0; j < n; ++j)
-        exitance[j] =
-            std::max(0.0, exitance[j] * scale + missing * double(r.irradiance[j][c]));
+        if (r.w[j][c] > 0.0f) d_max = std::max(d_max, double(r.thickness[j]));
+    const SlabFactors through = slab_factors(m, fine.grid.h, d_max, r.o.diffuse_light);
+    r.rep.transmission_min[c] = through.factor.front()[0];
+    r.rep.transmission_max[c] = through.factor.front()[0];
+    for (const auto& f : through.factor)
+        for (double x : f) {
+            r.rep.transmission_min[c] = std::min(r.rep.transmission_min[c], x);
+            r.rep.transmission_max[c] = std::max(r.rep.transmission_max[c], x);
+        }
+    for (std::size_t j = 0; j < n; ++j) {
+        const double e = double(r.irradiance[j][c]);
+        const double v = exitance[j] * scale;
+        const double own = std::clamp(grid_reflectance * e, 0.0, v);
+        const double depth = fine.leak_depth[surfels.of_point[j]];
+        exitance[j] = std::max(
+            0.0, own +
+                     through.at(double(r.thickness[j]), depth, fine.grid.h) * (v - own) +
+                     missing * e);
+    }
     return exitance;
 }
 
@@ -816,6 +1024,18 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
     Run r{surface, irradiance, blockers, o, rep};
     r.n = n;
     plan(r, channels);
+    // The profiles describe light entering straight; diffuse light first
+    // scatters shallower and more of it comes back, by transport theory's
+    // ratio for a deep slab.
+    glm::dvec3 reflectance = profile_reflectance;
+    if (o.diffuse_light)
+        for (int c = 0; c < 3; ++c) {
+            const double ratio = diffuse_reflectance_ratio(r.med[c].alpha, r.med[c].eta);
+            rep.diffuse_ratio[c] = ratio;
+            if (reflectance[c] >= 0.0) reflectance[c] *= ratio;
+            for (glm::vec3& v : out) v[c] = float(double(v[c]) * ratio);
+        }
+    const std::vector<glm::vec3> profile = out;
     weigh(r);
     if (!rep.needed) return out;
     if (r.over_budget && r.h > r.l_min)
@@ -848,8 +1068,7 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
         if (!r.channel_needed[c]) continue;
         const std::vector<float> phi = solve_channel(r, c);
         if (o.progress) o.progress->update(uint64_t(c + 1), 3);
-        blend_channel(r, c, volume_exitance(r, c, phi, profile_reflectance[c]),
-                      profile_result, out);
+        blend_channel(r, c, volume_exitance(r, c, phi, reflectance[c]), profile, out);
     }
     return out;
 }

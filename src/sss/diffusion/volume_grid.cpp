@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <glm/vector_relational.hpp>
@@ -133,6 +134,48 @@ std::vector<int8_t> inside_voxels(const VoxelGrid& g, const SurfaceSamples& s) {
             }
     }
     return inside;
+}
+
+std::vector<double> nearest_source_distance(const VoxelGrid& g,
+                                            const std::vector<glm::dvec3>& sources,
+                                            const std::vector<glm::vec3>& queries) {
+    std::vector<double> out(queries.size(), std::numeric_limits<double>::infinity());
+    if (sources.empty()) return out;
+    std::vector<int32_t> nearest(g.count(), -1);
+    std::vector<double> best(g.count(), std::numeric_limits<double>::infinity());
+    std::deque<glm::ivec3> queue;
+    const auto offer = [&](const glm::ivec3& c, int32_t s) {
+        const std::size_t v = g.voxel(c.x, c.y, c.z);
+        const glm::dvec3 d = g.centre(c.x, c.y, c.z) - sources[std::size_t(s)];
+        const double d2 = glm::dot(d, d);
+        if (d2 >= best[v]) return;
+        if (nearest[v] < 0 || d2 < best[v]) queue.push_back(c);
+        best[v] = d2;
+        nearest[v] = s;
+    };
+    for (std::size_t s = 0; s < sources.size(); ++s)
+        offer(g.cell_of(sources[s]), int32_t(s));
+    const glm::ivec3 step[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
+    while (!queue.empty()) {
+        const glm::ivec3 c = queue.front();
+        queue.pop_front();
+        const int32_t s = nearest[g.voxel(c.x, c.y, c.z)];
+        for (const glm::ivec3& d : step) {
+            const glm::ivec3 n = c + d;
+            if (glm::any(glm::lessThan(n, glm::ivec3(0))) ||
+                glm::any(glm::greaterThanEqual(n, g.dim)))
+                continue;
+            offer(n, s);
+        }
+    }
+    for (std::size_t j = 0; j < queries.size(); ++j) {
+        const glm::dvec3 q(queries[j]);
+        const glm::ivec3 c = g.cell_of(q);
+        const int32_t s = nearest[g.voxel(c.x, c.y, c.z)];
+        if (s >= 0) out[j] = glm::length(q - sources[std::size_t(s)]);
+    }
+    return out;
 }
 
 std::vector<double> ray_thickness(const VoxelGrid& g, const SurfaceSamples& surface,

@@ -58,6 +58,14 @@ std::vector<double> ray_thickness(const VoxelGrid& grid, const SurfaceSamples& s
                                   const std::vector<SurfaceSamples>& blockers,
                                   double limit);
 
+/// Per query point, the straight distance to the nearest of `sources`, to
+/// about the grid's resolution (a brushfire from the sources' voxels: each
+/// voxel takes the nearest source of its neighbours'); infinity without
+/// sources.
+std::vector<double> nearest_source_distance(const VoxelGrid& grid,
+                                            const std::vector<glm::dvec3>& sources,
+                                            const std::vector<glm::vec3>& queries);
+
 /// The grid's medium voxels as unknowns of the diffusion system.
 struct Unknowns {
     std::vector<int32_t> index;   ///< per voxel: its unknown, or -1
