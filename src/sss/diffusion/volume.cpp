@@ -27,7 +27,7 @@ struct Medium {
     double sigma_t = 0; // sigma_t' = sigma_s' + sigma_a
     double alpha = 0;   // sigma_s' / sigma_t'
     double sigma_a = 0;
-    double D = 0;    // 1 / (3 sigma_t')
+    double D = 0;    // sigma_a / (k sigma_t')^2, about 1 / (3 sigma_t')
     double A = 1;    // boundary mismatch (1 + F_dr) / (1 - F_dr)
     double dmfp = 0; // 1 / sigma_tr (inf without absorption)
     double eta = 1;  // relative index of refraction
@@ -48,6 +48,19 @@ Medium medium_of(const ChannelCoefficients& c, bool diffuse) {
     m.alpha = c.sigma_s_prime / m.sigma_t;
     m.sigma_a = c.sigma_a;
     m.D = 1.0 / (3.0 * m.sigma_t);
+    if (m.alpha < 1.0 - 1e-6) {
+        // Light decays with transport theory's asymptotic rate k sigma_t
+        // (alpha atanh(k) / k = 1), not diffusion's sqrt(3 (1 - alpha)):
+        // the same in a nearly white medium, 15 % slower in skin's blue, so
+        // that light reaches the far sides of small and thin parts.
+        double lo = 0.0, hi = 1.0;
+        for (int i = 0; i < 60; ++i) {
+            const double k = 0.5 * (lo + hi);
+            (m.alpha * std::atanh(k) / k < 1.0 ? lo : hi) = k;
+        }
+        const double k = 0.5 * (lo + hi);
+        m.D = (1.0 - m.alpha) / (k * k * m.sigma_t);
+    }
     const double fdr = fresnel_diffuse_reflectance(c.ior);
     m.A = (1.0 + fdr) / (1.0 - fdr);
     m.eta = c.ior;
