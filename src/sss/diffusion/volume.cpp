@@ -270,7 +270,9 @@ Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
             if (bin[v] == 1 && l.grid.label[v] == kMedium) l.grid.label[v] = kBlocker;
     }
     l.u = number_unknowns(l.grid);
-    l.beam_exit = ray_thickness(l.grid, surface, blockers, beam_limit);
+    // Without a limit the beams are cut later (beam_exits), if at all.
+    if (beam_limit > 0)
+        l.beam_exit = ray_thickness(l.grid, surface, blockers, beam_limit);
     l.beam_limit = beam_limit;
     const std::size_t n = surface.positions.size();
     l.leak_voxel.assign(n, -1);
@@ -748,8 +750,8 @@ void plan(Run& r, const ChannelCoefficients (&channels)[3]) {
         ++r.coarse_steps;
     const double e = r.h * double(1 << r.coarse_steps);
     auto [sf, bl] = r.merged(e);
-    r.levels.push_back(std::make_unique<Level>(
-        make_level(r.lo, r.hi, e, sf->samples, bl, r.beam_limit)));
+    r.levels.push_back(
+        std::make_unique<Level>(make_level(r.lo, r.hi, e, sf->samples, bl, 0.0)));
     r.level_surfels.push_back(sf);
     r.coarse_blockers = std::move(bl);
 }
@@ -803,13 +805,12 @@ void weigh(Run& r) {
     const std::vector<double> depth =
         ray_thickness(r.levels[0]->grid, cs.samples, r.coarse_blockers,
                       std::isfinite(limit) ? limit : 2.0 * glm::length(r.size));
-    const std::vector<double> lit = lit_distance(r.levels[0]->grid, cs, r.surface);
     r.w.assign(r.n, glm::vec3(0.0f));
     r.thickness.assign(r.n, 0.0f);
     bool any = false;
     for (std::size_t j = 0; j < r.n; ++j) {
         const double d = depth[cs.of_point[j]];
-        r.thickness[j] = float(std::min(d, lit[j]));
+        r.thickness[j] = float(d);
         for (int c = 0; c < 3; ++c) {
             double wc = (o.thick_dmfp - d / spread[c]) / (o.thick_dmfp - o.thin_dmfp);
             if (d >= limit) wc = 0.0; // no way out found within the limit
@@ -817,7 +818,12 @@ void weigh(Run& r) {
             any = any || r.w[j][c] > 0.0f;
         }
     }
-    if (any) smooth_weights(r.levels[0]->grid, r.surface, spread, r.w);
+    if (any) {
+        smooth_weights(r.levels[0]->grid, r.surface, spread, r.w);
+        const std::vector<double> lit = lit_distance(r.levels[0]->grid, cs, r.surface);
+        for (std::size_t j = 0; j < r.n; ++j)
+            r.thickness[j] = float(std::min(double(r.thickness[j]), lit[j]));
+    }
     for (std::size_t j = 0; j < r.n; ++j) {
         for (int c = 0; c < 3; ++c)
             if (r.w[j][c] > 0.0f) r.channel_needed[c] = true;
@@ -1056,6 +1062,11 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
             "the object is large against the mean free path: voxels of " +
             std::to_string(r.h) + " (" + std::to_string(r.h / r.l_min) +
             " mean free paths)");
+    // The coarse grid's beams, now that the volume is needed.
+    Level& coarse = *r.levels.front();
+    coarse.beam_exit = ray_thickness(coarse.grid, r.level_surfels.front()->samples,
+                                     r.coarse_blockers, r.beam_limit);
+    coarse.beam_limit = r.beam_limit;
     refine(r);
     const Level& fine = *r.levels.front();
     const Surfels& surfels = *r.level_surfels.front();
