@@ -33,6 +33,14 @@ METHODS = {
 }
 
 
+def told(extra, incidence):
+    """The volume methods are told how the light entered (-incidence): the
+    irradiance in the cloud does not say, and it decides how deep the light
+    first scatters. The surface profiles have no such option."""
+    volume = "-volume" in extra or "-blocker" in extra
+    return extra + ["-incidence", incidence] if volume and incidence != "normal" else extra
+
+
 def mfp(material, c):
     ss, sa, _ = MATERIALS[material]
     return 1.0 / (ss[c] + sa[c])
@@ -144,11 +152,14 @@ def slabs(r, quick):
             name = f"slab_{material}_{d}mm"
             rib = r.bake(name, box_rib(name + ".ptc", 40, 40, d) + "WorldEnd\n",
                          0.5 if quick else 0.25)
-            outs = {}
-            for method, extra in METHODS.items():
-                outs[method] = r.filter(material, name + ".ptc", f"{name}_{method}.ptc", extra)
             regions = {"R": (-5, -5, -0.01, 5, 5, 0.01), "T": (-5, -5, -d - 0.01, 5, 5, -d + 0.01)}
             for incidence in ("normal", "diffuse"):
+                outs = {}
+                for method, extra in METHODS.items():
+                    args = told(extra, incidence)
+                    out = f"{name}_{method}" + ("" if args == extra else "_" + incidence)
+                    outs[method] = (out + ".ptc" if incidence != "normal" and args == extra
+                                    else r.filter(material, name + ".ptc", out + ".ptc", args))
                 w, _ = r.walk(rib, material, name + ".ptc", list(outs.values()), regions,
                               incidence=incidence)
                 for method, out in outs.items():
@@ -183,7 +194,8 @@ WorldEnd
             outs, times = {}, {}
             for method, extra in METHODS.items():
                 t = time.perf_counter()
-                outs[method] = r.filter(material, name + ".ptc", f"{name}_{method}.ptc", extra)
+                outs[method] = r.filter(material, name + ".ptc", f"{name}_{method}.ptc",
+                                        told(extra, "diffuse"))
                 times[method] = time.perf_counter() - t
             # Per point the walk is noisy on a sphere's dark side: skin1's walks
             # are cheap and get 4x the paths; marble's 20 mm ball is slow (long
@@ -229,12 +241,16 @@ def bone_box(r, quick):
             "mc+volume+blocker": ["-profile", "mc", "-blocker", name + "_bone.ptc"],
             "classic+volume+blocker": ["-blocker", name + "_bone.ptc"],
         }
-        outs = {m: r.filter(material, name + ".ptc", f"{name}_{m}.ptc", e)
+        outs = {m: r.filter(material, name + ".ptc", f"{name}_{m}.ptc", told(e, "diffuse"))
                 for m, e in with_bone.items()}
         w, _ = r.walk(rib, material, name + ".ptc", list(outs.values()), regions,
                       blockers=["bone"])
-        # The same box without the bone, for how much the bone darkens it.
-        free, _ = r.walk(rib, material, name + ".ptc", [], regions)
+        # The same box without the bone (its geometry left out, not only its
+        # absorption), for how much the bone darkens it.
+        free_rib = os.path.join(r.work, name + "_free.rib")
+        with open(free_rib, "w") as f:
+            f.write(box_rib(name + ".ptc", 30, 30, 10) + "WorldEnd\n")
+        free, _ = r.walk(free_rib, material, name + ".ptc", [], regions)
         for method, out in outs.items():
             for c, ch in enumerate(CHANNELS):
                 row = {"material": material, "channel": ch, "method": method}
@@ -262,10 +278,12 @@ def thin_box(r, root, quick):
                "classic, negative-light torus": ("fake.ptc", []),
                "classic+volume+blocker": ("thinbox.ptc", ["-blocker", "torus.ptc"]),
                "pbd+volume+blocker": ("thinbox.ptc", ["-profile", "pbd", "-blocker",
-                                                      "torus.ptc"])}
+                                                      "torus.ptc"]),
+               "mc+volume+blocker": ("thinbox.ptc", ["-profile", "mc", "-blocker",
+                                                    "torus.ptc"])}
     outs = {}
     for i, (m, (cloud, extra)) in enumerate(methods.items()):
-        outs[m] = r.filter("skin1", cloud, f"thinbox_{i}.ptc", extra)
+        outs[m] = r.filter("skin1", cloud, f"thinbox_{i}.ptc", told(extra, "diffuse"))
     # The fake's cloud holds the torus's points too: it is compared on the
     # regions only.
     regions = {"top": (-3, 1.99, -3, 3, 2.01, 3), "under_centre": (-2, -2.01, -2, 2, -1.99, 2),
@@ -329,6 +347,11 @@ def run_cases(bin_dir, root, data_dir, work, photons, quick):
     write_tsv(os.path.join(data_dir, "bone.tsv"), bone_box(r, quick))
     write_tsv(os.path.join(data_dir, "thinbox.tsv"), thin_box(r, root, quick))
     write_tsv(os.path.join(data_dir, "cost.tsv"), cost(r, quick))
+
+
+def run_cost(bin_dir, data_dir, work, quick):
+    """Only the cost again (the walks' data are kept)."""
+    write_tsv(os.path.join(data_dir, "cost.tsv"), cost(Runner(bin_dir, work, 0), quick))
 
 
 def pct(x):
@@ -420,7 +443,8 @@ cloud as `-blocker`.
     w("40 x 40 mm slabs lit on the top face by a distant light (`ptbake -spacing 0.25`); R and T "
       "are the mean exitance over the middle 10 x 10 mm of the lit and of the back face. "
       "ptfilter gets the same cloud for either incidence (the irradiance does not say where the "
-      "light came from); the walk lets it in straight (normal) or diffuse.\n")
+      "light came from); the walk lets it in straight (normal) or diffuse, and the `+volume` "
+      "methods are told which with `-incidence` (the surface profiles have no such option).\n")
     methods = list(dict.fromkeys(r["method"] for r in slab))
     w("| material | d | incidence | channel | d / l | " +
       " | ".join(f"{m} R / T / out/in" for m in methods) + " |")
