@@ -220,4 +220,37 @@ surface t(string map = "";) {
     EXPECT_TRUE(e.services.warnings.empty());
 }
 
+TEST(RslEngineTextures, EmptyMapNamesGiveZeroQuietlyAMissingMapIsAnError) {
+    // Library shaders call texture(), environment() and shadow() unguarded
+    // with an empty default: 0, as in PRMan, and no warning.
+    TexturedEngine e;
+    ShadingBatch b = plane_grid(2, 1);
+    const char* source = R"(
+surface t(string map = ""; string env = ""; string shad = "";) {
+    Ci = color texture(map) + color environment(env, I) + color (1 - shadow(shad, P));
+    Oi = float texture(map[1], s, t) + float environment(env[2], N);
+}
+)";
+    ShaderInstance inst = e.instance(source);
+    e.context.execute(inst, b);
+    for (std::size_t i = 0; i < b.size; ++i) {
+        EXPECT_EQ(b.Ci[i], glm::vec3(1.0f)) << i;
+        EXPECT_EQ(b.Oi[i], glm::vec3(0.0f)) << i;
+    }
+    EXPECT_TRUE(e.services.warnings.empty());
+    // A named map that is missing stops the shader with an error naming it.
+    ShaderInstance missing = e.instance(source, [&] {
+        ParamList p;
+        p.set(string_param("map", "no_such_map.tx"));
+        return p;
+    }());
+    try {
+        e.context.execute(missing, b);
+        FAIL() << "no error for a missing map";
+    } catch (const ShaderRuntimeError& err) {
+        EXPECT_NE(std::string(err.what()).find("no_such_map.tx"), std::string::npos)
+            << err.what();
+    }
+}
+
 } // namespace

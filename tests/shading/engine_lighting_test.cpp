@@ -276,6 +276,48 @@ surface t(output varying color all = 0; output varying color key = 0;
     EXPECT_EQ(n[0], 2.0f);
 }
 
+TEST(RslEngineLighting, LightShadersSeeNsAndSetLOutsideIlluminate) {
+    LightRig rig;
+    // The specification's own ambientlight assigns L outside any illuminate.
+    rig.add(R"(
+light ambientlight(float intensity = 1; color lightcolor = 1;) {
+    Cl = intensity * lightcolor;
+    L = 0;
+}
+)",
+            "ambientlight", {}, Matrix4(1.0));
+    // PRMan's Ns: the normal of the surface being lit.
+    {
+        ParamList p;
+        p.set(point_param("from", {0, 0, -1}));
+        rig.add(R"(
+light ns(point from = point "shader" (0, 0, 0);) {
+    illuminate(from) { Cl = color(xcomp(Ns), ycomp(Ns), zcomp(Ns)); }
+}
+)",
+                "ns", p, Matrix4(1.0));
+    }
+    ShadingBatch b = plane_grid(2, 1);
+    ShaderInstance s = rig.engine.instance(R"(
+surface t(output varying color lit = 0; output varying color amb = 0;
+          output varying color nn = 0;) {
+    illuminance(P) { lit += Cl; }
+    amb = ambient();
+    nn = color(xcomp(N), ycomp(N), zcomp(N));
+}
+)");
+    rig.engine.context.execute(s, b, rig.lights());
+    auto out = [&](const char* name) {
+        TypeSpec ty;
+        std::vector<float> v;
+        EXPECT_TRUE(rig.engine.context.output(name, ty, v));
+        return glm::vec3(v[0], v[1], v[2]);
+    };
+    EXPECT_EQ(out("amb"), glm::vec3(1, 1, 1));
+    EXPECT_EQ(out("lit"), out("nn"));
+    EXPECT_GT(glm::length(out("nn")), 0.5f);
+}
+
 /// A square occluder in world space, z = zc, side 2 * half.
 void add_square(RayTracer& rt, double zc, double half, double cx = 0.0) {
     std::vector<glm::vec3> v = {{cx - half, -half, zc},

@@ -37,7 +37,7 @@ constexpr GlobalDef kGlobals[] = {
     {"ncomps", F, false, kS | kD | kL, 0, 0}, {"time", F, false, kS | kD | kL, 0, 0},
     {"dtime", F, false, kS | kD | kL, 0, 0}, {"dPdtime", Ve, true, kS | kD, 0, 0},
     {"Ci", C, true, kS, kS, 0}, {"Oi", C, true, kS, kS, 0},
-    {"L", Ve, true, kS | kL, 0, kS | kL},
+    {"L", Ve, true, kS | kL, kL, kS},
     {"Cl", C, true, kS | kL, kL, kS}, {"Ol", C, true, kS | kL, kL, kS},
     {"Ps", Pt, true, kL, 0, 0},
 };
@@ -200,6 +200,9 @@ const Var* Generator::lookup(const std::string& name, SrcLoc at, bool report) {
         auto it = s->vars.find(name);
         if (it != s->vars.end()) return &it->second;
     }
+    // PRMan's Ns in a light shader is the normal of the surface being lit,
+    // which is what N holds there.
+    if (name == "Ns" && m_kind_bit == kL) return lookup("N", at, report);
     if (find_global(name)) {
         if (const Var* g = global(name, at)) return g;
         if (find_global(name)->read & m_kind_bit) return nullptr; // reported

@@ -124,6 +124,13 @@ void op_texture(Frame& f, const BoundOp& b) {
     const std::size_t n = f.n;
     const std::size_t i0 = f.first_active();
     const std::string& file = f.str(b, 1, i0);
+    // texture("") is 0, quietly, as in PRMan: library shaders call it
+    // unguarded with an empty default map name. A named map that cannot be
+    // read stays an error (below).
+    if (file.empty()) {
+        write_result(f, d, std::vector<float>(n * std::size_t(nc), 0.0f), nc);
+        return;
+    }
     const int channel = static_cast<int>(*f.ptr(b, 2, i0));
     const int coords = b.ia; // 0, 2 or 8
     TextureOptions o;
@@ -210,6 +217,10 @@ void op_environment(Frame& f, const BoundOp& b) {
     const std::size_t n = f.n;
     const std::size_t i0 = f.first_active();
     const std::string& file = f.str(b, 1, i0);
+    if (file.empty()) { // as texture("")
+        write_result(f, d, std::vector<float>(n * std::size_t(nc), 0.0f), nc);
+        return;
+    }
     if (file == "raytrace") {
         environment_raytrace(f, b);
         return;
