@@ -22,8 +22,8 @@
 
 include(CMakePackageConfigHelpers)
 
-set(SSS_TOOLS ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview shader envdome
-  ssprofile)
+set(SSS_TOOLS ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview shader sloinfo
+  envdome ssprofile)
 set(SSS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/sss)
 
 # --- runtime: tools, shaders, plugin, scenes, docs, man pages ---------------
@@ -57,6 +57,7 @@ set(SSS_MAN_NAMES
   "ptsynth|write synthetic lit point clouds"
   "ptview|pictures of point clouds"
   "shader|compile RenderMan Shading Language shaders"
+  "sloinfo|describe compiled shaders and their parameters"
   "envdome|light probes to domes of distant lights"
   "ssprofile|diffusion profiles against a Monte-Carlo walk of the light"
   "sss-farm|submit the sss chain to a Slurm farm")
@@ -157,7 +158,7 @@ set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS
 set(CPACK_COMPONENT_PYTHON_DESCRIPTION
   "The sss Python module: point clouds as numpy arrays, ptfilter's diffusion in-process,\n brick maps and texture3d lookups, frame patterns.")
 set(CPACK_COMPONENT_RUNTIME_DESCRIPTION
-  "The sss tools: ptbake, ptfilter, brickmake, brickinfo, render, ptinfo, ptsynth, ptview,\n shader, envdome, ssprofile and sss-farm, with the standard shaders, scenes, docs and man pages.")
+  "The sss tools: ptbake, ptfilter, brickmake, brickinfo, render, ptinfo, ptsynth, ptview,\n shader, sloinfo, envdome, ssprofile and sss-farm, with the standard shaders, scenes, docs and man pages.")
 set(CPACK_COMPONENT_DEV_DESCRIPTION
   "The sss library: headers, static archives, CMake package (find_package(sss))\n and pkg-config file.")
 include(CPack)

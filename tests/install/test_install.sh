@@ -33,7 +33,7 @@ libdir="${libdir%/pkgconfig}"
 export -n SSS_SHADER_DIR SSS_PLUGIN_DIR 2>/dev/null || true
 unset SSS_SHADER_DIR SSS_PLUGIN_DIR
 bin="$prefix/bin"
-for tool in ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview shader envdome ssprofile sss-farm; do
+for tool in ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview shader sloinfo envdome ssprofile sss-farm; do
     [[ -x "$bin/$tool" ]] || fail "$tool not installed"
     "$bin/$tool" --version >/dev/null || fail "$tool --version"
     page="$prefix/share/man/man1/$tool.1"
