@@ -179,10 +179,13 @@ TEST(Volume, AThickShapeKeepsTheProfilesResultBitForBit) {
     EXPECT_GT(drep.diffuse_ratio.z, drep.diffuse_ratio.x);
     for (int ch = 0; ch < 3; ++ch) {
         const NamedMaterial* m = find_material("skin1");
-        const double alpha = m->sigma_s_prime[ch] / (m->sigma_s_prime[ch] + m->sigma_a[ch]);
-        EXPECT_DOUBLE_EQ(drep.diffuse_ratio[ch], diffuse_reflectance_ratio(alpha, m->ior));
+        const double alpha =
+            m->sigma_s_prime[ch] / (m->sigma_s_prime[ch] + m->sigma_a[ch]);
+        EXPECT_DOUBLE_EQ(drep.diffuse_ratio[ch],
+                         diffuse_reflectance_ratio(alpha, m->ior));
         for (std::size_t j = 0; j < out.size(); j += 97)
-            ASSERT_FLOAT_EQ(diffuse[j][ch], float(c.profile[j][ch] * drep.diffuse_ratio[ch]));
+            ASSERT_FLOAT_EQ(diffuse[j][ch],
+                            float(c.profile[j][ch] * drep.diffuse_ratio[ch]));
     }
 }
 

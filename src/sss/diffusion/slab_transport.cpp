@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <utility>
 #include <vector>
 
 #include "fresnel.h"
 #include "sss/util/error.h"
+#include "sss/util/gauss_legendre.h"
 
 namespace sss {
 
@@ -15,25 +15,12 @@ using diffusion_detail::fresnel_internal;
 
 namespace {
 
-// Gauss-Legendre nodes and weights on [a, b] (Newton on P_n).
-void gauss_legendre(int n, double a, double b, std::vector<double>& x,
+// The nodes and weights of `rule` mapped to [a, b], appended.
+void gauss_legendre(const GaussRule& rule, double a, double b, std::vector<double>& x,
                     std::vector<double>& w) {
-    for (int i = 0; i < n; ++i) {
-        double t = std::cos(std::numbers::pi * (i + 0.75) / (n + 0.5)), dp = 1.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = t;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2.0 * k - 1.0) * t * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (t * p1 - p0) / (t * t - 1.0);
-            const double step = p1 / dp;
-            t -= step;
-            if (std::abs(step) < 1e-15) break;
-        }
-        x.push_back(a + 0.5 * (b - a) * (t + 1.0));
-        w.push_back((b - a) / ((1.0 - t * t) * dp * dp));
+    for (std::size_t k = 0; k < rule.x.size(); ++k) {
+        x.push_back(a + 0.5 * (b - a) * (rule.x[k] + 1.0));
+        w.push_back(0.5 * (b - a) * rule.w[k]);
     }
 }
 
@@ -72,11 +59,11 @@ struct Direction {
 };
 
 std::vector<Direction> directions(double eta, double d) {
+    static const GaussRule rule(24);
     std::vector<double> x, w;
-    const int n = 24;
     const double mu_c = eta > 1.0 ? std::sqrt(1.0 - 1.0 / (eta * eta)) : 0.0;
-    if (mu_c > 0.0) gauss_legendre(n, 0.0, mu_c, x, w);
-    gauss_legendre(n, mu_c, 1.0, x, w);
+    if (mu_c > 0.0) gauss_legendre(rule, 0.0, mu_c, x, w);
+    gauss_legendre(rule, mu_c, 1.0, x, w);
     std::vector<Direction> dirs(x.size());
     for (std::size_t k = 0; k < x.size(); ++k) {
         Direction& q = dirs[k];
@@ -94,8 +81,9 @@ std::vector<Direction> directions(double eta, double d) {
 // transmission.
 std::vector<std::pair<double, double>> entering(double eta, bool diffuse) {
     if (!diffuse) return {{1.0, 1.0}};
+    static const GaussRule rule(32);
     std::vector<double> x, w;
-    gauss_legendre(32, 0.0, 1.0, x, w);
+    gauss_legendre(rule, 0.0, 1.0, x, w);
     std::vector<std::pair<double, double>> in;
     double total = 0;
     for (std::size_t k = 0; k < x.size(); ++k) {

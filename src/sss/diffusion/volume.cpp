@@ -547,6 +547,40 @@ void smooth_weights(const VoxelGrid& g, const SurfaceSamples& surface,
     }
 }
 
+// A beam's first collisions (the share `inside` of them) as sources of a
+// column of voxel centres h apart, the first `first` below the lit face:
+// each shared between the two nearest centres.
+void add_beam(const Medium& m, double h, double first, double inside,
+              std::vector<double>& rhs) {
+    const std::size_t k_max = rhs.size();
+    for (int b = 0; b < kBeamSamples; ++b) {
+        const double z = beam_depth(b, m, inside);
+        const double t = std::clamp((z - first) / h, 0.0, double(k_max - 1));
+        const std::size_t k = std::min(std::size_t(t), k_max - 1);
+        const double f = t - double(k), q = m.alpha * inside / kBeamSamples;
+        rhs[k] += (1 - f) * q;
+        if (f > 0) rhs[k + 1] += f * q;
+    }
+}
+
+// The column's fluence: diag on the diagonal, -off beside it, solved
+// exactly (forward elimination and back substitution, Thomas).
+std::vector<double> solve_column(const std::vector<double>& diag, double off,
+                                 const std::vector<double>& rhs) {
+    const std::size_t k_max = diag.size();
+    std::vector<double> c(k_max, 0.0), e(k_max, 0.0), phi(k_max);
+    c[0] = -off / diag[0];
+    e[0] = rhs[0] / diag[0];
+    for (std::size_t k = 1; k < k_max; ++k) {
+        const double den = diag[k] + off * c[k - 1];
+        c[k] = -off / den;
+        e[k] = (rhs[k] + off * e[k - 1]) / den;
+    }
+    phi[k_max - 1] = e[k_max - 1];
+    for (std::size_t k = k_max - 1; k-- > 0;) phi[k] = e[k] - c[k] * phi[k + 1];
+    return phi;
+}
+
 // The total diffuse reflectance of a uniformly lit half-space in the same
 // discretisation as the grids (voxels of edge h below the surface, the leak
 // half a voxel above the first centre, the beam's collisions shared between
@@ -560,31 +594,8 @@ double halfspace_reflectance(const Medium& m, double h, double first) {
     for (std::size_t k = 0; k < k_max; ++k)
         diag[k] =
             m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) + (k == 0 ? leak : 0.0);
-    for (int b = 0; b < kBeamSamples; ++b) {
-        const double t = (beam_depth(b, m) - first) / h; // in voxel centres
-        const double q = m.alpha / kBeamSamples;
-        if (t <= 0) {
-            rhs[0] += q;
-            continue;
-        }
-        const std::size_t k = std::size_t(t);
-        if (k + 1 >= k_max) continue;
-        const double f = t - double(k);
-        rhs[k] += (1 - f) * q;
-        rhs[k + 1] += f * q;
-    }
-    // Forward elimination and back substitution (off-diagonals all -off).
-    std::vector<double> c(k_max, 0.0), d(k_max, 0.0);
-    c[0] = -off / diag[0];
-    d[0] = rhs[0] / diag[0];
-    for (std::size_t k = 1; k < k_max; ++k) {
-        const double den = diag[k] + off * c[k - 1];
-        c[k] = -off / den;
-        d[k] = (rhs[k] + off * d[k - 1]) / den;
-    }
-    double phi = d[k_max - 1];
-    for (std::size_t k = k_max - 1; k-- > 0;) phi = d[k] - c[k] * phi;
-    return leak * phi; // phi is now phi_0
+    add_beam(m, h, first, 1.0, rhs);
+    return leak * solve_column(diag, off, rhs)[0];
 }
 
 // The grid's own transmission through a slab of thickness d lit uniformly
@@ -603,25 +614,8 @@ double column_transmission(const Medium& m, double h, double d, double phase) {
     for (std::size_t k = 0; k < k_max; ++k)
         diag[k] = m.sigma_a * h + off * ((k > 0) + (k + 1 < k_max)) +
                   (k == 0 ? leak_top : 0.0) + (k + 1 == k_max ? leak_far : 0.0);
-    const double inside = collided_above(m, d);
-    for (int b = 0; b < kBeamSamples; ++b) {
-        const double z = beam_depth(b, m, inside);
-        const double t = std::clamp((z - first) / h, 0.0, double(k_max - 1));
-        const std::size_t k = std::min(std::size_t(t), k_max - 1);
-        const double f = t - double(k), q = m.alpha * inside / kBeamSamples;
-        rhs[k] += (1 - f) * q;
-        if (f > 0) rhs[k + 1] += f * q;
-    }
-    std::vector<double> c(k_max, 0.0), e(k_max, 0.0), phi(k_max);
-    c[0] = -off / diag[0];
-    e[0] = rhs[0] / diag[0];
-    for (std::size_t k = 1; k < k_max; ++k) {
-        const double den = diag[k] + off * c[k - 1];
-        c[k] = -off / den;
-        e[k] = (rhs[k] + off * e[k - 1]) / den;
-    }
-    phi[k_max - 1] = e[k_max - 1];
-    for (std::size_t k = k_max - 1; k-- > 0;) phi[k] = e[k] - c[k] * phi[k + 1];
+    add_beam(m, h, first, collided_above(m, d), rhs);
+    const std::vector<double> phi = solve_column(diag, off, rhs);
     const auto at = [&](double z) { // phi at depth z, linear between centres
         const double t = std::clamp((z - first) / h, 0.0, double(k_max - 1));
         const std::size_t k = std::min(std::size_t(t), k_max - 1);
