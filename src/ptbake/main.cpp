@@ -32,7 +32,8 @@ std::string usage() {
         "bake_constant) into micropolygons, independent of the view and with nothing\n"
         "culled, lights them (ambient + diffuse, ray-traced shadows) and writes the\n"
         "point clouds named by the shaders' \"filename\". Other surfaces only cast\n"
-        "shadows. See docs/ptbake.md.\n"
+        "shadows. The scene may be gzip-compressed; \"-\" reads it from standard\n"
+        "input. See docs/ptbake.md.\n"
         "\n"
         "options:\n"
         "  -o FILE                write every bake into FILE (.ptc or .ply) instead\n"
@@ -138,7 +139,9 @@ int run_job(const std::vector<std::string>& argv) {
     const double read_s = job.seconds();
     // One plan for the whole job: the shaders are loaded and bound once.
     const sss::BakeJob bake(scene, opt);
-    if (job.newer() && job.up_to_date(bake.output_files(), bake.input_files())) return 0;
+    // A scene on standard input has no date: always baked.
+    if (job.newer() && rib != sss::kRibStandardInput &&
+        job.up_to_date(bake.output_files(), bake.input_files())) return 0;
 
     sss::BakeReport report = bake.run();
     sss::warn_all(kTool, report.warnings);

@@ -31,7 +31,8 @@ std::string usage() {
            "writes every Display: the beauty in R, G, B, A and the AOVs its modes\n"
            "name (shader output variables, or the built-in ambient, diffuse,\n"
            "specular, sss, occlusion). A bake RIB (shaders that call bake3d) also\n"
-           "bakes its point clouds, as ptbake does. See docs/render.md.\n"
+           "bakes its point clouds, as ptbake does. The scene may be gzip-compressed;\n"
+           "\"-\" reads it from standard input. See docs/render.md.\n"
            "\n"
            "options:\n"
            "  -o IMAGE               write the primary Display into IMAGE instead\n"
@@ -121,7 +122,8 @@ int run(const std::vector<std::string>& argv) {
     const double read_s = job.seconds();
     // One plan for the whole job: the shaders are loaded and bound once.
     const sss::RenderJob render(scene, opt);
-    if (job.newer()) {
+    // A scene on standard input has no date: always rendered.
+    if (job.newer() && rib != sss::kRibStandardInput) {
         const sss::RenderFiles io = render.files();
         if (job.up_to_date(io.outputs, io.inputs)) return 0;
     }

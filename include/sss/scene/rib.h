@@ -52,9 +52,15 @@ struct RibReadOptions {
     std::optional<int> frame;
 };
 
-/// Reads a RIB file (ReadArchive paths are relative to the including file;
-/// a ReadArchive of a ".obj" file brings in a Wavefront OBJ mesh as
-/// PointsPolygons). Throws IoError / RibError.
+/// The path that names standard input for read_rib.
+inline constexpr const char* kRibStandardInput = "-";
+
+/// Reads a RIB file, plain or gzip-compressed (ReadArchive paths are
+/// relative to the including file; a ReadArchive of a ".obj" file brings in
+/// a Wavefront OBJ mesh as PointsPolygons). The path "-" reads standard
+/// input: messages name it "<stdin>", the scene has no path (relative names
+/// are relative to the working folder) and no source file. Throws IoError /
+/// RibError.
 Scene read_rib(const std::string& path, const RibReadOptions& options = {});
 /// Same, from text in memory; `path` names it in messages and is the base for
 /// relative ReadArchive paths.

@@ -29,6 +29,11 @@ public:
     /// Opens path; IoError if it cannot be opened or is not a regular file
     /// (require_regular_file).
     explicit ByteSource(const std::string& path);
+    /// Tag for the constructor that reads standard input.
+    struct StandardInput {};
+    /// Reads standard input (plain or gzip) without closing it; path() is
+    /// "<stdin>" and remaining_bound() is unknown.
+    explicit ByteSource(StandardInput);
     ~ByteSource();
     ByteSource(const ByteSource&) = delete;
     ByteSource& operator=(const ByteSource&) = delete;
@@ -53,6 +58,8 @@ public:
     void finish();
 
 private:
+    /// Reads fd (owned from here on) through zlib.
+    void attach(int fd);
     std::size_t raw_read(void* dst, std::size_t n);
     bool fill();
 

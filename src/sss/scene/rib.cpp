@@ -228,6 +228,13 @@ void Reader::warn_once(const std::string& key, const Statement& s,
 } // namespace rib
 
 Scene read_rib(const std::string& path, const RibReadOptions& options) {
+    if (path == kRibStandardInput) {
+        Scene scene = parse_rib(rib::slurp_standard_input(), "<stdin>", options);
+        if (scene.worlds == 0)
+            throw ValueError("<stdin>: no WorldBegin: not a scene");
+        scene.path.clear();
+        return scene;
+    }
     Scene scene = parse_rib(rib::slurp(path, ""), path, options);
     // Geometry outside a world block is already an error: a file without
     // one is an archive (or not RIB at all), never a scene to render or bake.

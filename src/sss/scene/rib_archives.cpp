@@ -110,29 +110,45 @@ void Reader::run_file(const Statement& from, const std::string& path) {
     --m_depth;
 }
 
+namespace {
+
+/// All of a source's (inflated) bytes, the memory checked as the text grows:
+/// a gzip RIB may inflate a thousandfold.
+std::string read_all(detail::ByteSource& in) {
+    std::string text;
+    std::size_t size = 0;
+    // A plain file in one block of its size (+1 to see the end at once).
+    std::size_t first = 1u << 20;
+    if (auto bound = in.remaining_bound(); bound && !in.compressed())
+        first = static_cast<std::size_t>(*bound) + 1;
+    for (;;) {
+        if (text.size() - size < (1u << 16)) {
+            const std::size_t want = text.empty() ? first : 2 * text.size();
+            check_memory(want, "reading " + in.path(),
+                         "split the scene into smaller archives");
+            text.resize(want);
+        }
+        const std::size_t got = in.read(text.data() + size, text.size() - size);
+        if (got == 0) break;
+        size += got;
+    }
+    in.finish();
+    text.resize(size);
+    text.shrink_to_fit();
+    return text;
+}
+
+} // namespace
+
 std::string slurp(const std::string& path, const std::string& context) {
     detail::require_regular_file(path, context);
-    std::ifstream in(path, std::ios::binary);
-    if (!in)
-        throw IoError(path,
-                      std::string("cannot open") + context + ": " + std::strerror(errno));
-    // Read in one block of the file's size, after checking that the text
-    // and what parsing it may take (arguments are checked as they grow) fit.
-    std::error_code ec;
-    const std::uintmax_t size = fs::file_size(path, ec);
-    std::string text;
-    if (!ec && size > 0) {
-        check_memory(size, "reading " + path, "split the scene into smaller archives");
-        text.resize(size);
-        in.read(text.data(), std::streamsize(size));
-        text.resize(std::size_t(in.gcount()));
-    }
-    // A file that grew while read: the rest too.
-    std::ostringstream rest;
-    rest << in.rdbuf();
-    if (in.bad()) throw IoError(path, "read error");
-    text += rest.str();
-    return text;
+    detail::ByteSource in(path);
+    return read_all(in);
+}
+
+std::string slurp_standard_input() {
+    detail::ByteSource in{detail::ByteSource::StandardInput{}};
+    return read_all(in);
 }
 
 // --- frames ----------------------------------------------------------------

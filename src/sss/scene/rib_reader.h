@@ -43,8 +43,11 @@ struct SavedState {
     std::shared_ptr<const std::string> file;
 };
 
-/// The whole text of a file; throws IoError "cannot open<context>: <reason>".
+/// The whole text of a file, inflated if it is gzip; throws IoError
+/// "cannot open<context>: <reason>".
 std::string slurp(const std::string& path, const std::string& context);
+/// The whole of standard input, inflated if it is gzip.
+std::string slurp_standard_input();
 
 /// The identity of a file for the ReadArchive cycle check: its canonical path.
 std::string file_key(const std::string& path);

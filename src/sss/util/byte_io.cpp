@@ -60,12 +60,24 @@ ByteSource::ByteSource(const std::string& path) : m_path(path), m_buf(kInputBuff
         throw IoError(path, "is a directory");
     }
     if (S_ISREG(st.st_mode)) m_file_size = static_cast<uint64_t>(st.st_size);
+    attach(fd);
+}
+
+ByteSource::ByteSource(StandardInput) : m_path("<stdin>"), m_buf(kInputBuffer) {
+    // A duplicate: closing the stream must not close the process's stdin.
+    const int fd = ::fcntl(STDIN_FILENO, F_DUPFD_CLOEXEC, 0);
+    if (fd < 0)
+        throw IoError(m_path, std::string("cannot read: ") + std::strerror(errno));
+    attach(fd);
+}
+
+void ByteSource::attach(int fd) {
     // zlib reads plain files transparently and inflates gzip ones, which gives
     // the gzip sniffing for free.
     gzFile gz = gzdopen(fd, "rb");
     if (!gz) {
         ::close(fd);
-        throw IoError(path, "cannot open (out of memory)");
+        throw IoError(m_path, "cannot open (out of memory)");
     }
     gzbuffer(gz, 1 << 17);
     m_gz = gz;
