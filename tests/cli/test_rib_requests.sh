@@ -88,5 +88,36 @@ touch -d '2 hours ago' bake.rib
 run "$bin/ptbake" -spacing 0.1 -newer 1 - <bake.rib
 [[ "$rc" == 0 && "$out" != *"nothing to do"* ]] || fail "ptbake -newer 1 - skipped: $out"
 
+# --- primitives -----------------------------------------------------------------
+# Each renders with exit 0 and no warning, covering about what it should.
+primitive() {
+    local name="$1" lo="$2" hi="$3"
+    shift 3
+    { header; printf '%s\n' "$@"; echo 'WorldEnd'; } >"$name.rib"
+    render_clean -o "$name.exr" "$name.rib"
+    expect_coverage "$name.exr" "$lo" "$hi"
+}
+# Three disks of diameter 0.6 facing the camera: 3 x 0.283 of a 5.04 x 3.78
+# frame (fov 35 at distance 6): 0.0445.
+primitive points 0.042 0.047 'Points "P" [-1 0 0 0 0.5 0 1 0 0] "constantwidth" [0.6]'
+# A ribbon about 3 long and 0.3 wide, and a thin closed loop 1.4 long: 0.05.
+primitive curves 0.04 0.06 'Basis "catmull-rom" 1 "catmull-rom" 1' \
+    'Curves "cubic" [6] "nonperiodic" "P" [-1.5 0 0 -1.3 0 0 -0.5 0.3 0 0.5 -0.3 0 1.3 0 0 1.5 0 0] "constantwidth" 0.3' \
+    'Curves "linear" [3] "periodic" "P" [0 -1 0 0.5 -1 0 0.2 -0.5 0] "width" [0.05 0.05 0.05] "Cs" [1 0 0 0 1 0 0 0 1]'
+# ptbake bakes points and curves like any surface.
+cat >bake_points.rib <<'RIB'
+WorldBegin
+  LightSource "distantlight" 1 "from" [0 0 -5] "to" [0 0 0] "intensity" 1
+  Surface "bake_radiance_t" "string filename" ["points.ptc"]
+  Points "P" [0 0 0 1 0 0] "constantwidth" [0.5]
+  Curves "linear" [2] "nonperiodic" "P" [0 1 0 2 1 0] "constantwidth" 0.2
+WorldEnd
+RIB
+run "$bin/ptbake" -progress 1 -spacing 0.02 bake_points.rib
+[[ "$rc" == 0 && -z "$err" ]] || fail "ptbake points and curves: exit $rc, stderr: $err"
+area="$(sed -n 's/.*wrote points.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")"
+python3 -c "import sys, math; a = float('$area' or 'nan'); sys.exit(0 if abs(a - (2 * math.pi * 0.0625 + 0.4)) < 0.01 else 1)" ||
+    fail "points.ptc: total area $area, expected $(python3 -c 'import math; print(2 * math.pi * 0.0625 + 0.4)')"
+
 ((failures == 0)) || { echo "$failures check(s) failed" >&2; exit 1; }
 echo "rib requests: all checks passed"

@@ -52,6 +52,9 @@ const std::vector<std::string> kBodies = {
     "SubdivisionMesh \"catmull-clark\" [4 4 4 4 4 4] [0 1 3 2 2 3 5 4 4 5 7 6 6 7 1 0 "
     "1 7 5 3 6 0 2 4] \"P\" [-1 -1 1 1 -1 1 -1 1 1 1 1 1 -1 1 -1 1 1 -1 -1 -1 -1 1 -1 "
     "-1]",
+    "Points \"P\" [0 0 0 1 0 0 0 1 0] \"width\" [0.5 0.2 0.3]",
+    "Curves \"cubic\" [4 7] \"nonperiodic\" \"P\" [0 0 0 1 1 0 2 0 0 3 1 0 "
+    "0 1 1 1 2 1 2 1 1 3 2 1 4 1 1 5 2 1 6 1 1] \"constantwidth\" 0.1",
 };
 
 TEST(DiceEstimate, WithinAFactorOfTwoForEveryFamily) {

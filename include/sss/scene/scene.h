@@ -170,7 +170,9 @@ enum class PrimitiveKind {
     Paraboloid,
     Patch,
     PatchMesh,
-    Teapot
+    Teapot,
+    Points,
+    Curves
 };
 /// The RIB request of a kind ("PointsPolygons", "Sphere", ...).
 const char* primitive_kind_name(PrimitiveKind kind);
@@ -190,7 +192,9 @@ struct Primitive {
     std::vector<int> nloops;
     std::vector<int> nverts;
     std::vector<int> verts;
-    /// Patch / PatchMesh type ("bicubic" or "bilinear"); SubdivisionMesh scheme.
+    /// Patch / PatchMesh type ("bicubic" or "bilinear"); SubdivisionMesh
+    /// scheme; Curves type ("linear" or "cubic"). Curves: nverts holds the
+    /// vertices per curve and vwrap whether they are periodic.
     std::string type;
     /// PatchMesh: vertex counts and wrap modes ("periodic" -> true).
     int nu = 0;

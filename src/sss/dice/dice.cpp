@@ -52,6 +52,10 @@ DicedSurface dispatch(const Primitive& prim, const DiceControl& control,
         return detail::dice_patch_mesh(prim, control, estimate);
     case PrimitiveKind::Teapot:
         return detail::dice_teapot(prim, control, estimate);
+    case PrimitiveKind::Points:
+        return detail::dice_points(prim, control, estimate);
+    case PrimitiveKind::Curves:
+        return detail::dice_curves(prim, control, estimate);
     }
     throw ValueError(prim.source + ": unknown primitive kind");
 }

@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include "sss/dice/dice.h"
@@ -81,6 +82,16 @@ DicedSurface dice_patch_mesh(const Primitive& prim, const DiceControl& control,
 /// Geometry "teapot" (dice_patch.cpp).
 DicedSurface dice_teapot(const Primitive& prim, const DiceControl& control,
                          DiceEstimate* estimate = nullptr);
+/// Points (dice_curves.cpp).
+DicedSurface dice_points(const Primitive& prim, const DiceControl& control,
+                         DiceEstimate* estimate = nullptr);
+/// Curves "linear" / "cubic" (dice_curves.cpp).
+DicedSurface dice_curves(const Primitive& prim, const DiceControl& control,
+                         DiceEstimate* estimate = nullptr);
+/// The matrix of a spline basis in our column-vector layout; a
+/// default-constructed Basis stands for Bezier, the RI default
+/// (dice_patch.cpp).
+glm::dmat4 resolve_basis(const Basis& b);
 /// Polygon, GeneralPolygon, PointsPolygons, PointsGeneralPolygons (dice_polygon.cpp).
 DicedSurface dice_polygons(const Primitive& prim, const DiceControl& control,
                            DiceEstimate* estimate = nullptr);

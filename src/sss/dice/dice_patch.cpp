@@ -58,13 +58,6 @@ const glm::dmat4& bezier_matrix() {
     return m;
 }
 
-/// The basis matrix to use. A default-constructed Basis (identity matrix
-/// but named "bezier") stands for the RI default, Bezier.
-glm::dmat4 resolve_basis(const Basis& b) {
-    if (b.name == "bezier" && b.matrix == Matrix4(1.0)) return bezier_matrix();
-    return b.matrix;
-}
-
 /// "P" (or "Pw" divided by w) with exactly `count` points.
 std::vector<dvec3> read_points(const Primitive& prim, std::size_t count) {
     const Param* p = prim.params.find("P");
@@ -121,6 +114,12 @@ int patch_count(const Primitive& prim, int n, bool wrap, bool bicubic, int step,
 }
 
 } // namespace
+
+glm::dmat4 resolve_basis(const Basis& b) {
+    // A default-constructed Basis has the identity matrix but the name "bezier".
+    if (b.name == "bezier" && b.matrix == Matrix4(1.0)) return bezier_matrix();
+    return b.matrix;
+}
 
 void BicubicSurface::evaluate(std::span<const double> us, std::span<const double> vs,
                               SurfacePoint* out) const {

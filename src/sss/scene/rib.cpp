@@ -43,7 +43,7 @@ bool ignored(std::string_view name) {
 bool unsupported(std::string_view name) {
     static const NameSet names = name_set(
         "Atmosphere Interior Exterior Deformation Detail DetailRange "
-        "Points Curves Blobby NuPatch TrimCurve HierarchicalSubdivisionMesh "
+        "Blobby NuPatch TrimCurve HierarchicalSubdivisionMesh "
         "ClippingPlane IfBegin ElseIf Else IfEnd MakeTexture MakeShadow MakeBump "
         "MakeLatLongEnvironment MakeCubeFaceEnvironment MakeBrickMap System Resource "
         "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
@@ -192,6 +192,8 @@ const Reader::HandlerTable& Reader::handlers() {
         {"Patch", &Reader::do_patch},
         {"PatchMesh", &Reader::do_patch_mesh},
         {"Geometry", &Reader::do_geometry},
+        {"Points", &Reader::do_points},
+        {"Curves", &Reader::do_curves},
     };
     return table;
 }

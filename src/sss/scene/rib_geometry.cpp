@@ -370,6 +370,61 @@ void Reader::do_patch_mesh(const Statement& s) {
     add_primitive(s, std::move(p));
 }
 
+namespace {
+
+/// "width" is predeclared as a uniform shader parameter; on Points and
+/// Curves it is the RI standard varying width, one per varying point.
+void varying_width(ParamList& params, std::size_t varying) {
+    for (Param& q : params.items)
+        if (q.name == "width" && q.storage == ParamClass::Uniform &&
+            q.element_count() == varying)
+            q.storage = ParamClass::Varying;
+}
+
+} // namespace
+
+void Reader::do_points(const Statement& s) {
+    Primitive p;
+    p.kind = PrimitiveKind::Points;
+    p.params = take_params(s, 0, false);
+    const Param* P = p.params.find("P");
+    if (!P) P = p.params.find("Pw");
+    const std::size_t n = P ? P->element_count() : 0;
+    if (n == 0) fail(s, "no points (\"P\" is missing or empty)");
+    check_vertices(s, n);
+    resolve_positions(s, p.params, n);
+    varying_width(p.params, n);
+    check_counts(s, p.params, counts(1, n, n, n));
+    add_primitive(s, std::move(p));
+}
+
+void Reader::do_curves(const Statement& s) {
+    std::size_t i = 0;
+    Primitive p;
+    p.kind = PrimitiveKind::Curves;
+    p.type = take_string(s, i, "curve type");
+    if (p.type != "linear" && p.type != "cubic")
+        fail(s, "curve type must be linear or cubic, got \"" + p.type + "\"");
+    p.nverts = take_ints(s, i, "nvertices", 1);
+    p.vwrap = take_wrap(s, i, "wrap");
+    p.params = take_params(s, i, false);
+    if (p.nverts.empty()) fail(s, "no curves");
+    const bool cubic = p.type == "cubic";
+    std::size_t varying = 0;
+    for (int n : p.nverts) {
+        std::size_t segments = 0, values = 0;
+        patch_dir(s, "nvertices", n, p.vwrap, cubic, m_attr.attrs.v_basis.step, segments,
+                  values);
+        varying += values;
+    }
+    const std::size_t nvert = sum(p.nverts);
+    check_vertices(s, nvert);
+    resolve_positions(s, p.params, nvert);
+    varying_width(p.params, varying);
+    check_counts(s, p.params, counts(p.nverts.size(), varying, nvert, varying));
+    add_primitive(s, std::move(p));
+}
+
 void Reader::do_geometry(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "geometry name");

@@ -214,6 +214,8 @@ private:
     void do_patch(const Statement& s);
     void do_patch_mesh(const Statement& s);
     void do_geometry(const Statement& s);
+    void do_points(const Statement& s);
+    void do_curves(const Statement& s);
 
     // --- state -----------------------------------------------------------------
 

@@ -51,7 +51,7 @@ constexpr NameTable<ParamType, 10> kParamTypeNames({{
     {ParamType::Matrix, "matrix"}, {ParamType::Integer, "int"},
 }});
 
-constexpr NameTable<PrimitiveKind, 15> kPrimitiveKindNames({{
+constexpr NameTable<PrimitiveKind, 17> kPrimitiveKindNames({{
     {PrimitiveKind::Polygon, "Polygon"},
     {PrimitiveKind::GeneralPolygon, "GeneralPolygon"},
     {PrimitiveKind::PointsPolygons, "PointsPolygons"},
@@ -62,6 +62,7 @@ constexpr NameTable<PrimitiveKind, 15> kPrimitiveKindNames({{
     {PrimitiveKind::Torus, "Torus"}, {PrimitiveKind::Hyperboloid, "Hyperboloid"},
     {PrimitiveKind::Paraboloid, "Paraboloid"}, {PrimitiveKind::Patch, "Patch"},
     {PrimitiveKind::PatchMesh, "PatchMesh"}, {PrimitiveKind::Teapot, "Teapot"},
+    {PrimitiveKind::Points, "Points"}, {PrimitiveKind::Curves, "Curves"},
 }});
 // clang-format on
 
