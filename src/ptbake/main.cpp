@@ -50,6 +50,9 @@ std::string usage() {
         "                         free path\n"
         "  -compress 0|1          gzip the .ptc (default 0)\n"
         "  -ptcversion 0|1|2      .ptc version written (default 0)\n"
+        "  -lenient               skip what the scene asks for that is not\n"
+        "                         implemented (motion blur, Blobby...) with a\n"
+        "                         warning; by default it is an error\n"
         "  -newer 0|1             1: do nothing when every cloud the scene bakes is\n"
         "                         newer than the RIB, every archive, texture and\n"
         "                         shader it reads\n"
@@ -72,6 +75,7 @@ int run_job(const std::vector<std::string>& argv) {
     bool have_material = false;
     std::vector<std::string> files;
     sss::RunOptions running;
+    sss::RibReadOptions read;
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, usage())) {
@@ -91,6 +95,8 @@ int run_job(const std::vector<std::string>& argv) {
             }
         } else if (o == "mfpfraction") {
             opt.mfp_fraction = args.positive(o);
+        } else if (o == "lenient") {
+            read.lenient = true;
         } else if (sss::prman_thread_option(o, running)) {
             continue;
         } else if (sss::newer_option(args, o, running)) {
@@ -129,7 +135,7 @@ int run_job(const std::vector<std::string>& argv) {
     sss::Job job(kTool, running);
     opt.progress = job.progress();
 
-    sss::RibReadOptions ropt;
+    sss::RibReadOptions ropt = read;
     ropt.frame = opt.frame;
     sss::Scene scene = [&] {
         sss::ScopedStage stage("reading " + rib);
@@ -141,7 +147,8 @@ int run_job(const std::vector<std::string>& argv) {
     const sss::BakeJob bake(scene, opt);
     // A scene on standard input has no date: always baked.
     if (job.newer() && rib != sss::kRibStandardInput &&
-        job.up_to_date(bake.output_files(), bake.input_files())) return 0;
+        job.up_to_date(bake.output_files(), bake.input_files()))
+        return 0;
 
     sss::BakeReport report = bake.run();
     sss::warn_all(kTool, report.warnings);

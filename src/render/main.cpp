@@ -40,6 +40,9 @@ std::string usage() {
            "                         %04d, #### and $F4 in file names\n"
            "  -res X Y               image size instead of Format (quick previews)\n"
            "  -samples N             N x N pixel samples instead of PixelSamples\n"
+           "  -lenient               skip what the scene asks for that is not\n"
+           "                         implemented (motion blur, Blobby...) with a\n"
+           "                         warning; by default it is an error\n"
            "  -newer 0|1             1: do nothing when every image is newer than the\n"
            "                         RIB, its archives and the maps its shaders read\n"
            "  -threads N             worker threads, 0 = all usable cores (default 0)\n"
@@ -56,6 +59,7 @@ int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::RenderJobOptions opt;
     sss::RunOptions running;
+    sss::RibReadOptions read;
     std::vector<std::string> files;
     std::string o;
     while (args.next_option(o, files)) {
@@ -70,6 +74,8 @@ int run(const std::vector<std::string>& argv) {
             opt.yres = args.integer(o, 1, INT_MAX);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
+        } else if (o == "lenient") {
+            read.lenient = true;
         } else if (sss::prman_thread_option(o, running)) {
             continue;
         } else if (sss::newer_option(args, o, running)) {
@@ -112,7 +118,7 @@ int run(const std::vector<std::string>& argv) {
     sss::Job job(kTool, running);
     opt.progress = job.progress();
 
-    sss::RibReadOptions ropt;
+    sss::RibReadOptions ropt = read;
     ropt.frame = opt.frame;
     const sss::Scene scene = [&] {
         sss::ScopedStage stage("reading " + rib);

@@ -111,7 +111,11 @@ fi
     printf 'WorldEnd\n'
 } >unknown.rib
 run timeout 120 "$bin/render" unknown.rib
-if expect_rc 0 "1000 unknown statements"; then
+expect_rc 1 "1000 unknown statements, not lenient" &&
+    [[ "$err" == "render ERROR: unknown.rib:5: Bogus0: unknown statement Bogus0 "* ]] ||
+    fail "unknown statements, not lenient: ${err:0:600}"
+run timeout 120 "$bin/render" -lenient unknown.rib
+if expect_rc 0 "1000 unknown statements, -lenient"; then
     n="$(count_warnings render)"
     [[ "$n" == 6 ]] || fail "unknown statements: $n warning lines (expected 6): ${err:0:600}"
     grep -qx 'render WARNING: 995 more warnings like "unknown statement" not shown' stderr ||

@@ -119,5 +119,19 @@ area="$(sed -n 's/.*wrote points.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")
 python3 -c "import sys, math; a = float('$area' or 'nan'); sys.exit(0 if abs(a - (2 * math.pi * 0.0625 + 0.4)) < 0.01 else 1)" ||
     fail "points.ptc: total area $area, expected $(python3 -c 'import math; print(2 * math.pi * 0.0625 + 0.4)')"
 
+# --- not implemented: an error by default, -lenient: one warning --------------
+{ header; echo '  MotionBegin [0 1]'; echo '    Translate 0 0 0'; echo '    Translate 0 1 0';
+  echo '  MotionEnd'; echo '  Sphere 1 -1 1 360'; echo '  Frobnicate 3'; echo 'WorldEnd'; } >todo.rib
+run "$bin/render" -o todo.exr todo.rib
+[[ "$rc" == 1 && "$err" == "render ERROR: todo.rib:8: MotionBegin: motion blur is not supported (reading leniently: the first time sample is used, with a warning)" ]] ||
+    fail "strict: exit $rc, stderr: $err"
+[[ ! -e todo.exr ]] || fail "strict: an image was written"
+run "$bin/ptbake" todo.rib
+[[ "$rc" == 1 && "$err" == *"ptbake ERROR: todo.rib:8: MotionBegin"* ]] || fail "ptbake strict: exit $rc, stderr: $err"
+run "$bin/render" -lenient -o todo.exr todo.rib
+[[ "$rc" == 0 && -s todo.exr ]] || fail "-lenient: exit $rc, stderr: $err"
+[[ "$(grep -c 'render WARNING' <<<"$err")" == 2 && "$err" == *"first time sample is used"* &&
+    "$err" == *"unknown statement Frobnicate, skipped"* ]] || fail "-lenient warnings: $err"
+
 ((failures == 0)) || { echo "$failures check(s) failed" >&2; exit 1; }
 echo "rib requests: all checks passed"

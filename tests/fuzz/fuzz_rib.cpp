@@ -55,7 +55,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         sss::fuzz::may_name_outside_files(text))
         return 0;
     sss::fuzz::run_expecting_errors([&] {
-        const sss::Scene scene = sss::parse_rib(text, folder.file("fuzz.rib"));
+        // Leniently: what is not implemented is skipped, the rest exercised.
+        sss::RibReadOptions options;
+        options.lenient = true;
+        const sss::Scene scene = sss::parse_rib(text, folder.file("fuzz.rib"), options);
         exercise(scene);
     });
     return 0;

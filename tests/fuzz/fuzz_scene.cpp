@@ -151,7 +151,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::string text(reinterpret_cast<const char*>(data), size);
     if (sss::fuzz::may_name_outside_files(text)) return 0;
     sss::fuzz::run_expecting_errors([&] {
-        const sss::Scene scene = sss::parse_rib(text, folder.file("scene.rib"));
+        // Leniently: what is not implemented is skipped, the rest exercised.
+        sss::RibReadOptions options;
+        options.lenient = true;
+        const sss::Scene scene = sss::parse_rib(text, folder.file("scene.rib"), options);
         if (!dice_everything(scene)) return;
         sss::fuzz::run_expecting_errors([&] { bake_tiny(scene); });
         sss::fuzz::run_expecting_errors([&] { render_tiny(scene); });

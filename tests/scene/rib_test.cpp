@@ -605,9 +605,19 @@ Sphere 1 -1 1 360
 
 // --- warnings and errors ------------------------------------------------------
 
-TEST(RibErrors, UnknownStatementWarnsOncePerName) {
-    auto scene = parse("Frobnicate 1 2 [3 4]\nWorldBegin\nFrobnicate \"x\"\n"
-                       "Frobnicate\nWibble 3\nSphere 1 -1 1 360\nWorldEnd\n");
+/// Options that read leniently.
+sss::RibReadOptions lenient() {
+    sss::RibReadOptions o;
+    o.lenient = true;
+    return o;
+}
+
+TEST(RibErrors, UnknownStatementIsAnErrorOrLenientlyWarnsOncePerName) {
+    const std::string text = "Frobnicate 1 2 [3 4]\nWorldBegin\nFrobnicate \"x\"\n"
+                             "Frobnicate\nWibble 3\nSphere 1 -1 1 360\nWorldEnd\n";
+    expect_rib_error(text, {"test.rib:1: Frobnicate: unknown statement Frobnicate",
+                            "reading leniently: skipped"});
+    auto scene = parse(text, lenient());
     ASSERT_EQ(scene.warnings.size(), 2u);
     EXPECT_EQ(scene.warnings[0], "test.rib:1: unknown statement Frobnicate, skipped");
     EXPECT_EQ(scene.warnings[1], "test.rib:5: unknown statement Wibble, skipped");
@@ -707,6 +717,7 @@ FrameEnd
 
     sss::RibReadOptions opt;
     opt.frame = 2;
+    opt.lenient = true; // Frobnicate
     auto second = parse(text, opt);
     EXPECT_EQ(second.options.frame, 2);
     EXPECT_EQ(second.options.camera.xres, 200);
@@ -849,7 +860,10 @@ TEST(RibGeometry, CountMismatchesAreErrors) {
                      {"\"q\"", "expected 4"});
     expect_rib_error(w + "Geometry \"teapot\" \"varying float q\" [1 2 3 4]\n",
                      {"teapot"});
-    auto scene = parse(w + "Geometry \"bunny\"\nGeometry \"bunny\"\nWorldEnd\n");
+    expect_rib_error(w + "Geometry \"bunny\"\nWorldEnd\n",
+                     {"Geometry \"bunny\" is not supported"});
+    auto scene =
+        parse(w + "Geometry \"bunny\"\nGeometry \"bunny\"\nWorldEnd\n", lenient());
     EXPECT_EQ(scene.warnings.size(), 1u);
     EXPECT_TRUE(scene.primitives.empty());
 }
@@ -869,7 +883,8 @@ Translate 0 0 1
 Translate 0 0 2
 MotionEnd
 ObjectInstance "ball"
-)");
+)",
+                       lenient());
     ASSERT_EQ(scene.primitives.size(), 4u);
     expect_near(apply(scene.primitives[0].object_to_world, {0, 0, 0}), {1, 5, 0});
     EXPECT_EQ(scene.primitives[0].attributes->color, glm::dvec3(0, 1, 0));

@@ -50,6 +50,12 @@ struct RibReadOptions {
     /// A requested frame that a file with FrameBegin blocks does not contain is
     /// an error; a file without FrameBegin is the same scene for every frame.
     std::optional<int> frame;
+    /// What to do with a request RenderMan has that is not carried out here
+    /// (Blobby, CSG, motion blur, Procedural "RunProgram", ...): false (the
+    /// default) throws RibError, so that a farm never renders an incomplete
+    /// frame; true skips it with one warning per kind, as the tools'
+    /// -lenient option asks.
+    bool lenient = false;
 };
 
 /// The path that names standard input for read_rib.

@@ -34,7 +34,7 @@ NameSet name_set(const char* names) {
 bool ignored(std::string_view name) {
     static const NameSet names =
         name_set("version Version Shutter ArchiveRecord Camera "
-                 "PixelVariance Imager RelativeDetail ErrorHandler Matte Bound "
+                 "PixelVariance RelativeDetail ErrorHandler Bound "
                  "GeometricApproximation TextureCoordinates");
     return names.count(name) > 0;
 }
@@ -47,7 +47,7 @@ bool unsupported(std::string_view name) {
         "ClippingPlane IfBegin ElseIf Else IfEnd MakeTexture MakeShadow MakeBump "
         "MakeLatLongEnvironment MakeCubeFaceEnvironment MakeBrickMap System Resource "
         "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
-        "SampleFilter Light Volume");
+        "SampleFilter Light Volume Imager Matte");
     return names.count(name) > 0;
 }
 
@@ -206,13 +206,24 @@ void Reader::execute(const Statement& s) {
     } else if (ignored(s.name)) {
         // nothing to do
     } else if (unsupported(s.name)) {
-        warn_once("unsupported " + s.name, s, s.name + " is not supported, skipped");
+        not_implemented("unsupported " + s.name, s, s.name + " is not supported",
+                        "skipped");
     } else {
         // A name is a word of the lexer's (letters, digits, '_'): one line.
+        if (!m_options.lenient)
+            fail(s, "unknown statement " + truncated(s.name, kMaxEcho) +
+                        " (reading leniently: skipped, with a warning)");
         warn_once("unknown " + s.name, s,
                   "unknown statement " + truncated(s.name, kMaxEcho) + ", skipped",
                   "unknown statement");
     }
+}
+
+void Reader::not_implemented(const std::string& key, const Statement& s,
+                             const std::string& what, const std::string& lenient) {
+    if (!m_options.lenient)
+        fail(s, what + " (reading leniently: " + lenient + ", with a warning)");
+    warn_once(key, s, what + ", " + lenient);
 }
 
 void Reader::warn(const Statement& s, const std::string& what, std::string_view kind) {
@@ -232,8 +243,7 @@ void Reader::warn_once(const std::string& key, const Statement& s,
 Scene read_rib(const std::string& path, const RibReadOptions& options) {
     if (path == kRibStandardInput) {
         Scene scene = parse_rib(rib::slurp_standard_input(), "<stdin>", options);
-        if (scene.worlds == 0)
-            throw ValueError("<stdin>: no WorldBegin: not a scene");
+        if (scene.worlds == 0) throw ValueError("<stdin>: no WorldBegin: not a scene");
         scene.path.clear();
         return scene;
     }

@@ -254,8 +254,9 @@ void Reader::do_procedural(const Statement& s) {
     std::size_t i = 0;
     std::string kind = take_string(s, i, "procedural name");
     if (kind != "DelayedReadArchive") {
-        warn_once("procedural " + kind, s,
-                  "Procedural " + sss::quoted(kind) + " is not supported, skipped");
+        not_implemented("procedural " + kind, s,
+                        "Procedural " + sss::quoted(kind) + " is not supported",
+                        "skipped");
         return;
     }
     auto files = take_string_array(s, i, "archive file name");

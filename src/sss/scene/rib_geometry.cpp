@@ -429,8 +429,8 @@ void Reader::do_geometry(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "geometry name");
     if (name != "teapot") {
-        warn_once("geometry " + name, s,
-                  "Geometry \"" + name + "\" is not supported, skipped");
+        not_implemented("geometry " + name, s,
+                        "Geometry \"" + name + "\" is not supported", "skipped");
         return;
     }
     Primitive p;

@@ -80,6 +80,11 @@ private:
     void warn(const Statement& s, const std::string& what, std::string_view kind = {});
     void warn_once(const std::string& key, const Statement& s, const std::string& what,
                    std::string_view kind = {});
+    /// A request that is not carried out: a RibError "<what> (reading
+    /// leniently: <lenient>, with a warning)", or when reading leniently
+    /// that warning once per key ("<what>, <lenient>").
+    void not_implemented(const std::string& key, const Statement& s,
+                         const std::string& what, const std::string& lenient);
 
     // --- rib_params.cpp: parameter lists --------------------------------------
 

@@ -160,9 +160,8 @@ void Reader::do_transform_end(const Statement& s) {
 }
 
 void Reader::do_solid_begin(const Statement& s) {
-    warn_once("solid", s,
-              "SolidBegin: CSG is not supported, the parts are kept as "
-              "separate primitives");
+    not_implemented("solid", s, "CSG is not supported",
+                    "the parts are kept as separate primitives");
     push(s, Block::Solid);
 }
 
@@ -175,7 +174,8 @@ void Reader::do_motion_begin(const Statement& s) {
     if (m_in_motion) fail(s, "nested MotionBegin");
     m_in_motion = true;
     m_motion_used = false;
-    warn_once("motion", s, "motion blur is not supported: the first time sample is used");
+    not_implemented("motion", s, "motion blur is not supported",
+                    "the first time sample is used");
 }
 
 void Reader::do_motion_end(const Statement& s) {
