@@ -44,11 +44,12 @@ struct Expr {
 
 enum class Storage { Default, Uniform, Varying };
 
-/// One declared name: `x`, `a[3] = {1, 2, 3}`, `f[]` (function parameter).
+/// One declared name: `x`, `a[3] = {1, 2, 3}`, `f[]` (a function parameter
+/// taking any length, or a resizable local).
 struct Declarator {
     std::string name;
     SrcLoc loc;
-    int array = 0;             ///< > 0 fixed length, -1 "[]" (function parameters)
+    int array = 0;             ///< > 0 fixed length, kResizableArray "[]"
     ExprPtr init;              ///< = expr
     std::vector<ExprPtr> list; ///< = { ... }
     bool has_list = false;

@@ -260,8 +260,17 @@ private:
         const Declarator* decl;
     };
     static std::vector<UParam> user_params(const FuncDef& f);
-    bool match_user(const FuncDef& f, const std::vector<ArgInfo>& args, int& cost);
+    /// Whether the arguments fit f's parameters (cost: conversions). An
+    /// array of the wrong length for a fixed-length array parameter does not
+    /// fit; `why` (when given) then says which.
+    bool match_user(const FuncDef& f, const std::vector<ArgInfo>& args, int& cost,
+                    std::string* why = nullptr);
     Val inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args, const Expr& call);
+
+    // --- resizable arrays (codegen_arrays.cpp) ------------------------------
+    /// arraylength, resize, push, pop, reserve.
+    static bool is_array_function(const std::string& name);
+    Val array_call(const Expr& e, std::vector<ArgInfo>& args);
 
     // --- statements ---------------------------------------------------------
     void statement(const Stmt& s);

@@ -84,7 +84,7 @@ void Generator::declaration(const VarDecl& d) {
             m_scope->vars[n.name] = *v;
             continue;
         }
-        const TypeSpec t{d.type, std::max(n.array, 0)};
+        const TypeSpec t{d.type, n.array};
         std::string base = n.name;
         if (!m_funcs.empty())
             base = m_funcs.back().def->name + "::" + n.name + "@" +
@@ -104,12 +104,18 @@ void Generator::declaration(const VarDecl& d) {
 
 void Generator::initialise(int sym, const VarDecl& d, const Declarator& n) {
     const TypeSpec t = type(sym);
+    if (t.is_resizable() && !n.init) {
+        // Each time the declaration runs, the array starts with the values
+        // given (none: empty). The length is uniform; so is this store.
+        check_store(sym, false, n.loc);
+        emit("resize", {sym, kfloat(static_cast<double>(n.list.size()))});
+    }
     if (n.has_list) {
         if (!t.is_array()) {
             error(n.loc, "{...} initialises arrays only");
             return;
         }
-        if (static_cast<int>(n.list.size()) != t.array) {
+        if (!t.is_resizable() && static_cast<int>(n.list.size()) != t.array) {
             error(n.loc, "'" + n.name + "' has " + std::to_string(t.array) +
                              " elements but " + std::to_string(n.list.size()) +
                              " values are given");

@@ -400,6 +400,18 @@ private:
                 fail(i, "bad argument types for '" + n + "'");
             return i + 1;
         }
+        if (n == "arraylength" || n == "resize" || n == "reserve" || n == "push" ||
+            n == "pop") {
+            // arraylength d a, resize a n, reserve a n, push a v, pop d a.
+            nargs(i, 2, 2);
+            const bool result = n == "arraylength" || n == "pop";
+            const int array = op.args[result ? 1 : 0];
+            const bool resizable = type(array).is_resizable();
+            if (op.writes != (n == "pop" ? 3u : 1u) ||
+                !(resizable || (n == "arraylength" && type(array).is_array())))
+                fail(i, "bad arguments for '" + n + "'");
+            return i + 1;
+        }
         if (n == "construct" || n == "cast") {
             nargs(i, 3, 18);
             writes_only_result(i);
@@ -492,7 +504,7 @@ Program read_program(std::istream& in, const std::string& path) {
         Symbol s;
         s.name = r.string();
         s.type.type = parse_type(r, r.word());
-        s.type.array = static_cast<int>(r.integer(0, 1000000));
+        s.type.array = static_cast<int>(r.integer(kResizableArray, kMaxArrayLength));
         const std::string storage = r.word();
         if (storage != "u" && storage != "v") r.fail("storage must be u or v");
         s.varying = storage == "v";
@@ -515,6 +527,9 @@ Program read_program(std::istream& in, const std::string& path) {
         if (s.kind == SymbolKind::Const && have == 0) r.fail("constant without a value");
         if (s.kind == SymbolKind::Const && s.varying)
             r.fail("a constant cannot be varying");
+        if (s.type.is_resizable() &&
+            (s.kind != SymbolKind::Local && s.kind != SymbolKind::Temp))
+            r.fail("only locals can be resizable arrays");
         p.symbols.push_back(std::move(s));
     }
     r.line("ops");

@@ -36,6 +36,7 @@ const BinderTable& binders() {
         register_lighting(t);
         register_texture(t);
         register_raytrace(t);
+        register_arrays(t);
         return t;
     }();
     return table;
@@ -195,8 +196,11 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
     for (int g = 0; g < G_count; ++g) bp->globals[g] = -1;
     for (int s = 0; s < nsym; ++s) {
         const Symbol& sym = p.symbols[s];
-        if (sym.type.array < 0 || sym.type.array > (1 << 20))
+        if (sym.type.array < kResizableArray || sym.type.array > kMaxArrayLength)
             fail(-1, "symbol '" + sym.name + "' has a bad array length");
+        if (sym.type.is_resizable() &&
+            (sym.kind != SymbolKind::Local && sym.kind != SymbolKind::Temp))
+            fail(-1, "symbol '" + sym.name + "' is a resizable array but not a local");
         if (sym.type.type == ShadingType::Void && sym.kind != SymbolKind::Temp)
             fail(-1, "symbol '" + sym.name + "' is void");
         const int elements = sym.type.array > 0 ? sym.type.array : 1;

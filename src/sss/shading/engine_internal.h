@@ -144,6 +144,13 @@ void register_geometry(BinderTable& t); // engine_geometry.cpp
 void register_lighting(BinderTable& t); // engine_lighting.cpp
 void register_texture(BinderTable& t);  // engine_texture.cpp
 void register_raytrace(BinderTable& t); // engine_raytrace.cpp
+void register_arrays(BinderTable& t);   // engine_arrays.cpp
+/// aref and aassign of a resizable array (engine_arrays.cpp): b.ia = the
+/// floats per element; the length is the array's at run time.
+void op_aref_resizable(Frame& f, const BoundOp& b);
+void op_aassign_resizable(Frame& f, const BoundOp& b);
+/// Empties the resizable arrays of a frame (a new batch).
+void reset_resizable(Frame& f);
 /// environment("raytrace", ...) (engine_raytrace.cpp; engine_texture.cpp
 /// routes the name "raytrace" to it).
 void environment_raytrace(Frame& f, const BoundOp& b);
@@ -152,10 +159,25 @@ void environment_raytrace(Frame& f, const BoundOp& b);
 struct Slot {
     float* p = nullptr;
     int nf = 0;     ///< floats per value (elements included)
-    int stride = 0; ///< nf when varying, 0 when uniform
+    int stride = 0; ///< nf when varying (a resizable array's capacity), 0 when uniform
     bool varying = false;
+    int resizable = -1; ///< a resizable array: its index in Frame::resizable
     float* at(std::size_t i) const { return p + i * static_cast<std::size_t>(stride); }
 };
+
+/// The storage of a resizable array (engine_arrays.cpp): `length` elements
+/// per value, in blocks of `capacity` elements (a varying array's values are
+/// Slot::stride = capacity * element floats apart). The length is one for
+/// the whole batch.
+struct ResizableArray {
+    std::vector<float> data;
+    int length = 0;
+    int capacity = 0;
+};
+
+/// The storage of a resizable array may use at most this many floats over
+/// the batch (1 GiB).
+constexpr std::size_t kMaxResizableFloats = std::size_t(1) << 28;
 
 /// Per-point stop codes (why a point stopped running): 0 runs; otherwise the
 /// low two bits give the kind and the rest the depth of the construct.
@@ -173,6 +195,7 @@ struct Frame {
 
     std::vector<float> arena;
     std::vector<Slot> slots;
+    std::vector<ResizableArray> resizable; ///< Slot::resizable indexes it
 
     // Running mask.
     std::vector<uint8_t> mask;
