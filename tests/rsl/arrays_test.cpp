@@ -1,12 +1,13 @@
 /// \file arrays_test.cpp
 /// The compiler's PRMan 13.5+ additions: fixed-length array parameters of
 /// functions (`float mx[16]`), resizable arrays (`float a[]`, arraylength,
-/// resize, push, pop, reserve).
+/// resize, push, pop, reserve) and illuminance's "name", value options.
 /// What the compiled programs compute is checked in
-/// tests/shading/engine_arrays_test.cpp.
+/// tests/shading/engine_arrays_test.cpp and engine_messages_test.cpp.
 
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <string>
 
 #include "rsl_test_util.h"
@@ -17,6 +18,7 @@ using namespace sss;
 using sss::test::all_messages;
 using sss::test::compile_errors;
 using sss::test::compile_one;
+using sss::test::compile_raw;
 using sss::test::count_ops;
 using sss::test::find_op;
 using sss::test::has_error;
@@ -187,6 +189,77 @@ TEST(RslCompilerArrays, ReadOnlyArrayParameterCannotGrow) {
 TEST(RslCompilerArrays, ShaderParametersStillNeedALength) {
     const auto ds = compile_errors("surface s(float a[] = {1};) {}\n");
     EXPECT_TRUE(has_error(ds, "expected the array length")) << all_messages(ds);
+}
+
+TEST(RslCompilerArrays, IlluminanceOptions) {
+    CompileResult r = compile_raw(R"(surface s(output varying float got = 0;) {
+    float k = 0;
+    illuminance("key", P, N, PI / 2, "lightcache", "refresh", "light:intensity", k,
+                "send:light:scale", 2, "nosuch", 1) {
+        got += k;
+    }
+    illuminance(P, "lightcache", "reuse") { Ci += Cl; }
+}
+)");
+    ASSERT_EQ(r.shaders.size(), 1u);
+    const Program& p = r.shaders[0];
+    const Op* op = find_op(p, "illuminance");
+    ASSERT_NE(op, nullptr);
+    // cat P axis angle + lightcache, light:intensity, send:light:scale (nosuch dropped).
+    ASSERT_EQ(op->args.size(), 10u);
+    EXPECT_EQ(p.symbols[op->args[4]].strings, std::vector<std::string>{"lightcache"});
+    EXPECT_EQ(p.symbols[op->args[6]].strings,
+              std::vector<std::string>{"light:intensity"});
+    EXPECT_EQ(op->args[7], p.find("k"));
+    EXPECT_EQ(op->writes, uint64_t(1) << 7);
+    EXPECT_TRUE(p.symbols[p.find("k")].varying);
+    // The unknown option: a warning naming it, where it is.
+    ASSERT_EQ(r.warnings.size(), 1u);
+    EXPECT_NE(r.warnings[0].message.find("\"nosuch\" is not supported; ignored"),
+              std::string::npos);
+    EXPECT_EQ(r.warnings[0].line, 4);
+}
+
+TEST(RslCompilerArrays, IlluminanceOptionMistakes) {
+    struct Case {
+        const char* stmt;
+        const char* message;
+    };
+    const Case cases[] = {
+        {"illuminance(P, \"light:intensity\") {}", "come in pairs"},
+        {"illuminance(P, \"light:intensity\", 1) {}", "must be a variable"},
+        {"illuminance(P, \"light:intensity\", Ng) {}", "cannot assign to global"},
+        {"illuminance(P, \"lightcache\", 1) {}", "takes a string"},
+        {"illuminance(P, N, PI, 1, 2) {}", "illuminance takes"},
+        {"string o = \"lightcache\"; illuminance(P, \"lightcache\", \"reuse\", o, 1) {}",
+         "option names must be string literals"},
+    };
+    for (const Case& c : cases) {
+        const auto ds =
+            compile_errors(std::string("surface s() {\n    ") + c.stmt + "\n}\n");
+        EXPECT_TRUE(has_error(ds, c.message)) << c.stmt << "\n" << all_messages(ds);
+    }
+}
+
+TEST(RslCompilerArrays, SloRoundTrip) {
+    const Program p = compile_one(R"(surface s(output varying float got = 0;) {
+    float a[] = {1, 2};
+    push(a, 3);
+    float k = 0;
+    illuminance(P, "light:intensity", k) { got += k; }
+    Ci = pop(a) + arraylength(a) + k;
+}
+)");
+    std::stringstream text;
+    write_program(p, text);
+    const Program back = read_program(text, "s.slo");
+    ASSERT_EQ(back.symbols.size(), p.symbols.size());
+    EXPECT_EQ(back.symbols[back.find("a")].type, p.symbols[p.find("a")].type);
+    ASSERT_EQ(back.ops.size(), p.ops.size());
+    for (std::size_t i = 0; i < p.ops.size(); ++i) {
+        EXPECT_EQ(back.ops[i].name, p.ops[i].name);
+        EXPECT_EQ(back.ops[i].writes, p.ops[i].writes);
+    }
 }
 
 } // namespace

@@ -51,9 +51,11 @@
 ///    inside it ends it for the running points (the function's result was
 ///    assigned by the op before). A `return` outside any `block` ends the
 ///    shader for those points.
-///  - `illuminance cat p axis angle`: body [i+1, jump[0]) run once per light
-///    (cat is "" without a category; no axis/angle: angle = PI and axis 0
-///    means the whole sphere).
+///  - `illuminance cat p axis angle ("name" value)...`: body [i+1, jump[0])
+///    run once per light (cat is "" without a category; no axis/angle: angle
+///    = PI and axis 0 means the whole sphere). Options: "lightcache"
+///    "refresh"/"reuse", "send:light:NAME" value (read), "light:NAME" var
+///    (written each iteration: its bit in `writes`).
 ///  - `illuminate p axis angle` / `solar axis angle` (light shaders): body
 ///    [i+1, jump[0]); without axis/angle the angle symbol holds -1.
 ///  - `gather cat p dir angle samples ("name" value)...`: ray tracing
@@ -98,8 +100,12 @@
 ///    before. A void function's `return` has no assignment before it.
 ///  - `illuminance`: all four arguments are always present: category ""
 ///    when absent; axis the constant vector (0,0,0) and angle PI when
-///    absent. `illuminate p axis angle` / `solar axis angle`: the constant
-///    vector (0,0,0) and -1 when absent.
+///    absent; then the options it supports (names constant strings; others
+///    are dropped with a warning). `illuminate p axis angle` / `solar axis
+///    angle`: the constant vector (0,0,0) and -1 when absent.
+///  - A resizable local's declaration emits `resize a n` (n: the number of
+///    `{...}` values, 0 without) and then an `aassign` per value; a fixed
+///    array's `arraylength` is a constant.
 ///  - `gather`: the five fixed arguments are always present; output token
 ///    names must be constant strings and their values variables (a
 ///    "primitive:" output is a compile error); the bodies count as being

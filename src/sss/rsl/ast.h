@@ -100,8 +100,9 @@ struct Stmt {
     StmtKind kind = StmtKind::Empty;
     SrcLoc loc;
     ExprPtr expr; ///< Expr, Return (may be null), If / While condition
-    std::vector<ExprPtr>
-        exprs; ///< For: init, cond, step (any may be null); light loops: args
+    /// For: init, cond, step (any may be null); light loops: args (for
+    /// illuminance, "name", value options after the positional ones).
+    std::vector<ExprPtr> exprs;
     std::vector<StmtPtr> body; ///< Block
     StmtPtr sub;               ///< If: then; loops: body
     StmtPtr else_sub;          ///< If / Gather: else

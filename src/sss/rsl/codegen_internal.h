@@ -288,6 +288,16 @@ private:
     Val typed_arg(const Expr& e, ShadingType t);
     void light_statement(const Stmt& s);
 
+    // illuminance([category,] P [, axis, angle] [, "name", value]...): the op's
+    // four fixed arguments, then the options it keeps.
+    void illuminance_statement(const Stmt& s);
+    // The "name", value options of illuminance from exprs[first]: appended to
+    // args (outputs' bits in writes); unknown names warn and are dropped.
+    bool illuminance_options(const Stmt& s, std::size_t first, std::vector<int>& args,
+                             uint64_t& writes);
+    // The body of a light statement after its op.
+    void light_body(const Stmt& s, int op);
+
     // gather(category, P, dir, angle, samples, "name", value...) hit [else miss]:
     // op `gather` with the five fixed arguments (string, point, vector, float,
     // float) and the token-value pairs; values of output tokens ("surface:x",

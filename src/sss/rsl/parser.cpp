@@ -431,13 +431,15 @@ private:
                 }
                 expect(")", ("after the arguments of " + w).c_str());
                 const std::size_t n = s->exprs.size();
-                const bool ok = w == "illuminance"  ? (n >= 1 && n <= 4)
+                // illuminance's trailing "name", value options: codegen.
+                const bool ok = w == "illuminance"  ? n >= 1
                                 : w == "illuminate" ? (n == 1 || n == 3)
                                                     : (n == 0 || n == 2);
                 if (!ok)
                     m_diags.error(s->loc,
                                   w + (w == "illuminance"
-                                           ? " takes ([category,] P [, axis, angle])"
+                                           ? " takes ([category,] P [, axis, angle] [, "
+                                             "\"name\", value]...)"
                                        : w == "illuminate" ? " takes (P [, axis, angle])"
                                                            : " takes ([axis, angle])"));
                 s->sub = statement();

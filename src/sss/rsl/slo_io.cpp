@@ -342,8 +342,22 @@ private:
                                      : n == "illuminance" ? 4
                                      : n == "illuminate"  ? 3
                                                           : 2;
-            nargs(i, want, want);
-            no_writes(i);
+            if (n == "illuminance") {
+                // "name", value options follow; "light:..." values are written.
+                nargs(i, want, 64);
+                if ((op.args.size() - want) % 2 != 0)
+                    fail(i, "illuminance options come in pairs");
+                for (std::size_t k = want; k < op.args.size(); k += 2)
+                    if (!is(op.args[k], ShadingType::String) ||
+                        type(op.args[k + 1]).is_array())
+                        fail(i, "bad illuminance option");
+                for (std::size_t k = 0; k < op.args.size() && k < 64; ++k)
+                    if (((op.writes >> k) & 1u) && (k < want || (k - want) % 2 == 0))
+                        fail(i, "bad write flags for 'illuminance'");
+            } else {
+                nargs(i, want, want);
+                no_writes(i);
+            }
             std::size_t a = 0;
             if (n == "illuminance" && !is(op.args[a++], ShadingType::String))
                 fail(i, "illuminance category must be a string");

@@ -623,6 +623,7 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
         (batch.primitive ? batch.primitive->object_to_world : Matrix4(1.0));
     c.light_states.clear();
     c.light_states.resize(lights.size());
+    c.light_sends.clear();
     for (std::size_t k = 0; k < lights.size(); ++k)
         c.light_states[k].instance = lights[k];
     c.nonfinite = 0;

@@ -139,8 +139,20 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
             why = "illuminance is only for surface and volume shaders";
             return false;
         }
-        return n == 4 && in.is_string(0) && in.is_ptype(1) && in.is_triple_(2) &&
-               in.is_float(3);
+        if (n < 4 || (n - 4) % 2 != 0 || !in.is_string(0) || !in.is_ptype(1) ||
+            !in.is_triple_(2) || !in.is_float(3))
+            return false;
+        // Options: "name", value pairs; only "light:..." values are written.
+        for (int k = 4; k < n; k += 2) {
+            if (!in.is_string(k) || in.writes(k) || in.is_array(k + 1)) return false;
+            if (in.writes(k + 1) !=
+                (in.program.symbols[in.op.args[k]].strings.size() == 1 &&
+                 in.program.symbols[in.op.args[k]].strings[0].rfind("light:", 0) == 0)) {
+                why = "illuminance writes an option that is not \"light:...\"";
+                return false;
+            }
+        }
+        return !in.writes(0) && !in.writes(1) && !in.writes(2) && !in.writes(3);
     }
     if (name == "gather") {
         b.ia = C_Gather;

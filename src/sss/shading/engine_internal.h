@@ -290,6 +290,21 @@ struct LightState {
     bool described = false;
 };
 
+/// A "send:light:NAME" option of a running illuminance: light shaders run
+/// with their parameter NAME set to `value` (a slot of the surface frame).
+struct LightSend {
+    std::string name;
+    const Slot* value = nullptr;
+    ShadingType type = ShadingType::Float;
+};
+
+/// Copies the parameter (or output parameter) `name` of frame `from` into
+/// argument k of op b at the running points of f, when `from` has one of a
+/// fitting type (point, vector and normal fit each other; no arrays): the
+/// message-passing functions and illuminance's "light:NAME" (engine_lighting.cpp).
+bool copy_parameter(Frame& f, const BoundOp& b, int k, const Frame& from,
+                    const std::string& name);
+
 } // namespace sss::detail
 
 namespace sss {
@@ -318,6 +333,8 @@ struct ShadingContext::Impl {
     LightList lights;
     detail::Frame main;
     std::vector<detail::LightState> light_states;
+    /// The running illuminance's "send:light:" options (light() applies them).
+    std::vector<detail::LightSend> light_sends;
     int depth = 0; ///< nested executions (lights inside a surface)
     /// Storage of parameters a varying primitive variable made varying.
     std::vector<std::vector<float>> extra_storage;
