@@ -253,10 +253,10 @@ TEST(RslCorpus, Preprocessor) {
 // --- coverage ----------------------------------------------------------------------
 
 /// Built-ins no corpus file needs to call. Empty: the functions this release
-/// does not support (trace, indirectdiffuse, surface/displacement/
-/// lightsource message passing, depth-map shadow) are called anyway and
-/// their documented result (0, the variable untouched) is checked
-/// (lighting.sl, queries.sl). Add a name here only with a comment saying
+/// does not support (trace, indirectdiffuse, surface() in a surface shader,
+/// displacement() and atmosphere() message passing, depth-map shadow) are
+/// called anyway and their documented result (0, the variable untouched) is
+/// checked (lighting.sl, queries.sl). Add a name here only with a comment saying
 /// where its documented behaviour is tested instead.
 const std::set<std::string> kNotInCorpus = {};
 

@@ -24,7 +24,16 @@
 ///  - `dot d a b` (RSL `.`), `cross d a b` (RSL `^`).
 ///  - `eq ne lt le gt ge d a b`, `and or d a b`, `not d a`: d is a float 0/1.
 ///  - `aref d array index`, `aassign array index s`: array element (index
-///    rounded down, bounds-checked at run time).
+///    rounded down, bounds-checked at run time against the array's length,
+///    a resizable array's current one).
+///  - Resizable arrays (type array kResizableArray, locals only; one length
+///    for the whole batch, starting at 0): `arraylength d a` (d = the
+///    length, uniform; a may be any array), `resize a n` (n uniform: the
+///    first elements kept, new ones 0), `reserve a n` (a capacity hint),
+///    `push a v` (length + 1, v stored at the running points), `pop d a`
+///    (d = the last element, then length - 1; writes d and a). resize, reserve
+///    and push write a (bit 0). Lengths over kMaxArrayLength are run-time
+///    errors.
 ///  - `construct d [space] x y z` (color/point/vector/normal from three
 ///    floats) or `construct d [space] m00 ... m33` (matrix, row-major) or
 ///    `construct d space f` (matrix space f*I): the optional space (a string
@@ -42,9 +51,11 @@
 ///    inside it ends it for the running points (the function's result was
 ///    assigned by the op before). A `return` outside any `block` ends the
 ///    shader for those points.
-///  - `illuminance cat p axis angle`: body [i+1, jump[0]) run once per light
-///    (cat is "" without a category; no axis/angle: angle = PI and axis 0
-///    means the whole sphere).
+///  - `illuminance cat p axis angle ("name" value)...`: body [i+1, jump[0])
+///    run once per light (cat is "" without a category; no axis/angle: angle
+///    = PI and axis 0 means the whole sphere). Options: "lightcache"
+///    "refresh"/"reuse", "send:light:NAME" value (read), "light:NAME" var
+///    (written each iteration: its bit in `writes`).
 ///  - `illuminate p axis angle` / `solar axis angle` (light shaders): body
 ///    [i+1, jump[0]); without axis/angle the angle symbol holds -1.
 ///  - `gather cat p dir angle samples ("name" value)...`: ray tracing
@@ -89,8 +100,12 @@
 ///    before. A void function's `return` has no assignment before it.
 ///  - `illuminance`: all four arguments are always present: category ""
 ///    when absent; axis the constant vector (0,0,0) and angle PI when
-///    absent. `illuminate p axis angle` / `solar axis angle`: the constant
-///    vector (0,0,0) and -1 when absent.
+///    absent; then the options it supports (names constant strings; others
+///    are dropped with a warning). `illuminate p axis angle` / `solar axis
+///    angle`: the constant vector (0,0,0) and -1 when absent.
+///  - A resizable local's declaration emits `resize a n` (n: the number of
+///    `{...}` values, 0 without) and then an `aassign` per value; a fixed
+///    array's `arraylength` is a constant.
 ///  - `gather`: the five fixed arguments are always present; output token
 ///    names must be constant strings and their values variables (a
 ///    "primitive:" output is a compile error); the bodies count as being
@@ -144,17 +159,28 @@ bool is_point_like(ShadingType t);
 /// color, point, vector or normal.
 bool is_triple(ShadingType t);
 
-/// A type with an optional fixed array length.
+/// `TypeSpec::array` of a resizable array (`float a[]`, PRMan 13.5's
+/// dynamic arrays): its length is set at run time (resize, push, pop).
+constexpr int kResizableArray = -1;
+/// The longest array: fixed lengths and the run-time length of resizable ones.
+constexpr int kMaxArrayLength = 1000000;
+
+/// A type with an optional array length.
 struct TypeSpec {
     ShadingType type = ShadingType::Float;
-    int array = 0; ///< 0: not an array; > 0: fixed length
+    int array = 0; ///< 0: not an array; > 0: fixed length; kResizableArray
 
-    bool is_array() const { return array > 0; }
-    /// Floats per element times elements.
-    int floats() const { return shading_type_floats(type) * (array > 0 ? array : 1); }
+    bool is_array() const { return array != 0; }
+    /// A resizable array (locals and temporaries only).
+    bool is_resizable() const { return array < 0; }
+    /// Floats per element times elements (0 for a resizable array, whose
+    /// storage the engine keeps apart).
+    int floats() const {
+        return array < 0 ? 0 : shading_type_floats(type) * (array > 0 ? array : 1);
+    }
     bool operator==(const TypeSpec&) const = default;
 };
-/// "float", "color[3]", ...
+/// "float", "color[3]", "float[]" (resizable), ...
 std::string type_spec_name(const TypeSpec& t);
 
 /// The kinds of shaders.

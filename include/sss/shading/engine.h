@@ -38,9 +38,12 @@
 ///    ShadingServices::textures(), bake3d records handed to
 ///    ShadingServices::bake3d;
 ///  - attribute/option/rendererinfo/rayinfo queries.
+///  - message passing: lightsource() inside illuminance (and its
+///    "light:NAME" options), surface() in light shaders;
+///  - resizable arrays (engine_arrays.cpp).
 /// Not supported (they run and return 0, warned once where it matters):
-/// depth-map shadow(), message passing (surface(), displacement(),
-/// lightsource()), gather's "primitive:" outputs (a compile error).
+/// depth-map shadow(), displacement() and atmosphere() message passing,
+/// gather's "primitive:" outputs (a compile error).
 
 #include <cstddef>
 #include <cstdint>

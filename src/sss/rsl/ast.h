@@ -44,11 +44,12 @@ struct Expr {
 
 enum class Storage { Default, Uniform, Varying };
 
-/// One declared name: `x`, `a[3] = {1, 2, 3}`, `f[]` (function parameter).
+/// One declared name: `x`, `a[3] = {1, 2, 3}`, `f[]` (a function parameter
+/// taking any length, or a resizable local).
 struct Declarator {
     std::string name;
     SrcLoc loc;
-    int array = 0;             ///< > 0 fixed length, -1 "[]" (function parameters)
+    int array = 0;             ///< > 0 fixed length, kResizableArray "[]"
     ExprPtr init;              ///< = expr
     std::vector<ExprPtr> list; ///< = { ... }
     bool has_list = false;
@@ -99,8 +100,9 @@ struct Stmt {
     StmtKind kind = StmtKind::Empty;
     SrcLoc loc;
     ExprPtr expr; ///< Expr, Return (may be null), If / While condition
-    std::vector<ExprPtr>
-        exprs; ///< For: init, cond, step (any may be null); light loops: args
+    /// For: init, cond, step (any may be null); light loops: args (for
+    /// illuminance, "name", value options after the positional ones).
+    std::vector<ExprPtr> exprs;
     std::vector<StmtPtr> body; ///< Block
     StmtPtr sub;               ///< If: then; loops: body
     StmtPtr else_sub;          ///< If / Gather: else

@@ -109,12 +109,19 @@ constexpr BuiltinSignature kTable[] = {
     {"option", "f=s[F]"}, {"option", "f=sM"},
     {"rendererinfo", "f=sF"}, {"rendererinfo", "f=sS"}, {"rendererinfo", "f=s[F]"},
     {"rayinfo", "f=sF"}, {"rayinfo", "f=sS"}, {"rayinfo", "f=sP"}, {"rayinfo", "f=sV"},
-    {"surface", "f=sF"}, {"surface", "f=sC"}, {"surface", "f=sP"}, {"surface", "f=sV"},
-    {"surface", "f=sN"}, {"surface", "f=sS"}, {"surface", "f=sM"},
-    {"displacement", "f=sF"}, {"displacement", "f=sC"}, {"displacement", "f=sP"},
-    {"displacement", "f=sV"}, {"displacement", "f=sN"}, {"displacement", "f=sS"},
-    {"lightsource", "f=sF"}, {"lightsource", "f=sC"}, {"lightsource", "f=sP"},
-    {"lightsource", "f=sV"}, {"lightsource", "f=sN"}, {"lightsource", "f=sS"},
+    // (message passing: the values differ per point, the other shader's)
+    {"surface", "f=sF", V}, {"surface", "f=sC", V}, {"surface", "f=sP", V},
+    {"surface", "f=sV", V}, {"surface", "f=sN", V}, {"surface", "f=sS", V},
+    {"surface", "f=sM", V},
+    {"displacement", "f=sF", V}, {"displacement", "f=sC", V}, {"displacement", "f=sP", V},
+    {"displacement", "f=sV", V}, {"displacement", "f=sN", V}, {"displacement", "f=sS", V},
+    {"displacement", "f=sM", V},
+    {"lightsource", "f=sF", V}, {"lightsource", "f=sC", V}, {"lightsource", "f=sP", V},
+    {"lightsource", "f=sV", V}, {"lightsource", "f=sN", V}, {"lightsource", "f=sS", V},
+    {"lightsource", "f=sM", V},
+    {"atmosphere", "f=sF", V}, {"atmosphere", "f=sC", V}, {"atmosphere", "f=sP", V},
+    {"atmosphere", "f=sV", V}, {"atmosphere", "f=sN", V}, {"atmosphere", "f=sS", V},
+    {"atmosphere", "f=sM", V},
 };
 // clang-format on
 

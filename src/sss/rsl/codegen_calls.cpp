@@ -19,7 +19,9 @@ int Generator::arg_cost(const ArgInfo& a, ShadingType want, bool want_array,
     }
     if (!a.val.ok()) return 0; // already reported: do not add errors
     const TypeSpec t = type(a.val.sym);
-    if (want_array) return t.is_array() && t.type == want ? 0 : -1;
+    // A built-in's output array (textureinfo, attribute...) has a fixed length.
+    if (want_array)
+        return t.is_array() && t.type == want && !(output && t.is_resizable()) ? 0 : -1;
     if (t.is_array()) return -1;
     if (t.type == want) return 0;
     if (output) return -1;
@@ -156,9 +158,10 @@ Val Generator::gen_call(const Expr& e, const TypeSpec* hint) {
             users.insert(users.end(), it->second.begin(), it->second.end());
     }
     int best = -1, best_cost = 0, best_rank = 0;
+    std::string length_why;
     for (std::size_t i = 0; i < users.size(); ++i) {
         int cost = 0;
-        if (!match_user(*users[i].def, args, cost)) continue;
+        if (!match_user(*users[i].def, args, cost, &length_why)) continue;
         int rank = hint_rank(users[i].def->result, hint);
         if (best < 0 || cost < best_cost || (cost == best_cost && rank < best_rank)) {
             best = static_cast<int>(i);
@@ -167,6 +170,11 @@ Val Generator::gen_call(const Expr& e, const TypeSpec* hint) {
         }
     }
     if (best >= 0) return inline_call(users[best], args, e);
+    if (!length_why.empty()) {
+        error(e.loc, length_why);
+        return {};
+    }
+    if (is_array_function(name)) return array_call(e, args);
 
     const Proto* bp = nullptr;
     Match bm;
@@ -301,16 +309,36 @@ std::vector<Generator::UParam> Generator::user_params(const FuncDef& f) {
     return out;
 }
 
-bool Generator::match_user(const FuncDef& f, const std::vector<ArgInfo>& args,
-                           int& cost) {
+bool Generator::match_user(const FuncDef& f, const std::vector<ArgInfo>& args, int& cost,
+                           std::string* why) {
     const std::vector<UParam> ps = user_params(f);
     if (ps.size() != args.size()) return false;
     cost = 0;
+    std::string length_why;
     for (std::size_t i = 0; i < ps.size(); ++i) {
-        int c = arg_cost(args[i], ps[i].group->type, ps[i].decl->array != 0,
-                         ps[i].group->output);
+        const VarDecl& g = *ps[i].group;
+        const int length = ps[i].decl->array;
+        if (length != 0) {
+            // `name[]` takes any array of the type, `name[N]` N elements.
+            if (args[i].literal) return false;
+            if (!args[i].val.ok()) continue; // reported
+            const TypeSpec t = type(args[i].val.sym);
+            if (!t.is_array() || t.type != g.type) return false;
+            if (length > 0 && t.array != length && length_why.empty())
+                length_why = "argument " + std::to_string(i + 1) + " of '" + f.name +
+                             "' is " + tname(t) +
+                             (t.is_resizable() ? " (resizable)" : "") +
+                             " but parameter '" + ps[i].decl->name + "' is " +
+                             tname({g.type, length});
+            continue;
+        }
+        int c = arg_cost(args[i], g.type, false, g.output);
         if (c < 0) return false;
         cost += c;
+    }
+    if (!length_why.empty()) {
+        if (why) *why = length_why;
+        return false;
     }
     return true;
 }

@@ -260,8 +260,17 @@ private:
         const Declarator* decl;
     };
     static std::vector<UParam> user_params(const FuncDef& f);
-    bool match_user(const FuncDef& f, const std::vector<ArgInfo>& args, int& cost);
+    /// Whether the arguments fit f's parameters (cost: conversions). An
+    /// array of the wrong length for a fixed-length array parameter does not
+    /// fit; `why` (when given) then says which.
+    bool match_user(const FuncDef& f, const std::vector<ArgInfo>& args, int& cost,
+                    std::string* why = nullptr);
     Val inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args, const Expr& call);
+
+    // --- resizable arrays (codegen_arrays.cpp) ------------------------------
+    /// arraylength, resize, push, pop, reserve.
+    static bool is_array_function(const std::string& name);
+    Val array_call(const Expr& e, std::vector<ArgInfo>& args);
 
     // --- statements ---------------------------------------------------------
     void statement(const Stmt& s);
@@ -278,6 +287,16 @@ private:
     void loop_statement(const Stmt& s);
     Val typed_arg(const Expr& e, ShadingType t);
     void light_statement(const Stmt& s);
+
+    // illuminance([category,] P [, axis, angle] [, "name", value]...): the op's
+    // four fixed arguments, then the options it keeps.
+    void illuminance_statement(const Stmt& s);
+    // The "name", value options of illuminance from exprs[first]: appended to
+    // args (outputs' bits in writes); unknown names warn and are dropped.
+    bool illuminance_options(const Stmt& s, std::size_t first, std::vector<int>& args,
+                             uint64_t& writes);
+    // The body of a light statement after its op.
+    void light_body(const Stmt& s, int op);
 
     // gather(category, P, dir, angle, samples, "name", value...) hit [else miss]:
     // op `gather` with the five fixed arguments (string, point, vector, float,

@@ -84,7 +84,7 @@ void Generator::declaration(const VarDecl& d) {
             m_scope->vars[n.name] = *v;
             continue;
         }
-        const TypeSpec t{d.type, std::max(n.array, 0)};
+        const TypeSpec t{d.type, n.array};
         std::string base = n.name;
         if (!m_funcs.empty())
             base = m_funcs.back().def->name + "::" + n.name + "@" +
@@ -104,12 +104,18 @@ void Generator::declaration(const VarDecl& d) {
 
 void Generator::initialise(int sym, const VarDecl& d, const Declarator& n) {
     const TypeSpec t = type(sym);
+    if (t.is_resizable() && !n.init) {
+        // Each time the declaration runs, the array starts with the values
+        // given (none: empty). The length is uniform; so is this store.
+        check_store(sym, false, n.loc);
+        emit("resize", {sym, kfloat(static_cast<double>(n.list.size()))});
+    }
     if (n.has_list) {
         if (!t.is_array()) {
             error(n.loc, "{...} initialises arrays only");
             return;
         }
-        if (static_cast<int>(n.list.size()) != t.array) {
+        if (!t.is_resizable() && static_cast<int>(n.list.size()) != t.array) {
             error(n.loc, "'" + n.name + "' has " + std::to_string(t.array) +
                              " elements but " + std::to_string(n.list.size()) +
                              " values are given");
@@ -302,6 +308,10 @@ Val Generator::typed_arg(const Expr& e, ShadingType t) {
 }
 
 void Generator::light_statement(const Stmt& s) {
+    if (s.kind == StmtKind::Illuminance) {
+        illuminance_statement(s);
+        return;
+    }
     const std::size_t n = s.exprs.size();
     std::vector<int> args;
     bool ok = true;
@@ -311,54 +321,31 @@ void Generator::light_statement(const Stmt& s) {
         args.push_back(v.ok() ? v.sym : 0);
     };
     const int no_axis = ktriple(ShadingType::Vector, 0, 0, 0);
-    const char* name = "illuminance";
-    if (s.kind == StmtKind::Illuminance) {
-        if (m_shader.kind != ShaderKind::Surface) {
-            error(s.loc, "illuminance is only allowed in surface shaders");
-            return;
-        }
-        if (m_in_illuminance) {
-            error(s.loc, "illuminance statements cannot be nested");
-            return;
-        }
-        if (n < 1 || n > 4) return; // reported by the parser
-        const std::size_t p = (n == 2 || n == 4) ? 1 : 0;
-        if (p)
-            arg(0, ShadingType::String);
-        else
-            args.push_back(kstring(""));
-        arg(p, ShadingType::Point);
-        if (n >= 3) {
-            arg(p + 1, ShadingType::Vector);
-            arg(p + 2, ShadingType::Float);
-        } else {
-            args.push_back(no_axis);
-            args.push_back(kfloat(kPi));
-        }
+    const bool solar = s.kind == StmtKind::Solar;
+    const char* name = solar ? "solar" : "illuminate";
+    if (m_shader.kind != ShaderKind::Light) {
+        error(s.loc, std::string(name) + " is only allowed in light shaders");
+        return;
+    }
+    if (m_in_light_loop) {
+        error(s.loc, "illuminate and solar statements cannot be nested");
+        return;
+    }
+    if (solar ? (n != 0 && n != 2) : (n != 1 && n != 3)) return; // reported
+    std::size_t i = 0;
+    if (!solar) arg(i++, ShadingType::Point);
+    if (n > i) {
+        arg(i, ShadingType::Vector);
+        arg(i + 1, ShadingType::Float);
     } else {
-        const bool solar = s.kind == StmtKind::Solar;
-        name = solar ? "solar" : "illuminate";
-        if (m_shader.kind != ShaderKind::Light) {
-            error(s.loc, std::string(name) + " is only allowed in light shaders");
-            return;
-        }
-        if (m_in_light_loop) {
-            error(s.loc, "illuminate and solar statements cannot be nested");
-            return;
-        }
-        if (solar ? (n != 0 && n != 2) : (n != 1 && n != 3)) return; // reported
-        std::size_t i = 0;
-        if (!solar) arg(i++, ShadingType::Point);
-        if (n > i) {
-            arg(i, ShadingType::Vector);
-            arg(i + 1, ShadingType::Float);
-        } else {
-            args.push_back(no_axis);
-            args.push_back(kfloat(-1));
-        }
+        args.push_back(no_axis);
+        args.push_back(kfloat(-1));
     }
     if (!ok) return;
-    const int op = emit(name, args, 0);
+    light_body(s, emit(name, args, 0));
+}
+
+void Generator::light_body(const Stmt& s, int op) {
     int& depth = s.kind == StmtKind::Illuminance ? m_in_illuminance : m_in_light_loop;
     ++depth;
     ++m_varying_cond;
@@ -366,6 +353,150 @@ void Generator::light_statement(const Stmt& s) {
     --m_varying_cond;
     --depth;
     m_p.ops[op].jump[0] = here();
+}
+
+void Generator::illuminance_statement(const Stmt& s) {
+    if (m_shader.kind != ShaderKind::Surface) {
+        error(s.loc, "illuminance is only allowed in surface shaders");
+        return;
+    }
+    if (m_in_illuminance) {
+        error(s.loc, "illuminance statements cannot be nested");
+        return;
+    }
+    // The options start at the first string literal after the first argument
+    // (the positional arguments after the category are a point, a vector and
+    // a float).
+    const std::size_t total = s.exprs.size();
+    std::size_t n = 1;
+    while (n < total && s.exprs[n]->kind != ExprKind::String) ++n;
+    if (total < 1) return; // reported by the parser
+    if (n > 4) {
+        error(s.loc, "illuminance takes ([category,] P [, axis, angle] [, \"name\", "
+                     "value]...)");
+        return;
+    }
+    std::vector<int> args;
+    bool ok = true;
+    auto arg = [&](std::size_t i, ShadingType t) {
+        Val v = typed_arg(*s.exprs[i], t);
+        ok = ok && v.ok();
+        args.push_back(v.ok() ? v.sym : 0);
+    };
+    const std::size_t p = (n == 2 || n == 4) ? 1 : 0;
+    if (p)
+        arg(0, ShadingType::String);
+    else
+        args.push_back(kstring(""));
+    arg(p, ShadingType::Point);
+    if (n >= 3) {
+        arg(p + 1, ShadingType::Vector);
+        arg(p + 2, ShadingType::Float);
+    } else {
+        args.push_back(ktriple(ShadingType::Vector, 0, 0, 0));
+        args.push_back(kfloat(kPi));
+    }
+    uint64_t writes = 0;
+    ok = illuminance_options(s, n, args, writes) && ok;
+    if (!ok) return;
+    light_body(s, emit("illuminance", args, writes));
+}
+
+bool Generator::illuminance_options(const Stmt& s, std::size_t first,
+                                    std::vector<int>& args, uint64_t& writes) {
+    const std::size_t total = s.exprs.size();
+    if ((total - first) % 2 != 0) {
+        error(s.exprs.back()->loc,
+              "illuminance options come in pairs: \"name\", value (the last has no "
+              "value)");
+        return false;
+    }
+    bool ok = true;
+    for (std::size_t i = first; i + 1 < total; i += 2) {
+        const Expr& ne = *s.exprs[i];
+        const Expr& ve = *s.exprs[i + 1];
+        if (ne.kind != ExprKind::String) {
+            error(ne.loc, "illuminance option names must be string literals");
+            ok = false;
+            continue;
+        }
+        const std::string& token = ne.text;
+        if (token == "lightcache") {
+            Val v = value(ve);
+            if (!v.ok()) {
+                ok = false;
+                continue;
+            }
+            if (type(v.sym) != TypeSpec{ShadingType::String, 0}) {
+                error(ve.loc, "illuminance option \"lightcache\" takes a string "
+                              "(\"refresh\" or \"reuse\")");
+                ok = false;
+                continue;
+            }
+            const std::vector<std::string>& str = m_p.symbols[v.sym].strings;
+            if (is_const(v.sym) && !str.empty() && str[0] != "refresh" &&
+                str[0] != "reuse")
+                m_d.warning(ve.loc, "illuminance \"lightcache\" \"" + str[0] +
+                                        "\" is neither \"refresh\" nor \"reuse\"; "
+                                        "the cache is reused");
+            args.push_back(kstring(token));
+            args.push_back(v.sym);
+            continue;
+        }
+        const bool receive = token.rfind("light:", 0) == 0 && token.size() > 6;
+        const bool send = token.rfind("send:light:", 0) == 0 && token.size() > 11;
+        if (send) {
+            Val v = value(ve);
+            if (!v.ok()) {
+                ok = false;
+                continue;
+            }
+            if (type(v.sym).is_array()) {
+                error(ve.loc,
+                      "illuminance option \"" + token + "\" cannot send an array");
+                ok = false;
+                continue;
+            }
+            args.push_back(kstring(token));
+            args.push_back(v.sym);
+            continue;
+        }
+        if (!receive) {
+            m_d.warning(ne.loc,
+                        "illuminance option \"" + token + "\" is not supported; ignored");
+            continue;
+        }
+        // "light:NAME", var: the light's parameter NAME, each iteration.
+        const Var* var = ve.kind == ExprKind::Ident ? lookup(ve.text, ve.loc) : nullptr;
+        if (!var) {
+            if (ve.kind != ExprKind::Ident)
+                error(ve.loc, "the value of illuminance option \"" + token +
+                                  "\" must be a variable");
+            ok = false;
+            continue;
+        }
+        if (!check_writable(*var, ve.text, ve.loc)) {
+            ok = false;
+            continue;
+        }
+        if (type(var->sym).is_array()) {
+            error(ve.loc, "illuminance option \"" + token +
+                              "\" needs a variable that "
+                              "is not an array");
+            ok = false;
+            continue;
+        }
+        // Lights differ per point: the variable is written varying.
+        check_store(var->sym, true, ve.loc);
+        args.push_back(kstring(token));
+        writes |= uint64_t(1) << std::min<std::size_t>(args.size(), 63);
+        args.push_back(var->sym);
+    }
+    if (args.size() > 64) {
+        error(s.loc, "too many arguments to illuminance");
+        return false;
+    }
+    return ok;
 }
 
 void Generator::gather_statement(const Stmt& s) {

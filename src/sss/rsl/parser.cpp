@@ -229,16 +229,29 @@ private:
             Declarator n;
             n.loc = peek().loc;
             n.name = ident("a parameter name");
-            if (accept("[")) {
-                expect("]", "(array parameters are written 'name[]')");
-                n.array = -1;
-            }
+            // `name[]` takes an array of any length (fixed or resizable),
+            // `name[16]` one of exactly that length.
+            if (accept("[")) n.array = is("]") ? kResizableArray : array_length();
+            if (n.array == kResizableArray) expect("]", "after '['");
             d.names.push_back(std::move(n));
             // `float a, b` continues the group; `float a, float b` starts another.
             if (!is(",") || peek(1).kind != TokKind::Ident) break;
             ++m_pos;
         }
         return d;
+    }
+
+    // `N]` after a '[': a fixed array length.
+    int array_length() {
+        if (peek().kind != TokKind::Number)
+            fail(peek(), "expected the array length, got " + describe(peek()));
+        const Token& len = take();
+        if (len.number < 1 || len.number > kMaxArrayLength ||
+            len.number != static_cast<int>(len.number))
+            fail(len, "the array length must be a whole number from 1 to " +
+                          std::to_string(kMaxArrayLength));
+        expect("]", "after the array length");
+        return static_cast<int>(len.number);
     }
 
     void storage(VarDecl& d) {
@@ -270,16 +283,12 @@ private:
             Declarator n;
             n.loc = peek().loc;
             n.name = ident(shader_param ? "a parameter name" : "a variable name");
+            // A local `name[]` is resizable; a shader parameter needs a length.
             if (accept("[")) {
-                if (peek().kind != TokKind::Number)
-                    fail(peek(), "expected the array length, got " + describe(peek()));
-                const Token& len = take();
-                if (len.number < 1 || len.number > 1e6 ||
-                    len.number != static_cast<int>(len.number))
-                    fail(len,
-                         "the array length must be a whole number from 1 to 1000000");
-                n.array = static_cast<int>(len.number);
-                expect("]", "after the array length");
+                if (!shader_param && accept("]"))
+                    n.array = kResizableArray;
+                else
+                    n.array = array_length();
             }
             if (accept("=")) {
                 if (is_extern_decl(d))
@@ -422,13 +431,15 @@ private:
                 }
                 expect(")", ("after the arguments of " + w).c_str());
                 const std::size_t n = s->exprs.size();
-                const bool ok = w == "illuminance"  ? (n >= 1 && n <= 4)
+                // illuminance's trailing "name", value options: codegen.
+                const bool ok = w == "illuminance"  ? n >= 1
                                 : w == "illuminate" ? (n == 1 || n == 3)
                                                     : (n == 0 || n == 2);
                 if (!ok)
                     m_diags.error(s->loc,
                                   w + (w == "illuminance"
-                                           ? " takes ([category,] P [, axis, angle])"
+                                           ? " takes ([category,] P [, axis, angle] [, "
+                                             "\"name\", value]...)"
                                        : w == "illuminate" ? " takes (P [, axis, angle])"
                                                            : " takes ([axis, angle])"));
                 s->sub = statement();

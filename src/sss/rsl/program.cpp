@@ -54,6 +54,7 @@ bool is_triple(ShadingType t) {
 std::string type_spec_name(const TypeSpec& t) {
     std::string s = shading_type_name(t.type);
     if (t.array > 0) s += "[" + std::to_string(t.array) + "]";
+    if (t.array < 0) s += "[]";
     return s;
 }
 

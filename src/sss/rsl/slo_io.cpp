@@ -342,8 +342,22 @@ private:
                                      : n == "illuminance" ? 4
                                      : n == "illuminate"  ? 3
                                                           : 2;
-            nargs(i, want, want);
-            no_writes(i);
+            if (n == "illuminance") {
+                // "name", value options follow; "light:..." values are written.
+                nargs(i, want, 64);
+                if ((op.args.size() - want) % 2 != 0)
+                    fail(i, "illuminance options come in pairs");
+                for (std::size_t k = want; k < op.args.size(); k += 2)
+                    if (!is(op.args[k], ShadingType::String) ||
+                        type(op.args[k + 1]).is_array())
+                        fail(i, "bad illuminance option");
+                for (std::size_t k = 0; k < op.args.size() && k < 64; ++k)
+                    if (((op.writes >> k) & 1u) && (k < want || (k - want) % 2 == 0))
+                        fail(i, "bad write flags for 'illuminance'");
+            } else {
+                nargs(i, want, want);
+                no_writes(i);
+            }
             std::size_t a = 0;
             if (n == "illuminance" && !is(op.args[a++], ShadingType::String))
                 fail(i, "illuminance category must be a string");
@@ -398,6 +412,18 @@ private:
                 !is(op.args[n == "aref" ? 2 : 1], ShadingType::Float) ||
                 type(value) != TypeSpec{type(array).type, 0})
                 fail(i, "bad argument types for '" + n + "'");
+            return i + 1;
+        }
+        if (n == "arraylength" || n == "resize" || n == "reserve" || n == "push" ||
+            n == "pop") {
+            // arraylength d a, resize a n, reserve a n, push a v, pop d a.
+            nargs(i, 2, 2);
+            const bool result = n == "arraylength" || n == "pop";
+            const int array = op.args[result ? 1 : 0];
+            const bool resizable = type(array).is_resizable();
+            if (op.writes != (n == "pop" ? 3u : 1u) ||
+                !(resizable || (n == "arraylength" && type(array).is_array())))
+                fail(i, "bad arguments for '" + n + "'");
             return i + 1;
         }
         if (n == "construct" || n == "cast") {
@@ -492,7 +518,7 @@ Program read_program(std::istream& in, const std::string& path) {
         Symbol s;
         s.name = r.string();
         s.type.type = parse_type(r, r.word());
-        s.type.array = static_cast<int>(r.integer(0, 1000000));
+        s.type.array = static_cast<int>(r.integer(kResizableArray, kMaxArrayLength));
         const std::string storage = r.word();
         if (storage != "u" && storage != "v") r.fail("storage must be u or v");
         s.varying = storage == "v";
@@ -515,6 +541,9 @@ Program read_program(std::istream& in, const std::string& path) {
         if (s.kind == SymbolKind::Const && have == 0) r.fail("constant without a value");
         if (s.kind == SymbolKind::Const && s.varying)
             r.fail("a constant cannot be varying");
+        if (s.type.is_resizable() &&
+            (s.kind != SymbolKind::Local && s.kind != SymbolKind::Temp))
+            r.fail("only locals can be resizable arrays");
         p.symbols.push_back(std::move(s));
     }
     r.line("ops");

@@ -463,6 +463,7 @@ void ShadingContext::Impl::setup_frame(detail::Frame& f, const ShaderInstance& i
     }
     f.arena.assign(total, 0.0f);
     std::size_t off = 0;
+    int resizable = 0;
     for (std::size_t s = 0; s < nsym; ++s) {
         const Symbol& sym = p.symbols[s];
         Slot& sl = f.slots[s];
@@ -470,6 +471,9 @@ void ShadingContext::Impl::setup_frame(detail::Frame& f, const ShaderInstance& i
         sl.varying = sym.varying;
         sl.stride = sym.varying ? sl.nf : 0;
         sl.p = f.arena.data() + off;
+        // A resizable array starts empty, its storage apart (engine_arrays.cpp).
+        sl.resizable = sym.type.is_resizable() ? resizable++ : -1;
+        if (sl.resizable >= 0) sl.p = nullptr;
         off += static_cast<std::size_t>(sl.nf) * (sym.varying ? n : 1);
         // Constants and constant defaults.
         if (sym.type.type == ShadingType::String) {
@@ -486,6 +490,8 @@ void ShadingContext::Impl::setup_frame(detail::Frame& f, const ShaderInstance& i
                 std::memcpy(sl.at(i), sym.numbers.data(), sizeof(float) * sl.nf);
         }
     }
+    f.resizable.resize(static_cast<std::size_t>(resizable));
+    if (resizable > 0) detail::reset_resizable(f);
     f.mask.assign(n, 1);
     f.active = n;
     f.stop.assign(n, 0);
@@ -617,6 +623,7 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
         (batch.primitive ? batch.primitive->object_to_world : Matrix4(1.0));
     c.light_states.clear();
     c.light_states.resize(lights.size());
+    c.light_sends.clear();
     for (std::size_t k = 0; k < lights.size(); ++k)
         c.light_states[k].instance = lights[k];
     c.nonfinite = 0;

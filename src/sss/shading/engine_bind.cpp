@@ -36,6 +36,7 @@ const BinderTable& binders() {
         register_lighting(t);
         register_texture(t);
         register_raytrace(t);
+        register_arrays(t);
         return t;
     }();
     return table;
@@ -138,8 +139,20 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
             why = "illuminance is only for surface and volume shaders";
             return false;
         }
-        return n == 4 && in.is_string(0) && in.is_ptype(1) && in.is_triple_(2) &&
-               in.is_float(3);
+        if (n < 4 || (n - 4) % 2 != 0 || !in.is_string(0) || !in.is_ptype(1) ||
+            !in.is_triple_(2) || !in.is_float(3))
+            return false;
+        // Options: "name", value pairs; only "light:..." values are written.
+        for (int k = 4; k < n; k += 2) {
+            if (!in.is_string(k) || in.writes(k) || in.is_array(k + 1)) return false;
+            if (in.writes(k + 1) !=
+                (in.program.symbols[in.op.args[k]].strings.size() == 1 &&
+                 in.program.symbols[in.op.args[k]].strings[0].rfind("light:", 0) == 0)) {
+                why = "illuminance writes an option that is not \"light:...\"";
+                return false;
+            }
+        }
+        return !in.writes(0) && !in.writes(1) && !in.writes(2) && !in.writes(3);
     }
     if (name == "gather") {
         b.ia = C_Gather;
@@ -195,8 +208,11 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
     for (int g = 0; g < G_count; ++g) bp->globals[g] = -1;
     for (int s = 0; s < nsym; ++s) {
         const Symbol& sym = p.symbols[s];
-        if (sym.type.array < 0 || sym.type.array > (1 << 20))
+        if (sym.type.array < kResizableArray || sym.type.array > kMaxArrayLength)
             fail(-1, "symbol '" + sym.name + "' has a bad array length");
+        if (sym.type.is_resizable() &&
+            (sym.kind != SymbolKind::Local && sym.kind != SymbolKind::Temp))
+            fail(-1, "symbol '" + sym.name + "' is a resizable array but not a local");
         if (sym.type.type == ShadingType::Void && sym.kind != SymbolKind::Temp)
             fail(-1, "symbol '" + sym.name + "' is void");
         const int elements = sym.type.array > 0 ? sym.type.array : 1;

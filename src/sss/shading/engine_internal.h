@@ -144,6 +144,13 @@ void register_geometry(BinderTable& t); // engine_geometry.cpp
 void register_lighting(BinderTable& t); // engine_lighting.cpp
 void register_texture(BinderTable& t);  // engine_texture.cpp
 void register_raytrace(BinderTable& t); // engine_raytrace.cpp
+void register_arrays(BinderTable& t);   // engine_arrays.cpp
+/// aref and aassign of a resizable array (engine_arrays.cpp): b.ia = the
+/// floats per element; the length is the array's at run time.
+void op_aref_resizable(Frame& f, const BoundOp& b);
+void op_aassign_resizable(Frame& f, const BoundOp& b);
+/// Empties the resizable arrays of a frame (a new batch).
+void reset_resizable(Frame& f);
 /// environment("raytrace", ...) (engine_raytrace.cpp; engine_texture.cpp
 /// routes the name "raytrace" to it).
 void environment_raytrace(Frame& f, const BoundOp& b);
@@ -152,10 +159,25 @@ void environment_raytrace(Frame& f, const BoundOp& b);
 struct Slot {
     float* p = nullptr;
     int nf = 0;     ///< floats per value (elements included)
-    int stride = 0; ///< nf when varying, 0 when uniform
+    int stride = 0; ///< nf when varying (a resizable array's capacity), 0 when uniform
     bool varying = false;
+    int resizable = -1; ///< a resizable array: its index in Frame::resizable
     float* at(std::size_t i) const { return p + i * static_cast<std::size_t>(stride); }
 };
+
+/// The storage of a resizable array (engine_arrays.cpp): `length` elements
+/// per value, in blocks of `capacity` elements (a varying array's values are
+/// Slot::stride = capacity * element floats apart). The length is one for
+/// the whole batch.
+struct ResizableArray {
+    std::vector<float> data;
+    int length = 0;
+    int capacity = 0;
+};
+
+/// The storage of a resizable array may use at most this many floats over
+/// the batch (1 GiB).
+constexpr std::size_t kMaxResizableFloats = std::size_t(1) << 28;
 
 /// Per-point stop codes (why a point stopped running): 0 runs; otherwise the
 /// low two bits give the kind and the rest the depth of the construct.
@@ -173,6 +195,7 @@ struct Frame {
 
     std::vector<float> arena;
     std::vector<Slot> slots;
+    std::vector<ResizableArray> resizable; ///< Slot::resizable indexes it
 
     // Running mask.
     std::vector<uint8_t> mask;
@@ -267,6 +290,21 @@ struct LightState {
     bool described = false;
 };
 
+/// A "send:light:NAME" option of a running illuminance: light shaders run
+/// with their parameter NAME set to `value` (a slot of the surface frame).
+struct LightSend {
+    std::string name;
+    const Slot* value = nullptr;
+    ShadingType type = ShadingType::Float;
+};
+
+/// Copies the parameter (or output parameter) `name` of frame `from` into
+/// argument k of op b at the running points of f, when `from` has one of a
+/// fitting type (point, vector and normal fit each other; no arrays): the
+/// message-passing functions and illuminance's "light:NAME" (engine_lighting.cpp).
+bool copy_parameter(Frame& f, const BoundOp& b, int k, const Frame& from,
+                    const std::string& name);
+
 } // namespace sss::detail
 
 namespace sss {
@@ -295,6 +333,8 @@ struct ShadingContext::Impl {
     LightList lights;
     detail::Frame main;
     std::vector<detail::LightState> light_states;
+    /// The running illuminance's "send:light:" options (light() applies them).
+    std::vector<detail::LightSend> light_sends;
     int depth = 0; ///< nested executions (lights inside a surface)
     /// Storage of parameters a varying primitive variable made varying.
     std::vector<std::vector<float>> extra_storage;

@@ -22,6 +22,17 @@
 ///    string parameter `__category` (comma separated); the loop's category
 ///    is a comma-separated list of names, each required (any of them) or,
 ///    with a leading '-', excluded.
+///    Options ("name", value after the positional arguments): "lightcache"
+///    "refresh" re-runs the lights (their cache is dropped first; "reuse"
+///    is the default); "light:NAME", var receives the light's parameter
+///    NAME each iteration (left alone for a light without one);
+///    "send:light:NAME", value runs the lights with their parameter NAME set
+///    to value (after the light's own parameters are bound; the lights are
+///    re-run before and after the loop so that no other query sees them).
+///  - Message passing: lightsource("NAME", var) inside illuminance reads
+///    the current light's parameter NAME (0 outside, or when there is
+///    none); surface("NAME", var) in a light shader reads the parameter of
+///    the surface being lit, at the same point, as it is when the light runs.
 ///  - ambient(), diffuse(N), specular(N, V, roughness), phong(N, V, size) as
 ///    RISpec's definitions over illuminance(P, N, PI/2), with unit N and L,
 ///    roughness clamped to >= 1e-4 and N.H to >= 0 (the C++ shaders'
@@ -72,7 +83,49 @@ void store3(const Slot* s, std::size_t i, const glm::vec3& v) {
     if (s) st3(s->at(i), v);
 }
 
+/// Whether a value of type `from` fits a variable of type `to` (messages).
+bool message_fits(const TypeSpec& from, const TypeSpec& to) {
+    if (from.is_array() || to.is_array()) return false;
+    return from.type == to.type || (is_point_like(from.type) && is_point_like(to.type));
+}
+
+/// Sets light frame lf's parameter send.name to the sent value (per point
+/// for a varying parameter, else the value at the first point of `mask`).
+void apply_send(Frame& lf, const LightSend& send, const std::vector<uint8_t>& mask) {
+    const int s = lf.program->find(send.name);
+    if (s < 0) return;
+    const Symbol& sym = lf.program->symbols[s];
+    if ((sym.kind != SymbolKind::Param && sym.kind != SymbolKind::OutputParam) ||
+        !message_fits({send.type, 0}, sym.type))
+        return;
+    Slot& to = lf.slots[s];
+    const std::size_t first =
+        std::find(mask.begin(), mask.end(), uint8_t(1)) - mask.begin();
+    if (first >= lf.n) return;
+    const std::size_t reps = to.varying ? lf.n : 1;
+    for (std::size_t i = 0; i < reps; ++i)
+        std::memcpy(to.at(i), send.value->at(to.varying ? i : first),
+                    sizeof(float) * to.nf);
+}
+
 } // namespace
+
+bool detail::copy_parameter(Frame& f, const BoundOp& b, int k, const Frame& from,
+                            const std::string& name) {
+    if (!from.program || from.n != f.n) return false;
+    const int s = from.program->find(name);
+    if (s < 0) return false;
+    const Symbol& src = from.program->symbols[s];
+    if (src.kind != SymbolKind::Param && src.kind != SymbolKind::OutputParam)
+        return false;
+    if (!message_fits(src.type, f.program->symbols[b.op->args[k]].type)) return false;
+    const Slot& value = from.slots[s];
+    Slot& to = f.slot(b, k);
+    f.each(to.varying, [&](std::size_t i) {
+        std::memcpy(to.at(i), value.at(i), sizeof(float) * to.nf);
+    });
+    return true;
+}
 
 LightState& ShadingContext::Impl::describe_light(int index) {
     LightState& ls = light_states[index];
@@ -141,6 +194,7 @@ LightState& ShadingContext::Impl::light(int index, const float* P, int P_stride,
     if (const Slot* s = sl(G_time))
         for (std::size_t i = 0; i < (s->varying ? n : 1); ++i) *s->at(i) = batch->time;
     init_params(lf, false);
+    for (const LightSend& send : light_sends) apply_send(lf, send, mask);
     lf.mask = mask;
     lf.active = active;
     lf.request_axis = all ? nullptr : axis;
@@ -279,9 +333,53 @@ inline bool in_cone(const glm::vec3& L, const glm::vec3& axis, float angle) {
 
 } // namespace
 
+namespace {
+
+/// The options of an illuminance op (see the file comment).
+struct IlluminanceOptions {
+    bool refresh = false;
+    std::vector<std::pair<std::string, int>> receive; ///< light parameter, argument
+    std::vector<LightSend> send;
+};
+
+IlluminanceOptions illuminance_options(Frame& f, const BoundOp& b) {
+    IlluminanceOptions o;
+    const std::size_t first = f.first_active();
+    for_options(f, b, 4, [&](const std::string& name, int k) {
+        if (name == "lightcache")
+            o.refresh = f.str(b, k, first) == "refresh";
+        else if (name.rfind("light:", 0) == 0)
+            o.receive.push_back({name.substr(6), k});
+        else if (name.rfind("send:light:", 0) == 0)
+            o.send.push_back({name.substr(11), &f.slot(b, k),
+                              f.program->symbols[b.op->args[k]].type.type});
+    });
+    return o;
+}
+
+void drop_light_caches(ShadingContext::Impl& ctx) {
+    for (LightState& ls : ctx.light_states) ls.valid = false;
+}
+
+} // namespace
+
 void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
     ShadingContext::Impl& ctx = *f.ctx;
     const std::size_t n = f.n;
+    IlluminanceOptions options;
+    if (b.op->args.size() > 4) options = illuminance_options(f, b);
+    if (options.refresh || !options.send.empty()) drop_light_caches(ctx);
+    // The sends hold for this loop only (the lights run again after it).
+    struct SendScope {
+        ShadingContext::Impl& ctx;
+        bool on;
+        ~SendScope() {
+            if (!on) return;
+            ctx.light_sends.clear();
+            drop_light_caches(ctx);
+        }
+    } send_scope{ctx, !options.send.empty()};
+    if (send_scope.on) ctx.light_sends = options.send;
     const int* g = f.bound->globals;
     const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
     const Slot* Cls = g[G_Cl] >= 0 ? &f.slots[g[G_Cl]] : nullptr;
@@ -319,6 +417,8 @@ void run_illuminance(Frame& f, const BoundOp& b, int body_begin, int body_end) {
             store3(Cls, i, ls.Cl[i]);
             store3(Ols, i, ls.Ol[i]);
         });
+        for (const auto& [name, k] : options.receive)
+            copy_parameter(f, b, k, *ls.frame, name);
         f.current_light = static_cast<int>(li);
         f.run(body_begin, body_end);
     }
@@ -399,6 +499,43 @@ void op_lighting(Frame& f, const BoundOp& b) {
     f.each(d.varying, [&](std::size_t i) { st3(d.at(i), sum[i]); });
 }
 
+// --- message passing ----------------------------------------------------------
+
+void set_result(Frame& f, const BoundOp& b, bool found) {
+    Slot& d = f.slot(b, 0);
+    f.each(d.varying, [&](std::size_t i) { *d.at(i) = found ? 1.0f : 0.0f; });
+}
+
+/// lightsource("NAME", var): inside illuminance, the current light's parameter.
+void op_lightsource(Frame& f, const BoundOp& b) {
+    ShadingContext::Impl& ctx = *f.ctx;
+    const int li = f.current_light;
+    bool found = false;
+    if (!f.is_light && li >= 0 &&
+        static_cast<std::size_t>(li) < ctx.light_states.size()) {
+        const LightState& ls = ctx.light_states[static_cast<std::size_t>(li)];
+        if (ls.frame)
+            found = copy_parameter(f, b, 2, *ls.frame, f.str(b, 1, f.first_active()));
+    }
+    set_result(f, b, found);
+}
+
+/// surface("NAME", var): in a light shader, the lit surface's parameter.
+void op_surface_message(Frame& f, const BoundOp& b) {
+    const Frame& surface = f.ctx->main;
+    const bool found = f.is_light && surface.program &&
+                       surface.program->kind == ShaderKind::Surface &&
+                       copy_parameter(f, b, 2, surface, f.str(b, 1, f.first_active()));
+    set_result(f, b, found);
+}
+
+bool bind_message(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 3 || !in.is_float(0) || !in.is_string(1) || in.is_array(2))
+        return false;
+    b.fn = in.op.name == "lightsource" ? op_lightsource : op_surface_message;
+    return true;
+}
+
 bool bind_ambient(const BindInfo& in, BoundOp& b, std::string&) {
     if (in.nargs() != 1 || !in.is_color(0)) return false;
     b.fn = op_lighting<M_Ambient>;
@@ -448,6 +585,8 @@ void register_lighting(BinderTable& t) {
     t["specular"] = bind_specular;
     t["phong"] = bind_specular;
     t["specularbrdf"] = bind_specularbrdf;
+    t["lightsource"] = bind_message;
+    t["surface"] = bind_message;
 }
 
 } // namespace detail

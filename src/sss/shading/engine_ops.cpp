@@ -346,7 +346,7 @@ bool bind_aref(const BindInfo& in, BoundOp& b, std::string&) {
     if (in.floats(0) != ne) return false;
     b.ia = ne;
     b.ib = in.sym(1).type.array;
-    b.fn = op_aref;
+    b.fn = in.sym(1).type.is_resizable() ? op_aref_resizable : op_aref;
     return true;
 }
 
@@ -359,7 +359,7 @@ bool bind_aassign(const BindInfo& in, BoundOp& b, std::string&) {
     if ((in.type(0) == ShadingType::String) != in.is_string(2)) return false;
     b.ia = ne;
     b.ib = in.sym(0).type.array;
-    b.fn = op_aassign;
+    b.fn = in.sym(0).type.is_resizable() ? op_aassign_resizable : op_aassign;
     return true;
 }
 

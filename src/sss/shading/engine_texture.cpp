@@ -2,8 +2,8 @@
 /// Texture built-ins through the TextureLibrary (texture, environment,
 /// textureinfo, texture3d), bake3d records (ShadingServices::bake3d), and
 /// the queries attribute, option, rendererinfo, rayinfo and the message
-/// passing functions surface/displacement/lightsource (which return 0: not
-/// supported yet).
+/// passing functions displacement/atmosphere (which return 0; surface and
+/// lightsource are in engine_lighting.cpp).
 ///
 ///  - texture(file[ch], [s, t | s1,t1..s4,t4], options): without
 ///    coordinates the globals s, t; the filter footprint is the differences
@@ -504,8 +504,10 @@ void op_rayinfo(Frame& f, const BoundOp& b) {
     set_result(f, b, known && write_query(f, b, 2, v) ? 1.0f : 0.0f);
 }
 
-/// surface() / displacement() / lightsource(): message passing is not
-/// supported: returns 0 and leaves the variable alone.
+/// displacement() and atmosphere(): a surface shader cannot reach its
+/// displacement shader's values (displacement runs when the dicer makes the
+/// grids), and there are no volume shaders: returns 0 and leaves the variable
+/// alone. (surface() and lightsource() are in engine_lighting.cpp.)
 void op_message(Frame& f, const BoundOp& b) {
     set_result(f, b, 0.0f);
 }
@@ -712,9 +714,8 @@ void register_texture(BinderTable& t) {
     t["option"] = bind_query;
     t["rendererinfo"] = bind_query;
     t["rayinfo"] = bind_query;
-    t["surface"] = bind_query;
     t["displacement"] = bind_query;
-    t["lightsource"] = bind_query;
+    t["atmosphere"] = bind_query;
 }
 
 } // namespace sss::detail

@@ -56,7 +56,7 @@ surface lighting(
     CHECK(ambient); CHECK(diffuse); CHECK(illuminance_all); CHECK(illuminance_category);
     CHECK(illuminance_excluded); CHECK(illuminance_axis_angle); CHECK(illuminance_hemisphere);
     CHECK(specular_vs_brdf); CHECK(specular_closed_form); CHECK(phong);
-    CHECK(lightsource_unsupported); CHECK(raytraced_without_occluders);
+    CHECK(lightsource); CHECK(illuminance_light_option); CHECK(raytraced_without_occluders);
     CHECK(depth_map_shadow_unsupported); CHECK(trace_all_miss);
     float rough = 0.2; float size = 10;)
 {
@@ -134,10 +134,22 @@ surface lighting(
     }
     check_phong = cnear(phong(Nf, V, size), phongsum, 1e-5);
 
-    /* message passing is not supported: 0, the variable untouched */
-    float got = -3, ret = 7;
-    illuminance("key", P) { ret = lightsource("intensity", got); }
-    check_lightsource_unsupported = near(ret, 0, 0) + near(got, -3, 0);
+    /* message passing: lightsource() inside illuminance reads the current
+       light's parameter (the key light's intensity 2); outside, or for a
+       parameter the light does not have, 0 and the variable untouched */
+    float got = -3, ret = 7, none = -4, ret_none = 7;
+    illuminance("key", P) {
+        ret = lightsource("intensity", got);
+        ret_none = lightsource("nosuch", none);
+    }
+    float outside = -5;
+    float ret_outside = lightsource("intensity", outside);
+    check_lightsource = near(ret, 1, 0) + near(got, 2, 0) + near(ret_none, 0, 0)
+        + near(none, -4, 0) + near(ret_outside, 0, 0) + near(outside, -5, 0);
+    /* illuminance's "light:NAME" option receives it each iteration */
+    float recv = -1;
+    illuminance("key", P, "light:intensity", recv, "lightcache", "reuse") { }
+    check_illuminance_light_option = near(recv, 2, 0);
 
     /* no occluders bound: nothing is shadowed or occluded */
     check_raytraced_without_occluders = near(shadow("raytrace", P), 0, 0)

@@ -56,7 +56,8 @@ surface queries(
         + near(rayinfo("direction", dir), 1, 0) + near(length(dir - normalize(I)), 0, 1e-6)
         + near(rayinfo("length", rlen), 1, 0) + near(rlen, length(I), 1e-5)
         + near(rayinfo("nosuch", dummy), 0, 0) + near(dummy, 7, 0);
-    /* documented: message passing is not supported: 0, the variable untouched */
+    /* documented: a surface shader cannot query surface(), its displacement
+       shader's values or an atmosphere: 0, the variable untouched */
     float f = 1;
     color c = 2;
     point p = 3;
@@ -67,7 +68,9 @@ surface queries(
     float got = surface("Kd", f) + surface("Cs", c) + surface("P", p) + surface("v", v)
         + surface("n", n) + surface("s", s) + surface("m", m)
         + displacement("amp", f) + displacement("c", c) + displacement("p", p)
-        + displacement("v", v) + displacement("n", n) + displacement("s", s);
+        + displacement("v", v) + displacement("n", n) + displacement("s", s)
+        + displacement("m", m) + atmosphere("f", f) + atmosphere("c", c)
+        + atmosphere("p", p) + atmosphere("s", s) + atmosphere("m", m);
     check_message_passing_unsupported = near(got, 0, 0) + near(f, 1, 0) + cnear(c, color 2, 0)
         + pnear(p, point 3, 0) + pnear(v, vector 4, 0) + pnear(n, normal 5, 0) + TRUTH(s == "s")
         + mnear(m, matrix 6, 0);
