@@ -104,6 +104,11 @@ primitive points 0.042 0.047 'Points "P" [-1 0 0 0 0.5 0 1 0 0] "constantwidth" 
 primitive curves 0.04 0.06 'Basis "catmull-rom" 1 "catmull-rom" 1' \
     'Curves "cubic" [6] "nonperiodic" "P" [-1.5 0 0 -1.3 0 0 -0.5 0.3 0 0.5 -0.3 0 1.3 0 0 1.5 0 0] "constantwidth" 0.3' \
     'Curves "linear" [3] "periodic" "P" [0 -1 0 0.5 -1 0 0.2 -0.5 0] "width" [0.05 0.05 0.05] "Cs" [1 0 0 0 1 0 0 0 1]'
+# A NuPatch (a 2 x 2 bilinear square) with a round hole of radius 0.25 in
+# (u, v): (4 - pi / 4) of 19.05.
+primitive nupatch 0.165 0.172 \
+    'TrimCurve [1] [3] [0 0 0 0.25 0.25 0.5 0.5 0.75 0.75 1 1 1] [0] [1] [9] [0.75 0.530330086 0.5 0.176776695 0.25 0.176776695 0.5 0.530330086 0.75] [0.5 0.530330086 0.75 0.530330086 0.5 0.176776695 0.25 0.176776695 0.5] [1 0.707106781 1 0.707106781 1 0.707106781 1 0.707106781 1]' \
+    'NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 "P" [-1 -1 0 1 -1 0 -1 1 0 1 1 0]'
 # ptbake bakes points and curves like any surface.
 cat >bake_points.rib <<'RIB'
 WorldBegin

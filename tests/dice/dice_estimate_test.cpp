@@ -55,6 +55,8 @@ const std::vector<std::string> kBodies = {
     "Points \"P\" [0 0 0 1 0 0 0 1 0] \"width\" [0.5 0.2 0.3]",
     "Curves \"cubic\" [4 7] \"nonperiodic\" \"P\" [0 0 0 1 1 0 2 0 0 3 1 0 "
     "0 1 1 1 2 1 2 1 1 3 2 1 4 1 1 5 2 1 6 1 1] \"constantwidth\" 0.1",
+    "NuPatch 4 3 [0 0 0 1 2 2 2] 0 2 3 2 [0 0 1 1 1] 0 1 \"P\" [0 0 0 1 0 1 2 0 0 3 0 1 "
+    "0 1 1 1 1 2 2 1 1 3 1 0 0 2 0 1 2 1 2 2 0 3 2 1]",
 };
 
 TEST(DiceEstimate, WithinAFactorOfTwoForEveryFamily) {

@@ -130,6 +130,18 @@ struct Basis {
 /// catmull-rom (also "catmullrom"), hermite, power. nullopt if unknown.
 std::optional<Basis> named_basis(std::string_view name);
 
+/// `TrimCurve` loops: non-uniform rational B-spline curves in the (u, v)
+/// parameter space of the NuPatches they trim, in RIB order (every array
+/// concatenated over the curves, as RiTrimCurve takes them).
+struct TrimCurves {
+    std::vector<int> ncurves;     ///< curves per loop
+    std::vector<int> order;       ///< per curve
+    std::vector<double> knot;     ///< n + order per curve
+    std::vector<double> min, max; ///< parameter range per curve
+    std::vector<int> n;           ///< control points per curve
+    std::vector<double> u, v, w;  ///< homogeneous control points
+};
+
 /// The attribute state of a primitive or light (shared by many primitives).
 struct Attributes {
     glm::dvec3 color{1.0};           ///< Color (Cs)
@@ -145,6 +157,8 @@ struct Attributes {
     std::map<std::string, ParamList> groups;
     Basis u_basis = *named_basis("bezier");
     Basis v_basis = *named_basis("bezier");
+    /// The current TrimCurve (none: untrimmed NuPatches).
+    std::shared_ptr<const TrimCurves> trim_curves;
     /// `Attribute "identifier" "name"` if given, else "".
     std::string name() const;
     /// Whether `Attribute "visibility" kind` ("camera", "transmission",
@@ -172,7 +186,8 @@ enum class PrimitiveKind {
     PatchMesh,
     Teapot,
     Points,
-    Curves
+    Curves,
+    NuPatch
 };
 /// The RIB request of a kind ("PointsPolygons", "Sphere", ...).
 const char* primitive_kind_name(PrimitiveKind kind);
@@ -197,8 +212,14 @@ struct Primitive {
     /// vertices per curve and vwrap whether they are periodic.
     std::string type;
     /// PatchMesh: vertex counts and wrap modes ("periodic" -> true).
+    /// NuPatch: control points in u and v.
     int nu = 0;
     int nv = 0;
+    /// NuPatch: order, knot vector (nu + uorder knots) and parameter range
+    /// in u and in v. Its "Pw" stays homogeneous.
+    int uorder = 0, vorder = 0;
+    std::vector<double> uknot, vknot;
+    double umin = 0.0, umax = 1.0, vmin = 0.0, vmax = 1.0;
     bool uwrap = false;
     bool vwrap = false;
     /// SubdivisionMesh tags: names, nargs (2 per tag: ints, floats), intargs, floatargs.

@@ -56,6 +56,8 @@ DicedSurface dispatch(const Primitive& prim, const DiceControl& control,
         return detail::dice_points(prim, control, estimate);
     case PrimitiveKind::Curves:
         return detail::dice_curves(prim, control, estimate);
+    case PrimitiveKind::NuPatch:
+        return detail::dice_nupatch(prim, control, estimate);
     }
     throw ValueError(prim.source + ": unknown primitive kind");
 }

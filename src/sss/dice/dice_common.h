@@ -88,6 +88,9 @@ DicedSurface dice_points(const Primitive& prim, const DiceControl& control,
 /// Curves "linear" / "cubic" (dice_curves.cpp).
 DicedSurface dice_curves(const Primitive& prim, const DiceControl& control,
                          DiceEstimate* estimate = nullptr);
+/// NuPatch, trimmed by the current TrimCurve (dice_nurbs.cpp).
+DicedSurface dice_nupatch(const Primitive& prim, const DiceControl& control,
+                          DiceEstimate* estimate = nullptr);
 /// The matrix of a spline basis in our column-vector layout; a
 /// default-constructed Basis stands for Bezier, the RI default
 /// (dice_patch.cpp).

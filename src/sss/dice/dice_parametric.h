@@ -80,12 +80,13 @@ private:
 // Primitive variables (Cs, N) over one face
 
 /// Cs or N over one face: absent, constant, bilinear over the four corners
-/// (varying class) or interpolated like P (vertex class of bicubic patches).
+/// (varying class) or interpolated like P (vertex class of bicubic patches
+/// and NuPatches: a Surface over the values).
 struct FaceValues {
     enum class Mode { None, Constant, Bilinear, Spline };
     Mode mode = Mode::None;
     std::array<dvec3, 4> corners{}; ///< Constant uses corners[0]
-    std::optional<BicubicSurface> spline;
+    std::shared_ptr<const Surface> spline;
 
     bool present() const { return mode != Mode::None; }
 

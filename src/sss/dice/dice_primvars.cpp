@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -102,7 +103,7 @@ FaceValues PrimVar::face(const FaceIndex& at, const glm::dmat4& u_basis,
             cp[k] = values[per_face ? n * at.uniform + k : at.vertex[k]];
         if (at.bicubic) {
             fv.mode = FaceValues::Mode::Spline;
-            fv.spline.emplace(cp, u_basis, v_basis);
+            fv.spline = std::make_shared<BicubicSurface>(cp, u_basis, v_basis);
         } else {
             fv.mode = FaceValues::Mode::Bilinear;
             std::copy(cp.begin(), cp.begin() + 4, fv.corners.begin());

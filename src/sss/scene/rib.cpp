@@ -43,7 +43,7 @@ bool ignored(std::string_view name) {
 bool unsupported(std::string_view name) {
     static const NameSet names = name_set(
         "Atmosphere Interior Exterior Deformation Detail DetailRange "
-        "Blobby NuPatch TrimCurve HierarchicalSubdivisionMesh "
+        "Blobby HierarchicalSubdivisionMesh "
         "ClippingPlane IfBegin ElseIf Else IfEnd MakeTexture MakeShadow MakeBump "
         "MakeLatLongEnvironment MakeCubeFaceEnvironment MakeBrickMap System Resource "
         "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
@@ -194,6 +194,8 @@ const Reader::HandlerTable& Reader::handlers() {
         {"Geometry", &Reader::do_geometry},
         {"Points", &Reader::do_points},
         {"Curves", &Reader::do_curves},
+        {"NuPatch", &Reader::do_nupatch},
+        {"TrimCurve", &Reader::do_trim_curve},
     };
     return table;
 }

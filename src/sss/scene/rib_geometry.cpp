@@ -425,6 +425,119 @@ void Reader::do_curves(const Statement& s) {
     add_primitive(s, std::move(p));
 }
 
+namespace {
+
+/// A NuPatch or TrimCurve knot vector: n + order non-decreasing numbers,
+/// with the range [min, max] inside the curve's domain
+/// [knot[order - 1], knot[n]].
+void check_knots(const Statement& s, const std::string& what, const double* knot, int n,
+                 int order, double min, double max) {
+    for (int k = 1; k < n + order; ++k)
+        if (!(knot[k] >= knot[k - 1]))
+            fail(s, what + " must not decrease (knot " + std::to_string(k) + ")");
+    if (!(min < max) || min < knot[order - 1] || max > knot[n])
+        fail(s, what + ": the range [" + fmt(min) + ", " + fmt(max) +
+                    "] must be a non-empty part of [" + fmt(knot[order - 1]) + ", " +
+                    fmt(knot[n]) + "]");
+}
+
+/// One direction of a NuPatch: n, order, knots, min, max.
+void take_nurbs_dir(const Statement& s, std::size_t& i, const char* dir, int& n,
+                    int& order, std::vector<double>& knot, double& min, double& max) {
+    const std::string d = dir;
+    n = to_int(s, take_number(s, i), "n" + d);
+    order = to_int(s, take_number(s, i), d + "order");
+    knot = take_float_array(s, i, (d + "knot").c_str());
+    min = take_number(s, i);
+    max = take_number(s, i);
+    if (order < 1 || order > 16)
+        fail(s, d + "order must be 1 to 16, not " + std::to_string(order));
+    if (n < order)
+        fail(s, "n" + d + " (" + std::to_string(n) + ") must be at least " + d +
+                    "order (" + std::to_string(order) + ")");
+    if (knot.size() != static_cast<std::size_t>(n) + static_cast<std::size_t>(order))
+        fail(s, d + "knot has " + std::to_string(knot.size()) + " knots, expected n" + d +
+                    " + " + d + "order = " + std::to_string(n + order));
+    check_knots(s, d + "knot", knot.data(), n, order, min, max);
+}
+
+} // namespace
+
+void Reader::do_nupatch(const Statement& s) {
+    std::size_t i = 0;
+    Primitive p;
+    p.kind = PrimitiveKind::NuPatch;
+    take_nurbs_dir(s, i, "u", p.nu, p.uorder, p.uknot, p.umin, p.umax);
+    take_nurbs_dir(s, i, "v", p.nv, p.vorder, p.vknot, p.vmin, p.vmax);
+    p.params = take_params(s, i, false);
+    const std::size_t nvert =
+        static_cast<std::size_t>(p.nu) * static_cast<std::size_t>(p.nv);
+    check_vertices(s, nvert);
+    // A rational patch keeps "Pw": its weights enter the basis.
+    if (const Param* pw = p.params.find("Pw"); pw && !p.params.has("P")) {
+        if (pw->type != ParamType::HPoint || pw->array_size != 1)
+            fail(s, "\"Pw\" must be an hpoint");
+        if (pw->element_count() != nvert)
+            fail(s, "\"Pw\" has " + std::to_string(pw->element_count()) +
+                        " points, expected " + std::to_string(nvert));
+        for (std::size_t k = 3; k < pw->numbers.size(); k += 4)
+            if (!(pw->numbers[k] > 0.0))
+                fail(s, "\"Pw\" has a point with a weight w <= 0");
+    } else {
+        resolve_positions(s, p.params, nvert);
+    }
+    const std::size_t su = static_cast<std::size_t>(p.nu - p.uorder + 1);
+    const std::size_t sv = static_cast<std::size_t>(p.nv - p.vorder + 1);
+    check_counts(s, p.params,
+                 counts(su * sv, (su + 1) * (sv + 1), nvert, (su + 1) * (sv + 1)));
+    add_primitive(s, std::move(p));
+}
+
+void Reader::do_trim_curve(const Statement& s) {
+    std::size_t i = 0;
+    auto t = std::make_shared<TrimCurves>();
+    t->ncurves = take_ints(s, i, "ncurves", 1);
+    t->order = take_ints(s, i, "order", 2);
+    t->knot = take_float_array(s, i, "knot");
+    t->min = take_float_array(s, i, "min");
+    t->max = take_float_array(s, i, "max");
+    t->n = take_ints(s, i, "n", 2);
+    t->u = take_float_array(s, i, "u");
+    t->v = take_float_array(s, i, "v");
+    t->w = take_float_array(s, i, "w");
+    no_more_args(s, i);
+    const std::size_t curves = sum(t->ncurves);
+    for (const auto& [what, size] :
+         {std::pair<const char*, std::size_t>{"order", t->order.size()},
+          {"min", t->min.size()},
+          {"max", t->max.size()},
+          {"n", t->n.size()}})
+        if (size != curves)
+            fail(s, std::string(what) + " has " + std::to_string(size) +
+                        " values, the loops have " + std::to_string(curves) + " curves");
+    std::size_t knots = 0;
+    std::size_t points = 0;
+    for (std::size_t c = 0; c < curves; ++c) {
+        if (t->n[c] < t->order[c])
+            fail(s, "curve " + std::to_string(c) + ": n must be at least its order");
+        const std::size_t k = static_cast<std::size_t>(t->n[c] + t->order[c]);
+        if (knots + k > t->knot.size()) fail(s, "knot has too few knots for the curves");
+        check_knots(s, "knot of curve " + std::to_string(c), &t->knot[knots], t->n[c],
+                    t->order[c], t->min[c], t->max[c]);
+        knots += k;
+        points += static_cast<std::size_t>(t->n[c]);
+    }
+    if (knots != t->knot.size())
+        fail(s, "knot has " + std::to_string(t->knot.size()) +
+                    " knots, the curves need " + std::to_string(knots));
+    if (t->u.size() != points || t->v.size() != points || t->w.size() != points)
+        fail(s, "u, v and w need " + std::to_string(points) + " values each");
+    for (double w : t->w)
+        if (!(w > 0.0)) fail(s, "w must be > 0");
+    check_vertices(s, points);
+    attrs_mut().trim_curves = std::move(t);
+}
+
 void Reader::do_geometry(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "geometry name");

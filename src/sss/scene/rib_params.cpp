@@ -95,6 +95,7 @@ std::unordered_map<std::string, Decl> predeclared() {
     add("lightcolor specularcolor color background", T::Color, C::Uniform);
     add("from to", T::Point, C::Uniform);
     add("shadowname filename displaychannels texturename name shader texture archive "
+        "sense "
         "procedural display resource coordinatesystem compression",
         T::String, C::Uniform);
     add("gridsize eyesplits texturememory binary rasterorient camera diffuse specular "

@@ -221,6 +221,8 @@ private:
     void do_geometry(const Statement& s);
     void do_points(const Statement& s);
     void do_curves(const Statement& s);
+    void do_nupatch(const Statement& s);
+    void do_trim_curve(const Statement& s);
 
     // --- state -----------------------------------------------------------------
 
