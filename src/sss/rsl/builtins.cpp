@@ -108,7 +108,7 @@ constexpr BuiltinSignature kTable[] = {
     {"option", "f=sF"}, {"option", "f=sC"}, {"option", "f=sP"}, {"option", "f=sS"},
     {"option", "f=s[F]"}, {"option", "f=sM"},
     {"rendererinfo", "f=sF"}, {"rendererinfo", "f=sS"}, {"rendererinfo", "f=s[F]"},
-    {"rayinfo", "f=sF"}, {"rayinfo", "f=sS"}, {"rayinfo", "f=sP"}, {"rayinfo", "f=sV"},
+    {"raylevel", "f="}, {"rayinfo", "f=sF"}, {"rayinfo", "f=sS"}, {"rayinfo", "f=sP"}, {"rayinfo", "f=sV"},
     // (message passing: the values differ per point, the other shader's)
     {"surface", "f=sF", V}, {"surface", "f=sC", V}, {"surface", "f=sP", V},
     {"surface", "f=sV", V}, {"surface", "f=sN", V}, {"surface", "f=sS", V},

@@ -82,13 +82,19 @@ Val Generator::gen_index(const Expr& e) {
     Val idx = value(*e.args[0]);
     if (!v || !idx.ok()) return {};
     const TypeSpec at = type(v->sym);
-    if (!at.is_array()) {
+    const bool component = !at.is_array() && is_triple(at.type);
+    if (!at.is_array() && !component) {
         error(e.loc, "'" + e.text + "' is not an array");
         return {};
     }
     if (type(idx.sym) != TypeSpec{ShadingType::Float, 0}) {
         error(e.args[0]->loc, "an array index must be a float");
         return {};
+    }
+    if (component) { // PRMan: c[i] is comp(c, i)
+        int t = temp({ShadingType::Float, 0}, varying(v->sym) || varying(idx.sym));
+        emit("comp", {t, v->sym, idx.sym});
+        return {t};
     }
     int t = temp({at.type, 0}, varying(v->sym) || varying(idx.sym));
     emit("aref", {t, v->sym, idx.sym});
@@ -358,11 +364,12 @@ Val Generator::gen_assign(const Expr& e) {
         return {v.sym};
     }
     // a[i] = ...
-    if (!vt.is_array()) {
+    const bool component = !vt.is_array() && is_triple(vt.type); // c[i] = x: setcomp
+    if (!vt.is_array() && !component) {
         error(lhs.loc, "'" + lhs.text + "' is not an array");
         return {};
     }
-    const TypeSpec et{vt.type, 0};
+    const TypeSpec et{component ? ShadingType::Float : vt.type, 0};
     Val idx = value(*lhs.args[0]);
     if (idx.ok() && type(idx.sym) != TypeSpec{ShadingType::Float, 0}) {
         error(lhs.args[0]->loc, "an array index must be a float");
@@ -372,14 +379,17 @@ Val Generator::gen_assign(const Expr& e) {
     if (!idx.ok() || !r.ok()) return {};
     if (op != "=") {
         int cur = temp(et, varying(v.sym) || varying(idx.sym));
-        emit("aref", {cur, v.sym, idx.sym});
+        emit(component ? "comp" : "aref", {cur, v.sym, idx.sym});
         r = arith(op, {cur}, r, e.loc);
     }
     if (!r.ok() || !check_writable(v, lhs.text, lhs.loc)) return {};
     r = convert(r, et, e.loc);
     if (!r.ok()) return {};
     check_store(v.sym, varying(r.sym) || varying(idx.sym), e.loc);
-    emit("aassign", {v.sym, idx.sym, r.sym});
+    if (component)
+        emit("setcomp", {v.sym, idx.sym, r.sym});
+    else
+        emit("aassign", {v.sym, idx.sym, r.sym});
     return r;
 }
 

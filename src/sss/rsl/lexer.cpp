@@ -16,13 +16,14 @@ namespace sss::detail {
 
 namespace {
 
+// The shader kinds (surface, light, volume...) are not reserved: PRMan
+// reads them as kinds only where a shader is defined, and shaders name
+// variables `light` and call surface() and displacement().
 constexpr std::string_view kKeywords[] = {
-    "surface",     "displacement", "light",      "volume",  "imager", "transformation",
-    "float",       "color",        "point",      "vector",  "normal", "matrix",
-    "string",      "void",         "uniform",    "varying", "output", "extern",
-    "if",          "else",         "while",      "for",     "break",  "continue",
-    "return",      "illuminance",  "illuminate", "solar",   "gather", "texture",
-    "environment", "shadow",       "bump"};
+    "float", "color",   "point",   "vector",      "normal", "matrix",      "string",
+    "void",  "uniform", "varying", "output",      "extern", "if",          "else",
+    "while", "for",     "break",   "continue",    "return", "illuminance", "illuminate",
+    "solar", "gather",  "texture", "environment", "shadow", "bump"};
 
 bool reserved(std::string_view w) {
     return std::find(std::begin(kKeywords), std::end(kKeywords), w) !=

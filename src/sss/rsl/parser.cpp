@@ -151,7 +151,7 @@ private:
     // --- top level ------------------------------------------------------
     void top_level(SourceFile& out) {
         const Token& t = peek();
-        if (t.kind == TokKind::Keyword &&
+        if (t.kind == TokKind::Ident && peek(1).kind == TokKind::Ident &&
             (t.text == "surface" || t.text == "displacement" || t.text == "light" ||
              t.text == "volume" || t.text == "imager" || t.text == "transformation")) {
             shader(out, t);

@@ -512,6 +512,18 @@ void op_message(Frame& f, const BoundOp& b) {
     set_result(f, b, 0.0f);
 }
 
+/// raylevel(): PRMan's depth of the ray that reached the batch (0: camera).
+void op_raylevel(Frame& f, const BoundOp& b) {
+    const ShadingBatch* batch = f.ctx->batch;
+    set_result(f, b, batch ? static_cast<float>(batch->ray.depth) : 0.0f);
+}
+
+bool bind_raylevel(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 1 || !in.is_float(0)) return false;
+    b.fn = op_raylevel;
+    return true;
+}
+
 bool bind_query(const BindInfo& in, BoundOp& b, std::string&) {
     if (in.nargs() != 3 || !in.is_float(0) || !in.is_string(1)) return false;
     const std::string& n = in.op.name;
@@ -714,6 +726,7 @@ void register_texture(BinderTable& t) {
     t["option"] = bind_query;
     t["rendererinfo"] = bind_query;
     t["rayinfo"] = bind_query;
+    t["raylevel"] = bind_raylevel;
     t["displacement"] = bind_query;
     t["atmosphere"] = bind_query;
 }

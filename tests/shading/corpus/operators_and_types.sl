@@ -17,7 +17,8 @@ surface operators_and_types(
     CHECK(cast_hsv); CHECK(cast_matrix_space); CHECK(float_cast);
     CHECK(tuple_matrix); CHECK(arrays); CHECK(array_index_rounds_down);
     CHECK(array_param); CHECK(colour_array); CHECK(uniform_varying);
-    CHECK(globals); CHECK(if_non_relation);
+    CHECK(globals); CHECK(if_non_relation); CHECK(component_index);
+    CHECK(shader_kinds_are_names);
     float tab[4] = {10, 20, 30, 40};
     uniform float two = 2;)
 {
@@ -138,4 +139,14 @@ surface operators_and_types(
     float nz = 0;
     if (u + 1) nz = 1;
     check_if_non_relation = near(nz, 1, 0);
+    /* PRMan: c[i] is comp(c, i) on colours, points, vectors and normals */
+    color ci = color(1, 2, 3);
+    point pi3 = point(4, 5, 6);
+    ci[1] = pi3[2] + u;
+    ci[0] += 10;
+    check_component_index = cnear(ci, color(11, 6 + u, 3), 1e-6) + near(pi3[0], 4, 0);
+    /* shader kinds are keywords only where a shader is defined */
+    color light = color(1, 0.5, 0);
+    float volume = 2, imager = 3;
+    check_shader_kinds_are_names = near(comp(light, 1) * volume * imager, 3, 0);
 }

@@ -55,7 +55,8 @@ surface queries(
         + near(rayinfo("origin", org), 1, 0) + near(length(org - (P - I)), 0, 1e-6)
         + near(rayinfo("direction", dir), 1, 0) + near(length(dir - normalize(I)), 0, 1e-6)
         + near(rayinfo("length", rlen), 1, 0) + near(rlen, length(I), 1e-5)
-        + near(rayinfo("nosuch", dummy), 0, 0) + near(dummy, 7, 0);
+        + near(rayinfo("nosuch", dummy), 0, 0) + near(dummy, 7, 0)
+        + near(raylevel(), 0, 0);
     /* documented: a surface shader cannot query surface(), its displacement
        shader's values or an atmosphere: 0, the variable untouched */
     float f = 1;
