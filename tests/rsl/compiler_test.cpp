@@ -778,3 +778,54 @@ TEST(RslCompile, RayinfoOfTheBatchIsUniformOfTheRayVarying) {
         "surface s() { uniform float l = 0; float x = rayinfo(\"length\", l); Ci = l; }");
     EXPECT_TRUE(sss::test::has_error(ds, "varying value to uniform"));
 }
+
+// What PRMan's compiler accepts from old shader libraries.
+TEST(RslCompiler, PrmanLenienceOfOldLibraries) {
+    // A storage class on a function's result; a uniform result stays uniform
+    // inside illuminance (a varying loop).
+    const CompileResult r = sss::test::compile_raw(R"(
+uniform float next(uniform float x) { return x + 1; }
+surface s(float seed = 3;) {
+    uniform float count = 0;
+    varying color light = 0;
+    illuminance(P) {
+        uniform float once = next(seed);
+        extern vector L;
+        count += once;
+        light += Cl * normalize(L).N;
+    }
+    Ci = light * count;
+}
+)");
+    ASSERT_EQ(r.shaders.size(), 1u);
+    EXPECT_FALSE(sym(r.shaders[0], "count").varying);
+    // extern L where L does not exist (the function's top), used where it
+    // does; lightsource() filling a uniform variable; Ps in a surface shader
+    // is P, with a warning.
+    const CompileResult q = sss::test::compile_raw(R"(
+color rim(normal Nn) {
+    extern vector L;
+    extern color Cl;
+    color c = 0;
+    uniform float flag = 0;
+    illuminance(P, Nn, PI / 2) {
+        if (lightsource("__rim", flag) == 0) flag = 0;
+        c += flag * Cl * max(0, normalize(L).Nn);
+    }
+    return c;
+}
+surface s() { Ci = rim(normalize(N)) + color(length(Ps - P)); }
+)");
+    ASSERT_EQ(q.shaders.size(), 1u);
+    ASSERT_EQ(q.warnings.size(), 1u);
+    EXPECT_NE(q.warnings[0].message.find("'Ps' is a light shader variable"),
+              std::string::npos);
+    // extern L used outside illuminance is still an error, where it is used.
+    EXPECT_TRUE(has_error(compile_errors(R"(
+surface s() {
+    extern vector L;
+    Ci = color(length(L));
+}
+)"),
+                          "'L' exists only inside an illuminance statement"));
+}

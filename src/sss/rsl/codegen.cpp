@@ -203,6 +203,14 @@ const Var* Generator::lookup(const std::string& name, SrcLoc at, bool report) {
     // PRMan's Ns in a light shader is the normal of the surface being lit,
     // which is what N holds there.
     if (name == "Ns" && m_kind_bit == kL) return lookup("N", at, report);
+    // Old shaders (The RenderMan Companion's) read Ps, the light shaders'
+    // surface point, in surface shaders: there it is P.
+    if (name == "Ps" && m_kind_bit == kS && !shadowed(name)) {
+        if (m_warned_names.insert(name).second)
+            m_d.warning(at,
+                        "'Ps' is a light shader variable; P is used in a surface shader");
+        return lookup("P", at, report);
+    }
     if (find_global(name)) {
         if (const Var* g = global(name, at)) return g;
         if (find_global(name)->read & m_kind_bit) return nullptr; // reported

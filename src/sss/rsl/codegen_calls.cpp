@@ -291,10 +291,15 @@ Val Generator::builtin_call(const Proto& p, const Match& m, std::vector<ArgInfo>
         all.push_back(result);
         writes |= 1;
     }
+    // PRMan lets message passing fill a uniform variable (a light's or
+    // surface's parameter is one value for the batch, or taken at the
+    // first running point).
+    const bool message = name == "lightsource" || name == "surface" ||
+                         name == "displacement" || name == "atmosphere";
     for (std::size_t i = 0; i < syms.size(); ++i) {
         if (out[i]) {
             writes |= uint64_t(1) << all.size();
-            check_store(syms[i], call_varying, args[i].expr->loc);
+            check_store(syms[i], call_varying && !message, args[i].expr->loc);
         }
         all.push_back(syms[i]);
     }
@@ -417,6 +422,8 @@ Val Generator::inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args,
         m_auto.insert(ctx.result);
     }
     ctx.saved_loop_depth = m_loop_depth;
+    ctx.entry_varying_cond = m_varying_cond;
+    ctx.entry_region = m_regions.size();
     m_loop_depth = 0;
     m_funcs.push_back(ctx);
     m_inline.push_back(&f);

@@ -108,6 +108,10 @@ struct FuncCtx {
     bool result_varying = false;
     int saved_loop_depth = 0;
     int instance = 0; ///< names this inlining's locals
+    /// The varying conditions and regions around the call: a return is
+    /// varying only under conditions of the function's own.
+    int entry_varying_cond = 0;
+    std::size_t entry_region = 0;
 };
 
 /// A call argument: generated, or a bare tuple generated once the callee's
@@ -184,6 +188,9 @@ private:
     // Under a varying condition, or after a varying return in this function
     // (or the body): only some points run.
     bool masked() const;
+    /// masked() counting only the conditions and exits inside the function
+    /// being inlined: what makes its result or its exit varying.
+    bool masked_in_function() const;
 
     // A loop left by some points only runs its next iterations masked:
     // whatever it assigns is varying.
@@ -327,6 +334,7 @@ private:
     std::vector<const FuncDef*> m_inline;
     int m_ntemp = 0, m_nconst = 0, m_instances = 0;
     int m_varying_cond = 0;
+    std::set<std::string> m_warned_names; ///< lenient names already warned about
     int m_loop_depth = 0;
     int m_in_illuminance = 0;
     int m_in_light_loop = 0;

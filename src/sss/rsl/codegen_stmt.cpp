@@ -69,6 +69,17 @@ void Generator::declaration(const VarDecl& d) {
             continue;
         }
         if (d.is_extern) {
+            // A global that exists only inside illuminance (L, Cl...) may be
+            // declared anywhere in a function and is checked where it is
+            // used, as PRMan does: the name keeps resolving to the global.
+            const GlobalDef* g = find_global(n.name);
+            if (g && (g->in_loop & m_kind_bit) && !shadowed(n.name)) {
+                if (g->type != d.type)
+                    error(n.loc, "extern '" + n.name + "' is declared " +
+                                     shading_type_name(d.type) + " but is " +
+                                     shading_type_name(g->type));
+                continue;
+            }
             const Var* v = lookup_extern(n.name, n.loc);
             if (!v) {
                 error(n.loc, "extern '" + n.name +
@@ -225,11 +236,12 @@ void Generator::return_statement(const Stmt& s) {
         const TypeSpec rt{ctx.def->result, 0};
         Val v = convert(value(*s.expr, &rt), rt, s.expr->loc);
         if (v.ok()) {
-            if (varying(v.sym) || masked()) m_funcs.back().result_varying = true;
+            if (varying(v.sym) || masked_in_function())
+                m_funcs.back().result_varying = true;
             emit("assign", {m_funcs.back().result, v.sym});
         }
     }
-    if (masked())
+    if (masked_in_function())
         for (auto it = m_regions.rbegin(); it != m_regions.rend(); ++it) {
             it->varying_exit = true;
             if (it->kind == Region::Function) break;

@@ -77,6 +77,14 @@ bool Generator::masked() const {
     return false;
 }
 
+bool Generator::masked_in_function() const {
+    const FuncCtx& ctx = m_funcs.back();
+    if (m_varying_cond > ctx.entry_varying_cond) return true;
+    for (std::size_t i = ctx.entry_region; i < m_regions.size(); ++i)
+        if (m_regions[i].kind != Region::Loop && m_regions[i].varying_exit) return true;
+    return false;
+}
+
 void Generator::pop_region() {
     Region r = std::move(m_regions.back());
     m_regions.pop_back();

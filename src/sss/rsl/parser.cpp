@@ -157,7 +157,8 @@ private:
             shader(out, t);
             return;
         }
-        if (at_type() || (t.kind == TokKind::Ident && is("(", 1))) {
+        if (at_type() || at_storage_function() ||
+            (t.kind == TokKind::Ident && is("(", 1))) {
             out.functions.push_back(function());
             return;
         }
@@ -194,9 +195,17 @@ private:
         out.shaders.push_back(std::move(def));
     }
 
+    /// At `uniform|varying type name (`: a function whose result has a
+    /// storage class, which PRMan accepts (and which changes nothing here).
+    bool at_storage_function() const {
+        return (is("uniform") || is("varying")) && peek(1).kind == TokKind::Keyword &&
+               is_type_word(peek(1).text) && peek(2).kind == TokKind::Ident && is("(", 3);
+    }
+
     std::shared_ptr<FuncDef> function() {
         auto f = std::make_shared<FuncDef>();
         f->loc = peek().loc;
+        if (at_storage_function()) ++m_pos;
         if (at_type()) f->result = type_of(take().text);
         f->name = ident("a function name");
         expect("(", "after the function name");
@@ -461,7 +470,7 @@ private:
             if (w == "extern" || w == "uniform" || w == "varying" || w == "output" ||
                 (is_type_word(w) &&
                  (peek(1).kind == TokKind::Ident || peek(1).kind == TokKind::String))) {
-                if (is_type_word(w) && at_function_def()) {
+                if ((is_type_word(w) && at_function_def()) || at_storage_function()) {
                     s->kind = StmtKind::Func;
                     s->func = function();
                     return s;

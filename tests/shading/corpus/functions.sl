@@ -50,7 +50,7 @@ surface functions(
     CHECK(results); CHECK(output_params); CHECK(array_params); CHECK(overload_args);
     CHECK(overload_result); CHECK(void_return_mask); CHECK(single_return_mask);
     CHECK(calls_calls); CHECK(nested); CHECK(extern_local); CHECK(extern_param);
-    CHECK(extern_global); CHECK(extern_write); CHECK(by_reference);
+    CHECK(extern_global); CHECK(extern_write); CHECK(by_reference); CHECK(uniform_result_under_mask);
     float Kd = 0.25;)
 {
     check_results = near(sq(3), 9, 0) + cnear(tint(color(1, 2, 3), 2), color(2, 4, 6), 0)
@@ -116,4 +116,18 @@ surface functions(
     twicep(same);
     twicep(same);
     check_by_reference = near(same, 4, 0);
+    /* PRMan: a function may declare its result uniform, and a uniform result
+       stays uniform when the call runs under a varying condition */
+    uniform float calls = 0;
+    uniform float next() {
+        extern uniform float calls;
+        calls += 1;
+        return calls * 10;
+    }
+    float got = 0;
+    if (u >= 0) {
+        uniform float once = next();
+        got = once;
+    }
+    check_uniform_result_under_mask = near(got, 10, 0) + near(calls, 1, 0);
 }
