@@ -109,6 +109,35 @@ primitive curves 0.04 0.06 'Basis "catmull-rom" 1 "catmull-rom" 1' \
 primitive nupatch 0.165 0.172 \
     'TrimCurve [1] [3] [0 0 0 0.25 0.25 0.5 0.5 0.75 0.75 1 1 1] [0] [1] [9] [0.75 0.530330086 0.5 0.176776695 0.25 0.176776695 0.5 0.530330086 0.75] [0.5 0.530330086 0.75 0.530330086 0.5 0.176776695 0.25 0.176776695 0.5] [1 0.707106781 1 0.707106781 1 0.707106781 1 0.707106781 1]' \
     'NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 "P" [-1 -1 0 1 -1 0 -1 1 0 1 1 0]'
+# Procedural "RunProgram": the program reads "detail data" lines and answers
+# RIB ending with the byte 0377; it is found along the procedural search path.
+mkdir -p procs
+cat >procs/spheres <<'SH'
+#!/bin/sh
+while read -r detail n; do
+    echo "# detail $detail" >>requests.txt
+    i=0
+    while [ "$i" -lt "$n" ]; do
+        echo "AttributeBegin Translate $((i - 1)) 0 0 Sphere 0.4 -0.4 0.4 360 AttributeEnd"
+        i=$((i + 1))
+    done
+    printf '\377'
+done
+SH
+chmod +x procs/spheres
+primitive runprogram 0.065 0.085 'Option "searchpath" "procedural" ["procs:&"]' \
+    'Procedural "RunProgram" ["spheres" "3"] [-1.4 1.4 -0.4 0.4 -0.4 0.4]'
+# Asked once, with the bound's raster area (64 x 48 image: about 600 pixels).
+python3 -c "
+import sys
+d = [float(l.split()[2]) for l in open('requests.txt')]
+sys.exit(0 if len(d) == 1 and 300 < d[0] < 1500 else 1)" || fail "RunProgram requests: $(cat requests.txt)"
+printf '#!/bin/sh\nexit 3\n' >procs/broken && chmod +x procs/broken
+{ header; echo 'Option "searchpath" "procedural" ["procs"]'
+  echo 'Procedural "RunProgram" ["broken" ""] [-1 1 -1 1 -1 1]'; echo 'WorldEnd'; } >broken.rib
+run "$bin/render" -o broken.exr broken.rib
+[[ "$rc" == 1 && "$err" == *"broken.rib:9: Procedural \"RunProgram\""*"exited with status 3"* ]] ||
+    fail "failing RunProgram: exit $rc, stderr: $err"
 # ptbake bakes points and curves like any surface.
 cat >bake_points.rib <<'RIB'
 WorldBegin

@@ -17,6 +17,7 @@
 #include "sss/util/byte_io.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
+#include "sss/util/subprocess.h"
 
 namespace sss::rib {
 
@@ -253,22 +254,79 @@ void Reader::do_read_archive(const Statement& s) {
 void Reader::do_procedural(const Statement& s) {
     std::size_t i = 0;
     std::string kind = take_string(s, i, "procedural name");
-    if (kind != "DelayedReadArchive") {
+    if (kind != "DelayedReadArchive" && kind != "RunProgram") {
         not_implemented("procedural " + kind, s,
                         "Procedural " + sss::quoted(kind) + " is not supported",
                         "skipped");
         return;
     }
-    auto files = take_string_array(s, i, "archive file name");
+    auto args = take_string_array(s, i, "procedural arguments");
     auto bound = take_float_array(s, i, "bound");
     no_more_args(s, i);
-    if (files.size() != 1) fail(s, "DelayedReadArchive needs exactly one file name");
+    if (kind == "DelayedReadArchive" && args.size() != 1)
+        fail(s, "DelayedReadArchive needs exactly one file name");
+    if (kind == "RunProgram" && args.size() != 2)
+        fail(s, "RunProgram needs two strings: the program and its data");
     if (bound.size() != 6) fail(s, "bound must have 6 numbers");
     // A procedural runs in a copy of the graphics state.
     push(s, Block::Attribute);
-    read_archive(s, files[0]);
+    if (kind == "RunProgram")
+        run_program(s, args[0], args[1], bound);
+    else
+        read_archive(s, args[0]);
     SavedState saved = pop(s, Block::Attribute);
     restore_all(saved);
+}
+
+double Reader::raster_area(const std::vector<double>& bound) const {
+    // The bound's corners in raster space; a bound reaching behind the eye
+    // (or without a camera) asks for all the detail there is.
+    const Camera& cam = m_scene.options.camera;
+    const Matrix4 to_ndc = cam.world_to_ndc() * m_ctm;
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec4 h = to_ndc * glm::dvec4(bound[c & 1], bound[2 + ((c >> 1) & 1)],
+                                                 bound[4 + ((c >> 2) & 1)], 1.0);
+        if (!(h.w > 0.0)) return 1e30;
+        for (int k = 0; k < 2; ++k) {
+            lo[k] = std::min(lo[k], h[k] / h.w);
+            hi[k] = std::max(hi[k], h[k] / h.w);
+        }
+    }
+    const double area = (hi[0] - lo[0]) * cam.xres * (hi[1] - lo[1]) * cam.yres;
+    return std::isfinite(area) ? std::min(area, 1e30) : 1e30;
+}
+
+void Reader::run_program(const Statement& s, const std::string& command,
+                         const std::string& data, const std::vector<double>& bound) {
+    std::vector<std::string> argv;
+    std::istringstream words(command);
+    for (std::string w; words >> w;) argv.push_back(w);
+    if (argv.empty()) fail(s, "RunProgram: no program named");
+    // The program is looked for along the procedural search path, then PATH.
+    if (argv[0].find('/') == std::string::npos)
+        if (auto found =
+                find_on_search_path(search_path(m_scene, "procedural"), argv[0])) {
+            argv[0] = found->find('/') == std::string::npos ? "./" + *found : *found;
+            if (std::find(m_scene.sources.begin(), m_scene.sources.end(), *found) ==
+                m_scene.sources.end()) {
+                m_scene.sources.push_back(*found);
+                m_scene.source_uses.push_back("Procedural \"RunProgram\" at " + where(s));
+            }
+        }
+    check_archive_depth(s, argv[0]);
+    // RiProcedural's protocol: a request "detail datablock" on a line; the
+    // RIB answer ends with the byte 0377.
+    char detail[64];
+    std::snprintf(detail, sizeof detail, "%.9g ", raster_area(bound));
+    const std::string answer =
+        run_filter(argv, detail + data + "\n", 0377, FilterLimits{},
+                   where(s) + ": Procedural \"RunProgram\"");
+    check_memory(answer.size(), "reading the answer of " + argv[0], "");
+    ++m_depth;
+    run_text(answer, std::make_shared<const std::string>(argv[0] + " (RunProgram at " +
+                                                         where(s) + ")"));
+    --m_depth;
 }
 
 void Reader::add_obj(const std::string& text, const std::string& path) {

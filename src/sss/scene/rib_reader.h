@@ -120,6 +120,12 @@ private:
     void do_archive_end(const Statement& s);
     void do_read_archive(const Statement& s);
     void do_procedural(const Statement& s);
+    /// Procedural "RunProgram": runs the program and reads the RIB it answers.
+    void run_program(const Statement& s, const std::string& command,
+                     const std::string& data, const std::vector<double>& bound);
+    /// The raster area a bound (current object space) covers: the detail
+    /// a procedural is asked for.
+    double raster_area(const std::vector<double>& bound) const;
 
     // --- rib_state.cpp: graphics state, blocks and transforms -----------------
 
