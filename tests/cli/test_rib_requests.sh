@@ -153,6 +153,38 @@ area="$(sed -n 's/.*wrote points.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")
 python3 -c "import sys, math; a = float('$area' or 'nan'); sys.exit(0 if abs(a - (2 * math.pi * 0.0625 + 0.4)) < 0.01 else 1)" ||
     fail "points.ptc: total area $area, expected $(python3 -c 'import math; print(2 * math.pi * 0.0625 + 0.4)')"
 
+# --- MakeTexture and MakeLatLongEnvironment -------------------------------------
+oiiotool --pattern checker:width=8:height=8:color1=1,0,0:color2=0,0,1 64x64 3 -d uint8 -o checker.png
+oiiotool --pattern constant:color=0.2,0.4,0.8 64x32 3 -d half -o sky.exr
+cat >make.rib <<'RIB'
+MakeTexture "checker.png" "checker.tx" "periodic" "clamp" "gaussian" 2 2
+MakeLatLongEnvironment "sky.exr" "sky.tx" "box" 1 1
+Format 64 48 1
+Projection "perspective" "fov" 35
+Translate 0 0 6
+WorldBegin
+  LightSource "ambientlight" 1 "intensity" 1
+  Surface "paintedplastic" "texturename" "checker.tx" "Ka" 1 "Kd" 0 "Ks" 0
+  Sphere 1 -1 1 360
+WorldEnd
+RIB
+render_clean -o make.exr make.rib
+info="$(oiiotool --info -v checker.tx 2>&1)"
+[[ "$info" == *"MIP-map levels"* && "$info" == *"wrapmodes: \"periodic,clamp\""* ]] ||
+    fail "checker.tx is not a MIP-mapped texture with the wrap modes: $info"
+[[ "$(oiiotool --info -v sky.tx 2>&1)" == *'textureformat: "LatLong Environment"'* ]] ||
+    fail "sky.tx is not a lat-long environment: $(oiiotool --info -v sky.tx 2>&1)"
+# The sphere shows the checker's red and blue (ambient light 1, Ka 1).
+red="$(oiiotool make.exr --ch R --printstats | sed -n 's/.*Stats Max: *\([^ ]*\).*/\1/p')"
+blue="$(oiiotool make.exr --ch B --printstats | sed -n 's/.*Stats Max: *\([^ ]*\).*/\1/p')"
+python3 -c "import sys; sys.exit(0 if float('$red') > 0.5 and float('$blue') > 0.5 else 1)" ||
+    fail "make.exr: red max $red, blue max $blue"
+# A second run finds the textures newer than the pictures and keeps them.
+before="$(stat -c %Y.%s checker.tx)"
+sleep 1
+render_clean -o make.exr make.rib
+[[ "$(stat -c %Y.%s checker.tx)" == "$before" ]] || fail "checker.tx was made again"
+
 # --- not implemented: an error by default, -lenient: one warning --------------
 { header; echo '  MotionBegin [0 1]'; echo '    Translate 0 0 0'; echo '    Translate 0 1 0';
   echo '  MotionEnd'; echo '  Sphere 1 -1 1 360'; echo '  Frobnicate 3'; echo 'WorldEnd'; } >todo.rib

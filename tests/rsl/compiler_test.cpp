@@ -820,6 +820,11 @@ surface s() { Ci = rim(normalize(N)) + color(length(Ps - P)); }
     ASSERT_EQ(q.warnings.size(), 1u);
     EXPECT_NE(q.warnings[0].message.find("'Ps' is a light shader variable"),
               std::string::npos);
+    // Empty declarations in a parameter list, as macros of AOV lists leave.
+    EXPECT_EQ(
+        sss::test::compile_raw("surface s(; float a = 1;; float b = 2;;) { Ci = a + b; }")
+            .shaders.size(),
+        1u);
     // extern L used outside illuminance is still an error, where it is used.
     EXPECT_TRUE(has_error(compile_errors(R"(
 surface s() {

@@ -413,6 +413,18 @@ struct RenderOptions {
 };
 
 /// A whole scene (one frame).
+/// A texture-making request of the RIB (MakeTexture, MakeLatLongEnvironment),
+/// carried out before anything is shaded.
+struct MakeRequest {
+    std::string kind;   ///< the RIB request
+    std::string input;  ///< the picture, found along the texture search path
+    std::string output; ///< the texture, relative to the working folder
+    std::string swrap = "black", twrap = "black", filter = "box";
+    double swidth = 1.0, twidth = 1.0;
+    ParamList params;
+    std::string source; ///< "file.rib:3"
+};
+
 struct Scene {
     RenderOptions options;
     std::vector<Primitive> primitives;
@@ -428,6 +440,8 @@ struct Scene {
     /// then each ReadArchive / DelayedReadArchive file and OBJ mesh once, in
     /// first-read order. The inputs of `-newer 1`.
     std::vector<std::string> sources;
+    /// The Make* requests, in RIB order.
+    std::vector<MakeRequest> makes;
     /// How each of `sources` was named, for messages: "the scene file",
     /// "ReadArchive \"cube.obj\" at scene.rib:3".
     std::vector<std::string> source_uses;

@@ -182,9 +182,13 @@ private:
         else
             def.kind = ShaderKind::Volume;
         expect("(", "after the shader name");
+        while (accept(";")) {
+        } // empty declarations, as macros leave them
         while (!is(")")) {
             def.params.push_back(var_decl(/*shader_param=*/true));
             if (!accept(";")) break;
+            while (accept(";")) {
+            }
         }
         expect(")", "after the shader parameters");
         def.body = block();

@@ -44,8 +44,8 @@ bool unsupported(std::string_view name) {
     static const NameSet names = name_set(
         "Atmosphere Interior Exterior Deformation Detail DetailRange "
         "Blobby HierarchicalSubdivisionMesh "
-        "ClippingPlane IfBegin ElseIf Else IfEnd MakeTexture MakeShadow MakeBump "
-        "MakeLatLongEnvironment MakeCubeFaceEnvironment MakeBrickMap System Resource "
+        "ClippingPlane IfBegin ElseIf Else IfEnd MakeShadow MakeBump "
+        "MakeCubeFaceEnvironment MakeBrickMap System Resource "
         "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
         "SampleFilter Light Volume Imager Matte");
     return names.count(name) > 0;
@@ -196,6 +196,8 @@ const Reader::HandlerTable& Reader::handlers() {
         {"Curves", &Reader::do_curves},
         {"NuPatch", &Reader::do_nupatch},
         {"TrimCurve", &Reader::do_trim_curve},
+        {"MakeTexture", &Reader::do_make_texture},
+        {"MakeLatLongEnvironment", &Reader::do_make_texture},
     };
     return table;
 }

@@ -329,6 +329,28 @@ void Reader::run_program(const Statement& s, const std::string& command,
     --m_depth;
 }
 
+void Reader::do_make_texture(const Statement& s) {
+    std::size_t i = 0;
+    MakeRequest m;
+    m.kind = s.name;
+    m.input = take_string(s, i, "picture name");
+    m.output = take_string(s, i, "texture name");
+    if (s.name == "MakeTexture") {
+        m.swrap = take_string(s, i, "swrap");
+        m.twrap = take_string(s, i, "twrap");
+    }
+    m.filter = take_string(s, i, "filter");
+    m.swidth = take_number(s, i);
+    m.twidth = take_number(s, i);
+    m.params = take_params(s, i, false);
+    if (!(m.swidth > 0.0) || !(m.twidth > 0.0)) fail(s, "filter widths must be > 0");
+    if (m.output.empty()) fail(s, "no texture name");
+    if (auto found = find_on_search_path(search_path(m_scene, "texture"), m.input))
+        m.input = *found;
+    m.source = where(s);
+    m_scene.makes.push_back(std::move(m));
+}
+
 void Reader::add_obj(const std::string& text, const std::string& path) {
     std::vector<std::string> warnings;
     auto mesh = detail::import_obj(text, path, warnings);

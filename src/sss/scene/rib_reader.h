@@ -228,6 +228,7 @@ private:
     void do_points(const Statement& s);
     void do_curves(const Statement& s);
     void do_nupatch(const Statement& s);
+    void do_make_texture(const Statement& s);
     void do_trim_curve(const Statement& s);
 
     // --- state -----------------------------------------------------------------
