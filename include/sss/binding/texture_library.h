@@ -60,6 +60,21 @@ public:
     /// texture3d). Unreadable files are otherwise remembered as such.
     void invalidate(const std::string& file);
 
+    /// A texture to make (RenderMan's MakeTexture, MakeLatLongEnvironment).
+    struct Make {
+        std::string input;  ///< the picture (any format OpenImageIO reads)
+        std::string output; ///< the texture, written atomically
+        bool latlong = false;
+        std::string swrap = "black", twrap = "black"; ///< periodic, clamp, black, mirror
+        std::string filter = "box"; ///< OpenImageIO's filter names; "catmullrom" too
+    };
+    /// Makes a tiled, MIP-mapped texture with OpenImageIO's texture maker
+    /// (the plugin), unless the texture is already newer than its picture
+    /// (returns false then). IoError / ValueError naming `where` when the
+    /// picture cannot be read, a wrap mode or filter is unknown, or the
+    /// texture cannot be written.
+    bool make_texture(const Make& m, const std::string& where);
+
 private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;

@@ -10,7 +10,7 @@
 #include <map>
 #include <system_error>
 
-#include "sss/image/make_texture.h"
+#include "sss/binding/texture_library.h"
 #include "sss/rsl/builtins.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/messages.h"
@@ -129,17 +129,18 @@ std::vector<std::string> shader_search_path(const Scene& scene) {
 
 SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
     // The textures the RIB makes come before any shader looks one up.
-    for (const MakeRequest& m : scene.makes) {
-        TextureMake t;
-        t.kind = m.kind == "MakeLatLongEnvironment"
-                     ? TextureMake::Kind::LatLongEnvironment
-                     : TextureMake::Kind::Texture;
-        t.input = m.input;
-        t.output = m.output;
-        t.swrap = m.swrap;
-        t.twrap = m.twrap;
-        t.filter = m.filter;
-        make_texture(t, m.source + ": " + m.kind);
+    if (!scene.makes.empty()) {
+        TextureLibrary maker;
+        for (const MakeRequest& m : scene.makes) {
+            TextureLibrary::Make t;
+            t.latlong = m.kind == "MakeLatLongEnvironment";
+            t.input = m.input;
+            t.output = m.output;
+            t.swrap = m.swrap;
+            t.twrap = m.twrap;
+            t.filter = m.filter;
+            maker.make_texture(t, m.source + ": " + m.kind);
+        }
     }
     SceneShaders out;
     out.library = std::make_unique<ShaderLibrary>(shader_search_path(scene));

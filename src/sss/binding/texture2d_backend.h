@@ -32,6 +32,13 @@ public:
     virtual bool texture_info(const std::string& file, const std::string& key,
                               int expected_floats, float* numbers, std::string* text) = 0;
     virtual void invalidate(const std::string& file) = 0;
+    /// Makes a tiled, MIP-mapped TIFF texture (`latlong`: a lat-long
+    /// environment) of the picture `input` into `output`, with OpenImageIO's
+    /// wrap modes ("periodic,clamp") and resampling filter; false with
+    /// *error when the filter is unknown or the texture cannot be made.
+    virtual bool make_texture(const std::string& input, const std::string& output,
+                              bool latlong, const std::string& wrapmodes,
+                              const std::string& filter, std::string* error) = 0;
 };
 
 /// The plugin's entry point (extern "C", looked up by name).

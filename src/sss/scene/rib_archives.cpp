@@ -123,7 +123,7 @@ std::string read_all(detail::ByteSource& in) {
     if (auto bound = in.remaining_bound(); bound && !in.compressed())
         first = static_cast<std::size_t>(*bound) + 1;
     for (;;) {
-        if (text.size() - size < (1u << 16)) {
+        if (text.size() == size) {
             const std::size_t want = text.empty() ? first : 2 * text.size();
             check_memory(want, "reading " + in.path(),
                          "split the scene into smaller archives");
@@ -135,7 +135,7 @@ std::string read_all(detail::ByteSource& in) {
     }
     in.finish();
     text.resize(size);
-    text.shrink_to_fit();
+    if (text.capacity() > size + size / 4) text.shrink_to_fit(); // an inflated stream
     return text;
 }
 

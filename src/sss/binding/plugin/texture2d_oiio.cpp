@@ -12,8 +12,11 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <unordered_map>
 
+#include <OpenImageIO/filter.h>
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/texture.h>
 
 #include "texture2d_backend.h"
@@ -211,6 +214,9 @@ public:
     bool texture_info(const std::string& file, const std::string& key,
                       int expected_floats, float* numbers, std::string* text) override;
     void invalidate(const std::string& file) override;
+    bool make_texture(const std::string& input, const std::string& output, bool latlong,
+                      const std::string& wrapmodes, const std::string& filter,
+                      std::string* error) override;
 
 private:
     std::shared_ptr<TextureFile> open(const std::string& file);
@@ -508,6 +514,32 @@ void OiioTextures::invalidate(const std::string& file) {
         files.erase(file);
     }
     ts->invalidate(OIIO::ustring(file), true);
+}
+
+bool OiioTextures::make_texture(const std::string& input, const std::string& output,
+                                bool latlong, const std::string& wrapmodes,
+                                const std::string& filter, std::string* error) {
+    bool known = false;
+    for (int i = 0, n = OIIO::Filter2D::num_filters(); i < n; ++i) {
+        OIIO::FilterDesc d;
+        OIIO::Filter2D::get_filterdesc(i, &d);
+        known = known || filter == d.name;
+    }
+    if (!known) {
+        *error = "unknown filter \"" + filter + "\"";
+        return false;
+    }
+    OIIO::ImageSpec config;
+    config.attribute("wrapmodes", wrapmodes);
+    config.attribute("maketx:filtername", filter);
+    config.attribute("maketx:fileformatname", "tiff");
+    std::ostringstream log;
+    const auto mode =
+        latlong ? OIIO::ImageBufAlgo::MakeTxEnvLatl : OIIO::ImageBufAlgo::MakeTxTexture;
+    if (OIIO::ImageBufAlgo::make_texture(mode, input, output, config, &log)) return true;
+    *error = OIIO::geterror();
+    if (error->empty()) *error = log.str();
+    return false;
 }
 
 } // namespace
