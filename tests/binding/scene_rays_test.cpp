@@ -269,3 +269,49 @@ TEST(SceneRays, RunawayRayTreesStopAtTheBudget) {
     ASSERT_EQ(s.services->warnings.size(), 1u);
     EXPECT_NE(s.services->warnings[0].find("deeper rays miss"), std::string::npos);
 }
+
+namespace {
+/// Interior: Ci plus the segment's length in green; Exterior: Ci halved and
+/// Oi set to 0.25 (traced rays run them on the segment to the hit).
+const char* kInteriorSl = "volume inside() { Ci += color(0, length(I), 0); }";
+const char* kExteriorSl = "volume outside() { Ci *= 0.5; Oi = 0.25; }";
+const char* kVolumes =
+    "AttributeBegin\nTranslate 10 0 0\nExterior \"outside\"\nSurface \"hitcolor\"\n"
+    "Disk 0 0.5 360\nAttributeEnd\n"
+    "Color [0.2 0.4 0.6]\nInterior \"inside\"\nSurface \"hitcolor\"\nSphere 1 -1 1 360\n";
+} // namespace
+
+TEST(SceneRays, InteriorAndExteriorShadersRunOnTracedSegments) {
+    RayScene s("", kVolumes, {{"inside.sl", kInteriorSl}, {"outside.sl", kExteriorSl}});
+    ASSERT_TRUE(s.shaders.any_interior_exterior);
+    ASSERT_TRUE(s.shaders.exterior_of[0] && s.shaders.interior_of[1]);
+    // Leaving the disk (its Exterior) and reaching the sphere's front face:
+    // the segment ran outside, through the disk's exterior.
+    RayQuery out = query(RayKind::Specular, 1, {kHitRay}, {"Ci", "Oi"});
+    out.origin = &s.scene.primitives[0];
+    s.rays->trace(out);
+    ASSERT_EQ(out.hit[0], 1);
+    EXPECT_NEAR(out.values[0][0], 0.1f, 1e-6f);
+    EXPECT_NEAR(out.values[0][2], 0.3f, 1e-6f);
+    EXPECT_NEAR(out.values[1][0], 0.25f, 1e-6f);
+    // From the sphere's centre (a ray leaving its inside): the back face at
+    // distance 1, through the sphere's Interior.
+    RayQuery in = query(RayKind::Specular, 1,
+                        {ShadowRay{{0, 0, 0}, {0, 0, 1}, 0.0f, kInf}}, {"Ci", "Oi"});
+    in.origin = &s.scene.primitives[1];
+    s.rays->trace(in);
+    ASSERT_EQ(in.hit[0], 1);
+    EXPECT_NEAR(in.values[0][0], 0.2f, 1e-6f);
+    EXPECT_NEAR(in.values[0][1], 0.4f + 1.0f, 2e-3f); // the chord of the diced sphere
+    EXPECT_NEAR(in.values[1][0], 1.0f, 1e-6f);        // Oi untouched
+    // A ray whose origin is not a primitive (or one without an Exterior):
+    // the front-face hit runs no volume.
+    RayQuery none = query(RayKind::Specular, 1, {kHitRay});
+    s.rays->trace(none);
+    EXPECT_NEAR(none.values[0][0], 0.2f, 1e-6f);
+    // Queries that do not ask for Ci or Oi run no volume shader.
+    RayQuery marker = query(RayKind::Specular, 1, {kHitRay}, {"marker"});
+    marker.origin = &s.scene.primitives[0];
+    s.rays->trace(marker);
+    EXPECT_EQ(marker.values[0][0], 7.0f);
+}

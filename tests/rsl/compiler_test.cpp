@@ -614,8 +614,8 @@ TEST(RslErrors, MiscStatements) {
     EXPECT_TRUE(has_error(ds, "break outside a loop"));
     ds = compile_errors("surface s() { while (u > 0) { break 2; } }");
     EXPECT_TRUE(has_error(ds, "only 1 enclosing loop"));
-    ds = compile_errors("volume v() { Ci = 1; }");
-    EXPECT_TRUE(has_error(ds, "volume shaders are not supported"));
+    ds = compile_errors("transformation t() { P = P; }");
+    EXPECT_TRUE(has_error(ds, "transformation shaders are not supported"));
     ds = compile_errors("surface s() { gather(\"\", P, N, 1) { Ci = 1; } }");
     EXPECT_TRUE(has_error(ds, "gather takes (category, P, dir, angle, samples"));
     ds = compile_errors(
@@ -656,7 +656,7 @@ TEST(RslErrors, MiscStatements) {
     ds = compile_errors("surface s(float k) { }");
     EXPECT_TRUE(has_error(ds, "needs a default value"));
     ds = compile_errors("light l() { illuminance(P) { } }");
-    EXPECT_TRUE(has_error(ds, "only allowed in surface shaders"));
+    EXPECT_TRUE(has_error(ds, "illuminance is only allowed in surface and volume shaders"));
     ds = compile_errors("surface s() { illuminate(P) { } }");
     EXPECT_TRUE(has_error(ds, "only allowed in light shaders"));
     ds = compile_errors("surface s() { float x; float x; }");
@@ -834,3 +834,115 @@ surface s() {
 )"),
                           "'L' exists only inside an illuminance statement"));
 }
+
+namespace {
+
+using namespace sss;
+using sss::test::compile_errors;
+using sss::test::compile_one;
+using sss::test::count_ops;
+using sss::test::has_error;
+
+// Volume shaders (RISpec 12.4): P, I, E, ncomps, time, dtime readable, Ci and
+// Oi read and written, and lights through illuminance (L, Cl, Ol inside).
+TEST(RslShaderTypes, VolumeGlobalsAndIlluminance) {
+    const Program p = compile_one(R"(
+volume murk(float density = 0.5; color tint = 1;)
+{
+    float d = length(I) + length(E) + time + dtime + ncomps + xcomp(P);
+    color lit = 0;
+    illuminance(P) {
+        lit += Cl * (1 - Ol) * length(L);
+    }
+    Ci = mix(Ci, tint * lit, 1 - exp(-density * d));
+    Oi = Oi * 0.5;
+}
+)");
+    EXPECT_EQ(p.kind, ShaderKind::Volume);
+    EXPECT_STREQ(shader_kind_name(p.kind), "volume");
+    EXPECT_EQ(count_ops(p, "illuminance"), 1);
+    for (const char* g :
+         {"P", "I", "E", "Ci", "Oi", "time", "dtime", "ncomps", "L", "Cl", "Ol"}) {
+        const int i = p.find(g);
+        ASSERT_GE(i, 0) << g;
+        EXPECT_EQ(p.symbols[i].kind, SymbolKind::Global) << g;
+    }
+    EXPECT_EQ(p.symbols[p.find("Ci")].type.type, ShadingType::Color);
+    EXPECT_EQ(p.symbols[p.find("I")].type.type, ShadingType::Vector);
+}
+
+TEST(RslShaderTypes, VolumeErrors) {
+    auto ds = compile_errors("volume v() { Ci = Cs; }");
+    EXPECT_TRUE(has_error(ds, "'Cs' is not available in a volume shader"));
+    ds = compile_errors("volume v() { Ci = N; }");
+    EXPECT_TRUE(has_error(ds, "'N' is not available in a volume shader"));
+    ds = compile_errors("volume v() { float x = s; }");
+    EXPECT_TRUE(has_error(ds, "'s' is not available in a volume shader"));
+    ds = compile_errors("volume v() { P = 0; }");
+    EXPECT_TRUE(has_error(ds, "cannot assign to global variable 'P'"));
+    ds = compile_errors("volume v() { I = 0; }");
+    EXPECT_TRUE(has_error(ds, "cannot assign to global variable 'I'"));
+    ds = compile_errors("volume v() { Ci = Cl; }");
+    EXPECT_TRUE(has_error(ds, "'Cl' exists only inside an illuminance"));
+    ds = compile_errors("volume v() { illuminance(P) { Cl = 1; } }");
+    EXPECT_TRUE(has_error(ds, "cannot assign to global variable 'Cl'"));
+    ds = compile_errors("volume v() { float a = alpha; }");
+    EXPECT_TRUE(has_error(ds, "'alpha' is not available in a volume shader"));
+    ds = compile_errors("volume v() { illuminate(P) { Cl = 1; } }");
+    EXPECT_TRUE(has_error(ds, "illuminate is only allowed in light shaders"));
+}
+
+// Imager shaders (RISpec 12.5): Ci, Oi and alpha read and written, P (the
+// pixel's raster position), ncomps, time, dtime readable; no lights.
+TEST(RslShaderTypes, ImagerGlobals) {
+    const Program p = compile_one(R"(
+imager vignette(float strength = 0.5; float xres = 640, yres = 480;)
+{
+    float dx = xcomp(P) / xres - 0.5, dy = ycomp(P) / yres - 0.5;
+    float fall = 1 - strength * (dx * dx + dy * dy) + 0 * (zcomp(P) + time + dtime + ncomps);
+    Ci *= fall;
+    Oi = alpha;
+    alpha = clamp(alpha, 0, 1);
+}
+)");
+    EXPECT_EQ(p.kind, ShaderKind::Imager);
+    EXPECT_STREQ(shader_kind_name(p.kind), "imager");
+    const int a = p.find("alpha");
+    ASSERT_GE(a, 0);
+    EXPECT_EQ(p.symbols[a].kind, SymbolKind::Global);
+    EXPECT_EQ(p.symbols[a].type.type, ShadingType::Float);
+    EXPECT_TRUE(p.symbols[a].varying);
+    const int pp = p.find("P");
+    ASSERT_GE(pp, 0);
+    EXPECT_EQ(p.symbols[pp].type.type, ShadingType::Point);
+}
+
+TEST(RslShaderTypes, ImagerErrors) {
+    auto ds = compile_errors("imager i() { Ci = Cs; }");
+    EXPECT_TRUE(has_error(ds, "'Cs' is not available in an imager shader"));
+    ds = compile_errors("imager i() { Ci = N; }");
+    EXPECT_TRUE(has_error(ds, "'N' is not available"));
+    ds = compile_errors("imager i() { vector v = I; }");
+    EXPECT_TRUE(has_error(ds, "'I' is not available"));
+    ds = compile_errors("imager i() { P = 0; }");
+    EXPECT_TRUE(has_error(ds, "cannot assign to global variable 'P'"));
+    ds = compile_errors("imager i() { illuminance(P) { Ci += Cl; } }");
+    EXPECT_TRUE(
+        has_error(ds, "illuminance is only allowed in surface and volume shaders"));
+    ds = compile_errors("surface s() { alpha = 1; }");
+    EXPECT_TRUE(has_error(ds, "'alpha' is not available in a surface shader"));
+    // A local named alpha is still a local elsewhere.
+    const Program s = compile_one("surface s() { float alpha = 0.5; Ci = alpha; }");
+    EXPECT_EQ(s.symbols[s.find("alpha")].kind, SymbolKind::Local);
+}
+
+TEST(RslShaderTypes, TransformationShadersAreRefusedClearly) {
+    const auto ds = compile_errors("transformation t() { P = P; }");
+    ASSERT_FALSE(ds.empty());
+    EXPECT_TRUE(has_error(ds, "transformation shaders are not supported (PRMan does not "
+                              "run them either)"));
+    EXPECT_EQ(ds[0].line, 1);
+    EXPECT_EQ(ds[0].column, 1);
+}
+
+} // namespace

@@ -42,3 +42,24 @@ surface s(string a = "say \"hi\"\n\\";) { Ci = 1; }
 }
 
 } // namespace
+
+namespace {
+
+// sloinfo names volume and imager shaders by their type, as PRMan's does.
+TEST(SloInfo, VolumeAndImagerTypes) {
+    using namespace sss;
+    const Program v = sss::test::compile_one(
+        "volume fog(float distance = 1; color background = 0;) { Ci = background; }");
+    EXPECT_EQ(describe_shader(v), "volume \"fog\"\n"
+                                  "    \"distance\" \"parameter uniform float\"\n"
+                                  "\t\tDefault value: 1\n"
+                                  "    \"background\" \"parameter uniform color\"\n"
+                                  "\t\tDefault value: \"rgb\" [0 0 0]\n");
+    const Program i = sss::test::compile_one(
+        "imager background(color bgcolor = 1;) { Ci += (1 - alpha) * bgcolor; }");
+    EXPECT_EQ(describe_shader(i).rfind("imager \"background\"\n", 0), 0u);
+    EXPECT_NE(describe_shader_json(i, "background.slo").find("\"type\": \"imager\""),
+              std::string::npos);
+}
+
+} // namespace

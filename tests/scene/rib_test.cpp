@@ -1034,3 +1034,75 @@ TEST(RibArchives, ObjWithoutNormalsEverywhereAndObjErrors) {
         }
     }
 }
+
+// --- imager and volume shaders --------------------------------------------------
+
+namespace {
+
+TEST(RibShaders, ImagerAtmosphereInteriorExterior) {
+    const std::string text =
+        "Imager \"background\" \"color bgcolor\" [0.1 0.2 0.3]\n" // 1: camera space
+        "Translate 0 0 5\n"
+        "WorldBegin\n"
+        "Atmosphere \"fog\" \"float distance\" [4]\n" // 4
+        "AttributeBegin\n"
+        "Translate 1 0 0\n"
+        "Interior \"murk\" \"float density\" [2]\n" // 7
+        "Exterior \"depthcue\"\n"
+        "Sphere 1 -1 1 360\n"
+        "AttributeEnd\n"
+        "Atmosphere \"null\"\n"
+        "Sphere 1 -1 1 360\n"
+        "Atmosphere \"fog\"\n"
+        "Atmosphere \"\"\n"
+        "Sphere 1 -1 1 360\n"
+        "WorldEnd\n";
+    const sss::Scene scene = parse(text);
+    EXPECT_TRUE(scene.warnings.empty());
+    ASSERT_TRUE(scene.options.imager);
+    const sss::ShaderRef& imager = *scene.options.imager;
+    EXPECT_EQ(imager.name, "background");
+    EXPECT_EQ(imager.source, "test.rib:1");
+    const glm::dvec3 bg = imager.params.get_vec3("bgcolor", glm::dvec3(0.0));
+    EXPECT_DOUBLE_EQ(bg.y, 0.2);
+    // Given before WorldBegin: camera space, the camera 5 along +z.
+    expect_near(apply(imager.shader_to_world, {0, 0, 0}), {0, 0, -5});
+
+    ASSERT_EQ(scene.primitives.size(), 3u);
+    const sss::Attributes& a0 = *scene.primitives[0].attributes;
+    ASSERT_TRUE(a0.atmosphere && a0.interior && a0.exterior);
+    EXPECT_EQ(a0.atmosphere->name, "fog");
+    EXPECT_EQ(a0.atmosphere->source, "test.rib:4");
+    EXPECT_EQ(a0.atmosphere->params.get_float("distance", 0), 4.0);
+    EXPECT_EQ(a0.interior->name, "murk");
+    EXPECT_EQ(a0.interior->params.get_float("density", 0), 2.0);
+    expect_near(apply(a0.interior->shader_to_world, {0, 0, 0}), {1, 0, 0});
+    EXPECT_EQ(a0.exterior->name, "depthcue");
+    // AttributeEnd restores them; "null" and "" turn the atmosphere off.
+    const sss::Attributes& a1 = *scene.primitives[1].attributes;
+    EXPECT_FALSE(a1.atmosphere);
+    EXPECT_FALSE(a1.interior);
+    EXPECT_FALSE(a1.exterior);
+    EXPECT_FALSE(scene.primitives[2].attributes->atmosphere);
+}
+
+TEST(RibShaders, ImagerNullTurnsItOffAndInsideTheWorldIsIgnored) {
+    sss::Scene scene =
+        parse("Imager \"background\"\nImager \"null\"\nWorldBegin\nWorldEnd\n");
+    EXPECT_FALSE(scene.options.imager);
+    scene = parse("Imager \"background\"\nImager \"\"\nWorldBegin\nWorldEnd\n");
+    EXPECT_FALSE(scene.options.imager);
+    scene = parse("WorldBegin\nImager \"background\"\nWorldEnd\n");
+    EXPECT_FALSE(scene.options.imager);
+    ASSERT_EQ(scene.warnings.size(), 1u);
+    EXPECT_EQ(scene.warnings[0],
+              "test.rib:2: Imager inside WorldBegin/WorldEnd has no effect, ignored");
+    // Read strictly: no longer "not supported".
+    EXPECT_NO_THROW(parse("Imager \"background\"\nWorldBegin\nAtmosphere \"fog\"\n"
+                          "Interior \"fog\"\nExterior \"fog\"\nWorldEnd\n"));
+    expect_rib_error("Imager\n", {"test.rib:1: Imager"});
+    expect_rib_error("WorldBegin\nAtmosphere \"fog\" \"float distance\"\n",
+                     {"test.rib:2: Atmosphere"});
+}
+
+} // namespace

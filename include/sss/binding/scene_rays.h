@@ -25,6 +25,11 @@
 ///    "specularhitmode"` "primitive" skip the shader (Ci = Cs, Oi = Os).
 ///    bake3d calls of hit shaders are dropped (they would bake points from
 ///    ray hits).
+///  - Volumes: a query that asks for Ci or Oi gets them through the
+///    Interior shader of the object whose back face a ray hit (the ray
+///    travelled inside it), else through the Exterior shader of the object
+///    that shot the ray (RayQuery::origin), run on the segment to the hit (P
+///    the hit, I the segment). Misses and transmission rays run none.
 ///  - Transmission: the product of (1 - Os) of every surface along the ray
 ///    (`"shade" "transmissionhitmode"` "primitive", the default) or of
 ///    (1 - Oi) of the hit shader ("shader").

@@ -7,8 +7,8 @@
 /// May use: shading, rsl, dice, light, brick, image, cloud, scene and util.
 ///
 /// The shaders of a scene bound for one job (ptbake or render): every
-/// distinct Surface and Displacement call and every light source as a
-/// ShaderInstance, loaded
+/// distinct Surface, Displacement, Atmosphere, Interior and Exterior call,
+/// every light source and the Imager as a ShaderInstance, loaded
 /// along the scene's shader search path (shader_library.h). Frame patterns
 /// ("%04d", "####", "$F4") in string parameters are expanded with the job's frame,
 /// so `"string filename" ["orbit_ssd.%04d.bkm"]` reads the frame's file.
@@ -36,6 +36,16 @@ struct SceneShaders {
     std::vector<std::unique_ptr<ShaderInstance>> displacements;
     /// Per primitive: its displacement shader, or null without a Displacement.
     std::vector<const ShaderInstance*> displacement_of;
+    /// Distinct volume instances (one per Atmosphere, Interior or Exterior
+    /// call), and per primitive its Atmosphere (bound only for images: see
+    /// bind_scene_shaders), Interior and Exterior shader, or null.
+    std::vector<std::unique_ptr<ShaderInstance>> volumes;
+    std::vector<const ShaderInstance*> atmosphere_of, interior_of, exterior_of;
+    /// Whether some primitive has an Interior or Exterior shader (traced rays
+    /// run them).
+    bool any_interior_exterior = false;
+    /// The scene's Imager shader (bound only for images), or null.
+    std::unique_ptr<ShaderInstance> imager;
     /// Per scene light (Scene::lights order).
     std::vector<std::unique_ptr<ShaderInstance>> lights;
     /// Per primitive: the lights that are on for it, in Scene::lights order.
@@ -43,7 +53,8 @@ struct SceneShaders {
     /// Parameters the shaders do not declare, and similar notes.
     std::vector<std::string> warnings;
 
-    /// Whether any bound program (surface or light) calls `op`.
+    /// Whether any bound program (surface, displacement, light, volume or
+    /// imager) calls `op`.
     bool uses(std::string_view op) const;
 };
 
@@ -72,10 +83,15 @@ bool program_reads_parametric(const Program& program);
 /// their neighbours (BatchLayout::Triplets) and a baker whole grids.
 bool program_uses_derivatives(const Program& program);
 
-/// Loads and binds the scene's shaders (surface, displacement, light). Throws
-/// ShaderNotFoundError (a shader the search path does not have, naming the call and the
-/// path), ShaderCompileError, ValueError (parameters of the wrong type).
-SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame);
+/// Loads and binds the scene's shaders (surface, displacement, light, and the
+/// Interior and Exterior volume shaders that traced rays run). With `image`
+/// (render's image), also the Imager and the Atmosphere shaders, which only
+/// an image runs (ptbake writes no image and shades no camera rays: it
+/// neither loads nor needs them). Throws ShaderNotFoundError (a shader the
+/// search path does not have, naming the call and the path),
+/// ShaderCompileError, ValueError (parameters of the wrong type).
+SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
+                                bool image = false);
 
 /// String parameter values of the bound shaders that name existing files, or
 /// files by their extension (.bkm .ptc .ply .tx .tex .exr .png .tif .tiff

@@ -152,7 +152,12 @@ struct Attributes {
     std::string shading_interpolation = "constant";
     std::optional<ShaderRef> surface;      ///< Surface
     std::optional<ShaderRef> displacement; ///< Displacement
-    std::vector<int> lights_on;            ///< indices into Scene::lights, ascending
+    /// Atmosphere: the volume shader run on camera rays between the eye and
+    /// the surface they hit; Interior and Exterior: the volume shaders of
+    /// the inside and the outside of the object, run on traced rays.
+    /// Unset without the request, or after `"null"` / `""`.
+    std::optional<ShaderRef> atmosphere, interior, exterior;
+    std::vector<int> lights_on; ///< indices into Scene::lights, ascending
     /// Every `Attribute "group" params`, by group ("cull", "dice", "identifier"...).
     std::map<std::string, ParamList> groups;
     Basis u_basis = *named_basis("bezier");
@@ -403,6 +408,9 @@ struct RenderOptions {
     std::map<std::string, std::vector<std::string>> search_paths;
     std::string hider;
     PixelFilterSpec pixel_filter; ///< PixelFilter (default gaussian 2 2)
+    /// `Imager "name" params` (an option): the imager shader run on every
+    /// final pixel; unset without one, or after `Imager "null"` / `""`.
+    std::optional<ShaderRef> imager;
     /// Exposure gain gamma: colour = (gain * colour)^(1/gamma) when written.
     double exposure_gain = 1.0;
     double exposure_gamma = 1.0;

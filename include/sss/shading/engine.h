@@ -239,9 +239,14 @@ struct ShadingBatch {
     /// without a primitive) and converted to the current space.
     std::vector<ShaderArgument> primvars;
 
-    /// Outputs: Ci and Oi after a surface shader, P and N after a
-    /// displacement shader (written back into P and N).
+    /// Outputs: Ci and Oi after a surface, volume or imager shader, P and N
+    /// after a displacement shader (written back into P and N). Volume and
+    /// imager shaders also read them: they start from the Ci and Oi given
+    /// here (0 and Os when empty), as the surface (or the pixel) left them.
     std::vector<glm::vec3> Ci, Oi;
+    /// Imager shaders: the pixels' alpha, read and written (1 when empty).
+    /// Left alone by the other kinds.
+    std::vector<float> alpha;
 };
 
 /// Rays a shader asks the renderer to trace and, for the ones that hit,
@@ -381,13 +386,15 @@ public:
 
     /// Runs `shader` over every point of `batch`. Surface shaders leave Ci
     /// and Oi in the batch; displacement shaders leave the new P and N in
-    /// batch.P and batch.N. `lights` are run lazily by illuminance loops,
+    /// batch.P and batch.N; volume shaders change the batch's Ci and Oi;
+    /// imager shaders its Ci, Oi and alpha. `lights` are run lazily by illuminance loops,
     /// ambient(), diffuse()... and cached for the batch. Throws
     /// ShaderRuntimeError for errors a shader cannot recover from, including
     /// a loop that runs more than kMaxLoopIterations times in one batch
     /// ("loop does not end").
     ///
-    /// Before the body: Ci = 0, Oi = Os; uninitialised locals are 0 (strings
+    /// Before the body: Ci = 0, Oi = Os (volume and imager shaders: the
+    /// batch's Ci and Oi); uninitialised locals are 0 (strings
     /// ""). After it, non-finite values of Ci, Oi, P, N and the output
     /// parameters are replaced by 0; nonfinite_points() counts the points.
     void execute(const ShaderInstance& shader, ShadingBatch& batch,

@@ -256,10 +256,63 @@ struct SceneRays::Impl {
     void shade(const RayQuery& q, const std::vector<Hit>& hits, std::size_t begin,
                std::size_t end, RayQuery* results, std::vector<glm::vec3>* oi) const;
 
+    /// The Interior and Exterior shaders on the segments of shaded hits
+    /// (batch: one primitive's hits; back[k]: hit k is on a back face, so
+    /// its ray travelled inside that primitive): Interior of the primitive
+    /// hit from behind, else Exterior of the primitive the rays left.
+    void run_volumes(const RayQuery& q, ShadingBatch& batch,
+                     const std::vector<char>& back, uint32_t prim_index) const;
+
     void trace(RayQuery& q) const;
     void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
                   int depth) const;
 };
+
+void SceneRays::Impl::run_volumes(const RayQuery& q, ShadingBatch& batch,
+                                  const std::vector<char>& back,
+                                  uint32_t prim_index) const {
+    const Primitive* const first = scene.primitives.data();
+    const bool known_origin =
+        q.origin && q.origin >= first && q.origin < first + scene.primitives.size();
+    const std::size_t origin_index = known_origin ? std::size_t(q.origin - first) : 0;
+    for (const bool inside : {true, false}) {
+        const std::size_t owner = inside ? prim_index : origin_index;
+        if (!inside && !known_origin) continue;
+        const ShaderInstance* shader =
+            (inside ? shaders.interior_of : shaders.exterior_of)[owner];
+        if (!shader) continue;
+        std::vector<std::size_t> which;
+        for (std::size_t k = 0; k < batch.size; ++k)
+            if ((back[k] != 0) == inside) which.push_back(k);
+        if (which.empty()) continue;
+        const std::size_t n = which.size();
+        ShadingBatch v;
+        v.size = n;
+        v.layout = BatchLayout::Points;
+        v.primitive = &scene.primitives[owner];
+        v.ray = batch.ray;
+        v.seed = detail::splitmix64(batch.seed ^ (inside ? 0x696E74ull : 0x657874ull));
+        v.ray_offset = batch.ray_offset;
+        for (auto* x : {&v.P, &v.I, &v.N, &v.Ng, &v.Ci, &v.Oi}) x->resize(n);
+        for (std::size_t j = 0; j < n; ++j) {
+            const std::size_t k = which[j];
+            v.P[j] = batch.P[k];
+            v.I[j] = batch.I[k];
+            v.N[j] = batch.N[k];
+            v.Ng[j] = batch.Ng[k];
+            v.Ci[j] = batch.Ci[k];
+            v.Oi[j] = batch.Oi[k];
+        }
+        ShadingContext& context = context_at(q.depth);
+        const auto& lights = shaders.lights_of[owner];
+        context.execute(*shader, v, LightList(lights.data(), lights.size()));
+        nonfinite.fetch_add(context.nonfinite_points(), std::memory_order_relaxed);
+        for (std::size_t j = 0; j < n; ++j) {
+            batch.Ci[which[j]] = v.Ci[j];
+            batch.Oi[which[j]] = v.Oi[j];
+        }
+    }
+}
 
 const RayTracer* HitServices::occluders() const {
     return m_impl.tracer(RayKind::Transmission);
@@ -305,6 +358,7 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
     batch.ray_offset = bias[prim_index] >= 0.0f ? bias[prim_index] : 1e-5f * extent;
     batch.ray = RayContext{q.depth, q.kind, q.label};
     const glm::dmat3 linear(to_camera);
+    std::vector<char> back(n, 0); // the ray reached the hit from behind its surface
     for (std::size_t k = 0; k < n; ++k) {
         const Hit& h = hits[begin + k];
         const ShadowRay& ray = q.rays[h.ray];
@@ -320,6 +374,7 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
         const double nl = glm::length(nn);
         nn = nl > 0.0 && std::isfinite(nl) ? nn / nl : ng;
         if (glm::dot(ng, nn) < 0.0) ng = -ng;
+        back[k] = glm::dot(ng, glm::dvec3(ray.direction)) > 0.0;
         // The footprint: the ray's spread at the hit, on the tangent plane.
         const double w = std::max(double(q.spread) * h.t, 1e-6 * extent);
         glm::dvec3 t1 = glm::cross(nn, glm::dvec3(ray.direction));
@@ -385,6 +440,10 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
     if (oi)
         for (std::size_t k = 0; k < n; ++k) (*oi)[begin + k] = batch.Oi[k];
     if (!results) return;
+    if (shaders.any_interior_exterior &&
+        std::any_of(q.outputs.begin(), q.outputs.end(),
+                    [](const std::string& o) { return o == "Ci" || o == "Oi"; }))
+        run_volumes(q, batch, back, prim_index);
     // Ci, Oi (and, in primitive mode, Cs and Os) from the batch.
     for (std::size_t o = 0; o < q.outputs.size(); ++o) {
         const std::string& name = q.outputs[o];

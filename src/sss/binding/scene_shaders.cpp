@@ -1,6 +1,6 @@
 /// \file scene_shaders.cpp
-/// Binding a scene's Surface and LightSource calls to compiled shaders
-/// (scene_shaders.h).
+/// Binding a scene's Surface, Displacement, LightSource, Atmosphere,
+/// Interior, Exterior and Imager calls to compiled shaders (scene_shaders.h).
 
 #include "sss/binding/scene_shaders.h"
 
@@ -91,13 +91,10 @@ bool program_uses_derivatives(const Program& program) {
 }
 
 bool SceneShaders::uses(std::string_view op) const {
-    for (const auto& s : surfaces)
-        if (program_uses(s->program(), op)) return true;
-    for (const auto& s : displacements)
-        if (program_uses(s->program(), op)) return true;
-    for (const auto& l : lights)
-        if (program_uses(l->program(), op)) return true;
-    return false;
+    for (const auto* list : {&surfaces, &displacements, &volumes, &lights})
+        for (const auto& s : *list)
+            if (program_uses(s->program(), op)) return true;
+    return imager && program_uses(imager->program(), op);
 }
 
 std::optional<std::string> unlit_scene_warning(const Scene& scene,
@@ -127,7 +124,8 @@ std::vector<std::string> shader_search_path(const Scene& scene) {
     return resolve_shader_search_path(search_path(scene, "shader"));
 }
 
-SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
+SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
+                                bool image) {
     // The textures the RIB makes come before any shader looks one up.
     if (!scene.makes.empty()) {
         TextureLibrary maker;
@@ -155,7 +153,34 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
             light.shader.shader_to_world, where, &out.warnings));
     }
 
+    if (image && scene.options.imager) {
+        const ShaderRef& ref = *scene.options.imager;
+        const std::string where = call_where(ref, "Imager");
+        auto program = library.load(ref.name, ShaderKind::Imager, where);
+        out.imager = std::make_unique<ShaderInstance>(
+            program, expand_strings(ref.params, frame, where), ref.shader_to_world, where,
+            &out.warnings);
+    }
+
     std::map<const ShaderRef*, const ShaderInstance*> by_ref;
+    std::map<const ShaderRef*, const ShaderInstance*> volume_by_ref;
+    // One instance per Atmosphere, Interior or Exterior call.
+    const auto volume = [&](const std::optional<ShaderRef>& ref,
+                            const char* request) -> const ShaderInstance* {
+        if (!ref) return nullptr;
+        if (auto it = volume_by_ref.find(&*ref); it != volume_by_ref.end())
+            return it->second;
+        const std::string where = call_where(*ref, request);
+        auto program = library.load(ref->name, ShaderKind::Volume, where);
+        out.volumes.push_back(std::make_unique<ShaderInstance>(
+            program, expand_strings(ref->params, frame, where), ref->shader_to_world,
+            where, &out.warnings));
+        volume_by_ref.emplace(&*ref, out.volumes.back().get());
+        return out.volumes.back().get();
+    };
+    out.atmosphere_of.resize(scene.primitives.size(), nullptr);
+    out.interior_of.resize(scene.primitives.size(), nullptr);
+    out.exterior_of.resize(scene.primitives.size(), nullptr);
     std::map<const ShaderRef*, const ShaderInstance*> displacement_by_ref;
     std::map<const Attributes*, std::size_t> lights_by_attributes;
     const ShaderInstance* fallback = nullptr;
@@ -200,6 +225,10 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame) {
                 displacement_by_ref.emplace(d, out.displacement_of[i]);
             }
         }
+        if (image) out.atmosphere_of[i] = volume(attr.atmosphere, "Atmosphere");
+        out.interior_of[i] = volume(attr.interior, "Interior");
+        out.exterior_of[i] = volume(attr.exterior, "Exterior");
+        if (out.interior_of[i] || out.exterior_of[i]) out.any_interior_exterior = true;
         for (int l : attr.lights_on)
             if (l >= 0 && static_cast<std::size_t>(l) < out.lights.size())
                 out.lights_of[i].push_back(out.lights[static_cast<std::size_t>(l)].get());
@@ -220,9 +249,10 @@ void record_shader_inputs(JobFiles& files, const SceneShaders& shaders) {
             }
         }
     };
-    for (const auto& s : shaders.surfaces) add(*s);
-    for (const auto& s : shaders.displacements) add(*s);
-    for (const auto& l : shaders.lights) add(*l);
+    for (const auto* list :
+         {&shaders.surfaces, &shaders.displacements, &shaders.volumes, &shaders.lights})
+        for (const auto& s : *list) add(*s);
+    if (shaders.imager) add(*shaders.imager);
     if (shaders.library)
         for (const std::string& f : shaders.library->files())
             files.input(f, "the shader file \"" + f + "\"");
@@ -241,9 +271,10 @@ std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
                     files.push_back(v);
             }
     };
-    for (const auto& s : shaders.surfaces) add(*s);
-    for (const auto& s : shaders.displacements) add(*s);
-    for (const auto& l : shaders.lights) add(*l);
+    for (const auto* list :
+         {&shaders.surfaces, &shaders.displacements, &shaders.volumes, &shaders.lights})
+        for (const auto& s : *list) add(*s);
+    if (shaders.imager) add(*shaders.imager);
     if (shaders.library)
         for (const std::string& f : shaders.library->files())
             if (std::find(files.begin(), files.end(), f) == files.end())

@@ -304,6 +304,11 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         std::vector<std::vector<float>> aov_values(job.aovs.size());
         std::vector<char> has(job.aovs.size(), 0);
         shader_aovs(context, job.aovs, aov_values, has);
+        // The atmosphere between the eye and the hit, after the surface
+        // (and after its AOVs were read: they are the surface's).
+        if (const ShaderInstance* atmosphere = job.shaders.atmosphere_of[prim_index])
+            run_atmosphere(job, context, *atmosphere, batch, r,
+                           LightList(lights.data(), lights.size()));
         for (std::size_t k = 0; k < n; ++k) {
             const SurfaceHit& h = hits[begin + k];
             CameraSample& cs = samples[h.sample];
@@ -707,6 +712,9 @@ Image RenderJob::image(RenderReport* report_out) const {
         render_tiles(job, grid, options, depth, nearest);
     Image image =
         resolve_pixels(job, grid, add_tiles(job, grid, tile_sums), depth, nearest);
+    // RISpec's imaging pipeline: the pixel filter, the imager, then (when
+    // the Displays are written) exposure and quantisation.
+    run_imager(job, image);
     // A camera that sees nothing of a scene with geometry is a mistake more
     // often than a wish (a camera transform after WorldBegin, a sign).
     const auto missed = [](float z) { return !std::isfinite(z); };
@@ -776,8 +784,8 @@ std::vector<DisplaySpec> job_displays(const Scene& scene, const RenderJobOptions
 
 RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
     : m_scene(scene), m_options(options), m_frame(job_frame(scene, options.frame)),
-      m_shaders(
-          std::make_shared<const SceneShaders>(bind_scene_shaders(scene, m_frame))) {
+      m_shaders(std::make_shared<const SceneShaders>(
+          bind_scene_shaders(scene, m_frame, true))) {
     bool bakes = false;
     for (const ShaderInstance* s : m_shaders->surface_of)
         bakes = bakes || (s && program_uses(s->program(), "bake3d"));

@@ -1,7 +1,8 @@
 #pragma once
 // Internal to the render module: the job shared by render.cpp (tiles,
-// pixels, render_image, render_scene) and render_setup.cpp (the phases
-// before the tiles: camera, shaders and AOVs, surfaces, dicing, ray tracers).
+// pixels, render_image, render_scene), render_setup.cpp (the phases
+// before the tiles: camera, shaders and AOVs, surfaces, dicing, ray tracers)
+// and render_volumes.cpp (the Atmosphere and Imager shaders).
 
 #include "sss/render/render.h"
 
@@ -253,5 +254,18 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
 /// else one each; and the scene extent.
 void build_tracers(Renderer& job, const std::vector<std::size_t>& to_dice,
                    bool any_shadows, bool separate_shadows, RenderReport& report);
+
+/// Runs a primitive's Atmosphere shader on the camera hits its surface
+/// shader just shaded: point k * stride of `surface` is hit k (stride 3 for
+/// triplets); P, I, N and the surface's Ci and Oi go in, and the shader's Ci
+/// and Oi replace the surface's (render_volumes.cpp).
+void run_atmosphere(Renderer& job, ShadingContext& context, const ShaderInstance& shader,
+                    ShadingBatch& surface, std::size_t stride, LightList lights);
+
+/// Runs the scene's Imager shader (if any) on every pixel of the filtered
+/// image, before the Displays' exposure and quantisation: Ci = R G B, Oi =
+/// alpha = A, P = the pixel's centre in raster space; R G B = Ci and A =
+/// alpha afterwards. The AOVs and Z are not touched.
+void run_imager(Renderer& job, Image& image);
 
 } // namespace sss::render_detail

@@ -211,8 +211,11 @@ bool resolve_shading(Renderer& job, const Scene& scene, std::optional<int> frame
         any_shadows = any_shadows || job.shaders.uses(op);
     for (const auto& s : job.shaders.surfaces)
         job.any_rays = job.any_rays || program_traces_rays(s->program());
-    for (const auto& s : job.shaders.lights)
-        job.any_rays = job.any_rays || program_traces_rays(s->program());
+    for (const auto* list : {&job.shaders.lights, &job.shaders.volumes})
+        for (const auto& s : *list)
+            job.any_rays = job.any_rays || program_traces_rays(s->program());
+    if (job.shaders.imager)
+        job.any_rays = job.any_rays || program_traces_rays(job.shaders.imager->program());
     return any_shadows || job.any_rays;
 }
 

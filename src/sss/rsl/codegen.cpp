@@ -25,20 +25,26 @@ constexpr ShadingType F = ShadingType::Float, C = ShadingType::Color,
                       No = ShadingType::Normal;
 
 // clang-format off
+// Volume shaders (RISpec 12.4): P, I, E, Ci, Oi (and the lights' L, Cl, Ol in
+// illuminance). Imager shaders (12.5): Ci, Oi, alpha, and P the pixel's
+// raster position.
 constexpr GlobalDef kGlobals[] = {
     {"Cs", C, true, kS, kS, 0}, {"Os", C, true, kS, kS, 0},
-    {"P", Pt, true, kS | kD | kL, kS | kD, 0},
+    {"P", Pt, true, kS | kD | kL | kV | kI, kS | kD, 0},
     {"dPdu", Ve, true, kS | kD | kL, 0, 0}, {"dPdv", Ve, true, kS | kD | kL, 0, 0},
     {"N", No, true, kS | kD | kL, kS | kD | kL, 0}, {"Ng", No, true, kS | kD | kL, 0, 0},
     {"u", F, true, kS | kD | kL, 0, 0}, {"v", F, true, kS | kD | kL, 0, 0},
     {"du", F, true, kS | kD | kL, 0, 0}, {"dv", F, true, kS | kD | kL, 0, 0},
     {"s", F, true, kS | kD | kL, kS | kD | kL, 0}, {"t", F, true, kS | kD | kL, kS | kD | kL, 0},
-    {"E", Pt, false, kS | kD | kL, 0, 0}, {"I", Ve, true, kS | kD, 0, 0},
-    {"ncomps", F, false, kS | kD | kL, 0, 0}, {"time", F, false, kS | kD | kL, 0, 0},
-    {"dtime", F, false, kS | kD | kL, 0, 0}, {"dPdtime", Ve, true, kS | kD, 0, 0},
-    {"Ci", C, true, kS, kS, 0}, {"Oi", C, true, kS, kS, 0},
-    {"L", Ve, true, kS | kL, kL, kS},
-    {"Cl", C, true, kS | kL, kL, kS}, {"Ol", C, true, kS | kL, kL, kS},
+    {"E", Pt, false, kS | kD | kL | kV, 0, 0}, {"I", Ve, true, kS | kD | kV, 0, 0},
+    {"ncomps", F, false, kS | kD | kL | kV | kI, 0, 0},
+    {"time", F, false, kS | kD | kL | kV | kI, 0, 0},
+    {"dtime", F, false, kS | kD | kL | kV | kI, 0, 0}, {"dPdtime", Ve, true, kS | kD, 0, 0},
+    {"Ci", C, true, kS | kV | kI, kS | kV | kI, 0},
+    {"Oi", C, true, kS | kV | kI, kS | kV | kI, 0},
+    {"alpha", F, true, kI, kI, 0},
+    {"L", Ve, true, kS | kL | kV, kL, kS | kV},
+    {"Cl", C, true, kS | kL | kV, kL, kS | kV}, {"Ol", C, true, kS | kL | kV, kL, kS | kV},
     {"Ps", Pt, true, kL, 0, 0},
 };
 // clang-format on
@@ -53,9 +59,12 @@ unsigned kind_bit(ShaderKind k) {
         return kD;
     case ShaderKind::Light:
         return kL;
-    default:
-        return 0;
+    case ShaderKind::Volume:
+        return kV;
+    case ShaderKind::Imager:
+        return kI;
     }
+    return 0;
 }
 
 const GlobalDef* find_global(const std::string& name) {
@@ -174,12 +183,12 @@ const Var* Generator::global(const std::string& name, SrcLoc at) {
     const GlobalDef* g = find_global(name);
     if (!g || !(g->read & m_kind_bit)) return nullptr;
     if (g->in_loop & m_kind_bit) {
-        const bool inside = m_kind_bit == kS ? m_in_illuminance > 0 : m_in_light_loop > 0;
+        const bool illuminance = m_kind_bit != kL;
+        const bool inside = illuminance ? m_in_illuminance > 0 : m_in_light_loop > 0;
         if (!inside) {
-            error(at,
-                  "'" + name + "' exists only inside " +
-                      (m_kind_bit == kS ? "an illuminance" : "an illuminate or solar") +
-                      " statement");
+            error(at, "'" + name + "' exists only inside " +
+                          (illuminance ? "an illuminance" : "an illuminate or solar") +
+                          " statement");
             return nullptr;
         }
     }
@@ -215,7 +224,8 @@ const Var* Generator::lookup(const std::string& name, SrcLoc at, bool report) {
         if (const Var* g = global(name, at)) return g;
         if (find_global(name)->read & m_kind_bit) return nullptr; // reported
         if (report)
-            error(at, "'" + name + "' is not available in a " +
+            error(at, "'" + name + "' is not available in " +
+                          (m_shader.kind == ShaderKind::Imager ? "an " : "a ") +
                           shader_kind_name(m_shader.kind) + " shader");
         return nullptr;
     }

@@ -30,7 +30,8 @@ constexpr int kDemotionPasses = 8;          ///< then every undeclared local is 
 
 // --- globals (shading.md section 4) ------------------------------------------
 
-constexpr unsigned kS = 1, kD = 2, kL = 4; // surface, displacement, light
+// surface, displacement, light, volume, imager
+constexpr unsigned kS = 1, kD = 2, kL = 4, kV = 8, kI = 16;
 
 struct GlobalDef {
     const char* name;

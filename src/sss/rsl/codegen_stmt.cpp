@@ -368,8 +368,8 @@ void Generator::light_body(const Stmt& s, int op) {
 }
 
 void Generator::illuminance_statement(const Stmt& s) {
-    if (m_shader.kind != ShaderKind::Surface) {
-        error(s.loc, "illuminance is only allowed in surface shaders");
+    if (m_shader.kind != ShaderKind::Surface && m_shader.kind != ShaderKind::Volume) {
+        error(s.loc, "illuminance is only allowed in surface and volume shaders");
         return;
     }
     if (m_in_illuminance) {

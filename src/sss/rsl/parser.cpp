@@ -192,8 +192,12 @@ private:
         }
         expect(")", "after the shader parameters");
         def.body = block();
-        if (kind == "volume" || kind == "imager" || kind == "transformation") {
-            m_diags.error(kind_tok.loc, kind + " shaders are not supported");
+        if (kind == "transformation") {
+            // RISpec 3.2 has them; PRMan never ran them and dropped the type.
+            m_diags.error(kind_tok.loc,
+                          "transformation shaders are not supported (PRMan does not run "
+                          "them either); write a surface, displacement, light, volume "
+                          "or imager shader");
             return;
         }
         out.shaders.push_back(std::move(def));

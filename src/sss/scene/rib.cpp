@@ -42,12 +42,12 @@ bool ignored(std::string_view name) {
 /// Requests understood but not supported: one warning each.
 bool unsupported(std::string_view name) {
     static const NameSet names = name_set(
-        "Atmosphere Interior Exterior Deformation Detail DetailRange "
+        "Deformation Detail DetailRange "
         "Blobby HierarchicalSubdivisionMesh "
         "ClippingPlane IfBegin ElseIf Else IfEnd MakeShadow MakeBump "
         "MakeCubeFaceEnvironment MakeBrickMap System Resource "
         "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
-        "SampleFilter Light Volume Imager Matte");
+        "SampleFilter Light Volume Matte");
     return names.count(name) > 0;
 }
 
@@ -130,6 +130,7 @@ const Reader::HandlerTable& Reader::handlers() {
         {"PixelFilter", &Reader::do_pixel_filter},
         {"Exposure", &Reader::do_exposure},
         {"Quantize", &Reader::do_quantize},
+        {"Imager", &Reader::do_imager},
         // blocks
         {"FrameBegin", &Reader::do_frame_begin},
         {"FrameEnd", &Reader::do_frame_end},
@@ -172,6 +173,9 @@ const Reader::HandlerTable& Reader::handlers() {
         {"ShadingInterpolation", &Reader::do_shading_interpolation},
         {"Surface", &Reader::do_surface},
         {"Displacement", &Reader::do_displacement},
+        {"Atmosphere", &Reader::do_volume_shader},
+        {"Interior", &Reader::do_volume_shader},
+        {"Exterior", &Reader::do_volume_shader},
         {"LightSource", &Reader::do_light_source},
         {"AreaLightSource", &Reader::do_light_source},
         {"Illuminate", &Reader::do_illuminate},

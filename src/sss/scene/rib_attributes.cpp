@@ -1,6 +1,7 @@
 /// \file rib_attributes.cpp
 /// The reader's attribute requests: colour, sides, orientation, shading,
-/// `Attribute`, the surface shader, light sources and the patch bases.
+/// `Attribute`, the surface, displacement and volume shaders (Atmosphere,
+/// Interior, Exterior), light sources and the patch bases.
 
 #include "rib_reader.h"
 
@@ -131,6 +132,22 @@ void Reader::do_displacement(const Statement& s) {
     std::string name = take_string(s, i, "shader name");
     ParamList params = take_params(s, i, true, true);
     attrs_mut().displacement = make_shader(s, name, std::move(params));
+}
+
+void Reader::do_volume_shader(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "shader name");
+    ParamList params = take_params(s, i, true, true);
+    std::optional<ShaderRef> ref;
+    // RiAtmosphere(RI_NULL) turns the volume off: "null" or "" in a RIB.
+    if (!name.empty() && name != "null") ref = make_shader(s, name, std::move(params));
+    Attributes& a = attrs_mut();
+    if (s.name == "Atmosphere")
+        a.atmosphere = std::move(ref);
+    else if (s.name == "Interior")
+        a.interior = std::move(ref);
+    else
+        a.exterior = std::move(ref);
 }
 
 void Reader::do_light_source(const Statement& s) {

@@ -1,6 +1,7 @@
 /// \file rib_options.cpp
 /// The reader's option requests: image format, camera projection and screen
-/// window, displays, hider, `Option` and the parameter declarations.
+/// window, displays, the imager shader, hider, `Option` and the parameter
+/// declarations.
 
 #include "rib_reader.h"
 
@@ -235,6 +236,18 @@ void Reader::do_display_channel(const Statement& s) {
     else
         chans.emplace_back(name, type_text);
     m_decls[name] = decl;
+}
+
+void Reader::do_imager(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "shader name");
+    ParamList params = take_params(s, i, true, true);
+    if (!option_allowed(s)) return;
+    // Imager "null" (or "") turns the imager off, as RiImager(RI_NULL).
+    if (name.empty() || name == "null")
+        m_scene.options.imager.reset();
+    else
+        m_scene.options.imager = make_shader(s, name, std::move(params));
 }
 
 void Reader::do_hider(const Statement& s) {

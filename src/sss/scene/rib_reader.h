@@ -183,6 +183,7 @@ private:
     void do_pixel_filter(const Statement& s);
     void do_exposure(const Statement& s);
     void do_quantize(const Statement& s);
+    void do_imager(const Statement& s);
 
     // --- rib_attributes.cpp: attributes, shaders and lights -------------------
 
@@ -200,6 +201,8 @@ private:
     void do_shading_interpolation(const Statement& s);
     void do_surface(const Statement& s);
     void do_displacement(const Statement& s);
+    /// Atmosphere, Interior and Exterior: a volume shader of the attributes.
+    void do_volume_shader(const Statement& s);
     void do_light_source(const Statement& s);
     void do_illuminate(const Statement& s);
     void do_basis(const Statement& s);

@@ -126,9 +126,17 @@ void Reader::do_world_begin(const Statement& s) {
     const Matrix4 camera_to_world = glm::inverse(m_world_to_camera);
     for (const auto& [name, to_camera] : m_camera_spaces)
         m_scene.coordinate_systems[name] = camera_to_world * to_camera;
-    // A Surface given among the options was placed in camera space.
-    if (m_attr.attrs.surface) {
-        ShaderRef& ref = *attrs_mut().surface;
+    // Shaders given among the options were placed in camera space.
+    const Attributes& attrs = m_attr.attrs;
+    for (auto member :
+         {&Attributes::surface, &Attributes::displacement, &Attributes::atmosphere,
+          &Attributes::interior, &Attributes::exterior})
+        if (attrs.*member) {
+            ShaderRef& ref = *(attrs_mut().*member);
+            ref.shader_to_world = camera_to_world * ref.shader_to_world;
+        }
+    if (m_scene.options.imager) {
+        ShaderRef& ref = *m_scene.options.imager;
         ref.shader_to_world = camera_to_world * ref.shader_to_world;
     }
     m_ctm = Matrix4(1.0);

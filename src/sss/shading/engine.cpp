@@ -547,7 +547,12 @@ void ShadingContext::Impl::load_surface_globals(detail::Frame& f) {
     if (auto* s = sl(G_dPdv)) fill3(*s, n, &b.dPdv, glm::vec3(0.0f));
     if (auto* s = sl(G_Cs)) fill3(*s, n, &b.Cs, cs);
     if (auto* s = sl(G_Os)) fill3(*s, n, &b.Os, os);
-    if (auto* s = sl(G_Oi)) fill3(*s, n, &b.Os, os);
+    // Volume and imager shaders start from the Ci and Oi they are given.
+    const bool given =
+        f.program->kind == ShaderKind::Volume || f.program->kind == ShaderKind::Imager;
+    if (auto* s = sl(G_Oi)) fill3(*s, n, given && has(b.Oi) ? &b.Oi : &b.Os, os);
+    if (given)
+        if (auto* s = sl(G_Ci)) fill3(*s, n, &b.Ci, glm::vec3(0.0f));
     if (auto* s = sl(G_u)) fill1(*s, n, &b.u, 0.0f);
     if (auto* s = sl(G_v)) fill1(*s, n, &b.v, 0.0f);
     if (auto* s = sl(G_du)) fill1(*s, n, &b.du, 0.0f);
@@ -556,7 +561,7 @@ void ShadingContext::Impl::load_surface_globals(detail::Frame& f) {
     if (auto* s = sl(G_t)) fill1(*s, n, b.t.size() >= n ? &b.t : &b.v, 0.0f);
     if (auto* s = sl(G_ncomps)) fill1(*s, n, nullptr, 3.0f);
     if (auto* s = sl(G_time)) fill1(*s, n, nullptr, b.time);
-    if (auto* s = sl(G_alpha)) fill1(*s, n, nullptr, 1.0f);
+    if (auto* s = sl(G_alpha)) fill1(*s, n, &b.alpha, 1.0f);
 }
 
 void ShadingContext::Impl::run_body(detail::Frame& f) {
@@ -647,7 +652,7 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
     const Program& p = shader.program();
     const int* g = f.bound->globals;
     std::vector<uint8_t> bad(n, 0);
-    for (int id : {G_Ci, G_Oi, G_P, G_N})
+    for (int id : {G_Ci, G_Oi, G_P, G_N, G_alpha})
         if (g[id] >= 0) clean_slot(f.slots[g[id]], n, bad);
     for (int s : f.bound->params)
         if (p.symbols[s].kind == SymbolKind::OutputParam &&
@@ -658,6 +663,15 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
     if (p.kind == ShaderKind::Displacement) {
         if (g[G_P] >= 0) read3(f.slots[g[G_P]], n, batch.P);
         if (g[G_N] >= 0) read3(f.slots[g[G_N]], n, batch.N);
+    } else if (p.kind == ShaderKind::Volume || p.kind == ShaderKind::Imager) {
+        // What the shader does not mention stays as it was given.
+        if (g[G_Ci] >= 0) read3(f.slots[g[G_Ci]], n, batch.Ci);
+        if (g[G_Oi] >= 0) read3(f.slots[g[G_Oi]], n, batch.Oi);
+        if (g[G_alpha] >= 0) {
+            const Slot& a = f.slots[g[G_alpha]];
+            batch.alpha.resize(n);
+            for (std::size_t i = 0; i < n; ++i) batch.alpha[i] = *a.at(a.varying ? i : 0);
+        }
     } else {
         if (g[G_Ci] >= 0)
             read3(f.slots[g[G_Ci]], n, batch.Ci);
