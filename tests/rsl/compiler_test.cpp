@@ -656,7 +656,8 @@ TEST(RslErrors, MiscStatements) {
     ds = compile_errors("surface s(float k) { }");
     EXPECT_TRUE(has_error(ds, "needs a default value"));
     ds = compile_errors("light l() { illuminance(P) { } }");
-    EXPECT_TRUE(has_error(ds, "illuminance is only allowed in surface and volume shaders"));
+    EXPECT_TRUE(
+        has_error(ds, "illuminance is only allowed in surface and volume shaders"));
     ds = compile_errors("surface s() { illuminate(P) { } }");
     EXPECT_TRUE(has_error(ds, "only allowed in light shaders"));
     ds = compile_errors("surface s() { float x; float x; }");

@@ -41,13 +41,13 @@ bool ignored(std::string_view name) {
 
 /// Requests understood but not supported: one warning each.
 bool unsupported(std::string_view name) {
-    static const NameSet names = name_set(
-        "Deformation Detail DetailRange "
-        "Blobby HierarchicalSubdivisionMesh "
-        "ClippingPlane IfBegin ElseIf Else IfEnd MakeShadow MakeBump "
-        "MakeCubeFaceEnvironment MakeBrickMap System Resource "
-        "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
-        "SampleFilter Light Volume Matte");
+    static const NameSet names =
+        name_set("Deformation Detail DetailRange "
+                 "Blobby HierarchicalSubdivisionMesh "
+                 "ClippingPlane IfBegin ElseIf Else IfEnd MakeShadow MakeBump "
+                 "MakeCubeFaceEnvironment MakeBrickMap System Resource "
+                 "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
+                 "SampleFilter Light Volume Matte");
     return names.count(name) > 0;
 }
 
