@@ -93,17 +93,6 @@ int length_of(const Frame& f, const Slot& s) {
     return f.resizable[static_cast<std::size_t>(s.resizable)].length;
 }
 
-/// The element index at point i, checked against the array's length.
-inline int element(Frame& f, const BoundOp& b, const Slot& idx, std::size_t i,
-                   int length) {
-    const float v = *idx.at(i);
-    const float fl = std::floor(v);
-    if (!(fl >= 0.0f) || fl >= static_cast<float>(length))
-        f.fail(b, "array index " + std::to_string(v) + " out of range [0, " +
-                      std::to_string(length) + ")");
-    return static_cast<int>(fl);
-}
-
 void op_arraylength(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     const Slot& a = f.slot(b, 1);
@@ -215,7 +204,7 @@ void op_aref_resizable(Frame& f, const BoundOp& b) {
     Slot& idx = f.slot(b, 2);
     const int ne = b.ia, length = length_of(f, a);
     f.each(d.varying, [&](std::size_t i) {
-        const int e = element(f, b, idx, i, length);
+        const int e = array_element(f, b, idx, i, length);
         std::memmove(d.at(i), a.at(i) + e * ne, sizeof(float) * ne);
     });
 }
@@ -227,7 +216,7 @@ void op_aassign_resizable(Frame& f, const BoundOp& b) {
     const int ne = b.ia, length = length_of(f, a);
     const bool splat = s.nf == 1 && ne != 1;
     f.each(a.varying, [&](std::size_t i) {
-        const int e = element(f, b, idx, i, length);
+        const int e = array_element(f, b, idx, i, length);
         float* o = a.at(i) + e * ne;
         if (splat)
             std::fill(o, o + ne, *s.at(i));

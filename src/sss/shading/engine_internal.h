@@ -17,6 +17,7 @@
 // which is glm's column-major order of our column-vector matrices (scene.h):
 // the RSL product A*B is glm B*A.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -302,6 +303,18 @@ struct LightSend {
 /// argument k of op b at the running points of f, when `from` has one of a
 /// fitting type (point, vector and normal fit each other; no arrays): the
 /// message-passing functions and illuminance's "light:NAME" (engine_lighting.cpp).
+/// The element index of array access at point i (the index rounded down),
+/// checked against the array's length: an error naming the shader's line.
+inline int array_element(Frame& f, const BoundOp& b, const Slot& idx, std::size_t i,
+                         int length) {
+    const float v = *idx.at(i);
+    const float fl = std::floor(v);
+    if (!(fl >= 0.0f) || fl >= static_cast<float>(length))
+        f.fail(b, "array index " + std::to_string(v) + " out of range [0, " +
+                      std::to_string(length) + ")");
+    return static_cast<int>(fl);
+}
+
 bool copy_parameter(Frame& f, const BoundOp& b, int k, const Frame& from,
                     const std::string& name);
 

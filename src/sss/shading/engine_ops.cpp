@@ -300,24 +300,13 @@ bool bind_not(const BindInfo& in, BoundOp& b, std::string&) {
 
 // --- arrays ---------------------------------------------------------------
 
-/// The element index at point i, checked.
-inline int element(Frame& f, const BoundOp& b, const Slot& idx, std::size_t i,
-                   int length) {
-    const float v = *idx.at(i);
-    const float fl = std::floor(v);
-    if (!(fl >= 0.0f) || fl >= static_cast<float>(length))
-        f.fail(b, "array index " + std::to_string(v) + " out of range [0, " +
-                      std::to_string(length) + ")");
-    return static_cast<int>(fl);
-}
-
 void op_aref(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     Slot& a = f.slot(b, 1);
     Slot& idx = f.slot(b, 2);
     const int ne = b.ia, length = b.ib;
     f.each(d.varying, [&](std::size_t i) {
-        const int e = element(f, b, idx, i, length);
+        const int e = array_element(f, b, idx, i, length);
         std::memmove(d.at(i), a.at(i) + e * ne, sizeof(float) * ne);
     });
 }
@@ -329,7 +318,7 @@ void op_aassign(Frame& f, const BoundOp& b) {
     const int ne = b.ia, length = b.ib;
     const bool splat = s.nf == 1 && ne != 1;
     f.each(a.varying, [&](std::size_t i) {
-        const int e = element(f, b, idx, i, length);
+        const int e = array_element(f, b, idx, i, length);
         float* o = a.at(i) + e * ne;
         if (splat) {
             for (int k = 0; k < ne; ++k) o[k] = *s.at(i);
