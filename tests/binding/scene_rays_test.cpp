@@ -65,7 +65,7 @@ struct RayScene {
         DiceControl control;
         control.spacing = 0.02;
         for (std::size_t i = 0; i < scene.primitives.size(); ++i)
-            requests.push_back({i, control});
+            requests.push_back({i, control, {}});
         diced = dice_all(scene, requests);
         std::vector<RaySurface> surfaces(scene.primitives.size());
         for (std::size_t i = 0; i < diced.size(); ++i) surfaces[i] = {&diced[i], nullptr};

@@ -189,14 +189,14 @@ render_clean -o make.exr make.rib
 [[ "$(stat -c %Y.%s checker.tx)" == "$before" ]] || fail "checker.tx was made again"
 
 # --- not implemented: an error by default, -lenient: one warning --------------
-{ header; echo '  MotionBegin [0 1]'; echo '    Translate 0 0 0'; echo '    Translate 0 1 0';
+{ header; echo '  MotionBegin [0 1]'; echo '    Color 1 0 0'; echo '    Color 0 1 0';
   echo '  MotionEnd'; echo '  Sphere 1 -1 1 360'; echo '  Frobnicate 3'; echo 'WorldEnd'; } >todo.rib
 run "$bin/render" -o todo.exr todo.rib
-[[ "$rc" == 1 && "$err" == "render ERROR: todo.rib:8: MotionBegin: motion blur is not supported (reading leniently: the first time sample is used, with a warning)" ]] ||
+[[ "$rc" == 1 && "$err" == "render ERROR: todo.rib:9: Color: motion blur of Color is not supported (reading leniently: the first time sample is used, with a warning)" ]] ||
     fail "strict: exit $rc, stderr: $err"
 [[ ! -e todo.exr ]] || fail "strict: an image was written"
 run "$bin/ptbake" todo.rib
-[[ "$rc" == 1 && "$err" == *"ptbake ERROR: todo.rib:8: MotionBegin"* ]] || fail "ptbake strict: exit $rc, stderr: $err"
+[[ "$rc" == 1 && "$err" == *"ptbake ERROR: todo.rib:9: Color"* ]] || fail "ptbake strict: exit $rc, stderr: $err"
 run "$bin/render" -lenient -o todo.exr todo.rib
 [[ "$rc" == 0 && -s todo.exr ]] || fail "-lenient: exit $rc, stderr: $err"
 [[ "$(grep -c 'render WARNING' <<<"$err")" == 2 && "$err" == *"first time sample is used"* &&

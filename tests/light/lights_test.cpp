@@ -644,3 +644,33 @@ TEST(LightsTest, NoiseRangeDeterminismContinuity) {
     EXPECT_NEAR(sss::noise3({0.3, 1.7, -2.2}), sss::noise3({256.3, 1.7, -2.2}), 1e-9);
     EXPECT_THROW(sss::noise3({NAN, 0, 0}), sss::ValueError);
 }
+
+TEST(RayTracerTest, MovingMeshIsWhereItIsAtTheRaysTime) {
+    sss::RayTracer tracer;
+    // A triangle in z = 1 at time 0 that moves to z = 3 at time 1.
+    const std::vector<std::vector<glm::vec3>> steps = {
+        {{-1, -1, 3}, {2, -1, 3}, {-1, 2, 3}}};
+    tracer.add_mesh({{-1, -1, 1}, {2, -1, 1}, {-1, 2, 1}}, {0, 1, 2}, &steps);
+    tracer.commit();
+    sss::ShadowRay ray{{0.0f, 0.0f, -1.0f}, {0, 0, 1}, 0.0f, 100.0f};
+    EXPECT_NEAR(tracer.intersect(ray).t, 2.0f, 1e-5f);
+    ray.time = 1.0f;
+    EXPECT_NEAR(tracer.intersect(ray).t, 4.0f, 1e-5f);
+    ray.time = 0.25f;
+    EXPECT_NEAR(tracer.intersect(ray).t, 2.5f, 1e-5f);
+    // Occlusion sees the motion too: a ray ending at z = 2 is blocked only early.
+    ray.tfar = 3.0f;
+    ray.time = 0.0f;
+    EXPECT_TRUE(tracer.occluded(ray));
+    ray.time = 0.9f;
+    EXPECT_FALSE(tracer.occluded(ray));
+    // A time outside [0, 1] is an invalid ray.
+    ray.time = 1.5f;
+    EXPECT_FALSE(tracer.occluded(ray));
+    EXPECT_EQ(tracer.invalid_rays(), 1u);
+    // Steps must have every vertex.
+    sss::RayTracer bad;
+    const std::vector<std::vector<glm::vec3>> short_steps = {{{0, 0, 0}}};
+    EXPECT_THROW(bad.add_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2}, &short_steps),
+                 sss::ValueError);
+}

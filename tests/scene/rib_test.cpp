@@ -868,7 +868,7 @@ TEST(RibGeometry, CountMismatchesAreErrors) {
     EXPECT_TRUE(scene.primitives.empty());
 }
 
-TEST(RibGeometry, ObjectInstancesTakeTheInstanceStateAndMotionUsesFirstSample) {
+TEST(RibGeometry, ObjectInstancesTakeTheInstanceStateAndMoveWithTheCtm) {
     auto scene = parse(R"(WorldBegin
 ObjectBegin "ball"
   Translate 1 0 0
@@ -891,7 +891,11 @@ ObjectInstance "ball"
     EXPECT_EQ(scene.primitives[1].object_to_world, scene.primitives[0].object_to_world);
     expect_near(apply(scene.primitives[2].object_to_world, {0, 0, 0}), {1, 5, 1});
     EXPECT_EQ(scene.primitives[0].source, "test.rib:4");
-    EXPECT_TRUE(has_warning(scene, "motion blur"));
+    // The instance under the moving CTM moves; the one before does not.
+    EXPECT_FALSE(scene.primitives[0].motion);
+    ASSERT_TRUE(scene.primitives[2].motion);
+    expect_near(apply(scene.primitives[2].motion->transforms[1], {0, 0, 0}), {1, 5, 2});
+    EXPECT_FALSE(has_warning(scene, "motion blur"));
 }
 
 // --- archives -----------------------------------------------------------------

@@ -12,9 +12,11 @@
 /// camera measured at the surface's distance from the eye, ignoring its
 /// orientation (REYES with raster-oriented dicing off).
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -57,6 +59,31 @@ struct DisplaceGrid {
 /// Moves the points of a grid (a displacement shader); see DiceControl::displace.
 using DisplaceHook = std::function<void(DisplaceGrid& grid)>;
 
+/// The choices a dicing makes from the geometry (grid sizes, splits, the
+/// longest side of a triangle), recorded by one dicing and replayed by
+/// another of the same topology, so that both make the same triangles:
+/// motion blur dices a moving primitive at each time step with the choices
+/// made at the first. One dicing at a time (not thread-safe).
+class DiceJournal {
+public:
+    /// While recording: keeps `value` and returns it. While replaying: the
+    /// value recorded at this point (ValueError "<where>: ..." when the
+    /// replay asks for more than was recorded).
+    double note(double value, const std::string& where) const;
+    /// Replays the recording from its start.
+    void replay() {
+        m_replaying = true;
+        m_next = 0;
+    }
+    /// Whether a replay used every recorded choice.
+    bool replayed_all() const { return m_next == m_values.size(); }
+
+private:
+    mutable std::vector<double> m_values;
+    mutable std::size_t m_next = 0;
+    bool m_replaying = false;
+};
+
 /// How fine to dice.
 struct DiceControl {
     /// > 0: micropolygon edge length in world units. 0: from ShadingRate and the camera.
@@ -82,6 +109,13 @@ struct DiceControl {
     /// (world space); the dicer then recomputes the micropolygons' areas and
     /// radii from the displaced vertices. Called from the dicing thread.
     DisplaceHook displace;
+    /// When set: the dicing's geometric choices go through it (DiceJournal).
+    std::shared_ptr<DiceJournal> journal;
+
+    /// A choice made from the geometry: `value`, or its journal's.
+    double note(double value, const Primitive& prim) const {
+        return journal ? journal->note(value, prim.source) : value;
+    }
 
     /// Micropolygon edge length wanted at world point p for a primitive with
     /// the given shading rate: `spacing`, or sqrt(shading_rate) pixels of the
@@ -129,6 +163,31 @@ struct DicedSurface {
     /// (and triangulated polygons) have no (u, v): zeros, and s, t
     /// interpolated from "st" ("s", "t") when given, else zeros too.
     std::vector<glm::vec4> vertex_uvst;
+    /// Motion blur (DiceRequest::times): the vertices and their normals at
+    /// each time after the first (the surface itself is at the first), over
+    /// the same triangles.
+    std::vector<std::vector<glm::vec3>> step_vertices, step_normals;
+
+    /// Whether it moves: vertices at more than one time.
+    bool moving() const { return !step_vertices.empty(); }
+    /// Vertex v, or its normal, at `time` (0..1 over the steps, evenly
+    /// spread): linear between the steps, as the ray tracer has it.
+    glm::vec3 vertex_at(uint32_t v, float time) const {
+        return step_at(vertices, step_vertices, v, time);
+    }
+    glm::vec3 normal_at(uint32_t v, float time) const {
+        return step_at(vertex_normals, step_normals, v, time);
+    }
+    static glm::vec3 step_at(const std::vector<glm::vec3>& first,
+                             const std::vector<std::vector<glm::vec3>>& steps, uint32_t v,
+                             float time) {
+        if (steps.empty()) return first[v];
+        const float f = std::clamp(time, 0.0f, 1.0f) * static_cast<float>(steps.size());
+        const std::size_t i = std::min(static_cast<std::size_t>(f), steps.size() - 1);
+        const float w = f - static_cast<float>(i);
+        const glm::vec3& a = i == 0 ? first[v] : steps[i - 1][v];
+        return (1.0f - w) * a + w * steps[i][v];
+    }
 
     std::size_t size() const { return centers.size(); }
     bool has_parametric() const { return !u.empty(); }
@@ -166,7 +225,18 @@ DicedSurface dice_primitive(const Primitive& prim, const DiceControl& control);
 struct DiceRequest {
     std::size_t primitive = 0; ///< index into scene.primitives
     DiceControl control;       ///< its camera (if any) must outlive dice_all
+    /// Motion blur: the times to dice a moving primitive at (primitive_at),
+    /// the first one with its own choices, the others with the same ones
+    /// (DicedSurface::step_vertices). Empty: the primitive as it is.
+    std::vector<double> times;
 };
+
+/// Dices a moving primitive at each of `times` (at least one) into one
+/// surface: the first time's, with the vertices at the other times in
+/// step_vertices. ValueError naming the primitive when a time step dices
+/// into other triangles (a deformation that changes its triangulation).
+DicedSurface dice_moving(const Primitive& prim, const DiceControl& control,
+                         const std::vector<double>& times);
 
 /// What dicing makes of a primitive, estimated before anything is diced.
 struct DiceEstimate {

@@ -11,12 +11,14 @@
 
 namespace sss {
 
-/// One shadow ray: origin, unit direction and the [tnear, tfar] interval.
+/// One shadow ray: origin, unit direction, the [tnear, tfar] interval and
+/// the time it is traced at (motion blur: 0 = shutter open, 1 = close).
 struct ShadowRay {
     glm::vec3 origin;
     glm::vec3 direction;
     float tnear = 0.0f;
     float tfar = 0.0f;
+    float time = 0.0f;
 };
 
 /// A closest hit.
@@ -39,9 +41,13 @@ public:
     RayTracer(const RayTracer&) = delete;
     RayTracer& operator=(const RayTracer&) = delete;
 
-    /// Adds a mesh (3 indices per triangle) and returns its index. Data are copied.
+    /// Adds a mesh (3 indices per triangle) and returns its index. Data are
+    /// copied. A moving mesh gives its vertices at later times in `steps`
+    /// (each as many as `vertices`): the times spread evenly over [0, 1],
+    /// linear in between, and a ray sees the mesh as it is at its time.
     uint32_t add_mesh(const std::vector<glm::vec3>& vertices,
-                      const std::vector<uint32_t>& triangles);
+                      const std::vector<uint32_t>& triangles,
+                      const std::vector<std::vector<glm::vec3>>* steps = nullptr);
     /// Builds the acceleration structure.
     void commit();
 

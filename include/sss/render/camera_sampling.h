@@ -55,4 +55,9 @@ glm::dvec2 concentric_disk(double u, double v);
 /// `pixel_key` only (a different shuffle per pixel, none per thread).
 std::vector<glm::dvec2> lens_square_samples(uint64_t pixel_key, int nx, int ny);
 
+/// Motion blur: n times in [0, 1) for a pixel's n samples, one per stratum
+/// of width 1/n, jittered, in an order shuffled by the pixel's key (a stream
+/// of their own, apart from the pixel and lens positions).
+std::vector<double> time_samples(uint64_t pixel_key, int n);
+
 } // namespace sss

@@ -197,6 +197,8 @@ enum class PrimitiveKind {
 /// The RIB request of a kind ("PointsPolygons", "Sphere", ...).
 const char* primitive_kind_name(PrimitiveKind kind);
 
+struct PrimitiveMotion;
+
 /// One primitive as the RIB gave it, in its object space.
 struct Primitive {
     PrimitiveKind kind = PrimitiveKind::Polygon;
@@ -237,7 +239,38 @@ struct Primitive {
     Matrix4 object_to_world{1.0};
     std::shared_ptr<const Attributes> attributes;
     std::string source; ///< "file.rib:12" of the statement
+    /// Motion blur (MotionBegin): null for a primitive that does not move.
+    /// Its own args, params and object_to_world are those of the first time.
+    std::shared_ptr<const PrimitiveMotion> motion;
 };
+
+/// How a primitive moves (RIB MotionBegin blocks): its transform and its
+/// shape at a few times each (increasing), linear in between and held
+/// before the first and after the last (RISpec 3.2 section 4.3).
+struct PrimitiveMotion {
+    /// Times of `transforms`; empty: object_to_world at every time.
+    std::vector<double> transform_times;
+    std::vector<Matrix4> transforms; ///< object_to_world at each transform time
+    /// Times of the shapes; empty: the primitive's own shape at every time.
+    std::vector<double> shape_times;
+    /// Per shape time: the positional numbers and the parameter list ([0]
+    /// is the primitive's own). Same topology at every time.
+    std::vector<std::vector<double>> shape_args;
+    std::vector<ParamList> shape_params;
+
+    /// Every time anything is given at (sorted, distinct).
+    std::vector<double> times() const;
+};
+
+/// The primitive as it is at `time`: transform and shape interpolated
+/// linearly between the motion samples around it (the numbers of every
+/// parameter that has as many at both; others from the earlier sample),
+/// without motion. A primitive that does not move is returned as it is.
+Primitive primitive_at(const Primitive& prim, double time);
+
+/// Linear interpolation of `keys` at `time` (held outside `times`).
+Matrix4 matrix_at(const std::vector<double>& times, const std::vector<Matrix4>& keys,
+                  double time);
 
 /// A primitive's attributes (RI defaults for a primitive built without any).
 const Attributes& attributes_of(const Primitive& prim);
@@ -293,6 +326,18 @@ struct Camera {
     double fstop = std::numeric_limits<double>::infinity();
     double focal_length = 0.0;
     double focal_distance = 0.0;
+    /// Shutter open close: the times camera samples spread over (equal:
+    /// no motion blur, everything as it is at shutter_open).
+    double shutter_open = 0.0;
+    double shutter_close = 0.0;
+    /// A moving camera (MotionBegin around camera transformations):
+    /// world_to_camera at each of motion_times; empty when it stands still
+    /// (world_to_camera is the first).
+    std::vector<double> motion_times;
+    std::vector<Matrix4> motion_world_to_camera;
+
+    /// Whether samples spread over a shutter interval.
+    bool motion_blur() const { return shutter_close > shutter_open; }
 
     /// Where each part was set, as errors name it ("scene.rib:3: ScreenWindow");
     /// empty when the RI default is in effect.
@@ -303,6 +348,7 @@ struct Camera {
         std::string projection;     ///< Projection
         std::string clipping;       ///< Clipping
         std::string depth_of_field; ///< DepthOfField
+        std::string shutter;        ///< Shutter
         /// WorldBegin: the transformation in effect there is world_to_camera.
         std::string world_begin;
     };

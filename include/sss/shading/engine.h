@@ -204,6 +204,9 @@ struct ShadingBatch {
     /// empty: sqrt(area / pi) of the micropolygon (dicing_area when given,
     /// else area(P)).
     std::vector<float> radius;
+    /// Motion blur: the time each point's rays are traced at (0 = shutter
+    /// open, 1 = close; ShadowRay::time). Empty: 0.
+    std::vector<float> ray_time;
     float time = 0.0f;
     /// How the points were reached (rayinfo; depth limits of their rays).
     RayContext ray;

@@ -296,7 +296,10 @@ std::vector<DiceRequest> dice_requests(const Scene& scene, const BakeOptions& op
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const int job = plan.job_of[i];
         if (job < 0 && !plan.occluder[i]) continue;
-        DiceRequest request{i, control};
+        DiceRequest request{i, control, {}};
+        // A moving primitive is baked as it is when the shutter opens.
+        if (scene.primitives[i].motion)
+            request.times = {scene.options.camera.shutter_open};
         // Shaders that differentiate or read u, v, s, t are shaded grid by
         // grid with the parametrisation; the others need neither.
         if (job >= 0) {

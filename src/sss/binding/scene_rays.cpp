@@ -219,7 +219,8 @@ struct SceneRays::Impl {
             bool skip = glm::clamp(attr.opacity, 0.0, 1.0) == glm::dvec3(0.0) ||
                         (h.t < q.self_distance && q.origin == &scene.primitives[prim]);
             if (!skip && attr.sides == 1 && q.hitsides != HitSides::Both) {
-                const glm::vec3 n = interpolated_normal(prim, h.triangle, h.u, h.v);
+                const glm::vec3 n =
+                    interpolated_normal(prim, h.triangle, h.u, h.v, ray.time);
                 glm::vec3 ng = h.geometric_normal;
                 if (glm::dot(ng, n) < 0.0f) ng = -ng;
                 const bool back = glm::dot(ng, ray.direction) > 0.0f;
@@ -239,16 +240,17 @@ struct SceneRays::Impl {
         return false;
     }
 
-    glm::vec3 interpolated_normal(uint32_t prim, uint32_t tri, float b1, float b2) const {
+    /// The normal at a hit, of the surface as it is at `time` (motion blur).
+    glm::vec3 interpolated_normal(uint32_t prim, uint32_t tri, float b1, float b2,
+                                  float time) const {
         const DicedSurface& d = *surfaces[prim].diced;
         const uint32_t* v = &d.triangles[3 * std::size_t(tri)];
         if (d.vertex_normals.size() != d.vertices.size()) {
-            const glm::vec3 e1 = d.vertices[v[1]] - d.vertices[v[0]];
-            const glm::vec3 e2 = d.vertices[v[2]] - d.vertices[v[0]];
-            return glm::cross(e1, e2);
+            const glm::vec3 v0 = d.vertex_at(v[0], time);
+            return glm::cross(d.vertex_at(v[1], time) - v0, d.vertex_at(v[2], time) - v0);
         }
-        return (1.0f - b1 - b2) * d.vertex_normals[v[0]] + b1 * d.vertex_normals[v[1]] +
-               b2 * d.vertex_normals[v[2]];
+        return (1.0f - b1 - b2) * d.normal_at(v[0], time) + b1 * d.normal_at(v[1], time) +
+               b2 * d.normal_at(v[2], time);
     }
 
     /// Shades hits[begin, end) (one primitive) and writes the query's
@@ -363,14 +365,19 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
         const Hit& h = hits[begin + k];
         const ShadowRay& ray = q.rays[h.ray];
         const uint32_t* tri = &d.triangles[3 * std::size_t(h.triangle)];
-        const glm::dvec3 v0(d.vertices[tri[0]]), v1(d.vertices[tri[1]]),
-            v2(d.vertices[tri[2]]);
+        const glm::dvec3 v0(d.vertex_at(tri[0], ray.time)),
+            v1(d.vertex_at(tri[1], ray.time)), v2(d.vertex_at(tri[2], ray.time));
         const double b1 = h.b1, b2 = h.b2, b0 = 1.0 - b1 - b2;
         const glm::dvec3 p = b0 * v0 + b1 * v1 + b2 * v2;
         glm::dvec3 ng = glm::cross(v1 - v0, v2 - v0);
         const double ngl = glm::length(ng);
         ng = ngl > 0.0 && std::isfinite(ngl) ? ng / ngl : -glm::dvec3(ray.direction);
-        glm::dvec3 nn(interpolated_normal(prim_index, h.triangle, h.b1, h.b2));
+        glm::dvec3 nn(interpolated_normal(prim_index, h.triangle, h.b1, h.b2, ray.time));
+        // The hit's own rays leave at the time it was seen (motion blur).
+        if (ray.time != 0.0f) {
+            batch.ray_time.resize(n, 0.0f);
+            batch.ray_time[k] = ray.time;
+        }
         const double nl = glm::length(nn);
         nn = nl > 0.0 && std::isfinite(nl) ? nn / nl : ng;
         if (glm::dot(ng, nn) < 0.0) ng = -ng;
@@ -678,7 +685,8 @@ SceneRays::SceneRays(const Scene& scene, const SceneShaders& shaders,
             skip = skip || attr.sides == 1 ||
                    glm::clamp(attr.opacity, 0.0, 1.0) == glm::dvec3(0.0);
             const DicedSurface& d = *im.surfaces[i].diced;
-            rt->add_mesh(d.vertices, d.triangles);
+            rt->add_mesh(d.vertices, d.triangles,
+                         d.moving() ? &d.step_vertices : nullptr);
             mesh_to_prim.push_back(i);
             im.triangle_count += d.triangles.size() / 3;
         }

@@ -88,6 +88,38 @@ DicedSurface dice_primitive(const Primitive& prim, const DiceControl& control) {
     return surface;
 }
 
+double DiceJournal::note(double value, const std::string& where) const {
+    if (!m_replaying) {
+        m_values.push_back(value);
+        return value;
+    }
+    if (m_next >= m_values.size())
+        throw ValueError(where + ": motion blur: the primitive dices differently at " +
+                         "another time (its deformation changes how it is cut up)");
+    return m_values[m_next++];
+}
+
+DicedSurface dice_moving(const Primitive& prim, const DiceControl& control,
+                         const std::vector<double>& times) {
+    if (times.empty()) return dice_primitive(prim, control);
+    DiceControl steps = control;
+    steps.journal = std::make_shared<DiceJournal>();
+    DicedSurface surface = dice_primitive(primitive_at(prim, times.front()), steps);
+    for (std::size_t k = 1; k < times.size(); ++k) {
+        steps.journal->replay();
+        DicedSurface at = dice_primitive(primitive_at(prim, times[k]), steps);
+        if (!steps.journal->replayed_all() || at.triangles != surface.triangles ||
+            at.vertices.size() != surface.vertices.size())
+            throw ValueError(prim.source + ": motion blur: the primitive dices into " +
+                             "other triangles at time " + std::to_string(times[k]) +
+                             " than at " + std::to_string(times.front()) +
+                             " (its deformation changes how it is cut up)");
+        surface.step_vertices.push_back(std::move(at.vertices));
+        surface.step_normals.push_back(std::move(at.vertex_normals));
+    }
+    return surface;
+}
+
 DiceEstimate estimate_primitive(const Primitive& prim, const DiceControl& control) {
     DiceEstimate estimate;
     dispatch(prim, control, &estimate);
@@ -119,7 +151,10 @@ std::vector<DicedSurface> dice_all(const Scene& scene,
     for_each_request(requests.size(), [&](std::size_t k) {
         const DiceRequest& request = requests[k];
         DicedSurface& surface = diced[request.primitive];
-        surface = dice_primitive(scene.primitives[request.primitive], request.control);
+        const Primitive& prim = scene.primitives[request.primitive];
+        surface = request.times.empty()
+                      ? dice_primitive(prim, request.control)
+                      : dice_moving(prim, request.control, request.times);
         if (finish) finish(request.primitive, surface);
     });
     return diced;

@@ -277,7 +277,7 @@ Mesh points_mesh(const Primitive& prim, const DiceControl& control) {
         const double edge = control.edge_length_at(world, rate);
         const double across =
             w * glm::length(dvec3(prim.object_to_world * dvec4(perpendicular(n), 0.0)));
-        disk(mesh, pts[i], n, 0.5 * w, across / edge, i);
+        disk(mesh, pts[i], n, 0.5 * w, control.note(across / edge, prim), i);
     }
     return mesh;
 }
@@ -430,7 +430,7 @@ private:
         const dvec3 world =
             dvec3(m_prim.object_to_world * dvec4(position(mid, mid.w), 1.0));
         const double edge = m_control.edge_length_at(world, m_rate);
-        const double n = std::ceil(length / (4.0 * edge));
+        const double n = m_control.note(std::ceil(length / (4.0 * edge)), m_prim);
         return static_cast<int>(std::clamp(n, m_cubic ? 4.0 : 1.0, 4096.0));
     }
 

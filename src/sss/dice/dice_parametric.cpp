@@ -305,6 +305,11 @@ private:
                  "surface has NaN or infinite points (check the transform and \"P\")");
         if (!(e.emin > 0.0) || !std::isfinite(e.emax))
             fail(m_prim, "wanted micropolygon size is not a finite number > 0");
+        // Every split and grid size follows from these (motion blur replays them).
+        e.ulen = m_control.note(e.ulen, m_prim);
+        e.vlen = m_control.note(e.vlen, m_prim);
+        e.emin = m_control.note(e.emin, m_prim);
+        e.emax = m_control.note(e.emax, m_prim);
         return e;
     }
 

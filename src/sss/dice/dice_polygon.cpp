@@ -254,12 +254,16 @@ public:
                 plan.first = k;
             }
         }
+        plan.first = static_cast<int>(control.note(plan.first, prim));
         const glm::dvec3 &a = p[plan.first], &b = p[(plan.first + 1) % 3],
                          &c = p[(plan.first + 2) % 3];
         const glm::dvec3 ab = b - a;
         // C projects inside AB: AB is the longest side, so A and B are acute.
         plan.foot = std::clamp(glm::dot(c - a, ab) / glm::dot(ab, ab), 0.0, 1.0);
         plan.height = glm::length(glm::cross(ab, c - a)) / plan.longest;
+        // The cut follows from these (motion blur replays them).
+        plan.foot = control.note(plan.foot, prim);
+        plan.height = control.note(plan.height, prim);
         plan.pieces = piece_count(prim, control, plan.longest, e);
         piece_count(prim, control, plan.height, e); // budget check of the tallest line
         bool first = true;
@@ -426,7 +430,8 @@ void world_points(const Primitive& prim, const DiceControl& control,
         world[i] = to_world(m, points[i]);
         if (used[i]) {
             check_world_point(prim, world[i]);
-            edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
+            edge[i] = control.note(
+                edge_length(prim, control, world[i], attr.shading_rate), prim);
         }
     }
 }
@@ -564,7 +569,9 @@ DiceTotals count_pieces(const Primitive& prim, const DiceControl& control,
                  glm::dot(w[0] - w[2], w[0] - w[2])}));
             const double area2 = glm::length(glm::cross(w[1] - w[0], w[2] - w[0]));
             // Zero-area (collinear or repeated corner) triangles add nothing.
-            if (!(area2 > 1e-12 * longest * longest)) continue;
+            if (!(control.note(area2 > 1e-12 * longest * longest ? 1.0 : 0.0, prim) >
+                  0.5))
+                continue;
             // Sub-triangle edges up to sqrt(2) e, the diagonal of an e x e
             // micropolygon: a right triangle's sub-triangles pair up into e x e
             // squares, and the count stays near area / e^2 (with n = longest / e

@@ -43,7 +43,8 @@ DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control,
         for (std::size_t i = 0; i < points.size(); ++i) {
             world[i] = to_world(m, points[i]);
             check_world_point(prim, world[i]);
-            edge[i] = edge_length(prim, control, world[i], attr.shading_rate);
+            edge[i] = control.note(
+                edge_length(prim, control, world[i], attr.shading_rate), prim);
         }
     };
     if (estimate) {
@@ -85,7 +86,7 @@ DicedSurface dice_subdivision(const Primitive& prim, const DiceControl& control,
                     fine = false;
                     break;
                 }
-            if (fine) break;
+            if (control.note(fine ? 1.0 : 0.0, prim) > 0.5) break;
         }
         mesh = refine_subdiv_mesh(mesh);
     }

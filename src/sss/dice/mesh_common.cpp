@@ -126,7 +126,7 @@ double edge_length(const Primitive& prim, const DiceControl& control, const glm:
 /// Number of pieces for a length: ceil(length / edge), at least 1.
 std::size_t piece_count(const Primitive& prim, const DiceControl& control, double length,
                         double edge) {
-    const double n = std::max(1.0, std::ceil(length / edge));
+    const double n = control.note(std::max(1.0, std::ceil(length / edge)), prim);
     // Every piece is at least one micropolygon: one side beyond the budget is
     // reported here, before any count can overflow.
     if (!(n <= static_cast<double>(control.max_micropolygons)) || !(n <= 1e9))

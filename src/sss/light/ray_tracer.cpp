@@ -70,7 +70,8 @@ bool in_range(const glm::vec3& v) {
 bool valid(const ShadowRay& ray) {
     return in_range(ray.origin) && in_range(ray.direction) &&
            glm::dot(ray.direction, ray.direction) > 0.0f && ray.tnear >= 0.0f &&
-           std::isfinite(ray.tnear) && !std::isnan(ray.tfar);
+           std::isfinite(ray.tnear) && !std::isnan(ray.tfar) && ray.time >= 0.0f &&
+           ray.time <= 1.0f;
 }
 
 void fill(RTCRay& r, const ShadowRay& s) {
@@ -81,7 +82,7 @@ void fill(RTCRay& r, const ShadowRay& s) {
     r.dir_x = s.direction.x;
     r.dir_y = s.direction.y;
     r.dir_z = s.direction.z;
-    r.time = 0.0f;
+    r.time = s.time;
     r.tfar = s.tfar;
     r.mask = 0xFFFFFFFFu;
     r.id = 0;
@@ -141,7 +142,15 @@ RayTracer::~RayTracer() {
 }
 
 uint32_t RayTracer::add_mesh(const std::vector<glm::vec3>& vertices,
-                             const std::vector<uint32_t>& triangles) {
+                             const std::vector<uint32_t>& triangles,
+                             const std::vector<std::vector<glm::vec3>>* steps) {
+    const std::size_t later = steps ? steps->size() : 0;
+    if (later + 1 > 129) throw ValueError("RayTracer: more than 129 motion steps");
+    for (std::size_t k = 0; k < later; ++k)
+        if ((*steps)[k].size() != vertices.size())
+            throw ValueError("RayTracer: motion step " + std::to_string(k + 1) + " has " +
+                             std::to_string((*steps)[k].size()) + " vertices, not " +
+                             std::to_string(vertices.size()));
     if (triangles.size() % 3 != 0)
         throw ValueError("RayTracer: triangle index count " +
                          std::to_string(triangles.size()) + " is not a multiple of 3");
@@ -154,11 +163,14 @@ uint32_t RayTracer::add_mesh(const std::vector<glm::vec3>& vertices,
                              " uses vertex " + std::to_string(triangles[i]) + " of " +
                              std::to_string(vertices.size()));
     }
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-        // Embree would drop the triangles of such vertices without a word.
-        if (!finite3(vertices[i]) || !in_range(vertices[i]))
-            throw ValueError("RayTracer: vertex " + std::to_string(i) +
-                             " is not finite or lies beyond +-1.8e18");
+    for (std::size_t k = 0; k <= later; ++k) {
+        const std::vector<glm::vec3>& at = k == 0 ? vertices : (*steps)[k - 1];
+        for (std::size_t i = 0; i < at.size(); ++i) {
+            // Embree would drop the triangles of such vertices without a word.
+            if (!finite3(at[i]) || !in_range(at[i]))
+                throw ValueError("RayTracer: vertex " + std::to_string(i) +
+                                 " is not finite or lies beyond +-1.8e18");
+        }
     }
 
     const uint32_t index = m_impl->mesh_count;
@@ -171,34 +183,46 @@ uint32_t RayTracer::add_mesh(const std::vector<glm::vec3>& vertices,
     RTCDevice device = m_impl->device;
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     check_embree(device, "rtcNewGeometry");
-    // 16-byte vertex stride: Embree reads vertices with 16-byte SSE loads.
-    auto* vb = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                4 * sizeof(float), vertices.size()));
+    if (later > 0) rtcSetGeometryTimeStepCount(geom, static_cast<unsigned>(later + 1));
     auto* ib = static_cast<uint32_t*>(
         rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                 3 * sizeof(uint32_t), triangles.size() / 3));
-    if (!vb || !ib) {
+    if (!ib) {
         rtcReleaseGeometry(geom);
         check_embree(device, "rtcSetNewGeometryBuffer");
         throw Error("Embree: cannot allocate mesh buffers");
     }
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-        vb[4 * i + 0] = vertices[i].x;
-        vb[4 * i + 1] = vertices[i].y;
-        vb[4 * i + 2] = vertices[i].z;
-        vb[4 * i + 3] = 0.0f;
-    }
     std::memcpy(ib, triangles.data(), triangles.size() * sizeof(uint32_t));
+    for (std::size_t k = 0; k <= later; ++k) {
+        const std::vector<glm::vec3>& at = k == 0 ? vertices : (*steps)[k - 1];
+        // 16-byte vertex stride: Embree reads vertices with 16-byte SSE loads.
+        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_VERTEX, static_cast<unsigned>(k), RTC_FORMAT_FLOAT3,
+            4 * sizeof(float), at.size()));
+        if (!vb) {
+            rtcReleaseGeometry(geom);
+            check_embree(device, "rtcSetNewGeometryBuffer");
+            throw Error("Embree: cannot allocate mesh buffers");
+        }
+        for (std::size_t i = 0; i < at.size(); ++i) {
+            vb[4 * i + 0] = at[i].x;
+            vb[4 * i + 1] = at[i].y;
+            vb[4 * i + 2] = at[i].z;
+            vb[4 * i + 3] = 0.0f;
+        }
+    }
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(m_impl->scene, geom, index);
     rtcReleaseGeometry(geom); // the scene holds the reference now
     check_embree(device, "adding a mesh");
 
     // The bounding box only over vertices that triangles use.
-    for (uint32_t v : triangles) {
-        m_impl->lower = glm::min(m_impl->lower, vertices[v]);
-        m_impl->upper = glm::max(m_impl->upper, vertices[v]);
+    for (std::size_t k = 0; k <= later; ++k) {
+        const std::vector<glm::vec3>& at = k == 0 ? vertices : (*steps)[k - 1];
+        for (uint32_t v : triangles) {
+            m_impl->lower = glm::min(m_impl->lower, at[v]);
+            m_impl->upper = glm::max(m_impl->upper, at[v]);
+        }
     }
     m_impl->triangle_count += triangles.size() / 3;
     m_impl->committed = false;

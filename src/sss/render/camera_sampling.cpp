@@ -3,6 +3,7 @@
 
 #include "sss/render/camera_sampling.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 
@@ -106,6 +107,21 @@ std::vector<glm::dvec2> lens_square_samples(uint64_t pixel_key, int nx, int ny) 
         h = detail::splitmix64(h);
         const double jv = detail::unit_double(h);
         out[std::size_t(s)] = {((c % nx) + ju) / nx, ((c / nx) + jv) / ny};
+    }
+    return out;
+}
+
+std::vector<double> time_samples(uint64_t pixel_key, int n) {
+    std::vector<double> out(static_cast<std::size_t>(std::max(n, 0)));
+    uint64_t h = detail::splitmix64(pixel_key ^ 0x74696D6544454653ull); // "timeDEFS"
+    for (int s = 0; s < n; ++s) {
+        h = detail::splitmix64(h);
+        out[std::size_t(s)] = (s + detail::unit_double(h)) / n;
+    }
+    for (int k = n - 1; k > 0; --k) { // Fisher-Yates
+        h = detail::splitmix64(h);
+        const int j = static_cast<int>(detail::unit_double(h) * (k + 1));
+        std::swap(out[std::size_t(k)], out[std::size_t(std::min(j, k))]);
     }
     return out;
 }

@@ -58,10 +58,11 @@ void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
         const Attributes& attr = attributes_of(prim);
         const DicedSurface& d = surf.diced;
         const uint32_t* tri = &d.triangles[3 * std::size_t(hit.triangle)];
-        const glm::dvec3 v0(d.vertices[tri[0]]), v1(d.vertices[tri[1]]),
-            v2(d.vertices[tri[2]]);
-        const glm::dvec3 n0(d.vertex_normals[tri[0]]), n1(d.vertex_normals[tri[1]]),
-            n2(d.vertex_normals[tri[2]]);
+        // A moving surface as it is at the ray's time.
+        const glm::dvec3 v0(d.vertex_at(tri[0], ray.time)),
+            v1(d.vertex_at(tri[1], ray.time)), v2(d.vertex_at(tri[2], ray.time));
+        const glm::dvec3 n0(d.normal_at(tri[0], ray.time)),
+            n1(d.normal_at(tri[1], ray.time)), n2(d.normal_at(tri[2], ray.time));
         const double b1 = hit.u, b2 = hit.v, b0 = 1.0 - b1 - b2;
         const glm::dvec3 p = b0 * v0 + b1 * v1 + b2 * v2;
         const glm::dvec3 dir(ray.direction);
@@ -135,6 +136,7 @@ void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
         h.b2 = hit.v;
         h.seed = detail::splitmix64(cs.key ^
                                     (0xA5A5A5A5ull + static_cast<uint64_t>(cs.layers)));
+        h.time = ray.time;
         hits.push_back(h);
     }
 }
@@ -230,6 +232,7 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         batch.layout = triplets ? BatchLayout::Triplets : BatchLayout::Points;
         batch.oriented_derivatives = true;
         batch.primitive = &prim;
+        batch.time = static_cast<float>(job.shutter_open);
         batch.P.resize(m);
         batch.N.resize(m);
         batch.Ng.resize(m);
@@ -253,6 +256,7 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         }
         batch.dicing_area.resize(m);
         batch.radius.resize(m);
+        if (job.motion_blur) batch.ray_time.resize(m);
         // Point i of the batch draws its samples from hash(seed, i): the
         // first hit's key fixes them for the batch (tiles are split into
         // batches the same way for any thread count).
@@ -289,6 +293,7 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
                 batch.Os[i] = glm::vec3(h.os);
                 batch.dicing_area[i] = area;
                 batch.radius[i] = static_cast<float>(h.radius);
+                if (job.motion_blur) batch.ray_time[i] = h.time;
                 if (parametric) {
                     batch.u[i] = static_cast<float>(uvst[q].x);
                     batch.v[i] = static_cast<float>(uvst[q].y);
@@ -377,6 +382,50 @@ int filter_slots(const Renderer& job) {
     return job.values + (job.nearest_fallback ? 2 : 1);
 }
 
+/// The camera samples of the pixels [x0, x1) x [y0, y1), pixel by pixel in
+/// row order: stratified and jittered positions, lens positions (depth of
+/// field) and times (motion blur) of their own strata.
+std::vector<CameraSample> tile_samples(const Renderer& job, int x0, int y0, int x1,
+                                       int y1) {
+    const bool lens = job.camera.depth_of_field();
+    std::vector<CameraSample> samples;
+    samples.reserve(std::size_t(x1 - x0) * (y1 - y0) * job.nx * job.ny);
+    for (int py = y0; py < y1; ++py) {
+        for (int px = x0; px < x1; ++px) {
+            const uint64_t pixel_key =
+                detail::splitmix64((uint64_t(uint32_t(py)) << 32) | uint32_t(px));
+            // Lens positions: strata of their own, paired with the pixel
+            // strata by a per-pixel shuffle (no extra numbers without DOF).
+            const std::vector<glm::dvec2> lens_uv =
+                lens ? lens_square_samples(pixel_key, job.nx, job.ny)
+                     : std::vector<glm::dvec2>();
+            // Times over the shutter: strata of their own, shuffled per pixel.
+            const std::vector<double> times =
+                job.motion_blur ? time_samples(pixel_key, job.nx * job.ny)
+                                : std::vector<double>();
+            for (int j = 0; j < job.ny; ++j) {
+                for (int i = 0; i < job.nx; ++i) {
+                    CameraSample cs;
+                    cs.key =
+                        detail::splitmix64(pixel_key + uint64_t(j * job.nx + i) *
+                                                           detail::kSplitMixIncrement);
+                    cs.sx = px + (i + detail::unit_double(cs.key)) / job.nx;
+                    cs.sy = py + (j + detail::unit_double(detail::splitmix64(cs.key))) /
+                                     job.ny;
+                    const glm::dvec2 uv =
+                        lens ? lens_uv[std::size_t(j * job.nx + i)] : glm::dvec2(0.5);
+                    cs.ray = job.rays->ray(cs.sx, cs.sy, concentric_disk(uv.x, uv.y),
+                                           &cs.units);
+                    if (job.motion_blur)
+                        move_camera_ray(job, times[std::size_t(j * job.nx + i)], cs.ray);
+                    samples.push_back(cs);
+                }
+            }
+        }
+    }
+    return samples;
+}
+
 /// Renders every tile: its camera samples go through the scene layer by
 /// layer (each pass traces every live sample's ray to its next surface and
 /// shades the hits in batches per primitive), then each splats into the
@@ -395,7 +444,6 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
     const int span_x = kTile + 2 * job.reach_x, span_y = kTile + 2 * job.reach_y;
     const int rx = job.reach_x, ry = job.reach_y;
     const PixelFilter& filter = *job.filter;
-    const bool lens = job.camera.depth_of_field();
     if (job.nearest_fallback)
         nearest.assign(std::size_t(width) * height * job.values, 0.0f);
     std::vector<std::vector<float>> tile_sums(tiles);
@@ -414,36 +462,7 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
         uint64_t camera_count = 0, bad_count = 0;
 
         // The tile's samples, pixel by pixel in row order.
-        std::vector<CameraSample> samples;
-        samples.reserve(std::size_t(x1 - x0) * (y1 - y0) * job.nx * job.ny);
-        for (int py = y0; py < y1; ++py) {
-            for (int px = x0; px < x1; ++px) {
-                const uint64_t pixel_key =
-                    detail::splitmix64((uint64_t(uint32_t(py)) << 32) | uint32_t(px));
-                // Lens positions: strata of their own, paired with the pixel
-                // strata by a per-pixel shuffle (no extra numbers without DOF).
-                const std::vector<glm::dvec2> lens_uv =
-                    lens ? lens_square_samples(pixel_key, job.nx, job.ny)
-                         : std::vector<glm::dvec2>();
-                for (int j = 0; j < job.ny; ++j) {
-                    for (int i = 0; i < job.nx; ++i) {
-                        CameraSample cs;
-                        cs.key = detail::splitmix64(pixel_key +
-                                                    uint64_t(j * job.nx + i) *
-                                                        detail::kSplitMixIncrement);
-                        cs.sx = px + (i + detail::unit_double(cs.key)) / job.nx;
-                        cs.sy =
-                            py + (j + detail::unit_double(detail::splitmix64(cs.key))) /
-                                     job.ny;
-                        const glm::dvec2 uv =
-                            lens ? lens_uv[std::size_t(j * job.nx + i)] : glm::dvec2(0.5);
-                        cs.ray = job.rays->ray(cs.sx, cs.sy, concentric_disk(uv.x, uv.y),
-                                               &cs.units);
-                        samples.push_back(cs);
-                    }
-                }
-            }
-        }
+        std::vector<CameraSample> samples = tile_samples(job, x0, y0, x1, y1);
         std::vector<float> values(samples.size() * job.values, 0.0f);
         std::vector<SurfaceHit> hits;
         while (true) {

@@ -185,6 +185,13 @@ struct Renderer {
     double pixel_per_depth = 0.0;
     glm::dmat3 normal_to_camera{1.0}; ///< inverse transpose of world->camera
     glm::dvec3 camera_x{1, 0, 0}, camera_y{0, 1, 0}; ///< camera axes in world space
+    /// Motion blur: camera samples spread over the shutter (Camera::motion_blur).
+    bool motion_blur = false;
+    /// A moving camera: its world-to-camera at each motion sample (empty
+    /// when it does not move), and the shutter's open and close times.
+    std::vector<double> camera_times;
+    std::vector<glm::dmat4> world_to_camera_keys;
+    double shutter_open = 0.0, shutter_close = 0.0;
     std::atomic<uint64_t> camera_rays{0};
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
@@ -218,7 +225,18 @@ struct SurfaceHit {
     float b1 = 0.0f, b2 = 0.0f; ///< its vertices 1 and 2 at the hit
     uint64_t seed = 0;
     double lift = 0.0; ///< distance of p above the flat triangle
+    float time = 0.0f; ///< the ray's time (0 = shutter open, 1 = close)
 };
+
+/// The times a moving primitive is diced at: evenly over the shutter with
+/// motion blur (a step at each of its motion samples when they fall on an
+/// even spacing, else four steps per sample interval, at most 33), the
+/// shutter's open time alone without. Empty when it does not move.
+std::vector<double> dice_times(const Camera& camera, const Primitive& prim);
+
+/// Moves a camera ray made by the camera as it is at the shutter's open time
+/// to the camera as it is at `time` (a moving camera), and stamps the time.
+void move_camera_ray(const Renderer& job, double time, ShadowRay& ray);
 
 /// The camera with the image size overrides, the pixel samples, the camera
 /// rays and the pixel size per unit of depth; ValueError (UsageError for a

@@ -38,6 +38,20 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     if (options.pixel_samples > 0) job.nx = job.ny = options.pixel_samples;
     if (job.nx < 1 || job.ny < 1 || job.nx > 1024 || job.ny > 1024)
         throw ValueError("pixel samples must lie in [1, 1024]");
+    // Motion blur: the camera rays start from the camera at the shutter's
+    // open time; a moving camera moves them to each sample's time.
+    Camera& cam = job.camera;
+    job.motion_blur = cam.motion_blur();
+    job.shutter_open = cam.shutter_open;
+    job.shutter_close = cam.shutter_close;
+    if (!cam.motion_times.empty()) {
+        cam.world_to_camera =
+            matrix_at(cam.motion_times, cam.motion_world_to_camera, cam.shutter_open);
+        if (job.motion_blur) {
+            job.camera_times = cam.motion_times;
+            job.world_to_camera_keys = cam.motion_world_to_camera;
+        }
+    }
     job.rays.emplace(job.camera);
     const PixelFilterSpec& filter = scene.options.pixel_filter;
     job.filter.emplace(filter);
@@ -55,6 +69,48 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     const glm::dmat3 to_world = glm::inverse(linear);
     job.camera_x = glm::normalize(to_world * glm::dvec3(1, 0, 0));
     job.camera_y = glm::normalize(to_world * glm::dvec3(0, 1, 0));
+}
+
+std::vector<double> dice_times(const Camera& camera, const Primitive& prim) {
+    if (!prim.motion) return {};
+    const double open = camera.shutter_open, close = camera.shutter_close;
+    if (!camera.motion_blur()) return {open};
+    std::vector<double> inside;
+    for (double t : prim.motion->times())
+        if (t > open && t < close) inside.push_back(t);
+    // Even steps through every motion sample inside the shutter, when there
+    // are such steps; else four per interval.
+    int segments = static_cast<int>(inside.size()) + 1;
+    for (double t : inside) {
+        const double f = (t - open) / (close - open) * segments;
+        if (std::abs(f - std::round(f)) > 1e-6) {
+            segments = std::min(32, 4 * segments);
+            break;
+        }
+    }
+    std::vector<double> out(static_cast<std::size_t>(segments) + 1);
+    for (int k = 0; k <= segments; ++k)
+        out[std::size_t(k)] =
+            k == segments ? close : open + (close - open) * k / segments;
+    return out;
+}
+
+void move_camera_ray(const Renderer& job, double time, ShadowRay& ray) {
+    ray.time = static_cast<float>(time);
+    if (job.camera_times.empty()) return;
+    const double t = job.shutter_open + (job.shutter_close - job.shutter_open) * time;
+    const glm::dmat4 to_world =
+        glm::inverse(matrix_at(job.camera_times, job.world_to_camera_keys, t));
+    const glm::dmat4 move = to_world * job.camera.world_to_camera;
+    const glm::dvec3 o = glm::dvec3(move * glm::dvec4(glm::dvec3(ray.origin), 1.0));
+    const glm::dvec3 d = glm::dvec3(move * glm::dvec4(glm::dvec3(ray.direction), 0.0));
+    const double len = glm::length(d);
+    if (!(len > 0.0) || !std::isfinite(len)) return;
+    ray.origin = glm::vec3(o);
+    ray.direction = glm::vec3(d / len);
+    // Distances along the ray scale with the direction (a camera that grows).
+    ray.tnear = static_cast<float>(ray.tnear * len);
+    if (std::isfinite(ray.tfar)) ray.tfar = static_cast<float>(ray.tfar * len);
 }
 
 namespace {
@@ -314,17 +370,21 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
         }
         control.displace = displacer.hook(to_dice[k]);
         control.grids = job.parametric[to_dice[k]] != 0;
-        requests[k] = {to_dice[k], control};
+        requests[k] = {to_dice[k], control, dice_times(job.camera, prim)};
     }
     ScopedStage stage("dicing " +
                       (scene.path.empty() ? std::string("the scene") : scene.path));
     check_dicing(job, requests, separate_shadows);
     std::vector<DicedSurface> diced =
         dice_all(scene, requests, [&](std::size_t i, DicedSurface& d) {
-            for (glm::vec3& n : d.vertex_normals) {
-                const float len = glm::length(n);
-                if (len > 0.0f && std::isfinite(len)) n /= len;
-            }
+            const auto unit = [](std::vector<glm::vec3>& normals) {
+                for (glm::vec3& n : normals) {
+                    const float len = glm::length(n);
+                    if (len > 0.0f && std::isfinite(len)) n /= len;
+                }
+            };
+            unit(d.vertex_normals);
+            for (std::vector<glm::vec3>& step : d.step_normals) unit(step);
             // Hits use the vertices' (u, v, s, t) only: free the centres'.
             for (auto* a : {&d.u, &d.v, &d.du, &d.dv, &d.s, &d.t})
                 std::vector<float>().swap(*a);
@@ -347,12 +407,13 @@ void build_tracers(Renderer& job, const std::vector<std::size_t>& to_dice,
         const Surface& s = job.surfaces[i];
         if (s.diced.triangles.empty()) continue;
         report.triangles += s.diced.triangles.size() / 3;
+        const auto* steps = s.diced.moving() ? &s.diced.step_vertices : nullptr;
         if (s.camera) {
-            job.camera_tracer->add_mesh(s.diced.vertices, s.diced.triangles);
+            job.camera_tracer->add_mesh(s.diced.vertices, s.diced.triangles, steps);
             job.camera_primitive.push_back(static_cast<uint32_t>(i));
         }
         if (separate_shadows && s.shadows)
-            job.shadow_tracer->add_mesh(s.diced.vertices, s.diced.triangles);
+            job.shadow_tracer->add_mesh(s.diced.vertices, s.diced.triangles, steps);
     }
     job.camera_tracer->commit();
     if (job.shadow_tracer) job.shadow_tracer->commit();

@@ -33,7 +33,7 @@ NameSet name_set(const char* names) {
 /// Requests that do not change what this toolchain computes.
 bool ignored(std::string_view name) {
     static const NameSet names =
-        name_set("version Version Shutter ArchiveRecord Camera "
+        name_set("version Version ArchiveRecord Camera "
                  "PixelVariance RelativeDetail ErrorHandler Bound "
                  "GeometricApproximation TextureCoordinates");
     return names.count(name) > 0;
@@ -102,11 +102,8 @@ bool Reader::diverted(const Statement& s) {
             fail(s, "nested FrameBegin");
         return true;
     }
-    // Motion blocks: only the first time sample is used.
-    if (m_in_motion && s.name != "MotionEnd") {
-        if (m_motion_used) return true;
-        m_motion_used = true;
-    }
+    if (m_in_motion && s.name != "MotionEnd" && s.name != "MotionBegin")
+        return motion_statement(s);
     return false;
 }
 
@@ -142,6 +139,7 @@ const Reader::HandlerTable& Reader::handlers() {
         {"TransformEnd", &Reader::do_transform_end},
         {"SolidBegin", &Reader::do_solid_begin},
         {"SolidEnd", &Reader::do_solid_end},
+        {"Shutter", &Reader::do_shutter},
         {"MotionBegin", &Reader::do_motion_begin},
         {"MotionEnd", &Reader::do_motion_end},
         {"ObjectBegin", &Reader::do_object_begin},
@@ -210,7 +208,9 @@ void Reader::execute(const Statement& s) {
     if (diverted(s)) return;
     auto it = handlers().find(s.name);
     if (it != handlers().end()) {
+        const bool in_motion = m_in_motion;
         (this->*(it->second))(s);
+        if (in_motion) after_motion_statement(s);
     } else if (ignored(s.name)) {
         // nothing to do
     } else if (unsupported(s.name)) {

@@ -102,8 +102,16 @@ bool take_wrap(const Statement& s, std::size_t& i, const char* what) {
 void Reader::add_primitive(const Statement& s, Primitive p, const Matrix4& object_to_ctm,
                            const std::string& source) {
     if (!m_object && !m_in_world) fail(s, "geometry outside WorldBegin/WorldEnd");
-    p.object_to_world = m_ctm * object_to_ctm;
+    place(p, object_to_ctm);
     p.source = source;
+    if (m_motion_capture) { // a time sample of a moving primitive (MotionEnd keeps it)
+        m_motion_prims.back().push_back(std::move(p));
+        return;
+    }
+    store_primitive(std::move(p));
+}
+
+void Reader::store_primitive(Primitive p) {
     if (m_object) {
         p.attributes.reset(); // objects take the attributes of each instance
         m_object->push_back(std::move(p));

@@ -94,7 +94,7 @@ void Reader::do_projection(const Statement& s) {
     if (m_ctm != Matrix4(1.0))
         warn(s, "transformations before Projection are part of the screen "
                 "transformation and are ignored");
-    m_ctm = Matrix4(1.0);
+    set_ctm(Matrix4(1.0));
 }
 
 void Reader::do_clipping(const Statement& s) {

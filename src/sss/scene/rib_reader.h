@@ -34,6 +34,13 @@ struct AttributeState {
     std::shared_ptr<const Attributes> snapshot;
 };
 
+/// A moving current transformation (MotionBegin around transformations):
+/// the CTM at each time. Empty: the CTM does not move.
+struct CtmMotion {
+    std::vector<double> times;
+    std::vector<Matrix4> keys;
+};
+
 /// The graphics state saved by an open block, and where the block opened.
 struct SavedState {
     Block block;
@@ -41,6 +48,7 @@ struct SavedState {
     AttributeState attributes; // unused for TransformBegin
     int line;
     std::shared_ptr<const std::string> file;
+    CtmMotion ctm_motion;
 };
 
 /// The whole text of a file, inflated if it is gzip; throws IoError
@@ -146,8 +154,6 @@ private:
     void do_transform_end(const Statement& s);
     void do_solid_begin(const Statement& s);
     void do_solid_end(const Statement& s);
-    void do_motion_begin(const Statement& s);
-    void do_motion_end(const Statement& s);
     void do_object_begin(const Statement& s);
     void do_object_end(const Statement& s);
     void do_object_instance(const Statement& s);
@@ -161,6 +167,31 @@ private:
     void do_perspective(const Statement& s);
     void do_coordinate_system(const Statement& s);
     void do_coord_sys_transform(const Statement& s);
+
+    /// Sets the CTM; it no longer moves.
+    void set_ctm(const Matrix4& m) {
+        m_ctm = m;
+        m_ctm_motion = {};
+    }
+    void restore_ctm(const SavedState& saved) {
+        m_ctm = saved.ctm;
+        m_ctm_motion = saved.ctm_motion;
+    }
+
+    // --- rib_motion.cpp: motion blocks and the shutter --------------------------
+
+    void do_shutter(const Statement& s);
+    void do_motion_begin(const Statement& s);
+    void do_motion_end(const Statement& s);
+    /// A request inside a motion block, before its handler: true when it
+    /// is not executed (a later sample of a request that cannot move).
+    bool motion_statement(const Statement& s);
+    /// The same request after its handler ran.
+    void after_motion_statement(const Statement& s);
+    /// The transform (and transform motion) of a primitive made now:
+    /// CTM x object_to_ctm, or the CTM's motion composed with the
+    /// primitive's own (ObjectInstance of a moving object).
+    void place(Primitive& p, const Matrix4& object_to_ctm) const;
 
     // --- rib_options.cpp: options, camera and declarations --------------------
 
@@ -214,6 +245,8 @@ private:
     void add_primitive(const Statement& s, Primitive p, const Matrix4& object_to_ctm,
                        const std::string& source);
     void add_primitive(const Statement& s, Primitive p);
+    /// Keeps a placed primitive (in the object being defined, or the scene).
+    void store_primitive(Primitive p);
     /// Makes "P" the position parameter (from Pw or, for patches, Pz) and
     /// checks it holds `n_points` points.
     void resolve_positions(const Statement& s, ParamList& params, std::size_t n_points,
@@ -261,8 +294,18 @@ private:
     int m_skip_line = 0;
     std::shared_ptr<const std::string> m_skip_file;
     // motion blocks
+    enum class MotionKind { Transform, Geometry, Other };
+    CtmMotion m_ctm_motion;
     bool m_in_motion = false;
-    bool m_motion_used = false;
+    std::vector<double> m_motion_times;
+    std::size_t m_motion_count = 0; // requests of the block so far
+    std::string m_motion_request;   // its first request
+    MotionKind m_motion_kind = MotionKind::Other;
+    Matrix4 m_motion_base{1.0}; // the CTM at MotionBegin
+    CtmMotion m_motion_base_motion;
+    std::vector<Matrix4> m_motion_ctms;                 // per time: the CTM made
+    std::vector<std::vector<Primitive>> m_motion_prims; // per time: the primitives made
+    bool m_motion_capture = false;
     // lights and objects
     std::unordered_map<std::string, int> m_light_handles;
     std::unordered_map<std::string, std::vector<Primitive>> m_objects;

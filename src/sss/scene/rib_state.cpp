@@ -75,7 +75,7 @@ std::shared_ptr<const Attributes> Reader::snapshot() {
 }
 
 void Reader::push(const Statement& s, Block block) {
-    m_stack.push_back(SavedState{block, m_ctm, m_attr, s.line, s.file});
+    m_stack.push_back(SavedState{block, m_ctm, m_attr, s.line, s.file, m_ctm_motion});
 }
 
 SavedState Reader::pop(const Statement& s, Block block) {
@@ -91,12 +91,13 @@ SavedState Reader::pop(const Statement& s, Block block) {
 }
 
 void Reader::restore_all(SavedState& saved) {
-    m_ctm = saved.ctm;
+    restore_ctm(saved);
     m_attr = std::move(saved.attributes);
 }
 
 void Reader::concat(const Matrix4& m) {
     m_ctm = m_ctm * m;
+    for (Matrix4& key : m_ctm_motion.keys) key = key * m;
 }
 
 bool Reader::current_left_handed() const {
@@ -116,6 +117,9 @@ void Reader::do_world_begin(const Statement& s) {
     m_world_to_camera = m_ctm;
     Camera& cam = m_scene.options.camera;
     cam.world_to_camera = m_ctm;
+    // A camera that moves: its world-to-camera at each time.
+    cam.motion_times = m_ctm_motion.times;
+    cam.motion_world_to_camera = m_ctm_motion.keys;
     cam.sources.world_begin = where(s) + ": " + s.name;
     if (m_frame_aspect && !cam.screen_window) {
         double a = *m_frame_aspect;
@@ -139,7 +143,7 @@ void Reader::do_world_begin(const Statement& s) {
         ShaderRef& ref = *m_scene.options.imager;
         ref.shader_to_world = camera_to_world * ref.shader_to_world;
     }
-    m_ctm = Matrix4(1.0);
+    set_ctm(Matrix4(1.0));
 }
 
 void Reader::do_world_end(const Statement& s) {
@@ -164,7 +168,7 @@ void Reader::do_transform_begin(const Statement& s) {
 }
 
 void Reader::do_transform_end(const Statement& s) {
-    m_ctm = pop(s, Block::Transform).ctm;
+    restore_ctm(pop(s, Block::Transform));
 }
 
 void Reader::do_solid_begin(const Statement& s) {
@@ -178,19 +182,6 @@ void Reader::do_solid_end(const Statement& s) {
     restore_all(saved);
 }
 
-void Reader::do_motion_begin(const Statement& s) {
-    if (m_in_motion) fail(s, "nested MotionBegin");
-    m_in_motion = true;
-    m_motion_used = false;
-    not_implemented("motion", s, "motion blur is not supported",
-                    "the first time sample is used");
-}
-
-void Reader::do_motion_end(const Statement& s) {
-    if (!m_in_motion) fail(s, "MotionEnd without MotionBegin");
-    m_in_motion = false;
-}
-
 void Reader::do_object_begin(const Statement& s) {
     std::size_t i = 0;
     std::string handle = take_handle(s, i);
@@ -199,7 +190,7 @@ void Reader::do_object_begin(const Statement& s) {
     m_object_handle = handle;
     m_object = &m_objects[handle];
     m_object->clear(); // redefinition replaces
-    m_ctm = Matrix4(1.0);
+    set_ctm(Matrix4(1.0));
 }
 
 void Reader::do_object_end(const Statement& s) {
@@ -241,14 +232,14 @@ void Reader::do_object_instance(const Statement& s) {
 
 void Reader::do_identity(const Statement& s) {
     no_more_args(s, 0);
-    m_ctm = Matrix4(1.0);
+    set_ctm(Matrix4(1.0));
 }
 
 void Reader::do_transform(const Statement& s) {
     std::size_t i = 0;
     auto n = take_numbers(s, i, 16);
     no_more_args(s, i);
-    m_ctm = matrix_from(n);
+    set_ctm(matrix_from(n));
 }
 
 void Reader::do_concat_transform(const Statement& s) {
@@ -343,23 +334,23 @@ void Reader::do_coord_sys_transform(const Statement& s) {
     if (name == "object" || name == "current") return;
     if (name == "world") {
         if (!m_in_world) fail(s, "world space is not defined before WorldBegin");
-        m_ctm = Matrix4(1.0);
+        set_ctm(Matrix4(1.0));
     } else if (name == "camera") {
-        m_ctm = m_in_world ? glm::inverse(m_world_to_camera) : Matrix4(1.0);
+        set_ctm(m_in_world ? glm::inverse(m_world_to_camera) : Matrix4(1.0));
     } else if (name == "shader") {
-        if (m_attr.attrs.surface) m_ctm = m_attr.attrs.surface->shader_to_world;
+        if (m_attr.attrs.surface) set_ctm(m_attr.attrs.surface->shader_to_world);
     } else if (name == "screen" || name == "raster" || name == "NDC") {
         fail(s, sss::quoted(name) + " space is not supported");
     } else if (m_in_world) {
         auto it = m_scene.coordinate_systems.find(name);
         if (it == m_scene.coordinate_systems.end())
             fail(s, "unknown coordinate system " + sss::quoted(name));
-        m_ctm = it->second;
+        set_ctm(it->second);
     } else {
         auto it = m_camera_spaces.find(name);
         if (it == m_camera_spaces.end())
             fail(s, "unknown coordinate system " + sss::quoted(name));
-        m_ctm = it->second;
+        set_ctm(it->second);
     }
 }
 

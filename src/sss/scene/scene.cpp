@@ -351,3 +351,74 @@ Matrix4 Camera::world_to_ndc() const {
 }
 
 } // namespace sss
+
+namespace sss {
+
+namespace {
+
+/// The samples around `time`: indices a <= b and the weight of b.
+void bracket(const std::vector<double>& times, double time, std::size_t& a,
+             std::size_t& b, double& w) {
+    a = b = 0;
+    w = 0.0;
+    if (times.empty() || !(time > times.front())) return;
+    if (!(time < times.back())) {
+        a = b = times.size() - 1;
+        return;
+    }
+    b = static_cast<std::size_t>(std::upper_bound(times.begin(), times.end(), time) -
+                                 times.begin());
+    a = b - 1;
+    const double span = times[b] - times[a];
+    w = span > 0.0 ? (time - times[a]) / span : 0.0;
+}
+
+} // namespace
+
+std::vector<double> PrimitiveMotion::times() const {
+    std::vector<double> out = transform_times;
+    out.insert(out.end(), shape_times.begin(), shape_times.end());
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+Matrix4 matrix_at(const std::vector<double>& times, const std::vector<Matrix4>& keys,
+                  double time) {
+    std::size_t a = 0, b = 0;
+    double w = 0.0;
+    bracket(times, time, a, b, w);
+    if (keys.empty()) return Matrix4(1.0);
+    if (a == b || w == 0.0) return keys[a];
+    return keys[a] * (1.0 - w) + keys[b] * w;
+}
+
+Primitive primitive_at(const Primitive& prim, double time) {
+    Primitive out = prim;
+    out.motion.reset();
+    if (!prim.motion) return out;
+    const PrimitiveMotion& m = *prim.motion;
+    if (!m.transform_times.empty())
+        out.object_to_world = matrix_at(m.transform_times, m.transforms, time);
+    if (m.shape_times.empty()) return out;
+    std::size_t a = 0, b = 0;
+    double w = 0.0;
+    bracket(m.shape_times, time, a, b, w);
+    out.args = m.shape_args[a];
+    out.params = m.shape_params[a];
+    if (a == b || w == 0.0) return out;
+    const std::vector<double>& args_b = m.shape_args[b];
+    if (args_b.size() == out.args.size())
+        for (std::size_t i = 0; i < out.args.size(); ++i)
+            out.args[i] += w * (args_b[i] - out.args[i]);
+    for (Param& p : out.params.items) {
+        const Param* q = m.shape_params[b].find(p.name);
+        if (!q || p.type == ParamType::String || q->numbers.size() != p.numbers.size())
+            continue;
+        for (std::size_t i = 0; i < p.numbers.size(); ++i)
+            p.numbers[i] += w * (q->numbers[i] - p.numbers[i]);
+    }
+    return out;
+}
+
+} // namespace sss

@@ -208,6 +208,10 @@ struct RayEnv {
           seed(batch ? batch->seed : 0), op(b.index), call(fr.calls[b.index]++) {}
 
     int depth() const { return (batch ? batch->ray.depth : 0) + 1; }
+    /// The time point i's rays are traced at (motion blur), 0 by default.
+    float time(std::size_t i) const {
+        return batch && batch->ray_time.size() > i ? batch->ray_time[i] : 0.0f;
+    }
     uint64_t hash(std::size_t i) const { return point_hash(seed, i, op, call); }
     /// Seed of the query's hit shaders.
     uint64_t query_seed() const {
@@ -454,7 +458,7 @@ RayQuery gather_query(Frame& f, const BoundOp& b, const GatherArgs& g, RayEnv& r
         for (int s = 0; s < samples; ++s) {
             const glm::vec3 d = cone_direction(B, h, s, samples, angle, cosine);
             const glm::vec3 origin = Pw + RayEnv::disk(B, h, s, jitter) + d * re.offset;
-            q.rays.push_back(ShadowRay{origin, d, 0.0f, tfar});
+            q.rays.push_back(ShadowRay{origin, d, 0.0f, tfar, re.time(i)});
         }
     }
     q.spread = spread;
@@ -614,7 +618,7 @@ void specular_rays(Frame& f, const BoundOp& b, const RayParams& o, const Slot* P
         for (int s = 0; s < samples; ++s) {
             const glm::vec3 d =
                 samples > 1 ? cone_direction(B, h, s, samples, 0.5 * o.cone, false) : w;
-            q.rays.push_back(ShadowRay{Pw + d * re.offset, d, 0.0f, tfar});
+            q.rays.push_back(ShadowRay{Pw + d * re.offset, d, 0.0f, tfar, re.time(i)});
         }
         count[i] = samples;
     });
@@ -718,7 +722,7 @@ void op_hemisphere(Frame& f, const BoundOp& b) {
                     cone_direction(p.B, p.h, k, p.samples, o.coneangle, cosine);
                 const glm::vec3 origin =
                     p.Pw + RayEnv::disk(p.B, p.h, k, p.jitter) + p.B.w * re.offset;
-                q.rays.push_back(ShadowRay{origin, dir, 0.0f, tfar});
+                q.rays.push_back(ShadowRay{origin, dir, 0.0f, tfar, re.time(i)});
                 owner.push_back(i);
             }
         });
@@ -849,7 +853,8 @@ struct Tracer {
             if (!(len > 0.0f)) return false;
             dir /= len;
         }
-        out = ShadowRay{origin, dir, 0.0f, infinite ? len : len * (1.0f - 1e-4f)};
+        out = ShadowRay{origin, dir, 0.0f, infinite ? len : len * (1.0f - 1e-4f),
+                        re.time(i)};
         return true;
     }
 
@@ -867,7 +872,7 @@ struct Tracer {
         const uint64_t h = re.hash(i);
         for (int k = 0; k < samples; ++k) {
             const glm::vec3 d = cone_direction(B, h, k, samples, 0.5 * cone, false);
-            out.push_back(ShadowRay{centre.origin, d, 0.0f, centre.tfar});
+            out.push_back(ShadowRay{centre.origin, d, 0.0f, centre.tfar, centre.time});
         }
     }
 

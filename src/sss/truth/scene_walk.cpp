@@ -98,7 +98,7 @@ PointCloud walk_scene(const SceneWalkOptions& o, const PointCloud& baked,
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         DiceControl control;
         control.spacing = rep.spacing;
-        requests.push_back({i, control});
+        requests.push_back({i, control, {}});
     }
     const std::vector<DicedSurface> diced = dice_all(scene, requests);
     std::set<std::string> found;
