@@ -794,6 +794,7 @@ RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
     // (ShadingRate micropolygons of the scene's own camera, not -res).
     m_bake_options = std::make_unique<BakeOptions>();
     m_bake_options->frame = m_frame;
+    m_bake_options->after_frame_makes = false; // run() does them after the image
     // A pass that renders no image (only "null" Displays) reports the bake's
     // progress; otherwise the image's (one 0-100 % run per job).
     int primary = -1;
@@ -824,6 +825,13 @@ RenderFiles RenderJob::files() const {
 }
 
 RenderReport RenderJob::run() const {
+    RenderReport report = render_frame();
+    // After the frame's files are in place: MakeShadow of its zfile.
+    run_make_requests(m_scene, true);
+    return report;
+}
+
+RenderReport RenderJob::render_frame() const {
     RenderReport report;
     Stopwatch watch;
     const Scene& scene = m_scene;
@@ -924,6 +932,13 @@ RenderReport RenderJob::run() const {
     cam.xres = image.width;
     cam.yres = image.height;
     meta.world_to_ndc = cam.world_to_ndc();
+    // NDC (x right, y down, [0, 1]) to the depth maps' screen ([-1, 1], y up).
+    Matrix4 ndc_to_screen(1.0);
+    ndc_to_screen[0][0] = 2.0;
+    ndc_to_screen[1][1] = -2.0;
+    ndc_to_screen[3][0] = -1.0;
+    ndc_to_screen[3][1] = 1.0;
+    meta.world_to_screen = ndc_to_screen * meta.world_to_ndc;
     if (!scene.path.empty()) meta.extra.emplace_back("sss:scene", scene.path);
     const int nx = options.pixel_samples > 0 ? options.pixel_samples
                                              : scene.options.pixel_samples[0];
