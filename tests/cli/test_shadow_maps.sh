@@ -128,6 +128,12 @@ diff_out="$(oiiotool t1.exr t2.exr --diff 2>&1 || true)"
 grep -q "Max error  = 0" <<<"$diff_out" || grep -q "PASS" <<<"$diff_out" ||
     fail "-threads 1 and 2 differ: $diff_out"
 
+# The scene's shadow bias: past the gap between ball and wall, no shadow.
+sed 's/^FrameBegin 2$/FrameBegin 2\n  Option "shadow" "bias" [6]/' passes.rib >biased.rib
+render_clean -frame 2 biased.rib
+biased="$(box_mean beauty.exr 16 30 4 4 R)"
+expect_value "the wall with a bias of 6" "$biased" "> 0.3"
+
 # Without a shadowname the same wall is lit everywhere.
 sed 's/"string shadowname" "shadow.tex"//' passes.rib >unshadowed.rib
 render_clean -frame 2 unshadowed.rib

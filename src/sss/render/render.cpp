@@ -315,7 +315,11 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             float* v = &values[std::size_t(h.sample) * job.values];
             const glm::dvec3 ci(batch.Ci[k * r]);
             const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k * r]), 0.0, 1.0);
-            if (cs.layers == 0) cs.depth = h.depth;
+            if (job.opaque_depth
+                    ? std::isinf(cs.depth) && oi.x >= job.zthreshold.x &&
+                          oi.y >= job.zthreshold.y && oi.z >= job.zthreshold.z
+                    : cs.layers == 0)
+                cs.depth = h.depth;
             const glm::dvec3 w = cs.trans;
             for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(w[c] * ci[c]);
             const double coverage = (w.x * oi.x + w.y * oi.y + w.z * oi.z) / 3.0;
@@ -526,6 +530,9 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             }
         }
         job.shadow_rays += context.rays_traced() - rays_before;
+        uint64_t met = 0;
+        for (const CameraSample& cs : samples) met += cs.layers > 0 ? 1 : 0;
+        job.surface_samples += met;
         job.camera_rays += camera_count;
         job.bad_samples += bad_count;
         if (options.progress) options.progress->update(++tiles_done, tiles);
@@ -679,6 +686,7 @@ Image RenderJob::image(RenderReport* report_out) const {
             ": no geometry in the world: the image is empty");
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
     setup_camera(job, scene, options);
+    setup_depth(job, scene);
     const bool any_shadows = resolve_shading(job, scene, frame, report);
     if (auto w = unlit_scene_warning(scene, job.shaders)) report.warnings.push_back(*w);
     check_image_memory(job, scene);
@@ -717,8 +725,7 @@ Image RenderJob::image(RenderReport* report_out) const {
     run_imager(job, image);
     // A camera that sees nothing of a scene with geometry is a mistake more
     // often than a wish (a camera transform after WorldBegin, a sign).
-    const auto missed = [](float z) { return !std::isfinite(z); };
-    if (!scene.primitives.empty() && std::all_of(depth.begin(), depth.end(), missed))
+    if (!scene.primitives.empty() && job.surface_samples.load() == 0)
         report.warnings.push_back(
             name + ": no camera ray hit a surface: the image is empty (is the camera "
                    "looking away from the scene, or is the scene smaller than a pixel? "

@@ -185,6 +185,13 @@ struct Renderer {
     double pixel_per_depth = 0.0;
     glm::dmat3 normal_to_camera{1.0}; ///< inverse transpose of world->camera
     glm::dvec3 camera_x{1, 0, 0}, camera_y{0, 1, 0}; ///< camera axes in world space
+    /// A frame with a depth-map display ("zfile", "shadow"): the depth is
+    /// the nearest surface at least `zthreshold` opaque in every channel
+    /// (PRMan's Option "limits" "zthreshold"), semi-transparent ones are
+    /// seen through; otherwise the nearest surface.
+    bool opaque_depth = false;
+    glm::dvec3 zthreshold{0.996};
+    std::atomic<uint64_t> surface_samples{0}; ///< camera samples that met a surface
     std::atomic<uint64_t> camera_rays{0};
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
@@ -219,6 +226,10 @@ struct SurfaceHit {
     uint64_t seed = 0;
     double lift = 0.0; ///< distance of p above the flat triangle
 };
+
+/// The depth rule of the frame (Renderer::opaque_depth, zthreshold): opaque
+/// surfaces only when a Display is a depth map.
+void setup_depth(Renderer& job, const Scene& scene);
 
 /// The camera with the image size overrides, the pixel samples, the camera
 /// rays and the pixel size per unit of depth; ValueError (UsageError for a
