@@ -134,6 +134,17 @@ render_clean -frame 2 biased.rib
 biased="$(box_mean beauty.exr 16 30 4 4 R)"
 expect_value "the wall with a bias of 6" "$biased" "> 0.3"
 
+# shadowpoint: the +z map of six (the others empty: unshadowed) gives the
+# same shadow on the wall, whose points lie towards +z from the light.
+sed 's/"shadowspot" 1 "from" \[0 0 0\] "to" \[0 0 1\] "coneangle" 0.6/"shadowpoint" 1 "from" [0 0 0]/; s/"string shadowname" "shadow.tex"/"string sfpz" "shadow.tex"/' \
+    passes.rib >point.rib
+grep -q '"shadowpoint"' point.rib || fail "point.rib has no shadowpoint: $(cat point.rib)"
+render_clean -frame 2 point.rib
+dark="$(box_mean beauty.exr 16 30 4 4 R)"
+lit="$(box_mean beauty.exr 30 30 4 4 R)"
+expect_value "the shadow of shadowpoint" "$dark" "< 0.05"
+expect_value "the wall lit by shadowpoint" "$lit" "> 0.3"
+
 # Without a shadowname the same wall is lit everywhere.
 sed 's/"string shadowname" "shadow.tex"//' passes.rib >unshadowed.rib
 render_clean -frame 2 unshadowed.rib
