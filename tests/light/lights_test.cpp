@@ -377,6 +377,15 @@ TEST(LightsTest, ShadowMapNamesReadTheMapQuietly) {
             << e.what();
         EXPECT_NE(std::string(e.what()).find("spot.shd"), std::string::npos) << e.what();
     }
+    // shadowdistant: distantlight's light (intensity 1, no falloff) and map.
+    auto distant = sss::resolve_lights(
+        one_light("shadowdistant",
+                  {point_param("from", {0, 0, 2}), point_param("to", {0, 0, 0}),
+                   string_param("shadowname", "d.shd")}),
+        &warnings, loader);
+    EXPECT_EQ(distant[0].kind, sss::Light::Kind::Distant);
+    expect_gray(irradiance_of(distant, {-1, 0.1, 0}, {0, 0, 1}), 0.0);
+    expect_gray(irradiance_of(distant, {1, 0.1, 0}, {0, 0, 1}), 1.0);
     // shadowpoint: the map of the axis towards the point (-z here), and a
     // scene bias that is larger than the gap lights everything.
     sss::Scene point = one_light(
