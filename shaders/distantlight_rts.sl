@@ -11,6 +11,7 @@ light distantlight_rts(float intensity = 1; color lightcolor = 1;
 {
     solar(to - from, 0) {
         Cl = intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, radians(angle));
+             light_visibility(shadowname, Ps, samples, radians(angle),
+                              0, -1, 1);
     }
 }

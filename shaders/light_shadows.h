@@ -1,15 +1,21 @@
-/* Shared by the standard lights: the ray-traced shadow term.
- * shadowname "raytrace" (or any map name: depth-map shadows are ray traced
- * here) turns shadows on; samples > 1 with a light of non-zero size gives
- * soft shadows over the cone the emitter subtends (half-angle cone). */
+/* Shared by the standard lights: the shadow term. shadowname "raytrace"
+ * traces shadow rays: samples > 1 with a light of non-zero size gives soft
+ * shadows over the cone the emitter subtends (half-angle cone). Any other
+ * non-empty name is a shadow map (MakeShadow, Display "shadow"), looked up
+ * with samples, blur, bias (< 0: the scene's Option "shadow" "bias") and
+ * width (the filter footprint's multiplier). */
 #ifndef SSS_LIGHT_SHADOWS_H
 #define SSS_LIGHT_SHADOWS_H
 
 /* The unshadowed fraction at Ps of a light seen under the cone (apex angle). */
-float light_visibility(string shadowname; point Ps; float samples, cone) {
+float light_visibility(string shadowname; point Ps; float samples, cone, blur, bias,
+                       width) {
     float visible = 1;
-    if (shadowname != "")
+    if (shadowname == "raytrace")
         visible = 1 - shadow("raytrace", Ps, "samples", samples, "samplecone", cone);
+    else if (shadowname != "")
+        visible = 1 - shadow(shadowname, Ps, "samples", samples, "blur", blur,
+                             "bias", bias, "width", width);
     return visible;
 }
 

@@ -1,6 +1,7 @@
 /* spotlight: a cone of light from `from` towards `to` with a soft edge and
- * a beam falloff (RISpec 3.2, appendix A). Extensions: shadowname (ray
- * traced), samples and radius (spherical emitter) for soft shadows. */
+ * a beam falloff (RISpec 3.2, appendix A). Extensions: shadowname
+ * ("raytrace": samples and radius (spherical emitter) for soft shadows; a
+ * shadow map: samples, blur, bias, width, light_shadows.h). */
 #include "light_shadows.h"
 
 light spotlight(float intensity = 1; color lightcolor = 1;
@@ -9,7 +10,8 @@ light spotlight(float intensity = 1; color lightcolor = 1;
                 float coneangle = radians(30), conedeltaangle = radians(5);
                 float beamdistribution = 2;
                 string shadowname = "";
-                float samples = 1, radius = 0;)
+                float samples = 1, radius = 0;
+                float blur = 0, bias = -1, width = 1;)
 {
     uniform vector A = normalize(to - from);
     illuminate(from, A, coneangle) {
@@ -20,6 +22,7 @@ light spotlight(float intensity = 1; color lightcolor = 1;
             atten = pow(cosangle, beamdistribution) / d2 *
                     smoothstep(cos(coneangle), cos(coneangle - conedeltaangle), cosangle);
         Cl = atten * intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2)));
+             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2)),
+                              blur, bias, width);
     }
 }

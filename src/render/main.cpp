@@ -37,7 +37,8 @@ std::string usage() {
            "options:\n"
            "  -o IMAGE               write the primary Display into IMAGE instead\n"
            "  -frame N               frame number: selects FrameBegin N and expands\n"
-           "                         %04d, #### and $F4 in file names\n"
+           "                         %04d, #### and $F4 in file names (without it\n"
+           "                         every frame of the file is rendered, in order)\n"
            "  -res X Y               image size instead of Format (quick previews)\n"
            "  -samples N             N x N pixel samples instead of PixelSamples\n"
            "  -lenient               skip what the scene asks for that is not\n"
@@ -53,6 +54,54 @@ std::string usage() {
            "  --version              version information\n"
            "\n"
            "Exit codes: 0 ok, 1 bad scene or failed render, 2 bad command line.\n";
+}
+
+/// Renders one frame of the scene (RenderJob) and prints its summary.
+void render_frame(const sss::Scene& scene, const std::string& rib,
+                  const sss::RenderJobOptions& opt, sss::Job& job, double read_s) {
+    sss::warn_all(kTool, scene.warnings);
+    // One plan for the whole job: the shaders are loaded and bound once.
+    const sss::RenderJob render(scene, opt);
+    // A scene on standard input has no date: always rendered.
+    if (job.newer() && rib != sss::kRibStandardInput) {
+        const sss::RenderFiles io = render.files();
+        if (job.up_to_date(io.outputs, io.inputs)) return;
+    }
+
+    const sss::RenderReport report = render.run();
+    sss::warn_all(kTool, report.warnings);
+    if (job.verbose()) {
+        const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;
+        const int yres = opt.yres > 0 ? opt.yres : scene.options.camera.yres;
+        const int nx =
+            opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[0];
+        const int ny =
+            opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[1];
+        for (std::size_t i = 0; i < report.baked_files.size(); ++i)
+            std::printf("render: baked %s: %zu points, total area %.6g\n",
+                        report.baked_files[i].c_str(), report.baked_points[i],
+                        report.baked_areas[i]);
+        if (report.files.empty()) {
+            std::printf("render: every Display is \"null\": no image rendered\n");
+        } else {
+            std::printf(
+                "render: %s: %zu primitives, %zu lights, %zu triangles, %dx%d pixels, "
+                "%dx%d samples\n",
+                rib.c_str(), scene.primitives.size(), scene.lights.size(),
+                report.triangles, xres, yres, nx, ny);
+            std::printf("render: %zu camera rays, %zu shadow and occlusion rays, %zu "
+                        "secondary rays\n",
+                        report.camera_rays, report.shadow_rays, report.secondary_rays);
+        }
+        for (const std::string& f : report.files)
+            std::printf("render: wrote %s\n", f.c_str());
+        std::printf("render: read %.3f s, bake %.3f s, setup %.3f s, render %.3f s, "
+                    "write %.3f s, total %.3f s, threads %d\n",
+                    read_s, report.bake_seconds, report.setup_seconds,
+                    report.render_seconds, report.write_seconds, job.seconds(),
+                    job.threads());
+        sss::flush_standard_output();
+    }
 }
 
 int run(const std::vector<std::string>& argv) {
@@ -124,49 +173,23 @@ int run(const std::vector<std::string>& argv) {
         sss::ScopedStage stage("reading " + rib);
         return sss::read_rib(rib, ropt);
     }();
-    sss::warn_all(kTool, scene.warnings);
-    const double read_s = job.seconds();
-    // One plan for the whole job: the shaders are loaded and bound once.
-    const sss::RenderJob render(scene, opt);
-    // A scene on standard input has no date: always rendered.
-    if (job.newer() && rib != sss::kRibStandardInput) {
-        const sss::RenderFiles io = render.files();
-        if (job.up_to_date(io.outputs, io.inputs)) return 0;
-    }
-
-    const sss::RenderReport report = render.run();
-    sss::warn_all(kTool, report.warnings);
-    if (job.verbose()) {
-        const int xres = opt.xres > 0 ? opt.xres : scene.options.camera.xres;
-        const int yres = opt.yres > 0 ? opt.yres : scene.options.camera.yres;
-        const int nx =
-            opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[0];
-        const int ny =
-            opt.pixel_samples > 0 ? opt.pixel_samples : scene.options.pixel_samples[1];
-        for (std::size_t i = 0; i < report.baked_files.size(); ++i)
-            std::printf("render: baked %s: %zu points, total area %.6g\n",
-                        report.baked_files[i].c_str(), report.baked_points[i],
-                        report.baked_areas[i]);
-        if (report.files.empty()) {
-            std::printf("render: every Display is \"null\": no image rendered\n");
-        } else {
-            std::printf(
-                "render: %s: %zu primitives, %zu lights, %zu triangles, %dx%d pixels, "
-                "%dx%d samples\n",
-                rib.c_str(), scene.primitives.size(), scene.lights.size(),
-                report.triangles, xres, yres, nx, ny);
-            std::printf("render: %zu camera rays, %zu shadow and occlusion rays, %zu "
-                        "secondary rays\n",
-                        report.camera_rays, report.shadow_rays, report.secondary_rays);
-        }
-        for (const std::string& f : report.files)
-            std::printf("render: wrote %s\n", f.c_str());
-        std::printf("render: read %.3f s, bake %.3f s, setup %.3f s, render %.3f s, "
-                    "write %.3f s, total %.3f s, threads %d\n",
-                    read_s, report.bake_seconds, report.setup_seconds,
-                    report.render_seconds, report.write_seconds, job.seconds(),
-                    job.threads());
-        sss::flush_standard_output();
+    render_frame(scene, rib, opt, job, job.seconds());
+    // Without -frame (and -o, which names one image) every frame of the
+    // file, in order, as prman renders them: a shadow pass's frame, then
+    // the frames that read its maps.
+    if (opt.frame || !opt.output.empty() || rib == sss::kRibStandardInput) return 0;
+    std::vector<int> done = {scene.options.frame.value_or(0)};
+    for (int number : scene.frame_numbers) {
+        if (std::find(done.begin(), done.end(), number) != done.end()) continue;
+        done.push_back(number);
+        const double start = job.seconds();
+        ropt.frame = number;
+        const sss::Scene next = [&] {
+            sss::ScopedStage stage("reading frame " + std::to_string(number) + " of " +
+                                   rib);
+            return sss::read_rib(rib, ropt);
+        }();
+        render_frame(next, rib, opt, job, job.seconds() - start);
     }
     return 0;
 }

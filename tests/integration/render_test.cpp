@@ -187,6 +187,22 @@ TEST(RenderGeometry, SemiTransparentSurfacesComposite) {
     EXPECT_NEAR(centre(both, "G"), 0.5, 1e-5);
     EXPECT_NEAR(centre(both, "A"), 1.0, 1e-5);
     EXPECT_NEAR(centre(both, "Z"), 5.0, 1e-4); // the first surface
+    // A depth map (shadow pass) sees through semi-transparent surfaces:
+    // its depth is the nearest opaque one (zthreshold 0.996), or PRMan's
+    // Option "limits" "zthreshold" when lowered below the red plane's 0.5.
+    const std::string zfile = "Display \"key.z\" \"zfile\" \"z\"\n";
+    EXPECT_NEAR(centre(render(scene_of(red + green, zfile)), "Z"), 6.0, 1e-4);
+    EXPECT_NEAR(centre(render(scene_of(
+                           red + green,
+                           zfile + "Option \"limits\" \"zthreshold\" [0.4 0.4 0.4]\n")),
+                       "Z"),
+                5.0, 1e-4);
+    // Only semi-transparent surfaces: no depth, and no "nothing hit" warning.
+    sss::RenderReport report;
+    const sss::Image glass = render(scene_of(red, zfile), &report);
+    EXPECT_EQ(centre(glass, "Z"), 0.0f);
+    for (const std::string& w : report.warnings)
+        EXPECT_EQ(w.find("no camera ray hit"), std::string::npos) << w;
     const sss::Image alone = render(scene_of(red));
     EXPECT_NEAR(centre(alone, "R"), 0.5, 1e-5); // premultiplied
     EXPECT_NEAR(centre(alone, "A"), 0.5, 1e-5);

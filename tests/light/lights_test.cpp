@@ -20,6 +20,7 @@
 
 #include "sss/light/lights.h"
 #include "sss/light/ray_tracer.h"
+#include "sss/light/shadow_map.h"
 #include "sss/scene/scene.h"
 #include "sss/util/error.h"
 
@@ -334,20 +335,70 @@ TEST(LightsTest, HardShadowBlocksAPointLight) {
     expect_gray(irradiance_of(rts, {0, 0, 0}, {0, 0, 1}, occluder.get()), 0.0);
 }
 
-TEST(LightsTest, ShadowMapNamesWarnAndTrace) {
+TEST(LightsTest, ShadowMapNamesReadTheMapQuietly) {
+    // A map seen from (0, 0, 2) looking down (camera z = 2 - world z),
+    // orthographic over [-2, 2]^2: an occluder at world z = 1 over x < 0.
+    auto map = std::make_shared<sss::ShadowMap>();
+    map->width = map->height = 4;
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x)
+            map->depth.push_back(x < 2 ? 1.0f : sss::kNoSurfaceDepth);
+    map->world_to_camera = sss::Matrix4(1.0);
+    map->world_to_camera[2][2] = -1.0;
+    map->world_to_camera[3][2] = 2.0;
+    map->world_to_screen = glm::scale(sss::Matrix4(1.0), glm::dvec3(0.5, 0.5, 1.0));
+    std::vector<std::string> asked;
+    const sss::ShadowMapLoader loader = [&](const std::string& name) {
+        asked.push_back(name);
+        return map;
+    };
     std::vector<std::string> warnings;
-    auto lights =
-        resolve(one_light("spotlight",
-                          {point_param("from", {0, 0, 2}), point_param("to", {0, 0, 0}),
-                           string_param("shadowname", "spot.shd")}),
-                &warnings);
-    ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_NE(warnings[0].find("test.rib:7: "), std::string::npos);
-    EXPECT_NE(warnings[0].find("shadow maps are not supported, using ray-traced shadows"),
-              std::string::npos);
-    EXPECT_TRUE(lights[0].shadows);
-    auto occluder = occluder_at(1.0f, true);
-    expect_gray(irradiance_of(lights, {0, 0, 0}, {0, 0, 1}, occluder.get()), 0.0);
+    const sss::Scene scene = one_light(
+        "spotlight",
+        {point_param("from", {0, 0, 2}), point_param("to", {0, 0, 0}),
+         float_param("coneangle", 1.2), string_param("shadowname", "spot.shd")});
+    auto lights = sss::resolve_lights(scene, &warnings, loader);
+    EXPECT_TRUE(warnings.empty());
+    EXPECT_EQ(asked, std::vector<std::string>{"spot.shd"});
+    EXPECT_FALSE(lights[0].shadows); // no rays: the map
+    ASSERT_EQ(lights[0].shadow_maps.size(), 1u);
+    EXPECT_NEAR(lights[0].shadow_lookup.bias, sss::kDefaultShadowBias, 1e-7);
+    // Under the occluder: dark; beside it: lit (no tracer needed).
+    expect_gray(irradiance_of(lights, {-1, 0.1, 0}, {0, 0, 1}), 0.0);
+    EXPECT_GT(irradiance_of(lights, {1, 0.1, 0}, {0, 0, 1}).x, 0.01);
+    // Above the occluder (camera z 0.5 < 1): lit.
+    EXPECT_GT(irradiance_of(lights, {-1, 0.1, 1.5}, {0, 0, 1}).x, 0.01);
+    // Without a map reader a named map is an error naming the light.
+    try {
+        sss::resolve_lights(scene, &warnings);
+        FAIL() << "no error without a map reader";
+    } catch (const sss::ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("test.rib:7"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("spot.shd"), std::string::npos) << e.what();
+    }
+    // shadowdistant: distantlight's light (intensity 1, no falloff) and map.
+    auto distant = sss::resolve_lights(
+        one_light("shadowdistant",
+                  {point_param("from", {0, 0, 2}), point_param("to", {0, 0, 0}),
+                   string_param("shadowname", "d.shd")}),
+        &warnings, loader);
+    EXPECT_EQ(distant[0].kind, sss::Light::Kind::Distant);
+    expect_gray(irradiance_of(distant, {-1, 0.1, 0}, {0, 0, 1}), 0.0);
+    expect_gray(irradiance_of(distant, {1, 0.1, 0}, {0, 0, 1}), 1.0);
+    // shadowpoint: the map of the axis towards the point (-z here), and a
+    // scene bias that is larger than the gap lights everything.
+    sss::Scene point = one_light(
+        "shadowpoint", {point_param("from", {0, 0, 2}), string_param("sfnz", "nz.shd")});
+    asked.clear();
+    auto p = sss::resolve_lights(point, &warnings, loader);
+    EXPECT_EQ(asked, std::vector<std::string>{"nz.shd"});
+    ASSERT_EQ(p[0].shadow_maps.size(), 6u);
+    EXPECT_EQ(p[0].shadow_lookup.samples, 16);
+    expect_gray(irradiance_of(p, {-1, 0.1, 0}, {0, 0, 1}), 0.0);
+    point.options.groups["shadow"].set(float_param("bias", 1.5));
+    p = sss::resolve_lights(point, &warnings, loader);
+    EXPECT_GT(irradiance_of(p, {-1, 0.1, 0}, {0, 0, 1}).x, 0.01);
 }
 
 TEST(LightsTest, DistantShadowAndRayOffset) {

@@ -370,6 +370,50 @@ TEST(ImageIoResolve, JpegDropsAlpha) {
 // OpenEXR
 // ---------------------------------------------------------------------------
 
+TEST(ImageIoExr, DepthMapDisplays) {
+    // Display "zfile" / "shadow": OpenEXR whatever the name, float Z only,
+    // no surface (Z 0 in the image) = kNoSurfaceDepth, and the matrices.
+    sss::test::TempDir dir("image_io");
+    Image img = test_image();
+    img.pixel(0, 0)[img.channel_index("Z")] = 0.0f; // no hit
+    ImageMetadata meta = test_metadata();
+    meta.world_to_screen = glm::scale(sss::Matrix4(1.0), glm::dvec3(0.5, 0.25, 1.0));
+    const std::string zfile = dir.file("key.z"), shd = dir.file("key.shd");
+    DisplayTarget z = sss::resolve_display(display(zfile, "zfile", "z"), img, true);
+    EXPECT_EQ(z.channels, (Names{"Z"}));
+    EXPECT_TRUE(z.depth_map);
+    EXPECT_FALSE(z.shadow_map);
+    sss::write_display(img, z, meta);
+    DisplayTarget s = sss::resolve_display(display(shd, "Shadow", "z", true), img, false);
+    EXPECT_TRUE(s.shadow_map);
+    sss::write_display(img, s, meta);
+    for (const std::string& path : {zfile, shd}) {
+        EXPECT_EQ(format_of(path), "openexr") << path;
+        EXPECT_EQ(pixel_type_of(path, 0), OIIO::TypeDesc::FLOAT) << path;
+        const Image back = sss::read_image(path);
+        ASSERT_EQ(back.channels, (Names{"Z"})) << path;
+        EXPECT_EQ(back.pixel(0, 0)[0], 1e30f) << path;
+        EXPECT_EQ(back.pixel(1, 0)[0], img.pixel(1, 0)[img.channel_index("Z")]) << path;
+        auto in = OIIO::ImageInput::open(path);
+        ASSERT_TRUE(in);
+        float m[16] = {};
+        ASSERT_TRUE(in->spec().getattribute("worldtoscreen", OIIO::TypeMatrix, m))
+            << path;
+        EXPECT_EQ(m[0], 0.5f);
+        EXPECT_EQ(m[5], 0.25f);
+        ASSERT_TRUE(in->spec().getattribute("worldtocamera", OIIO::TypeMatrix, m))
+            << path;
+        EXPECT_EQ(m[12], 1.0f); // row-vector layout: the translation in the last row
+        EXPECT_EQ(m[14], 3.0f);
+        EXPECT_EQ(in->spec().get_string_attribute("sss:textureformat"),
+                  path == shd ? "Shadow" : "")
+            << path;
+    }
+    // Depth maps hold depth only.
+    EXPECT_THROW(sss::resolve_display(display(zfile, "zfile", "rgba"), img, true),
+                 sss::ValueError);
+}
+
 TEST(ImageIoExr, RoundTripBeautyAndLayers) {
     sss::test::TempDir dir("image_io");
     Image img = test_image();

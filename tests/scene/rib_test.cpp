@@ -729,6 +729,63 @@ FrameEnd
     expect_rib_error(text, {"frame 3 not found"}, opt);
 }
 
+TEST(RibFrames, MakeRequestsBelongToTheFramesAroundThem) {
+    // A shadow pass: frame 1 renders the zfile, MakeShadow makes the map
+    // frame 2 reads. Requests before FrameBegin n run before frame n, those
+    // after its FrameEnd (up to the next FrameBegin) after it.
+    const std::string text = R"(MakeTexture "a.png" "a.tx" "black" "black" "box" 1 1
+FrameBegin 1
+MakeTexture "b.png" "b.tx" "black" "black" "box" 1 1
+Display "s.z" "zfile" "z"
+WorldBegin
+Sphere 1 -1 1 360
+WorldEnd
+MakeShadow "s.z" "in_frame.tex"
+FrameEnd
+MakeShadow "s.z" "s.tex"
+FrameBegin 2
+WorldBegin
+Sphere 1 -1 1 360
+WorldEnd
+FrameEnd
+MakeCubeFaceEnvironment "px.tif" "nx.tif" "py.tif" "ny.tif" "pz.tif" "nz.tif" "env.tex" 95 "gaussian" 2 2
+)";
+    const auto summary = [](const sss::Scene& scene) {
+        std::string out;
+        for (const sss::MakeRequest& m : scene.makes)
+            out += m.output + (m.after_frame ? "(after) " : " ");
+        return out;
+    };
+    const sss::Scene first = parse(text);
+    EXPECT_EQ(summary(first), "a.tx b.tx in_frame.tex(after) s.tex(after) ");
+    EXPECT_EQ(first.frame_numbers, (std::vector<int>{1, 2}));
+    sss::RibReadOptions opt;
+    opt.frame = 2;
+    const sss::Scene second = parse(text, opt);
+    EXPECT_EQ(summary(second), "s.tex env.tex(after) ");
+    ASSERT_EQ(second.makes.size(), 2u);
+    EXPECT_EQ(second.makes[0].kind, "MakeShadow");
+    EXPECT_EQ(second.makes[0].input, "s.z"); // not there yet: kept as given
+    EXPECT_EQ(second.makes[0].source, "test.rib:10");
+    const sss::MakeRequest& cube = second.makes[1];
+    EXPECT_EQ(cube.kind, "MakeCubeFaceEnvironment");
+    EXPECT_EQ(cube.faces, (std::vector<std::string>{"px.tif", "nx.tif", "py.tif",
+                                                    "ny.tif", "pz.tif", "nz.tif"}));
+    EXPECT_EQ(cube.fov, 95.0);
+    EXPECT_EQ(cube.filter, "gaussian");
+    EXPECT_TRUE(second.warnings.empty());
+    // Without frames, requests after WorldEnd run after the image.
+    const sss::Scene flat = parse(R"(MakeTexture "a.png" "a.tx" "black" "black" "box" 1 1
+WorldBegin
+WorldEnd
+MakeShadow "s.z" "s.tex"
+)");
+    EXPECT_EQ(summary(flat), "a.tx s.tex(after) ");
+    expect_rib_error(
+        R"(MakeCubeFaceEnvironment "a" "b" "c" "d" "e" "f" "g" 190 "box" 1 1)",
+        {"field of view"});
+}
+
 // --- coordinate systems -------------------------------------------------------
 
 TEST(RibCoordinateSystems, DefineAndUse) {

@@ -212,12 +212,10 @@ TEST(RslCorpus, Lighting) {
     std::vector<const ShaderInstance*> list;
     for (const ShaderInstance& l : lights) list.push_back(&l);
     run_corpus("lighting.sl", plane_grid(8, 8), {}, &e, list);
-    // The unsupported calls warned (trace() and indirectdiffuse() no longer do).
+    // Nothing warned (trace(), indirectdiffuse() and shadow() no longer do).
     std::string all;
     for (const std::string& w : e.services.warnings) all += w + "\n";
-    for (const char* name : {"depth-map shadows"})
-        EXPECT_NE(all.find(name), std::string::npos) << name << " in:\n" << all;
-    for (const char* name : {"trace()", "indirectdiffuse()"})
+    for (const char* name : {"trace()", "indirectdiffuse()", "shadow"})
         EXPECT_EQ(all.find(name), std::string::npos) << name << " in:\n" << all;
 }
 

@@ -41,8 +41,13 @@ TEST(RslTextureOptions, EveryOptionAndUnknownNames) {
     EXPECT_TRUE(set_texture_option(o, "lerp", &four, 1, nullptr));
     EXPECT_EQ(o.lerp, 2); // clamped to 0..2
 
+    // "bias" is shadow()'s (depth maps).
+    EXPECT_EQ(o.bias, -1.0f); // unset: the scene's
+    EXPECT_TRUE(set_texture_option(o, "bias", &half, 1, nullptr));
+    EXPECT_EQ(o.bias, 0.5f);
+
     const TextureOptions before = o;
-    EXPECT_FALSE(set_texture_option(o, "bias", &half, 1, nullptr));
+    EXPECT_FALSE(set_texture_option(o, "Bias", &half, 1, nullptr));
     EXPECT_FALSE(set_texture_option(o, "Blur", &half, 1, nullptr));
     EXPECT_FALSE(set_texture_option(o, "", &half, 1, nullptr));
     EXPECT_EQ(o.sblur, before.sblur);

@@ -53,7 +53,10 @@ struct BakeOptions {
     /// have the same unitlength (ValueError otherwise).
     double unitlength = 1.0;
     std::optional<int> frame; ///< -frame N, for frame patterns in file names
-    std::string output;       ///< -o: every bake goes to this one file
+    /// run() ends with the Make requests that follow the frame
+    /// (run_make_requests); render's bake pass leaves them to the render.
+    bool after_frame_makes = true;
+    std::string output; ///< -o: every bake goes to this one file
     PointCloudWriteOptions write;
     Progress* progress = nullptr;
 };

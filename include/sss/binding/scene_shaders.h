@@ -83,6 +83,15 @@ bool program_reads_parametric(const Program& program);
 /// their neighbours (BatchLayout::Triplets) and a baker whole grids.
 bool program_uses_derivatives(const Program& program);
 
+/// Carries out the scene's Make requests (MakeTexture,
+/// MakeLatLongEnvironment, MakeShadow, MakeCubeFaceEnvironment: through
+/// TextureLibrary) that run before the frame (`after_frame` false; as
+/// bind_scene_shaders does first) or after it (true: once the frame's images
+/// are written, as RenderJob::run does), in RIB order. A texture newer than
+/// its inputs is kept. Throws IoError / ValueError naming the request's RIB
+/// line (a missing picture or zfile, an unknown filter or wrap mode).
+void run_make_requests(const Scene& scene, bool after_frame);
+
 /// Loads and binds the scene's shaders (surface, displacement, light, and the
 /// Interior and Exterior volume shaders that traced rays run). With `image`
 /// (render's image), also the Imager and the Atmosphere shaders, which only

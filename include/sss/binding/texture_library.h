@@ -4,6 +4,7 @@
 /// over OpenImageIO (a plugin loaded on the first 2-D lookup), brick maps
 /// and point clouds.
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,6 +12,8 @@
 #include "sss/shading/texture_services.h"
 
 namespace sss {
+
+struct ShadowMap; // sss/light/shadow_map.h
 
 /// 2-D textures through one OpenImageIO TextureSystem (MIP-mapped .tx/.tex
 /// made by maketx, and any image OIIO reads, MIP-mapped on the fly),
@@ -42,6 +45,9 @@ public:
                      std::string* error) override;
     bool texture_info(const std::string& file, const std::string& key,
                       int expected_floats, float* numbers, std::string* text) override;
+    bool shadow(const std::string& file, const TextureOptions& options, std::size_t count,
+                const glm::vec3* P, const glm::vec3* dP_du, const glm::vec3* dP_dv,
+                const uint8_t* mask, float* out, std::string* error) override;
     bool texture3d(const std::string& file, std::span<const std::string> channels,
                    std::size_t count, const glm::vec3* P, const glm::vec3* N,
                    const float* radius, const uint8_t* mask,
@@ -74,6 +80,29 @@ public:
     /// picture cannot be read, a wrap mode or filter is unknown, or the
     /// texture cannot be written.
     bool make_texture(const Make& m, const std::string& where);
+
+    /// The depth map `file` (a zfile or shadow map: docs/scene.md), read
+    /// once along the search path and shared; null with *error ("file:
+    /// reason") when it cannot be read as one. Thread-safe.
+    std::shared_ptr<const ShadowMap> shadow_map(const std::string& file,
+                                                std::string* error);
+
+    /// MakeShadow: the zfile `input` as a shadow map in `output` (OpenEXR,
+    /// atomically), unless `output` is already newer than `input` (returns
+    /// false then). IoError naming `where` when the zfile is missing or not
+    /// a depth map, or the map cannot be written.
+    bool make_shadow(const std::string& input, const std::string& output,
+                     const std::string& where);
+
+    /// MakeCubeFaceEnvironment: the six pictures (+x, -x, +y, -y, +z, -z
+    /// views of `fov` degrees, RenderMan's orientation) as an OpenEXR
+    /// cube-face environment map in `output` (atomically), unless it is
+    /// newer than every picture (returns false then). IoError / ValueError
+    /// naming `where` (a missing picture, faces of different sizes, an
+    /// unknown filter).
+    bool make_cube_environment(const std::array<std::string, 6>& faces,
+                               const std::string& output, double fov,
+                               const std::string& filter, const std::string& where);
 
 private:
     struct Impl;

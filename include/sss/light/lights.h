@@ -10,12 +10,15 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "sss/light/ray_tracer.h"
+#include "sss/light/shadow_map.h"
 #include "sss/scene/scene.h"
 
 namespace sss {
@@ -38,17 +41,34 @@ struct Light {
     double size = 0.0;
     std::string name;     ///< shader name, for messages
     int scene_index = -1; ///< index in Scene::lights
+    /// Depth-map shadows: the map a "shadowname" other than "raytrace"
+    /// names, or shadowpoint's six (sfpx sfnx sfpy sfny sfpz sfnz; null
+    /// where the name is empty); empty without maps. Each point is looked up
+    /// in one (shadowpoint: the map of the world axis nearest to the
+    /// direction from the light to the point) with `shadow_lookup`.
+    std::vector<std::shared_ptr<const ShadowMap>> shadow_maps;
+    ShadowLookup shadow_lookup;
 };
+
+/// Reads the depth map a light names (a zfile or shadow map): the caller's
+/// (binding's TextureLibrary::shadow_map); throws when it cannot.
+using ShadowMapLoader =
+    std::function<std::shared_ptr<const ShadowMap>(const std::string&)>;
 
 /// Resolves every light of the scene (parameter defaults as RenderMan's
 /// standard shaders; "from"/"to" in the light's shader space). Unknown light
 /// shaders give a warning string in `warnings` and an entry with color 0.
-std::vector<Light> resolve_lights(const Scene& scene, std::vector<std::string>* warnings);
+/// Shadow maps (a "shadowname" other than "raytrace", shadowpoint's sfpx...)
+/// are read with `maps`; without one a light that names a map is a
+/// ValueError.
+std::vector<Light> resolve_lights(const Scene& scene, std::vector<std::string>* warnings,
+                                  const ShadowMapLoader& maps = nullptr);
 
 /// Irradiance at world point p with unit normal n from the lights listed in
 /// `active` (indices into `lights`): ambient lights add their colour, the
 /// others Cl * max(0, n.L), times the fraction of unoccluded shadow rays when
-/// the light has shadows and `tracer` is given. `seed` picks the sample
+/// the light has shadows and `tracer` is given, or by the lit fraction of its
+/// depth maps (Light::shadow_maps, no tracer needed). `seed` picks the sample
 /// pattern (deterministic; pass the point index). `ray_offset` is the origin
 /// offset along n used for shadow rays (world units).
 glm::dvec3 irradiance(const std::vector<Light>& lights, const std::vector<int>& active,

@@ -47,6 +47,9 @@ struct ImageMetadata {
     /// attributes hold them in Imath's row-vector layout (docs/images.md).
     Matrix4 world_to_camera{1.0};
     Matrix4 world_to_ndc{1.0};
+    /// World to screen with the screen window at [-1, 1] x [-1, 1], y up
+    /// (zfiles' and shadow maps' "worldtoscreen", docs/scene.md).
+    Matrix4 world_to_screen{1.0};
     std::vector<std::pair<std::string, std::string>> extra; ///< "sss:scene" -> path...
 };
 
@@ -70,7 +73,16 @@ struct DisplayTarget {
     QuantizeSpec quantize{};
     /// The file's pixel type for PNG/TIFF/JPEG: 8 or 16 (bits), 32 (float).
     int bits = 8;
+    /// Display types "zfile" and "shadow": a depth map (docs/scene.md,
+    /// "Depth maps"): float Z only, no surface = kNoSurfaceDepth, with the
+    /// worldtocamera and worldtoscreen matrices; `shadow_map` also tags it
+    /// as a shadow map (textureinfo "type" "shadow").
+    bool depth_map = false;
+    bool shadow_map = false;
 };
+
+/// Whether a Display is a depth map ("zfile" or "shadow", any case).
+bool display_is_depth_map(const DisplaySpec& display);
 
 /// What a Display takes from the scene unless its parameters say otherwise:
 /// Exposure, and Quantize (PRMan's 0 255 0 255 dither 0.5 when absent).
@@ -84,7 +96,8 @@ struct DisplayDefaults {
 const std::vector<std::string>& image_extensions();
 
 /// The format a Display writes: from the display type ("openexr"/"exr",
-/// "tiff"/"tif", "png", "jpeg"/"jpg"), else ("file", "it", "framebuffer",
+/// "tiff"/"tif", "png", "jpeg"/"jpg"; "zfile" and "shadow": OpenEXR
+/// whatever the name), else ("file", "it", "framebuffer",
 /// any other driver) from the extension of display_file(). Throws
 /// ValueError naming the Display and its line when that extension is not
 /// one of image_extensions() ("it"/"framebuffer" never: they add ".exr").

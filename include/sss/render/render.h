@@ -97,10 +97,13 @@ public:
     bool bakes() const { return m_bake != nullptr; }
     /// The image (render_image()).
     Image image(RenderReport* report) const;
-    /// Renders and writes every Display (render_scene()).
+    /// Renders and writes every Display (render_scene()), then carries out
+    /// the Make requests that follow the frame (a zfile it wrote made into
+    /// a shadow map: run_make_requests).
     RenderReport run() const;
 
 private:
+    RenderReport render_frame() const;
     const Scene& m_scene;
     const RenderJobOptions& m_options;
     std::optional<int> m_frame;

@@ -467,16 +467,26 @@ struct RenderOptions {
 };
 
 /// A whole scene (one frame).
-/// A texture-making request of the RIB (MakeTexture, MakeLatLongEnvironment),
-/// carried out before anything is shaded.
+/// A texture-making request of the RIB (MakeTexture, MakeLatLongEnvironment,
+/// MakeShadow, MakeCubeFaceEnvironment). Requests inside the frame read run
+/// before anything is shaded; requests between frames belong to the frames
+/// on either side: the ones before FrameBegin n run before frame n, the
+/// ones after its FrameEnd (up to the next FrameBegin) after frame n is
+/// written (`after_frame`), so that a zfile a frame renders can be made
+/// into the shadow map the next frame reads (docs/scene.md, "Frames").
 struct MakeRequest {
     std::string kind;   ///< the RIB request
-    std::string input;  ///< the picture, found along the texture search path
+    std::string input;  ///< the picture (zfile), found along the texture search path
     std::string output; ///< the texture, relative to the working folder
+    /// MakeCubeFaceEnvironment: the six pictures px nx py ny pz nz (input is
+    /// the first).
+    std::vector<std::string> faces;
+    double fov = 90.0; ///< MakeCubeFaceEnvironment: each picture's field of view
     std::string swrap = "black", twrap = "black", filter = "box";
     double swidth = 1.0, twidth = 1.0;
     ParamList params;
-    std::string source; ///< "file.rib:3"
+    std::string source;       ///< "file.rib:3"
+    bool after_frame = false; ///< run after the frame is rendered
 };
 
 struct Scene {
@@ -494,8 +504,12 @@ struct Scene {
     /// then each ReadArchive / DelayedReadArchive file and OBJ mesh once, in
     /// first-read order. The inputs of `-newer 1`.
     std::vector<std::string> sources;
-    /// The Make* requests, in RIB order.
+    /// The Make* requests of the frame read, in RIB order (MakeRequest says
+    /// which run before and which after the frame).
     std::vector<MakeRequest> makes;
+    /// The numbers of every FrameBegin of the file, in order (the one read
+    /// and the skipped ones).
+    std::vector<int> frame_numbers;
     /// How each of `sources` was named, for messages: "the scene file",
     /// "ReadArchive \"cube.obj\" at scene.rib:3".
     std::vector<std::string> source_uses;

@@ -34,15 +34,15 @@
 ///    indirectdiffuse() through ShadingServices::trace; shadow("raytrace")
 ///    and transmission() through ShadingServices::transmit. Every ray carries
 ///    depth = ShadingBatch::ray.depth + 1;
-///  - texture/environment/textureinfo/texture3d through
-///    ShadingServices::textures(), bake3d records handed to
+///  - texture/environment/textureinfo/texture3d and depth-map shadow()
+///    through ShadingServices::textures(), bake3d records handed to
 ///    ShadingServices::bake3d;
 ///  - attribute/option/rendererinfo/rayinfo queries.
 ///  - message passing: lightsource() inside illuminance (and its
 ///    "light:NAME" options), surface() in light shaders;
 ///  - resizable arrays (engine_arrays.cpp).
 /// Not supported (they run and return 0, warned once where it matters):
-/// depth-map shadow(), displacement() and atmosphere() message passing,
+/// displacement() and atmosphere() message passing,
 /// gather's "primitive:" outputs (a compile error).
 
 #include <cstddef>
@@ -343,15 +343,15 @@ public:
     virtual void transmit(const ShadowRay* rays, std::size_t count, glm::vec3* out,
                           int depth);
     /// The texture lookups of shaders (texture, environment, textureinfo,
-    /// texture3d), or null: then every lookup fails as an unreadable file
-    /// would ("no texture services", reported once, results 0).
+    /// texture3d, shadow on depth maps), or null: then every lookup fails as an
+    /// unreadable file would ("no texture services", reported once, results 0).
     virtual TextureServices* textures() { return nullptr; }
     /// Receives what bake3d writes (ptbake collects it; render too).
     virtual void bake3d(Bake3dRecord&& record) { (void)record; }
     /// printf output (one message per call).
     virtual void message(const std::string& text) = 0;
-    /// A run-time warning of a shader ("file:line: shadow maps are not
-    /// supported..."). The engine gives each text once per ShadingResources.
+    /// A run-time warning of a shader ("file:line: unknown texture option
+    /// ..."). The engine gives each text once per ShadingResources.
     /// By default: message("warning: " + text).
     virtual void warning(const std::string& text) { message("warning: " + text); }
     /// Frame number for patterns in file names (texture3d, bake3d).

@@ -30,6 +30,9 @@ struct TextureOptions {
     std::string filter = "box";
     float fill = 0; // value of channels past the file's last
     int lerp = 2;   // mip levels: 0 one level, 1 trilinear, 2 (auto) anisotropic
+    // shadow(): depth offset in the map camera's units; < 0: the scene's
+    // (Option "shadow" "bias", else PRMan's default, sss/light/shadow_map.h).
+    float bias = -1;
 };
 
 /// Sets option `name` from a token-value pair (numbers: count floats; text
@@ -95,6 +98,25 @@ public:
                              const glm::vec3* dir, const glm::vec3* ddir_du,
                              const glm::vec3* ddir_dv, const uint8_t* mask, float* out,
                              std::string* error) = 0;
+    /// shadow(file, P) on a depth map (a shadow map or zfile: docs/scene.md):
+    /// per point the fraction in shadow, 0 = lit, percentage-closer filtered
+    /// (sss/light/shadow_map.h: shadow_fraction) over the footprint of the
+    /// world-space differences dP_du, dP_dv (may be null: one texel) times
+    /// options.swidth/twidth, plus options.sblur/tblur, with options.samples
+    /// comparisons, options.bias (>= 0; the caller resolves the scene's
+    /// default) and options.filter ("gaussian" weights; others box).
+    /// Points behind the map's camera or outside the map are lit. Returns
+    /// false with *error ("file: reason") when the file cannot be read as a
+    /// depth map. The default implementation has no maps.
+    virtual bool shadow(const std::string& file, const TextureOptions& options,
+                        std::size_t count, const glm::vec3* P, const glm::vec3* dP_du,
+                        const glm::vec3* dP_dv, const uint8_t* mask, float* out,
+                        std::string* error) {
+        (void)options, (void)count, (void)P, (void)dP_du, (void)dP_dv, (void)mask,
+            (void)out;
+        if (error) *error = file + ": these texture services read no shadow maps";
+        return false;
+    }
     /// textureinfo(file, key, out): "resolution" (2 floats), "channels" (1),
     /// "type" ("texture", "environment", "shadow"),
     /// "viewingmatrix"/"projectionmatrix" (16, when the file has them: OIIO

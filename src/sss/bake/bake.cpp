@@ -820,14 +820,19 @@ BakeReport BakeJob::run() const {
     const double before = watch.seconds();
     // Every cloud is written as a temporary first and all are put in place
     // together at the end, or none.
-    OutputSet outputs;
-    for (auto& [path, cloud] : files) {
-        ScopedStage stage("writing " + path);
-        write_point_cloud(cloud, path, options.write);
+    {
+        OutputSet outputs;
+        for (auto& [path, cloud] : files) {
+            ScopedStage stage("writing " + path);
+            write_point_cloud(cloud, path, options.write);
+        }
+        outputs.commit();
     }
-    outputs.commit();
     report.write_seconds = watch.seconds() - before;
     if (options.progress) options.progress->finish();
+    // Once the clouds are in place (the set is gone: the textures are put in
+    // place by themselves).
+    if (options.after_frame_makes) run_make_requests(scene, true);
     return report;
 }
 

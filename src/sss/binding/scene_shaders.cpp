@@ -5,9 +5,11 @@
 #include "sss/binding/scene_shaders.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <system_error>
 
 #include "sss/binding/texture_library.h"
@@ -124,12 +126,20 @@ std::vector<std::string> shader_search_path(const Scene& scene) {
     return resolve_shader_search_path(search_path(scene, "shader"));
 }
 
-SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
-                                bool image) {
-    // The textures the RIB makes come before any shader looks one up.
-    if (!scene.makes.empty()) {
-        TextureLibrary maker;
-        for (const MakeRequest& m : scene.makes) {
+void run_make_requests(const Scene& scene, bool after_frame) {
+    std::optional<TextureLibrary> maker;
+    for (const MakeRequest& m : scene.makes) {
+        if (m.after_frame != after_frame) continue;
+        if (!maker) maker.emplace();
+        const std::string where = m.source + ": " + m.kind;
+        if (m.kind == "MakeShadow") {
+            maker->make_shadow(m.input, m.output, where);
+        } else if (m.kind == "MakeCubeFaceEnvironment") {
+            std::array<std::string, 6> faces;
+            for (std::size_t k = 0; k < faces.size() && k < m.faces.size(); ++k)
+                faces[k] = m.faces[k];
+            maker->make_cube_environment(faces, m.output, m.fov, m.filter, where);
+        } else {
             TextureLibrary::Make t;
             t.latlong = m.kind == "MakeLatLongEnvironment";
             t.input = m.input;
@@ -137,9 +147,15 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
             t.swrap = m.swrap;
             t.twrap = m.twrap;
             t.filter = m.filter;
-            maker.make_texture(t, m.source + ": " + m.kind);
+            maker->make_texture(t, where);
         }
     }
+}
+
+SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
+                                bool image) {
+    // The textures the RIB makes come before any shader looks one up.
+    run_make_requests(scene, false);
     SceneShaders out;
     out.library = std::make_unique<ShaderLibrary>(shader_search_path(scene));
     ShaderLibrary& library = *out.library;

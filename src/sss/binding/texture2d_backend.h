@@ -5,15 +5,26 @@
 // lookup, so that tools and jobs that never look up a 2-D texture do not load OpenImageIO
 // and the 260 libraries behind it (0.15 s at every process start).
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "sss/shading/texture_services.h"
 
 namespace sss::detail {
+
+/// A depth map as the plugin reads it (a zfile or shadow map, docs/scene.md).
+struct DepthMapData {
+    int width = 0, height = 0;
+    std::vector<float> z; ///< rows top to bottom
+    /// The files' matrices as stored: row-vector (Imath) layout, row by row,
+    /// which is glm's column-major order of the column-vector matrix.
+    std::array<float, 16> world_to_camera{}, world_to_screen{};
+};
 
 /// What TextureLibrary forwards to the plugin: the 2-D calls of texture_library.h.
 class Texture2dBackend {
@@ -39,6 +50,22 @@ public:
     virtual bool make_texture(const std::string& input, const std::string& output,
                               bool latlong, const std::string& wrapmodes,
                               const std::string& filter, std::string* error) = 0;
+    /// Reads a zfile or shadow map (its "Z" channel, or its only channel,
+    /// and the worldtocamera and worldtoscreen matrices); false with *error
+    /// ("file: reason") when it is not one.
+    virtual bool read_depth_map(const std::string& file, DepthMapData& out,
+                                std::string* error) = 0;
+    /// MakeShadow: the zfile `input` as a shadow map in `output` (an
+    /// OpenEXR file, written where told: the caller renames it).
+    virtual bool make_shadow(const std::string& input, const std::string& output,
+                             std::string* error) = 0;
+    /// MakeCubeFaceEnvironment: the six pictures (+x, -x, +y, -y, +z, -z,
+    /// RenderMan's orientation, `fov` degrees each) resampled into an
+    /// OpenEXR cube-face map (N x 6N) in `output`; `filter` is checked as
+    /// make_texture's.
+    virtual bool make_cube_environment(const std::array<std::string, 6>& faces,
+                                       const std::string& output, double fov,
+                                       const std::string& filter, std::string* error) = 0;
 };
 
 /// The plugin's entry point (extern "C", looked up by name).

@@ -15,6 +15,7 @@
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_lookup.h"
+#include "sss/light/shadow_map.h"
 
 namespace sss {
 
@@ -55,6 +56,13 @@ struct Texture3dFile {
 
 class Texture2dBackend; // texture2d_backend.h
 
+/// A depth map (zfile or shadow map), read once.
+struct ShadowMapFile {
+    std::once_flag once;
+    std::string error; ///< "file: reason" when it could not be read
+    std::shared_ptr<const ShadowMap> map;
+};
+
 } // namespace detail
 
 struct TextureLibrary::Impl {
@@ -70,6 +78,8 @@ struct TextureLibrary::Impl {
     std::string plugin_error;
     std::mutex mutex; ///< guards files3d (not the files' contents)
     std::unordered_map<std::string, std::shared_ptr<detail::Texture3dFile>> files3d;
+    /// Depth maps by resolved name; guarded by mutex.
+    std::unordered_map<std::string, std::shared_ptr<detail::ShadowMapFile>> shadow_maps;
 
     std::shared_ptr<detail::Texture3dFile> open3d(const std::string& file);
 

@@ -24,16 +24,24 @@
 /// contributes nothing. "from" and "to" must differ for distant and spot
 /// lights, and every number must be finite: otherwise ValueError.
 ///
-/// Shadows (ray traced; there are no shadow maps):
+/// Shadows:
 ///   - `"string shadowname" "raytrace"` on distantlight, pointlight or
-///     spotlight turns ray-traced shadows on. Any other non-empty shadow map
-///     name warns "shadow maps are not supported, using ray-traced shadows"
-///     and also turns them on.
+///     spotlight turns ray-traced shadows on.
 ///   - distantlight_rts, pointlight_rts and spotlight_rts (as in the
 ///     RenderMan application notes) take the same parameters as their
 ///     standard shader and always cast ray-traced shadows.
-///   - "blur" and "bias" of shadow() calls are not read; the baker chooses the
-///     ray origin offset.
+///   - Any other non-empty shadowname is a depth map (a zfile or shadow
+///     map, read by resolve_lights' loader), and so are the maps of PRMan's
+///     shadowspot, shadowdistant ("shadowname") and shadowpoint ("sfpx"
+///     "sfnx" "sfpy" "sfny" "sfpz" "sfnz": the map of the world axis nearest
+///     to the direction from the light to the point; an empty name: none),
+///     which take the parameters of spotlight, distantlight and pointlight.
+///     The shadow term is 1 - shadow_fraction() (shadow_map.h) at the point,
+///     one texel's footprint, with "samples" (default 1; the shadow* lights
+///     16), "blur" (0), "width" (1) and "bias" (< 0, the default: the
+///     scene's, scene_shadow_bias()); no rays are traced.
+///   - For ray-traced shadows "blur" and "bias" are not read; the baker
+///     chooses the ray origin offset.
 ///
 /// Soft shadows. Lights with shadows also read:
 ///   "float samples"  (default 1, whole number in [1, 1024]): shadow rays per
@@ -70,6 +78,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -139,11 +148,18 @@ glm::dvec3 axis_of(const ShaderRef& shader, const glm::dvec3& from) {
 
 /// Fills `light` from the shader call; throws ValueError (without location)
 /// on bad values. Returns false for an unknown shader.
-bool resolve_one(const ShaderRef& shader, const std::string& where, Light& light,
-                 std::vector<std::string>* warnings) {
+bool resolve_one(const ShaderRef& shader, const ShadowMapLoader& loader, float scene_bias,
+                 Light& light) {
     std::string base = shader.name;
     const bool rts = base.size() > 4 && base.ends_with("_rts");
     if (rts) base.resize(base.size() - 4);
+    // PRMan's shadow-map lights: the standard ones with maps.
+    const bool mapped = !rts && (base == "shadowspot" || base == "shadowdistant" ||
+                                 base == "shadowpoint");
+    if (mapped)
+        base = base == "shadowspot"      ? "spotlight"
+               : base == "shadowdistant" ? "distantlight"
+                                         : "pointlight";
 
     if (base == "ambientlight" && !rts) {
         light.kind = Light::Kind::Ambient;
@@ -173,22 +189,34 @@ bool resolve_one(const ShaderRef& shader, const std::string& where, Light& light
         light.beam_distribution = float_param(params, "beamdistribution", 2.0);
     }
 
+    std::vector<std::string> maps;
     if (rts) {
         light.shadows = true;
+    } else if (mapped && light.kind == Light::Kind::Point) {
+        for (const char* name : {"sfpx", "sfnx", "sfpy", "sfny", "sfpz", "sfnz"})
+            maps.push_back(params.get_string(name, ""));
     } else {
         const std::string map = params.get_string("shadowname", "");
-        if (map == "raytrace") {
+        if (map == "raytrace")
             light.shadows = true;
-        } else if (!map.empty()) {
-            if (warnings)
-                warnings->push_back(where + shader.name + " \"" + map +
-                                    "\": shadow maps are not supported, using "
-                                    "ray-traced shadows");
-            light.shadows = true;
-        }
+        else if (!map.empty())
+            maps.push_back(map);
+    }
+    const auto named = std::find_if(maps.begin(), maps.end(),
+                                    [](const std::string& m) { return !m.empty(); });
+    if (named != maps.end()) {
+        if (!loader) throw ValueError("shadow map \"" + *named + "\" but no map reader");
+        for (const std::string& map : maps)
+            light.shadow_maps.push_back(map.empty() ? nullptr : loader(map));
+        ShadowLookup& look = light.shadow_lookup;
+        look.samples = params.get_int("samples", mapped ? 16 : 1);
+        look.sblur = look.tblur = static_cast<float>(float_param(params, "blur", 0.0));
+        look.swidth = look.twidth = static_cast<float>(float_param(params, "width", 1.0));
+        const double bias = float_param(params, "bias", -1.0);
+        look.bias = bias >= 0.0 ? static_cast<float>(bias) : scene_bias;
     }
 
-    const int samples = params.get_int("samples", 1);
+    const int samples = params.get_int("samples", mapped ? 16 : 1);
     if (samples < 1 || samples > kMaxSamples)
         throw ValueError("\"samples\" must be in [1, " + std::to_string(kMaxSamples) +
                          "], got " + std::to_string(samples));
@@ -379,6 +407,24 @@ ShadowRay ray_to(const glm::dvec3& origin, const glm::dvec3& target) {
     sum += value * fraction;
 }
 
+/// The unshadowed fraction of a light's depth maps at p (1 without maps):
+/// shadowpoint's map of the world axis nearest to the direction from the
+/// light to p, as its RSL shader chooses.
+double map_visibility(const Light& l, const glm::dvec3& p) {
+    if (l.shadow_maps.empty()) return 1.0;
+    std::size_t k = 0;
+    if (l.shadow_maps.size() == 6) {
+        const glm::dvec3 d = p - l.from;
+        const glm::dvec3 a = glm::abs(d);
+        const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+        k = std::size_t(2 * axis + (d[axis] > 0.0 ? 0 : 1));
+    }
+    const ShadowMap* map = l.shadow_maps[k].get();
+    if (!map) return 1.0;
+    return 1.0 -
+           shadow_fraction(*map, p, glm::dvec3(0.0), glm::dvec3(0.0), l.shadow_lookup);
+}
+
 double visible_fraction(const uint8_t* hit, int count) {
     int visible = 0;
     for (int k = 0; k < count; ++k) visible += hit[k] ? 0 : 1;
@@ -387,8 +433,9 @@ double visible_fraction(const uint8_t* hit, int count) {
 
 } // namespace
 
-std::vector<Light> resolve_lights(const Scene& scene,
-                                  std::vector<std::string>* warnings) {
+std::vector<Light> resolve_lights(const Scene& scene, std::vector<std::string>* warnings,
+                                  const ShadowMapLoader& maps) {
+    const float scene_bias = scene_shadow_bias(scene);
     std::vector<Light> lights;
     lights.reserve(scene.lights.size());
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
@@ -399,7 +446,7 @@ std::vector<Light> resolve_lights(const Scene& scene,
         light.scene_index = static_cast<int>(i);
         bool known = false;
         try {
-            known = resolve_one(shader, where, light, warnings);
+            known = resolve_one(shader, maps, scene_bias, light);
         } catch (const ValueError& e) {
             throw ValueError(where + "light shader '" + shader.name + "': " + e.what());
         }
@@ -440,6 +487,8 @@ glm::dvec3 irradiance(const std::vector<Light>& lights, const std::vector<int>& 
             // The batch call, as irradiance_batch uses: same rays, same answers.
             tracer->occluded(rays.data(), rays.size(), hits.data());
             fraction = visible_fraction(hits.data(), pl.rays);
+        } else {
+            fraction = map_visibility(*pl.light, p);
         }
         accumulate(e, inc.value, fraction);
     }
@@ -487,6 +536,8 @@ void light_samples(const std::vector<Light>& lights, const std::vector<int>& act
             else
                 tracer->occluded(rays, static_cast<std::size_t>(pl.rays), hits);
             fraction = visible_fraction(hits, pl.rays);
+        } else {
+            fraction = map_visibility(*pl.light, p);
         }
         sample.color = inc.color * fraction;
         sample.direction = inc.to_light;
@@ -537,7 +588,7 @@ void irradiance_batch(const std::vector<Light>& lights, const std::vector<int>& 
                 if (!lit[i]) continue;
                 const double fraction =
                     pl.traced ? visible_fraction(hits.data() + first_ray[i], pl.rays)
-                              : 1.0;
+                              : map_visibility(*pl.light, glm::dvec3(p[begin + i]));
                 accumulate(out[begin + i], inc[i].value, fraction);
             }
         }

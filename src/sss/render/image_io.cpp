@@ -23,6 +23,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include "sss/image/image_file.h"
+#include "sss/light/shadow_map.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"
@@ -187,6 +188,22 @@ std::string join(const std::vector<std::string>& list, const char* sep) {
     return s;
 }
 
+/// PRMan's zfile and shadow drivers: the depth, nothing else.
+void depth_map_target(const DisplaySpec& display, const Image& image,
+                      const std::string& label, DisplayTarget& target) {
+    if (lower(trim(display.mode)) != "z")
+        throw ValueError(label + ": a \"" + display.type +
+                         "\" display writes depth: its mode is \"z\", not '" +
+                         display.mode + "'");
+    if (image.channel_index("Z") < 0)
+        throw ValueError(label + ": the image has no depth (" + describe_channels(image) +
+                         ")");
+    target.channels = target.names = {"Z"};
+    target.half = false;
+    target.depth_map = true;
+    target.shadow_map = lower(display.type) == "shadow";
+}
+
 } // namespace
 
 const std::vector<std::string>& image_extensions() {
@@ -195,8 +212,15 @@ const std::vector<std::string>& image_extensions() {
     return extensions;
 }
 
+bool display_is_depth_map(const DisplaySpec& display) {
+    const std::string type = lower(display.type);
+    return type == "zfile" || type == "shadow";
+}
+
 std::string display_format(const DisplaySpec& display) {
     const std::string type = lower(display.type);
+    // Depth maps are OpenEXR files whatever their name (".z", ".shd", ".tex").
+    if (display_is_depth_map(display)) return "openexr";
     std::string format = format_from_type(type);
     if (!format.empty()) return format;
     const std::string path = display_file(display);
@@ -244,6 +268,10 @@ DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
     target.path = display_file(display);
     target.format = display_format(display);
     const bool exr = target.format == "openexr";
+    if (display_is_depth_map(display)) {
+        depth_map_target(display, image, label, target);
+        return target;
+    }
 
     // Channels from the mode: a comma-separated list of items.
     if (trim(display.mode).empty()) throw ValueError(label + ": empty display mode");
@@ -468,6 +496,18 @@ void add_metadata(std::vector<ImageAttribute>& attributes, const ImageMetadata& 
     add("worldToNDC", row_vector_matrix(metadata.world_to_ndc));
 }
 
+/// A depth map's own attributes (docs/scene.md, "Depth maps"): OIIO's
+/// names, which textureinfo's "viewingmatrix" and "projectionmatrix" read.
+void add_depth_map_metadata(std::vector<ImageAttribute>& attributes,
+                            const ImageMetadata& metadata, bool shadow) {
+    attributes.push_back({"worldtocamera", row_vector_matrix(metadata.world_to_camera)});
+    attributes.push_back({"worldtoscreen", row_vector_matrix(metadata.world_to_screen)});
+    if (shadow) {
+        attributes.push_back({"textureformat", std::string("Shadow")});
+        attributes.push_back({"sss:textureformat", std::string("Shadow")});
+    }
+}
+
 int index_of(const std::vector<std::string>& list, const std::string& s) {
     auto it = std::find(list.begin(), list.end(), s);
     return it == list.end() ? -1 : int(it - list.begin());
@@ -619,6 +659,9 @@ void write_display(const Image& image, const DisplayTarget& target,
     const bool exr = target.format == "openexr";
     const std::size_t n = target.channels.size();
     std::vector<float> values = display_values(image, target, source);
+    if (target.depth_map)
+        for (float& z : values) // no hit (0): nothing there to cast a shadow
+            if (!(z > 0.0f)) z = kNoSurfaceDepth;
 
     ImageFileSpec spec;
     spec.format = target.format;
@@ -631,6 +674,8 @@ void write_display(const Image& image, const DisplayTarget& target,
     spec.z_channel = exr ? index_of(target.names, "Z") : -1;
     spec.what = target.format + " image";
     add_metadata(spec.attributes, metadata, exr);
+    if (target.depth_map)
+        add_depth_map_metadata(spec.attributes, metadata, target.shadow_map);
 
     // Exposure (a no-op at gain 1, gamma 1). Integer files apply it after
     // dividing by alpha, in integer_pixels.

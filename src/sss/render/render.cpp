@@ -320,7 +320,11 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             float* v = &values[std::size_t(h.sample) * job.values];
             const glm::dvec3 ci(batch.Ci[k * r]);
             const glm::dvec3 oi = glm::clamp(glm::dvec3(batch.Oi[k * r]), 0.0, 1.0);
-            if (cs.layers == 0) cs.depth = h.depth;
+            if (job.opaque_depth
+                    ? std::isinf(cs.depth) && oi.x >= job.zthreshold.x &&
+                          oi.y >= job.zthreshold.y && oi.z >= job.zthreshold.z
+                    : cs.layers == 0)
+                cs.depth = h.depth;
             const glm::dvec3 w = cs.trans;
             for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(w[c] * ci[c]);
             const double coverage = (w.x * oi.x + w.y * oi.y + w.z * oi.z) / 3.0;
@@ -545,6 +549,9 @@ std::vector<std::vector<float>> render_tiles(Renderer& job, const TileGrid& grid
             }
         }
         job.shadow_rays += context.rays_traced() - rays_before;
+        uint64_t met = 0;
+        for (const CameraSample& cs : samples) met += cs.layers > 0 ? 1 : 0;
+        job.surface_samples += met;
         job.camera_rays += camera_count;
         job.bad_samples += bad_count;
         if (options.progress) options.progress->update(++tiles_done, tiles);
@@ -698,6 +705,7 @@ Image RenderJob::image(RenderReport* report_out) const {
             ": no geometry in the world: the image is empty");
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
     setup_camera(job, scene, options);
+    setup_depth(job, scene);
     const bool any_shadows = resolve_shading(job, scene, frame, report);
     if (auto w = unlit_scene_warning(scene, job.shaders)) report.warnings.push_back(*w);
     check_image_memory(job, scene);
@@ -736,8 +744,7 @@ Image RenderJob::image(RenderReport* report_out) const {
     run_imager(job, image);
     // A camera that sees nothing of a scene with geometry is a mistake more
     // often than a wish (a camera transform after WorldBegin, a sign).
-    const auto missed = [](float z) { return !std::isfinite(z); };
-    if (!scene.primitives.empty() && std::all_of(depth.begin(), depth.end(), missed))
+    if (!scene.primitives.empty() && job.surface_samples.load() == 0)
         report.warnings.push_back(
             name + ": no camera ray hit a surface: the image is empty (is the camera "
                    "looking away from the scene, or is the scene smaller than a pixel? "
@@ -813,6 +820,7 @@ RenderJob::RenderJob(const Scene& scene, const RenderJobOptions& options)
     // (ShadingRate micropolygons of the scene's own camera, not -res).
     m_bake_options = std::make_unique<BakeOptions>();
     m_bake_options->frame = m_frame;
+    m_bake_options->after_frame_makes = false; // run() does them after the image
     // A pass that renders no image (only "null" Displays) reports the bake's
     // progress; otherwise the image's (one 0-100 % run per job).
     int primary = -1;
@@ -843,6 +851,13 @@ RenderFiles RenderJob::files() const {
 }
 
 RenderReport RenderJob::run() const {
+    RenderReport report = render_frame();
+    // After the frame's files are in place: MakeShadow of its zfile.
+    run_make_requests(m_scene, true);
+    return report;
+}
+
+RenderReport RenderJob::render_frame() const {
     RenderReport report;
     Stopwatch watch;
     const Scene& scene = m_scene;
@@ -943,6 +958,13 @@ RenderReport RenderJob::run() const {
     cam.xres = image.width;
     cam.yres = image.height;
     meta.world_to_ndc = cam.world_to_ndc();
+    // NDC (x right, y down, [0, 1]) to the depth maps' screen ([-1, 1], y up).
+    Matrix4 ndc_to_screen(1.0);
+    ndc_to_screen[0][0] = 2.0;
+    ndc_to_screen[1][1] = -2.0;
+    ndc_to_screen[3][0] = -1.0;
+    ndc_to_screen[3][1] = 1.0;
+    meta.world_to_screen = ndc_to_screen * meta.world_to_ndc;
     if (!scene.path.empty()) meta.extra.emplace_back("sss:scene", scene.path);
     const int nx = options.pixel_samples > 0 ? options.pixel_samples
                                              : scene.options.pixel_samples[0];

@@ -192,6 +192,13 @@ struct Renderer {
     std::vector<double> camera_times;
     std::vector<glm::dmat4> world_to_camera_keys;
     double shutter_open = 0.0, shutter_close = 0.0;
+    /// A frame with a depth-map display ("zfile", "shadow"): the depth is
+    /// the nearest surface at least `zthreshold` opaque in every channel
+    /// (PRMan's Option "limits" "zthreshold"), semi-transparent ones are
+    /// seen through; otherwise the nearest surface.
+    bool opaque_depth = false;
+    glm::dvec3 zthreshold{0.996};
+    std::atomic<uint64_t> surface_samples{0}; ///< camera samples that met a surface
     std::atomic<uint64_t> camera_rays{0};
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
@@ -237,6 +244,9 @@ std::vector<double> dice_times(const Camera& camera, const Primitive& prim);
 /// Moves a camera ray made by the camera as it is at the shutter's open time
 /// to the camera as it is at `time` (a moving camera), and stamps the time.
 void move_camera_ray(const Renderer& job, double time, ShadowRay& ray);
+/// The depth rule of the frame (Renderer::opaque_depth, zthreshold): opaque
+/// surfaces only when a Display is a depth map.
+void setup_depth(Renderer& job, const Scene& scene);
 
 /// The camera with the image size overrides, the pixel samples, the camera
 /// rays and the pixel size per unit of depth; ValueError (UsageError for a

@@ -21,6 +21,20 @@ bool needs_nearest_fallback(const PixelFilterSpec& spec) {
 /// The camera with the image size overrides, the pixel samples, the camera
 /// rays and the pixel size per unit of depth; ValueError (UsageError for a
 /// half-given override) on values that cannot render.
+void setup_depth(Renderer& job, const Scene& scene) {
+    for (const DisplaySpec& d : scene.options.displays)
+        job.opaque_depth = job.opaque_depth || display_is_depth_map(d);
+    const auto limits = scene.options.groups.find("limits");
+    if (limits == scene.options.groups.end()) return;
+    const Param* t = limits->second.find("zthreshold");
+    if (!t || t->numbers.empty()) return;
+    for (int c = 0; c < 3; ++c) {
+        const double v =
+            t->numbers[std::min<std::size_t>(std::size_t(c), t->numbers.size() - 1)];
+        if (std::isfinite(v)) job.zthreshold[c] = v;
+    }
+}
+
 void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& options) {
     job.scene = &scene;
     job.camera = scene.options.camera;

@@ -92,6 +92,7 @@ constexpr BuiltinSignature kTable[] = {
     {"texture", "f=sfffffffff!", V}, {"texture", "c=sfffffffff!", V},
     {"environment", "f=sfv!", V, D}, {"environment", "c=sfv!", V, D},
     {"shadow", "f=sfp!", V}, {"shadow", "c=sfp!", V},
+    {"shadow", "f=sfpppp!", V}, {"shadow", "c=sfpppp!", V},
     {"textureinfo", "f=ssF"}, {"textureinfo", "f=ss[F]"}, {"textureinfo", "f=ssS"},
     {"textureinfo", "f=ssM"},
 

@@ -44,8 +44,8 @@ bool unsupported(std::string_view name) {
     static const NameSet names =
         name_set("Deformation Detail DetailRange "
                  "Blobby HierarchicalSubdivisionMesh "
-                 "ClippingPlane IfBegin ElseIf Else IfEnd MakeShadow MakeBump "
-                 "MakeCubeFaceEnvironment MakeBrickMap System Resource "
+                 "ClippingPlane IfBegin ElseIf Else IfEnd MakeBump "
+                 "MakeBrickMap System Resource "
                  "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
                  "SampleFilter Light Volume Matte");
     return names.count(name) > 0;
@@ -70,6 +70,10 @@ Scene Reader::finish(const std::string& path) {
     if (m_skipping)
         m_scene.warnings.push_back(*m_skip_file + ":" + std::to_string(m_skip_line) +
                                    ": FrameBegin is never closed");
+    // Without frames, the requests outside them are the scene's.
+    if (!m_frames_seen)
+        for (MakeRequest& m : m_pending_makes) m_scene.makes.push_back(std::move(m));
+    m_pending_makes.clear();
     // A file without frame blocks is the same scene for every frame.
     if (m_options.frame && m_frames_seen && !m_frame_read)
         throw RibError(path, 0, "FrameBegin",
@@ -200,6 +204,8 @@ const Reader::HandlerTable& Reader::handlers() {
         {"TrimCurve", &Reader::do_trim_curve},
         {"MakeTexture", &Reader::do_make_texture},
         {"MakeLatLongEnvironment", &Reader::do_make_texture},
+        {"MakeShadow", &Reader::do_make_shadow},
+        {"MakeCubeFaceEnvironment", &Reader::do_make_cube_face_environment},
     };
     return table;
 }

@@ -161,7 +161,13 @@ void Reader::do_frame_begin(const Statement& s) {
     if (m_in_frame) fail(s, "nested FrameBegin");
     if (m_in_world) fail(s, "FrameBegin inside WorldBegin/WorldEnd");
     m_frames_seen = true;
+    m_scene.frame_numbers.push_back(number);
+    m_after_read_frame = false;
     bool wanted = !m_frame_read && (!m_options.frame || *m_options.frame == number);
+    // The requests since the last frame run before this one, if it is read.
+    if (wanted)
+        for (MakeRequest& m : m_pending_makes) m_scene.makes.push_back(std::move(m));
+    m_pending_makes.clear();
     if (!wanted) {
         m_skipping = true;
         m_skip_line = s.line;
@@ -180,6 +186,7 @@ void Reader::do_frame_end(const Statement& s) {
     SavedState saved = pop(s, Block::Frame);
     restore_all(saved);
     m_in_frame = false;
+    m_after_read_frame = true; // only the frame read gets here (others are skipped)
 }
 
 // --- archives --------------------------------------------------------------
@@ -348,7 +355,73 @@ void Reader::do_make_texture(const Statement& s) {
     if (auto found = find_on_search_path(search_path(m_scene, "texture"), m.input))
         m.input = *found;
     m.source = where(s);
-    m_scene.makes.push_back(std::move(m));
+    add_make(std::move(m));
+}
+
+void Reader::add_make(MakeRequest m) {
+    // After the world read was rendered: a zfile it wrote exists by then.
+    const bool world_done = m_scene.worlds > 0 && !m_in_world;
+    if (m_in_frame) {
+        m.after_frame = world_done;
+        m_scene.makes.push_back(std::move(m));
+    } else if (m_after_read_frame || (!m_frames_seen && world_done)) {
+        // Without frames the requests before the world are the scene's:
+        // they keep their place in RIB order.
+        if (!m_frames_seen) {
+            for (MakeRequest& p : m_pending_makes) m_scene.makes.push_back(std::move(p));
+            m_pending_makes.clear();
+        }
+        m.after_frame = true;
+        m_scene.makes.push_back(std::move(m));
+    } else if (!m_frame_read) {
+        m_pending_makes.push_back(std::move(m));
+    }
+    // Else it lies between two frames not read: theirs.
+}
+
+void Reader::do_make_shadow(const Statement& s) {
+    std::size_t i = 0;
+    MakeRequest m;
+    m.kind = s.name;
+    m.input = take_string(s, i, "zfile name");
+    m.output = take_string(s, i, "shadow map name");
+    m.params = take_params(s, i, false);
+    if (m.input.empty()) fail(s, "no zfile name");
+    if (m.output.empty()) fail(s, "no shadow map name");
+    // The zfile is often rendered by an earlier frame of this very file: a
+    // name found nowhere yet is kept as given (relative to the working folder).
+    if (auto found = find_on_search_path(search_path(m_scene, "texture"), m.input))
+        m.input = *found;
+    m.source = where(s);
+    add_make(std::move(m));
+}
+
+void Reader::do_make_cube_face_environment(const Statement& s) {
+    std::size_t i = 0;
+    MakeRequest m;
+    m.kind = s.name;
+    static const char* const kFaces[6] = {"px", "nx", "py", "ny", "pz", "nz"};
+    for (const char* face : kFaces) {
+        std::string name =
+            take_string(s, i, (std::string(face) + " picture name").c_str());
+        if (name.empty()) fail(s, std::string("no ") + face + " picture name");
+        if (auto found = find_on_search_path(search_path(m_scene, "texture"), name))
+            name = *found;
+        m.faces.push_back(std::move(name));
+    }
+    m.input = m.faces[0];
+    m.output = take_string(s, i, "texture name");
+    m.fov = take_number(s, i);
+    m.filter = take_string(s, i, "filter");
+    m.swidth = take_number(s, i);
+    m.twidth = take_number(s, i);
+    m.params = take_params(s, i, false);
+    if (m.output.empty()) fail(s, "no texture name");
+    if (!(m.fov > 0.0 && m.fov < 180.0))
+        fail(s, "field of view must be in (0, 180) degrees");
+    if (!(m.swidth > 0.0) || !(m.twidth > 0.0)) fail(s, "filter widths must be > 0");
+    m.source = where(s);
+    add_make(std::move(m));
 }
 
 void Reader::add_obj(const std::string& text, const std::string& path) {

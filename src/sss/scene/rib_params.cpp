@@ -90,9 +90,9 @@ std::unordered_map<std::string, Decl> predeclared() {
     // Standard shader, projection and option parameters.
     add("Ka Kd Ks Kr Kt Kdt roughness intensity fov coneangle conedeltaangle "
         "beamdistribution samples radius blur width height amplitude mindistance "
-        "maxdistance distance sphere bias dither",
+        "maxdistance distance sphere bias bias0 bias1 dither",
         T::Float, C::Uniform);
-    add("lightcolor specularcolor color background", T::Color, C::Uniform);
+    add("lightcolor specularcolor color background zthreshold", T::Color, C::Uniform);
     add("from to", T::Point, C::Uniform);
     add("shadowname filename displaychannels texturename name shader texture archive "
         "sense "

@@ -265,6 +265,10 @@ private:
     void do_curves(const Statement& s);
     void do_nupatch(const Statement& s);
     void do_make_texture(const Statement& s);
+    void do_make_shadow(const Statement& s);
+    void do_make_cube_face_environment(const Statement& s);
+    /// Files a Make request with the frame it belongs to (MakeRequest).
+    void add_make(MakeRequest m);
     void do_trim_curve(const Statement& s);
 
     // --- state -----------------------------------------------------------------
@@ -291,6 +295,12 @@ private:
     bool m_frame_read = false;
     bool m_frames_seen = false;
     bool m_skipping = false;
+    /// Between the FrameEnd of the frame read and the next FrameBegin:
+    /// Make requests there run after the frame.
+    bool m_after_read_frame = false;
+    /// Make requests outside frames before any frame was read: the frame
+    /// that follows them takes them (or, without frames, the scene).
+    std::vector<MakeRequest> m_pending_makes;
     int m_skip_line = 0;
     std::shared_ptr<const std::string> m_skip_file;
     // motion blocks

@@ -155,6 +155,9 @@ void reset_resizable(Frame& f);
 /// environment("raytrace", ...) (engine_raytrace.cpp; engine_texture.cpp
 /// routes the name "raytrace" to it).
 void environment_raytrace(Frame& f, const BoundOp& b);
+/// shadow(map[ch], P, options) on a depth map (engine_texture.cpp): the
+/// non-"raytrace", non-empty names of op_shadow (engine_raytrace.cpp).
+void shadow_map_lookup(Frame& f, const BoundOp& b);
 
 /// One symbol's storage in a frame.
 struct Slot {

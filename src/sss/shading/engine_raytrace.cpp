@@ -25,7 +25,8 @@
 ///    adaptive sampling on request ("adaptive" 1), environment maps for the open
 ///    directions.
 ///  - shadow("raytrace", P) and transmission(Psrc, Pdst): transmit() with
-///    Transmission rays (colour transmittance).
+///    Transmission rays (colour transmittance). shadow() of any other
+///    non-empty name reads a depth map (shadow_map_lookup, engine_texture.cpp).
 
 #include <algorithm>
 #include <cmath>
@@ -893,14 +894,18 @@ void op_shadow(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     const std::string& name = f.str(b, 1, f.first_active());
     const int nc = d.nf;
-    if (name != "raytrace") {
-        if (!name.empty())
-            f.warn_once(b, "shadow(\"" + name +
-                               "\"): depth-map shadows are not supported; unshadowed");
+    if (name.empty()) {
+        // shadow("") is 0, quietly (as texture("")): library lights call it
+        // with an empty default map name.
         f.each(d.varying, [&](std::size_t i) { std::fill(d.at(i), d.at(i) + nc, 0.0f); });
         return;
     }
-    const RayParams o = ray_params(f, b, 4);
+    if (name != "raytrace") {
+        shadow_map_lookup(f, b);
+        return;
+    }
+    // The area form traces from its first point.
+    const RayParams o = ray_params(f, b, 3 + (b.ia == 4 ? 4 : 1));
     Tracer t(f, b, o);
     const int* g = f.bound->globals;
     const Slot* Ls = g[G_L] >= 0 ? &f.slots[g[G_L]] : nullptr;
@@ -945,9 +950,12 @@ void op_shadow(Frame& f, const BoundOp& b) {
 
 bool bind_shadow(const BindInfo& in, BoundOp& b, std::string&) {
     const int n = in.nargs();
-    if (n < 4 || (n - 4) % 2 != 0 || !(in.is_float(0) || in.is_color(0)) ||
-        !in.is_string(1) || !in.is_float(2) || !in.is_ptype(3))
+    if (n < 4 || !(in.is_float(0) || in.is_color(0)) || !in.is_string(1) ||
+        !in.is_float(2) || !in.is_ptype(3))
         return false;
+    // shadow(map, P1, P2, P3, P4): the area form (depth maps).
+    b.ia = n >= 7 && in.is_ptype(4) && in.is_ptype(5) && in.is_ptype(6) ? 4 : 1;
+    if ((n - 3 - b.ia) % 2 != 0) return false;
     b.fn = op_shadow;
     return true;
 }

@@ -12,6 +12,11 @@
 ///  - environment(file[ch], dir): dir converted to world space; the name
 ///    "raytrace" traces rays instead (environment_raytrace,
 ///    engine_raytrace.cpp).
+///  - shadow(map[ch], P | P1..P4, options) on a depth map: P (or the quad's
+///    centre) in world space, its footprint the differences of P to the
+///    neighbour points (or the quad's edges), the bias the call's, else
+///    the scene's (scene_shadow_bias); the fraction in shadow per point,
+///    every channel of a colour result alike (TextureServices::shadow).
 ///  - rayinfo: "depth", "type", "label" (ShadingBatch::ray), "origin",
 ///    "direction", "length" (from I).
 ///  - texture3d(file, P, N, "channel", out...): P and N converted to the
@@ -34,6 +39,7 @@
 #include <glm/matrix.hpp>
 
 #include "engine_internal.h"
+#include "sss/light/shadow_map.h"
 #include "sss/shading/texture_services.h"
 #include "sss/util/job_files.h"
 #include "sss/util/parse.h"
@@ -258,6 +264,59 @@ bool bind_environment(const BindInfo& in, BoundOp& b, std::string&) {
     b.fn = op_environment;
     return true;
 }
+
+// --- shadow maps -------------------------------------------------------------------
+
+} // namespace
+
+void shadow_map_lookup(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    const std::size_t n = f.n;
+    const std::size_t i0 = f.first_active();
+    const std::string& file = f.str(b, 1, i0);
+    const int points = b.ia == 4 ? 4 : 1;
+    TextureOptions o;
+    read_texture_options(f, b, 3 + points, o);
+    // Without "bias": the scene's Option "shadow" "bias", else PRMan's default.
+    if (!(o.bias >= 0.0f)) o.bias = scene_shadow_bias(f.ctx->services.scene());
+    const glm::dmat4& m = f.ctx->camera_to_world;
+    std::vector<glm::vec3> P(n), du(n), dv(n);
+    if (points == 4) {
+        // The quad's corners as texture()'s: 1 at (0,0), 2 at (1,0), 3 at
+        // (0,1), 4 at (1,1); the lookup at their mean, its footprint the
+        // mean edges.
+        for (std::size_t i = 0; i < n; ++i) {
+            glm::vec3 c[4];
+            for (int k = 0; k < 4; ++k) c[k] = xform_point(m, ld3(f.ptr(b, 3 + k, i)));
+            P[i] = 0.25f * (c[0] + c[1] + c[2] + c[3]);
+            du[i] = 0.5f * ((c[1] - c[0]) + (c[3] - c[2]));
+            dv[i] = 0.5f * ((c[2] - c[0]) + (c[3] - c[1]));
+        }
+    } else {
+        const Slot& ps = f.slot(b, 3);
+        std::vector<float> eu, ev;
+        differences(f, ps, 3, f.program->symbols[b.op->args[3]].name, eu, ev);
+        for (std::size_t i = 0; i < n; ++i) {
+            P[i] = xform_point(m, ld3(ps.at(i)));
+            du[i] = xform_vector(m, ld3(&eu[i * 3]));
+            dv[i] = xform_vector(m, ld3(&ev[i * 3]));
+        }
+    }
+    std::vector<float> out(n, 0.0f);
+    std::string error;
+    TextureServices* lib = library(f);
+    const bool ok = lib && lib->shadow(file, o, n, P.data(), du.data(), dv.data(),
+                                       run_mask(f), out.data(), &error);
+    // A named map that cannot be read stops the job, as texture()'s.
+    if (!ok)
+        f.fail(b, "shadow \"" + file + "\": " + (lib ? error : "no texture services"));
+    f.each(d.varying, [&](std::size_t i) {
+        const float v = std::isfinite(out[i]) ? out[i] : 0.0f;
+        std::fill(d.at(i), d.at(i) + d.nf, v);
+    });
+}
+
+namespace {
 
 // --- textureinfo, attribute, option ------------------------------------------------
 

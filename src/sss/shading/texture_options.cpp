@@ -32,6 +32,8 @@ bool set_texture_option(TextureOptions& options, std::string_view name,
         if (text) options.filter = *text;
     } else if (name == "fill") {
         if (number) options.fill = x;
+    } else if (name == "bias") {
+        if (number) options.bias = x;
     } else if (name == "lerp") {
         if (number) options.lerp = std::clamp(static_cast<int>(std::lround(x)), 0, 2);
     } else {

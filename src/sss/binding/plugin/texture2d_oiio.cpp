@@ -20,6 +20,7 @@
 #include <OpenImageIO/texture.h>
 
 #include "texture2d_backend.h"
+#include "texture2d_makers.h"
 
 namespace sss::detail {
 
@@ -217,6 +218,19 @@ public:
     bool make_texture(const std::string& input, const std::string& output, bool latlong,
                       const std::string& wrapmodes, const std::string& filter,
                       std::string* error) override;
+    bool read_depth_map(const std::string& file, DepthMapData& out,
+                        std::string* error) override {
+        return read_depth_map_file(file, out, error);
+    }
+    bool make_shadow(const std::string& input, const std::string& output,
+                     std::string* error) override {
+        return make_shadow_file(input, output, error);
+    }
+    bool make_cube_environment(const std::array<std::string, 6>& faces,
+                               const std::string& output, double fov,
+                               const std::string& filter, std::string* error) override {
+        return make_cube_environment_file(faces, output, fov, filter, error);
+    }
 
 private:
     std::shared_ptr<TextureFile> open(const std::string& file);
@@ -284,6 +298,10 @@ std::shared_ptr<TextureFile> OiioTextures::open(const std::string& file) {
         entry->width = spec.full_width > 0 ? spec.full_width : spec.width;
         entry->height = spec.full_height > 0 ? spec.full_height : spec.height;
         entry->format = spec.get_string_attribute("textureformat");
+        // OpenEXR keeps no "textureformat" but its cube and lat-long tags:
+        // our shadow maps say theirs in an attribute of their own.
+        if (entry->format.empty())
+            entry->format = spec.get_string_attribute("sss:textureformat");
         entry->sample_border = spec.get_int_attribute("oiio:sampleborder") != 0;
         entry->periodic = spec.get_string_attribute("wrapmodes").empty();
         decide_env_layout(*entry, file, spec);
@@ -519,13 +537,7 @@ void OiioTextures::invalidate(const std::string& file) {
 bool OiioTextures::make_texture(const std::string& input, const std::string& output,
                                 bool latlong, const std::string& wrapmodes,
                                 const std::string& filter, std::string* error) {
-    bool known = false;
-    for (int i = 0, n = OIIO::Filter2D::num_filters(); i < n; ++i) {
-        OIIO::FilterDesc d;
-        OIIO::Filter2D::get_filterdesc(i, &d);
-        known = known || filter == d.name;
-    }
-    if (!known) {
+    if (!known_filter(filter)) {
         *error = "unknown filter \"" + filter + "\"";
         return false;
     }
