@@ -27,6 +27,7 @@
 #include "sss/scene/rib.h"
 #include "sss/scene/scene.h"
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 
 namespace {
 
@@ -185,6 +186,17 @@ TEST(DiceBlobby, AnEllipsoidFollowsItsMatrixAndTheTransform) {
     EXPECT_NEAR(top, 1.0 + 2.0 * 2.0 * r, 0.01);
 }
 
+TEST(DiceBlobby, ABlobSmallerThanAMicropolygonStillShows) {
+    // Radius 0.009 at micropolygons of 0.05: still a closed little sphere.
+    const sss::Scene scene =
+        scene_of("Blobby 1 [1001 0] [" + sphere_matrix(0.02) + "] [\"\"]");
+    const Mesh m = mesh_of(scene.primitives.at(0), 0.05);
+    EXPECT_TRUE(closed(m));
+    ASSERT_GE(m.P.size(), 6u);
+    for (const dvec3& p : m.P) ASSERT_NEAR(glm::length(p), iso_radius(0.02), 1e-12);
+    EXPECT_GT(sss::dice_primitive(scene.primitives.at(0), control(0.05)).size(), 0u);
+}
+
 TEST(DiceBlobby, ASegmentIsACapsule) {
     const sss::Scene scene =
         scene_of("Blobby 1 [1002 0] [-1 0 0 1 0 0 1 " + sphere_matrix(1.0) + "] [\"\"]");
@@ -340,6 +352,17 @@ TEST(DiceBlobby, OrientationInsideTurnsTheNormalsIn) {
             -0.99);
 }
 
+TEST(DiceBlobby, TheMicropolygonBudgetBoundsTheGrid) {
+    const sss::Scene scene =
+        scene_of("Blobby 1 [1001 0] [" + sphere_matrix(1.0) + "] [\"\"]");
+    sss::DiceControl c = control(0.0005);
+    c.max_micropolygons = 1000;
+    EXPECT_THROW((void)sss::dice_primitive(scene.primitives.at(0), c), sss::LimitError);
+    c.max_micropolygons = 100000000;
+    c.spacing = 0.05;
+    EXPECT_GT(sss::dice_primitive(scene.primitives.at(0), c).size(), 100u);
+}
+
 TEST(DiceBlobby, BadProgramsAreErrorsNamingTheStatement) {
     const std::string m = "[" + sphere_matrix(1.0) + "]";
     const auto expect = [](const std::string& error, const std::string& part) {
@@ -359,6 +382,19 @@ TEST(DiceBlobby, BadProgramsAreErrorsNamingTheStatement) {
     expect(error_of("Blobby 1 [1002 0] [0 0 0 1 0 0 0 " + sphere_matrix(1) + "] [\"\"]"),
            "radius must be > 0");
     expect(error_of("Blobby 1 [1000 0] [0.7] [\"\"]"), "not bounded");
+    // A blob that the dicing rate resolves, too small for the span of the
+    // others: no grid within the limits resolves it. (A speck below the
+    // dicing rate may vanish: it would not show.)
+    expect(error_of("Blobby 2 [1001 0 1001 16 0 2 0 1] [" + sphere_matrix(0.05) +
+                    sphere_matrix(1.0, 100.0) + "] [\"\"]"),
+           "grid cells");
+    EXPECT_EQ(error_of("Blobby 2 [1001 0 1001 16 0 2 0 1] [" + sphere_matrix(1e-4) +
+                       sphere_matrix(1.0, 100.0) + "] [\"\"]"),
+              "no error");
+    // Overflow: blob x 1e300 x 1e300 is infinite inside the blob.
+    expect(error_of("Blobby 3 [1001 0 1000 16 1000 16 1 3 0 1 2] [" + sphere_matrix(1.0) +
+                    "1e300] [\"\"]"),
+           "not a finite number");
     expect(error_of("Blobby 1 [1001 0] " + m + " [\"\"] \"P\" [0 0 0]"),
            "takes no \"P\"");
     expect(error_of("Blobby 2 [1001 0 1001 0 0 2 0 1] " + m + " [\"\"] \"Cs\" [1 0 0]"),

@@ -10,10 +10,11 @@
 /// mesh.
 ///
 /// The grid's cell is four micropolygon edges (finer for small blobs), at
-/// most kMaxCellsPerSide cells along a side and kMaxCells in all; the grid
-/// is swept one layer of cells at a time, so memory grows with a layer, not
-/// with the volume. Its outermost points count as outside, so the mesh is
-/// closed even where a constant field would reach beyond the blobs.
+/// most kMaxCellsPerSide cells along a side and kMaxCells in all (fewer
+/// with a small micropolygon budget); the grid is swept one layer of cells
+/// at a time, so memory grows with a layer, not with the volume. Its outermost points
+/// count as outside, so the mesh is closed even where a constant field would reach beyond
+/// the blobs.
 
 #include <algorithm>
 #include <array>
@@ -46,12 +47,16 @@ using glm::dvec3;
 /// the number of points.
 constexpr std::size_t kMaxCellsPerSide = 1024;
 constexpr double kMaxCells = 33554432.0; // 2^25
-/// Cells per side of the smallest blob's support radius wanted (down to the
-/// micropolygon size), and the fewest tolerated when the grid is capped.
+/// Cells per support radius of the smallest blob wanted, and the fewest
+/// tolerated when the grid is capped (for blobs of a radius of two
+/// micropolygon edges or more; smaller ones may then vanish).
 constexpr double kCellsPerRadius = 4.0;
 constexpr double kFewestCellsPerRadius = 2.0;
 /// Micropolygon edges per grid cell (the polygon dicer dices the quads).
 constexpr double kEdgesPerCell = 4.0;
+/// Grid cells allowed per micropolygon of the budget
+/// (DiceControl::max_micropolygons).
+constexpr double kCellsPerMicropolygon = 64.0;
 
 /// A field value and its gradient (object space).
 struct Dual {
@@ -192,7 +197,7 @@ public:
                 m_boxes[k] = support_box(item);
                 m_bounds.add(m_boxes[k]);
                 m_bounded.push_back(k);
-                m_smallest = std::min(m_smallest, support_radius(item));
+                m_radii.push_back(support_radius(item));
             }
             if (item.op == BlobbyOp::Constant) m_constant_leaves.push_back(k);
             for (std::size_t at = 0; at < item.operands.size(); ++at) {
@@ -226,8 +231,9 @@ public:
     const BlobbyProgram& program() const { return m_program; }
     /// The box outside which every ellipsoid and segment field is 0.
     const Box& bounds() const { return m_bounds; }
-    /// The smallest radius (object space) of an ellipsoid or segment support.
-    double smallest_radius() const { return m_smallest; }
+    /// The radius (object space, a lower bound) of each ellipsoid or
+    /// segment support, in the order of bounded().
+    const std::vector<double>& radii() const { return m_radii; }
     /// Items of the ellipsoids and segments.
     const std::vector<std::size_t>& bounded() const { return m_bounded; }
 
@@ -530,7 +536,7 @@ private:
     std::vector<std::size_t> m_bounded, m_constant_leaves;
     Box m_bounds;
     LeafBins m_bins;
-    double m_smallest = std::numeric_limits<double>::infinity();
+    std::vector<double> m_radii;
     bool m_sum = false;
     double m_constants = 0.0;
     std::vector<Dual> m_background;
@@ -585,28 +591,48 @@ Grid plan_grid(const Primitive& prim, const DiceControl& control,
     const Box& b = field.bounds();
     const double edge = finest_edge(prim, control, b) /
                         std::max(largest_stretch(prim.object_to_world), 1e-300);
-    const double r = field.smallest_radius();
-    double h = std::min(kEdgesPerCell * edge, std::max(r / kCellsPerRadius, edge));
+    const std::vector<double>& radii = field.radii();
+    const double r = *std::min_element(radii.begin(), radii.end());
+    // Every blob gets cells of a quarter of its radius at least, even one
+    // smaller than a micropolygon: a blob of a pixel or two must not fall
+    // between the grid's points.
+    double h = std::min(kEdgesPerCell * edge, r / kCellsPerRadius);
+    // The caps may coarsen that until blobs under about a micropolygon
+    // could vanish, but no larger one.
+    double resolved = std::numeric_limits<double>::infinity();
+    for (double x : radii)
+        if (x >= kFewestCellsPerRadius * edge) resolved = std::min(resolved, x);
     const dvec3 extent = b.hi - b.lo;
     const auto cells = [&](double size) {
         std::array<double, 3> n{};
         for (int a = 0; a < 3; ++a) n[a] = std::ceil(extent[a] / size) + 2.0;
         return n;
     };
+    // A surface crossing a grid of n^3 cells makes some n^2 quads (each at
+    // least a micropolygon): a grid far beyond the micropolygon budget
+    // would only be swept to fail.
+    const double budget =
+        std::min(kMaxCells,
+                 kCellsPerMicropolygon * static_cast<double>(control.max_micropolygons));
     for (int round = 0;; ++round) {
         const std::array<double, 3> n = cells(h);
         const double most = std::max({n[0], n[1], n[2]});
         if (most <= static_cast<double>(kMaxCellsPerSide) &&
-            n[0] * n[1] * n[2] <= kMaxCells && std::isfinite(most))
+            n[0] * n[1] * n[2] <= budget && std::isfinite(most))
             break;
         h *= 1.25;
-        if (!(h <= r / kFewestCellsPerRadius) || round > 200) {
+        if (!(h <= resolved / kFewestCellsPerRadius) || round > 200) {
+            if (budget < kMaxCells && most <= static_cast<double>(kMaxCellsPerSide))
+                too_many_micropolygons(prim, control,
+                                       n[0] * n[1] * n[2] / kCellsPerMicropolygon);
             char buf[256];
             std::snprintf(buf, sizeof buf,
-                          "its blobs span %.4g x %.4g x %.4g (object space) but the "
-                          "smallest has a radius of %.4g: more than %zu grid cells along "
-                          "a side (or %.0f in all) would be needed to polygonize it",
-                          extent.x, extent.y, extent.z, r, kMaxCellsPerSide, kMaxCells);
+                          "its blobs span %.4g x %.4g x %.4g (object space) but one "
+                          "has a radius of %.4g: more than %zu grid cells along a side "
+                          "(or %.0f in all) would be needed to polygonize it at the "
+                          "dicing rate (dice coarser, or split the Blobby)",
+                          extent.x, extent.y, extent.z, resolved, kMaxCellsPerSide,
+                          kMaxCells);
             fail(prim, buf);
         }
     }
