@@ -194,7 +194,14 @@ TEST(DiceBlobby, ABlobSmallerThanAMicropolygonStillShows) {
     EXPECT_TRUE(closed(m));
     ASSERT_GE(m.P.size(), 6u);
     for (const dvec3& p : m.P) ASSERT_NEAR(glm::length(p), iso_radius(0.02), 1e-12);
-    EXPECT_GT(sss::dice_primitive(scene.primitives.at(0), control(0.05)).size(), 0u);
+    const std::size_t made =
+        sss::dice_primitive(scene.primitives.at(0), control(0.05)).size();
+    EXPECT_GT(made, 0u);
+    // Each quad is a micropolygon at least: the estimate counts them.
+    const sss::DiceEstimate e =
+        sss::estimate_primitive(scene.primitives.at(0), control(0.05));
+    EXPECT_GT(e.micropolygons, 0.9 * static_cast<double>(made));
+    EXPECT_LT(e.micropolygons, 4.0 * static_cast<double>(made));
 }
 
 TEST(DiceBlobby, ASegmentIsACapsule) {

@@ -913,7 +913,8 @@ Param vertex_param(const char* name, ParamType type) {
 
 /// Estimate: each ellipsoid and segment as a surface at 0.6 of its support
 /// radius (between the lone blob's 0.454 and the support), rather over than
-/// under for blobs that merge.
+/// under for blobs that merge, and at least a micropolygon per grid cell
+/// of that area.
 void estimate_blobby(const Primitive& prim, const DiceControl& control,
                      const BlobbyField& field, DiceEstimate& estimate) {
     const double e = finest_edge(prim, control, field.bounds());
@@ -930,7 +931,13 @@ void estimate_blobby(const Primitive& prim, const DiceControl& control,
             area += 2.0 * kPi * r * std::sqrt(mean2) *
                     glm::length(m * (item.end - item.start));
     }
-    estimate += estimate_flat_face(area, 0.0, e, area / (16.0 * e * e) + 1.0);
+    // Every quad of the mesh is at least one micropolygon: a grid finer
+    // than the dicing rate (for small blobs) makes more of them.
+    const double stretch = largest_stretch(prim.object_to_world);
+    const std::vector<double>& radii = field.radii();
+    const double r = *std::min_element(radii.begin(), radii.end());
+    const double cell = std::min(kEdgesPerCell * e, stretch * r / kCellsPerRadius);
+    estimate += estimate_flat_face(area, 0.0, e, area / (cell * cell) + 1.0);
 }
 
 } // namespace
