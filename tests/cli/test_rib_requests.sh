@@ -112,6 +112,10 @@ primitive curves 0.04 0.06 'Basis "catmull-rom" 1 "catmull-rom" 1' \
 primitive nupatch 0.165 0.172 \
     'TrimCurve [1] [3] [0 0 0 0.25 0.25 0.5 0.5 0.75 0.75 1 1 1] [0] [1] [9] [0.75 0.530330086 0.5 0.176776695 0.25 0.176776695 0.5 0.530330086 0.75] [0.5 0.530330086 0.75 0.530330086 0.5 0.176776695 0.25 0.176776695 0.5] [1 0.707106781 1 0.707106781 1 0.707106781 1 0.707106781 1]' \
     'NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 "P" [-1 -1 0 1 -1 0 -1 1 0 1 1 0]'
+# A Blobby: two blobs of radius 1.5 at x = +-0.8, merged (their fields add
+# to 0.73 between them), red and blue blended: about 3.3 of 19.05.
+primitive blobby 0.16 0.20 \
+    'Blobby 2 [1001 0 1001 16 0 2 0 1] [1.5 0 0 0 0 1.5 0 0 0 0 1.5 0 -0.8 0 0 1 1.5 0 0 0 0 1.5 0 0 0 0 1.5 0 0.8 0 0 1] [""] "Cs" [1 0 0 0 0 1]'
 # Procedural "RunProgram": the program reads "detail data" lines and answers
 # RIB ending with the byte 0377; it is found along the procedural search path.
 mkdir -p procs
@@ -155,6 +159,20 @@ run "$bin/ptbake" -progress 1 -spacing 0.02 bake_points.rib
 area="$(sed -n 's/.*wrote points.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")"
 python3 -c "import sys, math; a = float('$area' or 'nan'); sys.exit(0 if abs(a - (2 * math.pi * 0.0625 + 0.4)) < 0.01 else 1)" ||
     fail "points.ptc: total area $area, expected $(python3 -c 'import math; print(2 * math.pi * 0.0625 + 0.4)')"
+
+# ... and a Blobby: one blob of radius 1, a sphere of radius sqrt(1 - 0.5^(1/3)).
+cat >bake_blobby.rib <<'RIB'
+WorldBegin
+  LightSource "distantlight" 1 "from" [0 0 -5] "to" [0 0 0] "intensity" 1
+  Surface "bake_radiance_t" "string filename" ["blobby.ptc"]
+  Blobby 1 [1001 0] [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1] [""]
+WorldEnd
+RIB
+run "$bin/ptbake" -progress 1 -spacing 0.02 bake_blobby.rib
+[[ "$rc" == 0 && -s blobby.ptc ]] && quiet "$err" || fail "ptbake blobby: exit $rc, stderr: $err"
+area="$(sed -n 's/.*wrote blobby.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")"
+python3 -c "import sys, math; a = float('$area' or 'nan'); e = 4 * math.pi * (1 - 0.5 ** (1 / 3)); sys.exit(0 if abs(a - e) < 0.01 * e else 1)" ||
+    fail "blobby.ptc: total area $area, expected $(python3 -c 'import math; print(4 * math.pi * (1 - 0.5 ** (1 / 3)))')"
 
 # --- MakeTexture and MakeLatLongEnvironment -------------------------------------
 oiiotool --pattern checker:width=8:height=8:color1=1,0,0:color2=0,0,1 64x64 3 -d uint8 -o checker.png

@@ -51,7 +51,7 @@ struct RibReadOptions {
     /// an error; a file without FrameBegin is the same scene for every frame.
     std::optional<int> frame;
     /// What to do with a request RenderMan has that is not carried out here
-    /// (Blobby, CSG, motion blur, Procedural "RunProgram", ...): false (the
+    /// (CSG, motion blur, Blobby ground planes, ...): false (the
     /// default) throws RibError, so that a farm never renders an incomplete
     /// frame; true skips it with one warning per kind, as the tools'
     /// -lenient option asks.

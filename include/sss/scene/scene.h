@@ -192,7 +192,8 @@ enum class PrimitiveKind {
     Teapot,
     Points,
     Curves,
-    NuPatch
+    NuPatch,
+    Blobby
 };
 /// The RIB request of a kind ("PointsPolygons", "Sphere", ...).
 const char* primitive_kind_name(PrimitiveKind kind);
@@ -229,6 +230,8 @@ struct Primitive {
     double umin = 0.0, umax = 1.0, vmin = 0.0, vmax = 1.0;
     bool uwrap = false;
     bool vwrap = false;
+    /// Blobby: nu is nleaf, verts the code array, args the float array and
+    /// tags the string array, as RIB gives them (blobby.h decodes them).
     /// SubdivisionMesh tags: names, nargs (2 per tag: ints, floats), intargs, floatargs.
     std::vector<std::string> tags;
     std::vector<int> tag_nargs;

@@ -1,8 +1,8 @@
 /// \file dice.cpp
 /// The dispatcher: dice_primitive hands each primitive to the dicer of its
 /// family (dice_quadric.cpp, dice_patch.cpp, dice_polygon.cpp,
-/// dice_subdiv.cpp), and dice_all dices many of them in parallel for the
-/// baker and the renderer.
+/// dice_subdiv.cpp, dice_curves.cpp, dice_nurbs.cpp, dice_blobby.cpp), and
+/// dice_all dices many of them in parallel for the baker and the renderer.
 
 #include "sss/dice/dice.h"
 
@@ -58,6 +58,8 @@ DicedSurface dispatch(const Primitive& prim, const DiceControl& control,
         return detail::dice_curves(prim, control, estimate);
     case PrimitiveKind::NuPatch:
         return detail::dice_nupatch(prim, control, estimate);
+    case PrimitiveKind::Blobby:
+        return detail::dice_blobby(prim, control, estimate);
     }
     throw ValueError(prim.source + ": unknown primitive kind");
 }

@@ -91,6 +91,17 @@ DicedSurface dice_curves(const Primitive& prim, const DiceControl& control,
 /// NuPatch, trimmed by the current TrimCurve (dice_nurbs.cpp).
 DicedSurface dice_nupatch(const Primitive& prim, const DiceControl& control,
                           DiceEstimate* estimate = nullptr);
+/// Blobby (dice_blobby.cpp).
+DicedSurface dice_blobby(const Primitive& prim, const DiceControl& control,
+                         DiceEstimate* estimate = nullptr);
+/// The mesh dice_blobby dices: the Blobby's surface polygonized as a
+/// PointsPolygons of quads in its object space, with "P", the unit normals
+/// "N" (the field's gradient, outward unless Orientation "inside"), the
+/// primitive variables (per-leaf ones blended by the leaves' fields, per
+/// vertex) and, unless given, "s" and "t" (x and y across the blobs' box).
+/// No faces when the surface is empty. ValueError naming the primitive for
+/// a malformed program, LimitError past control.max_micropolygons quads.
+Primitive blobby_mesh(const Primitive& prim, const DiceControl& control);
 /// The matrix of a spline basis in our column-vector layout; a
 /// default-constructed Basis stands for Bezier, the RI default
 /// (dice_patch.cpp).

@@ -43,7 +43,7 @@ bool ignored(std::string_view name) {
 bool unsupported(std::string_view name) {
     static const NameSet names =
         name_set("Deformation Detail DetailRange "
-                 "Blobby HierarchicalSubdivisionMesh "
+                 "HierarchicalSubdivisionMesh "
                  "ClippingPlane IfBegin ElseIf Else IfEnd MakeBump "
                  "MakeBrickMap System Resource "
                  "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
@@ -201,6 +201,7 @@ const Reader::HandlerTable& Reader::handlers() {
         {"Points", &Reader::do_points},
         {"Curves", &Reader::do_curves},
         {"NuPatch", &Reader::do_nupatch},
+        {"Blobby", &Reader::do_blobby},
         {"TrimCurve", &Reader::do_trim_curve},
         {"MakeTexture", &Reader::do_make_texture},
         {"MakeLatLongEnvironment", &Reader::do_make_texture},

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "rib_args.h"
+#include "sss/scene/blobby.h"
 #include "sss/util/limits.h"
 
 namespace sss::rib {
@@ -544,6 +545,81 @@ void Reader::do_trim_curve(const Statement& s) {
         if (!(w > 0.0)) fail(s, "w must be > 0");
     check_vertices(s, points);
     attrs_mut().trim_curves = std::move(t);
+}
+
+void Reader::do_blobby(const Statement& s) {
+    std::size_t i = 0;
+    Primitive p;
+    p.kind = PrimitiveKind::Blobby;
+    p.nu = to_int(s, take_number(s, i), "nleaf");
+    p.verts = take_ints(s, i, "code", 0);
+    p.args = take_float_array(s, i, "floats");
+    p.tags = take_string_array(s, i, "strings");
+    p.params = take_params(s, i, false);
+    if (p.nu < 1) fail(s, "nleaf must be at least 1, not " + std::to_string(p.nu));
+    check_vertices(s, std::max(p.verts.size(), static_cast<std::size_t>(p.nu)));
+    BlobbyProgram program;
+    try {
+        program = decode_blobby(p);
+    } catch (const BlobbyOpcodeError& e) {
+        not_implemented("blobby opcode " + std::to_string(e.opcode()), s,
+                        "Blobby " + std::string(e.what()) +
+                            " (not an opcode this toolchain knows)",
+                        "the Blobby is skipped");
+        return;
+    } catch (const ValueError& e) {
+        fail(s, e.what());
+    }
+    lenient_blobby_fields(s, p, program);
+    if (p.params.has("P") || p.params.has("Pw") || p.params.has("Pz"))
+        fail(s, "a Blobby takes no \"P\": its surface is where the field is 0.5");
+    if (p.params.has("N")) {
+        not_implemented("blobby N", s,
+                        "\"N\" on a Blobby is not supported (its normals are the "
+                        "field's gradient)",
+                        "\"N\" is ignored");
+        std::erase_if(p.params.items, [](const Param& q) { return q.name == "N"; });
+    }
+    const auto leaves = static_cast<std::size_t>(p.nu);
+    check_counts(s, p.params, counts(1, leaves, leaves, leaves));
+    add_primitive(s, std::move(p));
+}
+
+void Reader::lenient_blobby_fields(const Statement& s, Primitive& p,
+                                   const BlobbyProgram& program) {
+    bool rewrite = false;
+    for (const BlobbyItem& item : program.items) {
+        if (item.op == BlobbyOp::GroundPlane)
+            not_implemented("blobby 1003", s,
+                            "the repelling ground plane of a Blobby (opcode 1003, code[" +
+                                std::to_string(item.code_begin) +
+                                "]) is not supported: its depth map cannot be read",
+                            "its field is 0");
+        else if (item.op == BlobbyOp::Plugin)
+            not_implemented("blobby 1004", s,
+                            "implicit field plugins of a Blobby (opcode 1004, code[" +
+                                std::to_string(item.code_begin) + "]) are not supported",
+                            "its field is 0");
+        else
+            continue;
+        rewrite = true;
+    }
+    if (!rewrite) return;
+    // Reading leniently: each such leaf becomes the constant 0, which keeps
+    // the items, the leaves and the per-leaf values in place.
+    std::vector<int> code;
+    const auto zero = static_cast<int>(p.args.size());
+    p.args.push_back(0.0);
+    for (const BlobbyItem& item : program.items) {
+        if (item.op == BlobbyOp::GroundPlane || item.op == BlobbyOp::Plugin) {
+            code.insert(code.end(), {1000, zero});
+            continue;
+        }
+        code.insert(code.end(),
+                    p.verts.begin() + static_cast<std::ptrdiff_t>(item.code_begin),
+                    p.verts.begin() + static_cast<std::ptrdiff_t>(item.code_end));
+    }
+    p.verts = std::move(code);
 }
 
 void Reader::do_geometry(const Statement& s) {

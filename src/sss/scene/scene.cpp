@@ -51,7 +51,7 @@ constexpr NameTable<ParamType, 10> kParamTypeNames({{
     {ParamType::Matrix, "matrix"}, {ParamType::Integer, "int"},
 }});
 
-constexpr NameTable<PrimitiveKind, 18> kPrimitiveKindNames({{
+constexpr NameTable<PrimitiveKind, 19> kPrimitiveKindNames({{
     {PrimitiveKind::Polygon, "Polygon"},
     {PrimitiveKind::GeneralPolygon, "GeneralPolygon"},
     {PrimitiveKind::PointsPolygons, "PointsPolygons"},
@@ -63,7 +63,7 @@ constexpr NameTable<PrimitiveKind, 18> kPrimitiveKindNames({{
     {PrimitiveKind::Paraboloid, "Paraboloid"}, {PrimitiveKind::Patch, "Patch"},
     {PrimitiveKind::PatchMesh, "PatchMesh"}, {PrimitiveKind::Teapot, "Teapot"},
     {PrimitiveKind::Points, "Points"}, {PrimitiveKind::Curves, "Curves"},
-    {PrimitiveKind::NuPatch, "NuPatch"},
+    {PrimitiveKind::NuPatch, "NuPatch"}, {PrimitiveKind::Blobby, "Blobby"},
 }});
 // clang-format on
 
