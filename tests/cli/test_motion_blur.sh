@@ -122,6 +122,13 @@ WorldBegin
     Curves "linear" [2] "nonperiodic" "P" [0 -1 0 0 1 0] "constantwidth" 0.1
     Curves "linear" [2] "nonperiodic" "P" [0 -1 0 0.5 1 0] "constantwidth" 0.1
   MotionEnd
+  AttributeBegin
+    MotionBegin [0 1]
+      Translate 0 0.6 0
+      Translate 0.5 0.6 0
+    MotionEnd
+    Blobby 2 [1001 0 1001 16 0 2 0 1] [0.5 0 0 0 0 0.5 0 0 0 0 0.5 0 -0.2 0 0 1  0.5 0 0 0 0 0.5 0 0 0 0 0.5 0 0.2 0 0 1] [""]
+  AttributeEnd
 WorldEnd
 RIB
 } >deform.rib

@@ -637,11 +637,13 @@ Grid plan_grid(const Primitive& prim, const DiceControl& control,
         }
     }
     Grid g;
-    g.h = h;
+    // The grid's cell and counts (motion blur dices every time step with
+    // those of the first).
+    g.h = control.note(h, prim);
     const std::array<double, 3> n = cells(h);
     for (int a = 0; a < 3; ++a) {
-        g.n[a] = static_cast<std::size_t>(n[a]);
-        g.origin[a] = 0.5 * (b.lo[a] + b.hi[a]) - 0.5 * h * n[a];
+        g.n[a] = static_cast<std::size_t>(control.note(n[a], prim));
+        g.origin[a] = 0.5 * (b.lo[a] + b.hi[a]) - 0.5 * g.h * static_cast<double>(g.n[a]);
     }
     return g;
 }
