@@ -172,8 +172,8 @@ int apply_tags(const Primitive& prim, const EdgeIndex& edge_index, SubdivMesh& m
                 m.face_hole[ints[k]] = 1;
             }
         }
-        // Other tags (facevaryinginterpolateboundary, stitch, creasemethod...) do
-        // not change the surface enough to matter here and are ignored.
+        // The reader keeps no other tag but the face-varying ones, which
+        // change nothing here (face-varying values are bilinear per face).
     }
     return boundary_mode;
 }

@@ -43,7 +43,6 @@ bool ignored(std::string_view name) {
 bool unsupported(std::string_view name) {
     static const NameSet names =
         name_set("Deformation Detail DetailRange "
-                 "HierarchicalSubdivisionMesh "
                  "ClippingPlane IfBegin ElseIf Else IfEnd MakeBump "
                  "MakeBrickMap System Resource "
                  "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
@@ -188,6 +187,7 @@ const Reader::HandlerTable& Reader::handlers() {
         {"PointsPolygons", &Reader::do_points_polygons},
         {"PointsGeneralPolygons", &Reader::do_points_general_polygons},
         {"SubdivisionMesh", &Reader::do_subdivision_mesh},
+        {"HierarchicalSubdivisionMesh", &Reader::do_subdivision_mesh},
         {"Sphere", &Reader::do_quadric},
         {"Cylinder", &Reader::do_quadric},
         {"Cone", &Reader::do_quadric},

@@ -261,19 +261,26 @@ void Reader::do_points_general_polygons(const Statement& s) {
 }
 
 void Reader::do_subdivision_mesh(const Statement& s) {
+    // HierarchicalSubdivisionMesh: the same with 3 argument counts per tag
+    // and string arguments (hierarchical edits).
+    const bool hierarchical = s.name == "HierarchicalSubdivisionMesh";
     std::size_t i = 0;
     Primitive p;
     p.kind = PrimitiveKind::SubdivisionMesh;
     p.type = take_string(s, i, "scheme");
     p.nverts = take_ints(s, i, "nvertices", 3);
     p.verts = take_ints(s, i, "vertices", 0);
+    std::vector<std::string> string_args;
     if (i < s.args.size() && s.args[i].is_array()) {
         p.tags = take_string_array(s, i, "tags");
         p.tag_nargs = take_ints(s, i, "nargs", 0);
         p.tag_intargs = take_ints(s, i, "intargs", std::numeric_limits<int>::min());
         p.tag_floatargs = take_float_array(s, i, "floatargs");
+        if (hierarchical) string_args = take_string_array(s, i, "stringargs");
     }
     p.params = take_params(s, i, false);
+    if (hierarchical) hierarchical_tags(s, p, string_args);
+    check_subdivision_tags(s, p);
     if (p.nverts.empty()) fail(s, "no faces");
     check_vertices(s, p.verts.size());
     check_indices(s, p.verts, sum(p.nverts));

@@ -30,24 +30,13 @@ bool is_transform(std::string_view name) {
 }
 
 bool is_geometry(std::string_view name) {
-    static const std::set<std::string_view> names = {"Polygon",
-                                                     "GeneralPolygon",
-                                                     "PointsPolygons",
-                                                     "PointsGeneralPolygons",
-                                                     "SubdivisionMesh",
-                                                     "Sphere",
-                                                     "Cylinder",
-                                                     "Cone",
-                                                     "Disk",
-                                                     "Torus",
-                                                     "Hyperboloid",
-                                                     "Paraboloid",
-                                                     "Patch",
-                                                     "PatchMesh",
-                                                     "Points",
-                                                     "Curves",
-                                                     "NuPatch",
-                                                     "Blobby"};
+    // clang-format off
+    static const std::set<std::string_view> names = {
+        "Polygon", "GeneralPolygon", "PointsPolygons", "PointsGeneralPolygons",
+        "SubdivisionMesh", "HierarchicalSubdivisionMesh", "Sphere", "Cylinder", "Cone",
+        "Disk", "Torus", "Hyperboloid", "Paraboloid", "Patch", "PatchMesh", "Points",
+        "Curves", "NuPatch", "Blobby"};
+    // clang-format on
     return names.count(name) > 0;
 }
 

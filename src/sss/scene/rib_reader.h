@@ -258,6 +258,13 @@ private:
     void do_points_polygons(const Statement& s);
     void do_points_general_polygons(const Statement& s);
     void do_subdivision_mesh(const Statement& s);
+    /// HierarchicalSubdivisionMesh's tags (3 argument counts each, string
+    /// arguments) as SubdivisionMesh's; its edits are not implemented.
+    void hierarchical_tags(const Statement& s, Primitive& p,
+                           const std::vector<std::string>& string_args);
+    /// Keeps the tags the dicer carries out or that change nothing it
+    /// computes; any other is not implemented (read leniently: left out).
+    void check_subdivision_tags(const Statement& s, Primitive& p);
     void do_quadric(const Statement& s);
     void do_patch(const Statement& s);
     void do_patch_mesh(const Statement& s);
