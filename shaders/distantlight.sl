@@ -13,7 +13,7 @@ light distantlight(float intensity = 1; color lightcolor = 1;
 {
     solar(to - from, 0) {
         Cl = intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, radians(angle),
-                              blur, bias, width);
+             light_visibility(shadowname, Ps, samples, radians(angle)) *
+             map_visibility(shadowname, Ps, samples, blur, bias, width);
     }
 }

@@ -11,7 +11,7 @@ light distantlight_rts(float intensity = 1; color lightcolor = 1;
 {
     solar(to - from, 0) {
         Cl = intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, radians(angle),
-                              0, -1, 1);
+             light_visibility(shadowname, Ps, samples, radians(angle)) *
+             map_visibility(shadowname, Ps, samples, 0, -1, 1);
     }
 }

@@ -7,13 +7,21 @@
 #ifndef SSS_LIGHT_SHADOWS_H
 #define SSS_LIGHT_SHADOWS_H
 
-/* The unshadowed fraction at Ps of a light seen under the cone (apex angle). */
-float light_visibility(string shadowname; point Ps; float samples, cone, blur, bias,
-                       width) {
+/* The unshadowed fraction at Ps of a light seen under the cone (apex angle),
+ * traced with shadowname "raytrace". */
+float light_visibility(string shadowname; point Ps; float samples, cone) {
     float visible = 1;
     if (shadowname == "raytrace")
         visible = 1 - shadow("raytrace", Ps, "samples", samples, "samplecone", cone);
-    else if (shadowname != "")
+    return visible;
+}
+
+/* The unshadowed fraction at Ps in the shadow map shadowname (none: 1).
+ * Called after light_visibility: the ray-traced shadow's samples stay as
+ * they were before maps were read. */
+float map_visibility(string shadowname; point Ps; float samples, blur, bias, width) {
+    float visible = 1;
+    if (shadowname != "" && shadowname != "raytrace")
         visible = 1 - shadow(shadowname, Ps, "samples", samples, "blur", blur,
                              "bias", bias, "width", width);
     return visible;

@@ -13,7 +13,7 @@ light pointlight(float intensity = 1; color lightcolor = 1;
     illuminate(from) {
         float d2 = L . L;
         Cl = intensity * lightcolor / d2 *
-             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2)),
-                              blur, bias, width);
+             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2))) *
+             map_visibility(shadowname, Ps, samples, blur, bias, width);
     }
 }

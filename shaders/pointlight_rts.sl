@@ -11,7 +11,7 @@ light pointlight_rts(float intensity = 1; color lightcolor = 1;
     illuminate(from) {
         float d2 = L . L;
         Cl = intensity * lightcolor / d2 *
-             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2)),
-                              0, -1, 1);
+             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2))) *
+             map_visibility(shadowname, Ps, samples, 0, -1, 1);
     }
 }

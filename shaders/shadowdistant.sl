@@ -12,6 +12,7 @@ light shadowdistant(float intensity = 1; color lightcolor = 1;
 {
     solar(to - from, 0) {
         Cl = intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, 0, blur, bias, width);
+             light_visibility(shadowname, Ps, samples, 0) *
+             map_visibility(shadowname, Ps, samples, blur, bias, width);
     }
 }

@@ -21,19 +21,25 @@ light shadowpoint(float intensity = 1; color lightcolor = 1;
         float visible = 1;
         if (ax >= ay && ax >= az) {
             if (xcomp(Lw) > 0)
-                visible = light_visibility(sfpx, Ps, samples, 0, blur, bias, width);
+                visible = light_visibility(sfpx, Ps, samples, 0) *
+                          map_visibility(sfpx, Ps, samples, blur, bias, width);
             else
-                visible = light_visibility(sfnx, Ps, samples, 0, blur, bias, width);
+                visible = light_visibility(sfnx, Ps, samples, 0) *
+                          map_visibility(sfnx, Ps, samples, blur, bias, width);
         } else if (ay >= az) {
             if (ycomp(Lw) > 0)
-                visible = light_visibility(sfpy, Ps, samples, 0, blur, bias, width);
+                visible = light_visibility(sfpy, Ps, samples, 0) *
+                          map_visibility(sfpy, Ps, samples, blur, bias, width);
             else
-                visible = light_visibility(sfny, Ps, samples, 0, blur, bias, width);
+                visible = light_visibility(sfny, Ps, samples, 0) *
+                          map_visibility(sfny, Ps, samples, blur, bias, width);
         } else {
             if (zcomp(Lw) > 0)
-                visible = light_visibility(sfpz, Ps, samples, 0, blur, bias, width);
+                visible = light_visibility(sfpz, Ps, samples, 0) *
+                          map_visibility(sfpz, Ps, samples, blur, bias, width);
             else
-                visible = light_visibility(sfnz, Ps, samples, 0, blur, bias, width);
+                visible = light_visibility(sfnz, Ps, samples, 0) *
+                          map_visibility(sfnz, Ps, samples, blur, bias, width);
         }
         Cl = intensity * lightcolor / d2 * visible;
     }

@@ -22,6 +22,7 @@ light shadowspot(float intensity = 1; color lightcolor = 1;
             atten = pow(cosangle, beamdistribution) / d2 *
                     smoothstep(cos(coneangle), cos(coneangle - conedeltaangle), cosangle);
         Cl = atten * intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, 0, blur, bias, width);
+             light_visibility(shadowname, Ps, samples, 0) *
+             map_visibility(shadowname, Ps, samples, blur, bias, width);
     }
 }

@@ -22,7 +22,7 @@ light spotlight(float intensity = 1; color lightcolor = 1;
             atten = pow(cosangle, beamdistribution) / d2 *
                     smoothstep(cos(coneangle), cos(coneangle - conedeltaangle), cosangle);
         Cl = atten * intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2)),
-                              blur, bias, width);
+             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2))) *
+             map_visibility(shadowname, Ps, samples, blur, bias, width);
     }
 }

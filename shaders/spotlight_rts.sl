@@ -20,7 +20,7 @@ light spotlight_rts(float intensity = 1; color lightcolor = 1;
             atten = pow(cosangle, beamdistribution) / d2 *
                     smoothstep(cos(coneangle), cos(coneangle - conedeltaangle), cosangle);
         Cl = atten * intensity * lightcolor *
-             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2)),
-                              0, -1, 1);
+             light_visibility(shadowname, Ps, samples, sphere_cone(radius, sqrt(d2))) *
+             map_visibility(shadowname, Ps, samples, 0, -1, 1);
     }
 }

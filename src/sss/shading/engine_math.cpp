@@ -122,8 +122,11 @@ struct FMax {
     }
 };
 struct FClamp {
+    // min tested first (as Aqsis does): when min > max a value below min is
+    // min, so the published volume shaders' loops that clamp their step to
+    // [min, what remains] reach their end.
     static float eval(const float* v, int) {
-        return std::min(std::max(v[0], v[1]), v[2]);
+        return v[0] < v[1] ? v[1] : (v[0] > v[2] ? v[2] : v[0]);
     }
 };
 struct FMix {
