@@ -269,7 +269,7 @@ class main(string layer = "base"; string lightcat = "";) {
         }
         float k = 0;
         if (getvar(m_layer, "gain", k) != 0) c *= k;
-        m_layer->touch();
+        if (hasmethod(m_layer, "touch")) m_layer->touch();
         Ci = c + arraylength(all);
     }
 }
@@ -278,6 +278,7 @@ class main(string layer = "base"; string lightcat = "";) {
     EXPECT_EQ(count_ops(p, "getlights"), 1);
     EXPECT_EQ(count_ops(p, "getshaders"), 1);
     EXPECT_EQ(count_ops(p, "getvar"), 1);
+    EXPECT_EQ(count_ops(p, "hasmethod"), 1);
     EXPECT_EQ(count_ops(p, "callmethod"), 3);
     const int lights = p.find("m_lights");
     ASSERT_GE(lights, 0);

@@ -312,6 +312,13 @@ class wrapper(string wrapped_handle = "inner"; output uniform float ran = 0;) {
     ShaderInstance direct = lit.e.instance(kPlasticClass);
     const std::vector<glm::vec3> want = lit.shade(direct);
     expect_same(lit.shade(wrapper, co), want);
+
+    // A classic shader called by the name of its type runs its body.
+    ShaderInstance classic = lit.e.instance(kPlastic);
+    classic.set_handle("inner");
+    std::vector<const ShaderInstance*> old{&classic};
+    expect_same(lit.shade(wrapper, old), want);
+    EXPECT_TRUE(lit.e.services.warnings.empty());
 }
 
 TEST(RslEngineCoshader, VaryingHandlesCallEachShaderForItsPoints) {
@@ -358,6 +365,16 @@ surface count() {
     ShadingBatch batch = plane_grid(2, 2);
     e.context.execute(count, batch, {}, co);
     EXPECT_EQ(batch.Ci[0], glm::vec3(1.0f, 1.0f, 2.0f));
+    ShaderInstance has = e.instance(R"(
+surface has() {
+    shader a = getshader("a"), none = getshader("none");
+    Ci = color(hasmethod(a, "one"), hasmethod(a, "value"), hasmethod(none, "one"));
+    Oi = hasmethod(getshader("b"), "value");
+}
+)");
+    e.context.execute(has, batch, {}, co);
+    EXPECT_EQ(batch.Ci[0], glm::vec3(1.0f, 0.0f, 0.0f));
+    EXPECT_EQ(batch.Oi[0], glm::vec3(1.0f));
 
     auto fails = [&](const std::string& body, const std::string& part) {
         ShaderInstance s = e.instance("surface f() { " + body + " }");

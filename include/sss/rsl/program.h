@@ -74,6 +74,7 @@
 ///    cat)...` / `getlights a ...` (a: a resizable shader array, written),
 ///    `getvar d h name [var]` (d = 1 when the shader has a parameter or
 ///    member variable name; var, written, receives its value),
+///    `hasmethod d h name` (d = 1 when shader h has a public method name),
 ///    `callmethod d h name args...` (runs method name of shader h: args that
 ///    are written (their bits in `writes`) are passed by reference and
 ///    receive the method's outputs; d receives the result when bit 0 is set).

@@ -2,7 +2,8 @@
 /// RSL 2.0 co-shaders in the code generator: `shader` handles from
 /// getshader("handle"), getlight("handle"), getshaders() and getlights()
 /// (resizable `shader[]` arrays, with an optional "category" option),
-/// getvar(s, "name"[, var]) and method calls `s->method(args)`.
+/// getvar(s, "name"[, var]), hasmethod(s, "name") and method calls
+/// `s->method(args)`.
 ///
 /// Which method a call reaches is known only when it runs, so a call is the
 /// op `callmethod d handle "name" args...`: every argument that is a
@@ -19,7 +20,7 @@ namespace sss::detail::codegen {
 
 bool Generator::is_coshader_function(const std::string& name) {
     return name == "getshader" || name == "getshaders" || name == "getlight" ||
-           name == "getlights" || name == "getvar";
+           name == "getlights" || name == "getvar" || name == "hasmethod";
 }
 
 bool Generator::is_array_producer(const Expr& e) {
@@ -73,6 +74,17 @@ Val Generator::coshader_call(const Expr& e, std::vector<ArgInfo>& args, int targ
         for (const ArgInfo& a : args) all.push_back(a.val.sym);
         emit(name, all, 1);
         return {target};
+    }
+    if (name == "hasmethod") {
+        if (args.size() != 2 || !is_type(args[0], ShadingType::Shader) ||
+            !is_type(args[1], ShadingType::String)) {
+            error(e.loc, "hasmethod takes (shader, string name)");
+            return {};
+        }
+        const int d = temp({ShadingType::Float, 0},
+                           varying(args[0].val.sym) || varying(args[1].val.sym));
+        emit(name, {d, args[0].val.sym, args[1].val.sym});
+        return {d};
     }
     // getvar(shader, "name"[, output var]): 1 when the shader has it.
     if (args.size() < 2 || args.size() > 3 || !is_type(args[0], ShadingType::Shader) ||

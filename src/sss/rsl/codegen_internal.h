@@ -293,7 +293,7 @@ private:
     void class_pipelines();
 
     // --- co-shaders (codegen_coshader.cpp) -----------------------------------
-    /// getshader, getshaders, getlight, getlights, getvar.
+    /// getshader, getshaders, getlight, getlights, getvar, hasmethod.
     static bool is_coshader_function(const std::string& name);
     /// A call of one of them; getshaders and getlights fill `target` (a
     /// resizable shader array) when it is >= 0, else a temporary.

@@ -501,7 +501,7 @@ private:
             return i + 1;
         }
         if (n == "getshader" || n == "getlight" || n == "getshaders" ||
-            n == "getlights" || n == "getvar" || n == "callmethod")
+            n == "getlights" || n == "getvar" || n == "hasmethod" || n == "callmethod")
             return coshader_op(i);
         if (!detail::is_builtin(n)) fail(i, "unknown operation '" + n + "'");
         return i + 1;
@@ -523,6 +523,10 @@ private:
                  op.writes == 1;
             for (std::size_t k = 1; k < na && ok; ++k)
                 ok = is(op.args[k], ShadingType::String);
+        } else if (n == "hasmethod") {
+            ok = na == 3 && is(op.args[0], ShadingType::Float) &&
+                 type(op.args[1]) == shader && is(op.args[2], ShadingType::String) &&
+                 op.writes == 1;
         } else if (n == "getvar") {
             ok = (na == 3 || na == 4) && is(op.args[0], ShadingType::Float) &&
                  type(op.args[1]) == shader && is(op.args[2], ShadingType::String) &&

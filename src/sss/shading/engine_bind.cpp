@@ -128,8 +128,11 @@ void validate_class(const Program& p, const Validator& val) {
             (m.outputs >> m.params.size()) != 0)
             val.fail(-1, "method '" + m.name + "' has a bad result or parameters");
         for (int s : m.params)
-            if (s < 0 || s >= nsym || p.symbols[s].type.type == ShadingType::Void)
+            if (s < 0 || s >= nsym || p.symbols[s].type.type == ShadingType::Void ||
+                p.symbols[s].kind == SymbolKind::Const)
                 val.fail(-1, "method '" + m.name + "' has a bad parameter");
+        if (m.result >= 0 && p.symbols[m.result].kind == SymbolKind::Const)
+            val.fail(-1, "method '" + m.name + "' returns into a constant");
     }
     for (const Pipeline& pl : p.pipelines)
         for (int m : pl.methods)

@@ -24,8 +24,13 @@
 ///    light's frame once evaluated. A call on null, or of a method the
 ///    shader does not have, does nothing (warned once); a wrong number or
 ///    type of arguments is an error, and so is a shader calling itself.
+///  - A classic shader (not a class) called by the name of its type runs
+///    its body: `s->surface(Ci, Oi)`, `s->displacement(P, N)`,
+///    `s->volume(Ci, Oi)` (`light(L, Cl)` as above), the arguments in and out
+///    of those globals.
 ///  - getvar(s, "name"[, var]): whether the object has a parameter or
-///    member variable `name` (of var's type), and its value.
+///    member variable `name` (of var's type), and its value;
+///    hasmethod(s, "name"): whether a call of `name` would run something.
 
 #include <algorithm>
 #include <cstring>
@@ -314,6 +319,65 @@ std::string method_text(const ShaderObject& obj, const std::string& name) {
     return "method '" + name + "' of shader '" + obj.instance->program().name + "'";
 }
 
+/// The globals a classic shader takes when called by the name of its type
+/// (`s->surface(Ci, Oi)`), or null when `name` is not that.
+const std::vector<std::string>* classic_method(const Program& p,
+                                               const std::string& name) {
+    static const std::vector<std::string> colour{"Ci", "Oi"}, moved{"P", "N"},
+        lit{"L", "Cl"};
+    if (p.is_class() || name != shader_kind_name(p.kind)) return nullptr;
+    switch (p.kind) {
+    case ShaderKind::Surface:
+    case ShaderKind::Volume:
+        return &colour;
+    case ShaderKind::Displacement:
+        return &moved;
+    case ShaderKind::Light:
+        return &lit;
+    default:
+        return nullptr;
+    }
+}
+
+bool has_method(const Program& p, const std::string& name) {
+    return p.find_method(name) >= 0 || classic_method(p, name) != nullptr;
+}
+
+/// A classic shader's body run for `s->surface(Ci, Oi)` and the like.
+void run_classic(Frame& f, const BoundOp& b, ShaderObject& obj, Frame& cf,
+                 const std::vector<std::string>& globals,
+                 const std::vector<uint8_t>& group, std::size_t count,
+                 std::size_t first) {
+    const Program& p = *cf.program;
+    const std::string& name = f.str(b, 2);
+    const std::size_t nargs = b.op->args.size() - kFirstArg;
+    if (nargs != globals.size())
+        f.fail(b, method_text(obj, name) + " takes (" + globals[0] + ", " + globals[1] +
+                      ")");
+    CallGuard guard(f, b, obj);
+    std::vector<int> syms(nargs, -1);
+    for (std::size_t k = 0; k < nargs; ++k) {
+        const int s = p.find(globals[k]);
+        if (s < 0 || p.symbols[std::size_t(s)].kind != SymbolKind::Global) continue;
+        syms[k] = s;
+        if (!copy_value(f, b.op->args[kFirstArg + k], cf, s, group, first, f, b))
+            f.fail(b, "argument " + std::to_string(k + 1) + " of " +
+                          method_text(obj, name) + " does not fit " + globals[k]);
+    }
+    cf.mask = group;
+    cf.active = count;
+    std::fill(cf.stop.begin(), cf.stop.end(), 0u);
+    cf.run(p.body_begin, static_cast<int>(p.ops.size()));
+    for (std::size_t k = 0; k < nargs; ++k) {
+        const std::size_t a = kFirstArg + k;
+        if (syms[k] < 0 || !((b.op->writes >> a) & 1u)) continue;
+        if (!copy_value(cf, syms[k], f, b.op->args[a], group, first, f, b))
+            f.fail(b, globals[k] + " of " + method_text(obj, name) +
+                          " does not fit the variable given");
+    }
+    if (b.op->writes & 1u) fill_value(f, b.op->args[0], group, first, 0.0f);
+}
+
 /// light(L, Cl[, Ol]) of a light: the light evaluated at the caller's points.
 void call_light(Frame& f, const BoundOp& b, ShaderObject& obj,
                 const std::vector<uint8_t>& group, std::size_t count, std::size_t first) {
@@ -403,6 +467,10 @@ void call_one(Frame& f, const BoundOp& b, float v, const std::vector<uint8_t>& g
     Frame& cf = obj->light >= 0 ? *evaluate_light(f, *obj, group, count).frame
                                 : coshader_frame(f, b, *obj);
     const int mi = cf.program->find_method(name);
+    if (const std::vector<std::string>* globals = classic_method(*cf.program, name)) {
+        run_classic(f, b, *obj, cf, *globals, group, count, first);
+        return;
+    }
     if (mi < 0) {
         f.warn_once(b, "shader '" + cf.program->name + "' has no method '" + name +
                            "': the call does nothing");
@@ -438,6 +506,15 @@ void op_callmethod(Frame& f, const BoundOp& b) {
     f.pop_mask();
 }
 
+void op_hasmethod(Frame& f, const BoundOp& b) {
+    Slot& d = f.slot(b, 0);
+    f.each(d.varying, [&](std::size_t i) {
+        const ShaderObject* obj = object_of(f, b, *f.ptr(b, 1, i));
+        *d.at(i) =
+            obj && has_method(obj->instance->program(), f.str(b, 2, i)) ? 1.0f : 0.0f;
+    });
+}
+
 // --- binders ------------------------------------------------------------------
 
 bool is_shader(const BindInfo& in, int k) {
@@ -468,6 +545,13 @@ bool bind_getvar(const BindInfo& in, BoundOp& b, std::string&) {
     return true;
 }
 
+bool bind_hasmethod(const BindInfo& in, BoundOp& b, std::string&) {
+    if (in.nargs() != 3 || !in.is_float(0) || !is_shader(in, 1) || !in.is_string(2))
+        return false;
+    b.fn = op_hasmethod;
+    return true;
+}
+
 bool bind_callmethod(const BindInfo& in, BoundOp& b, std::string&) {
     if (in.nargs() < kFirstArg || in.is_array(0) || !is_shader(in, 1) ||
         !in.is_string(2) || in.writes(1) || in.writes(2))
@@ -484,6 +568,7 @@ void register_coshader(BinderTable& t) {
     t["getshaders"] = bind_getshaders;
     t["getlights"] = bind_getshaders;
     t["getvar"] = bind_getvar;
+    t["hasmethod"] = bind_hasmethod;
     t["callmethod"] = bind_callmethod;
 }
 
