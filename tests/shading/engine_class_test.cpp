@@ -343,6 +343,37 @@ surface pick() {
         EXPECT_EQ(batch.Ci[i].x, batch.u[i] < 0.5f ? 2.0f : 10.0f) << i;
 }
 
+TEST(RslEngineCoshader, CoshadersCallCoshaders) {
+    Engine e;
+    ShaderInstance leaf = e.instance(kLayer);
+    leaf.set_handle("leaf");
+    // Each call reaches a co-shader not handed out before it ran.
+    ShaderInstance mid = e.instance(R"(
+class mid() {
+    public color value(float x) {
+        shader l = getshader("leaf");
+        return l->value(x) + l->calls();
+    }
+}
+)");
+    mid.set_handle("mid");
+    std::vector<const ShaderInstance*> co{&mid, &leaf};
+    ShaderInstance s = e.instance(R"(
+surface top() {
+    shader m = getshader("mid");
+    Ci = m->value(u);
+    Ci += m->value(u);
+}
+)");
+    ShadingBatch b = plane_grid(3, 2);
+    e.context.execute(s, b, {}, co);
+    for (std::size_t i = 0; i < b.size; ++i) {
+        // leaf: tint * x * 2, then its call count (1, then 2).
+        EXPECT_NEAR(b.Ci[i].x, 2 * (2.0f * b.u[i]) + 1 + 2, 1e-5f) << i;
+        EXPECT_NEAR(b.Ci[i].z, 2 * (0.5f * b.u[i]) + 1 + 2, 1e-5f) << i;
+    }
+}
+
 TEST(RslEngineCoshader, CategoriesAndErrors) {
     Engine e;
     ShaderInstance a = e.instance(R"(

@@ -349,7 +349,7 @@ void run_classic(Frame& f, const BoundOp& b, ShaderObject& obj, Frame& cf,
                  const std::vector<uint8_t>& group, std::size_t count,
                  std::size_t first) {
     const Program& p = *cf.program;
-    const std::string& name = f.str(b, 2);
+    const std::string name = f.str(b, 2); // a copy: running shaders add strings
     const std::size_t nargs = b.op->args.size() - kFirstArg;
     if (nargs != globals.size())
         f.fail(b, method_text(obj, name) + " takes (" + globals[0] + ", " + globals[1] +
@@ -452,7 +452,7 @@ void run_method(Frame& f, const BoundOp& b, ShaderObject& obj, Frame& cf, int mi
 /// The call for the points of `group`, whose handle is `v`.
 void call_one(Frame& f, const BoundOp& b, float v, const std::vector<uint8_t>& group,
               std::size_t count) {
-    const std::string& name = f.str(b, 2);
+    const std::string name = f.str(b, 2); // a copy: running shaders add strings
     const std::size_t first = first_of(group);
     ShaderObject* obj = object_of(f, b, v);
     if (!obj) {

@@ -376,8 +376,9 @@ struct ShadingContext::Impl {
     ShadingBatch* batch = nullptr;
     LightList lights;
     CoshaderList coshaders;
-    /// The shader objects handed out in this execute (engine_coshader.cpp).
-    std::vector<detail::ShaderObject> objects;
+    /// The shader objects handed out in this execute (engine_coshader.cpp);
+    /// a deque: a method running may hand out more while its own is in use.
+    std::deque<detail::ShaderObject> objects;
     detail::Frame main;
     std::vector<detail::LightState> light_states;
     /// The running illuminance's "send:light:" options (light() applies them).
