@@ -1147,6 +1147,41 @@ TEST(RibShaders, ImagerAtmosphereInteriorExterior) {
     EXPECT_FALSE(scene.primitives[2].attributes->atmosphere);
 }
 
+TEST(RibShaders, CoshadersAreScopedAttributesByHandle) {
+    const std::string text =
+        "Shader \"layer\" \"outer\" \"float gain\" [3]\n" // camera space
+        "Translate 0 0 5\n"
+        "WorldBegin\n"
+        "AttributeBegin\n"
+        "Translate 1 0 0\n"
+        "Shader \"noise\" \"inner\"\n"                    // 6
+        "Shader \"layer\" \"outer\" \"float gain\" [4]\n" // replaces
+        "Sphere 1 -1 1 360\n"
+        "AttributeEnd\n"
+        "Shader \"spots\" 7\n" // a numeric handle
+        "Sphere 1 -1 1 360\n"
+        "WorldEnd\n";
+    const sss::Scene scene = parse(text);
+    EXPECT_TRUE(scene.warnings.empty());
+    ASSERT_EQ(scene.primitives.size(), 2u);
+    const auto& c0 = scene.primitives[0].attributes->coshaders;
+    ASSERT_EQ(c0.size(), 2u);
+    EXPECT_EQ(c0[0].handle, "outer");
+    EXPECT_EQ(c0[0].shader.name, "layer");
+    EXPECT_EQ(c0[0].shader.params.get_float("gain", 0), 4.0);
+    EXPECT_EQ(c0[1].handle, "inner");
+    EXPECT_EQ(c0[1].shader.source, "test.rib:6");
+    expect_near(apply(c0[1].shader.shader_to_world, {0, 0, 0}), {1, 0, 0});
+    // AttributeEnd restores the outer one; given before WorldBegin, its
+    // shader space is camera space.
+    const auto& c1 = scene.primitives[1].attributes->coshaders;
+    ASSERT_EQ(c1.size(), 2u);
+    EXPECT_EQ(c1[0].shader.params.get_float("gain", 0), 3.0);
+    expect_near(apply(c1[0].shader.shader_to_world, {0, 0, 0}), {0, 0, -5});
+    EXPECT_EQ(c1[1].handle, "7");
+    expect_rib_error("WorldBegin\nShader \"layer\"\n", {"test.rib:2: Shader"});
+}
+
 TEST(RibShaders, ImagerNullTurnsItOffAndInsideTheWorldIsIgnored) {
     sss::Scene scene =
         parse("Imager \"background\"\nImager \"null\"\nWorldBegin\nWorldEnd\n");

@@ -35,6 +35,8 @@ struct SceneShaders {
     /// Distinct displacement instances (one per Displacement call).
     std::vector<std::unique_ptr<ShaderInstance>> displacements;
     /// Per primitive: its displacement shader, or null without a Displacement.
+    /// Without one, a class surface shader (RSL 2.0) with a displacement
+    /// method is its own (run with execute_as(ShaderKind::Displacement)).
     std::vector<const ShaderInstance*> displacement_of;
     /// Distinct volume instances (one per Atmosphere, Interior or Exterior
     /// call), and per primitive its Atmosphere (bound only for images: see
@@ -50,6 +52,12 @@ struct SceneShaders {
     std::vector<std::unique_ptr<ShaderInstance>> lights;
     /// Per primitive: the lights that are on for it, in Scene::lights order.
     std::vector<std::vector<const ShaderInstance*>> lights_of;
+    /// Distinct co-shader instances (one per `Shader "name" "handle"` call,
+    /// RSL 2.0), each with its handle (ShaderInstance::handle).
+    std::vector<std::unique_ptr<ShaderInstance>> coshaders;
+    /// Per primitive: the co-shaders in effect for it (its shaders'
+    /// getshader() and getshaders() find them).
+    std::vector<std::vector<const ShaderInstance*>> coshaders_of;
     /// Parameters the shaders do not declare, and similar notes.
     std::vector<std::string> warnings;
 

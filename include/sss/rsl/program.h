@@ -68,6 +68,16 @@
 ///    "environment:color", "environment:direction") are variables the op
 ///    writes (their bits in `writes`; no other bit is set); the others are
 ///    read. Not a loop level for break/continue.
+///  - RSL 2.0 co-shaders (a `shader` value is a handle, 0 null):
+///    `getshader d name` / `getlight d name` (d: the co-shader / light whose
+///    RIB handle is the string name, or null), `getshaders a ("category"
+///    cat)...` / `getlights a ...` (a: a resizable shader array, written),
+///    `getvar d h name [var]` (d = 1 when the shader has a parameter or
+///    member variable name; var, written, receives its value),
+///    `hasmethod d h name` (d = 1 when shader h has a public method name),
+///    `callmethod d h name args...` (runs method name of shader h: args that
+///    are written (their bits in `writes`) are passed by reference and
+///    receive the method's outputs; d receives the result when bit 0 is set).
 ///  - anything else is a built-in function call (builtins.h lists every
 ///    name and its overloads); token-value lists follow the fixed arguments
 ///    as (string, value) symbol pairs. `texture`, `environment` and `shadow`
@@ -125,6 +135,14 @@
 ///  - A parameter whose default is constant has its value in
 ///    numbers/strings and init_begin == init_end == -1; otherwise its default
 ///    ops are [init_begin, init_end), before body_begin, in declaration order.
+///  - Class shaders (RSL 2.0 `class`): member variables are locals of the
+///    program named as declared, initialised by ops [body_begin, init_end);
+///    each public method (and each pipeline method: construct, begin,
+///    displacement, opacity, surface, prelighting, lighting, postlighting,
+///    light, volume) follows as a `block` of its own (Program::methods),
+///    whose parameters are symbols "<method>::<name>@<n>" (varying unless
+///    declared uniform) or, for a pipeline method, the globals they name.
+///    Calls between methods of the class are inlined like functions.
 ///  - Symbol::varying is final: locals declared without `uniform`/`varying`
 ///    are uniform when every assignment to them is uniform and not under a
 ///    varying condition (nor after a varying break/continue/return).
@@ -146,13 +164,17 @@ enum class ShadingType : uint8_t {
     Vector,
     Normal,
     Matrix,
-    String
+    String,
+    /// RSL 2.0 co-shader handle (`shader s = getshader("name")`): one float,
+    /// an index into the shading context's table of shader objects (0 is
+    /// `null`). Only locals, member variables and temporaries have it.
+    Shader
 };
 
 /// RSL spelling ("float", "color", ...).
 const char* shading_type_name(ShadingType t);
-/// Floats per value: 1 for float and string (a string is a table index), 3
-/// for the triples, 16 for matrix, 0 for void.
+/// Floats per value: 1 for float, string (a string is a table index) and
+/// shader (a handle), 3 for the triples, 16 for matrix, 0 for void.
 int shading_type_floats(ShadingType t);
 /// point, vector or normal.
 bool is_point_like(ShadingType t);
@@ -183,8 +205,9 @@ struct TypeSpec {
 /// "float", "color[3]", "float[]" (resizable), ...
 std::string type_spec_name(const TypeSpec& t);
 
-/// The kinds of shaders.
-enum class ShaderKind : uint8_t { Surface, Displacement, Light, Volume, Imager };
+/// The kinds of shaders. `Shader` is an RSL 2.0 class without any pipeline
+/// method (a co-shader: its methods are called by other shaders only).
+enum class ShaderKind : uint8_t { Surface, Displacement, Light, Volume, Imager, Shader };
 const char* shader_kind_name(ShaderKind k);
 
 /// What a symbol is.
@@ -231,6 +254,26 @@ struct Op {
     SourceLocation where;
 };
 
+/// A method of a class shader (RSL 2.0 `class`), as other shaders call it
+/// (`s->name(args)`) and as the renderer runs the pipeline methods.
+struct Method {
+    std::string name;
+    bool is_public = true;
+    /// Ops [begin, end): a `block` op holding the body (jump[0] == end).
+    int begin = 0;
+    int end = 0;
+    int result = -1;         ///< symbol receiving the returned value; -1: void
+    std::vector<int> params; ///< parameter symbols in order
+    /// Bit k: params[k] is an output (copied back to the caller's argument).
+    uint64_t outputs = 0;
+};
+
+/// The methods a class shader runs, in order, when it runs as `kind`.
+struct Pipeline {
+    ShaderKind kind = ShaderKind::Surface;
+    std::vector<int> methods; ///< indices into Program::methods
+};
+
 /// A compiled shader.
 struct Program {
     ShaderKind kind = ShaderKind::Surface;
@@ -241,6 +284,21 @@ struct Program {
     std::vector<std::string> files; ///< source files (SourceLocation::file)
     std::string source_path;        ///< the .sl it was compiled from
 
+    /// Class shaders (RSL 2.0): ops [body_begin, init_end) initialise the
+    /// member variables; the methods follow. -1 for a classic shader, whose
+    /// body is ops [body_begin, ops.size()).
+    int init_end = -1;
+    std::vector<Method> methods;     ///< class shaders: the public methods
+    std::vector<Pipeline> pipelines; ///< class shaders: one per kind it runs as
+
+    bool is_class() const { return init_end >= 0; }
+    /// Whether the shader can run as `k`: its kind, or one of a class's
+    /// pipelines (a class with displacement and surface methods is both).
+    bool runs_as(ShaderKind k) const;
+    /// The pipeline of kind `k`, or null.
+    const Pipeline* pipeline(ShaderKind k) const;
+    /// Index of the method `name`, or -1.
+    int find_method(const std::string& name) const;
     /// Index of the symbol `name`, or -1.
     int find(const std::string& name) const;
     /// Parameter symbol indices in declaration order.

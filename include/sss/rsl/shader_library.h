@@ -53,12 +53,17 @@ public:
     /// ValueError when its file does not compile or read.
     std::shared_ptr<const Program> load(const std::string& name, ShaderKind kind,
                                         const std::string& where);
+    /// The shader `name` of any kind: a co-shader (`Shader "name" "handle"`).
+    std::shared_ptr<const Program> load_any(const std::string& name,
+                                            const std::string& where);
     const std::vector<std::string>& search_path() const { return m_path; }
     /// The .slo / .sl files loaded so far, in load order (inputs of -newer).
     std::vector<std::string> files() const;
 
 private:
     std::vector<std::string> m_path;
+    std::shared_ptr<const Program> find(const std::string& name,
+                                        const std::string& where);
     mutable std::mutex m_mutex;
     std::map<std::string, std::shared_ptr<const Program>> m_loaded;
     std::vector<std::string> m_files;

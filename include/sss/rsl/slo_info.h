@@ -26,6 +26,8 @@ std::string describe_shader(const Program& program);
 /// The same as one JSON object: {"file", "type", "name", "parameters": [{"name",
 /// "storage", "type", "array", "output", "default"}]}, "default" being a list
 /// of numbers or of strings, or null when it is computed when the shader runs.
+/// A class shader (RSL 2.0) also has "methods": the names of its public
+/// methods (the pipeline methods among them).
 std::string describe_shader_json(const Program& program, const std::string& file);
 
 } // namespace sss

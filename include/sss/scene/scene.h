@@ -118,6 +118,14 @@ struct ShaderRef {
     std::string source;           ///< "file.rib:12" of the call
 };
 
+/// `Shader "name" "handle" params`: an RSL 2.0 co-shader that the surface,
+/// displacement, light and volume shaders of the primitives in its scope
+/// reach by its handle (getshader, getshaders).
+struct CoshaderRef {
+    std::string handle;
+    ShaderRef shader;
+};
+
 /// A spline basis for bicubic patches: 4x4 matrix (in RenderMan's row-vector
 /// layout, loaded as documented above) and its step. Default-constructed, it
 /// is the power basis; Attributes start with Bezier, the RI default.
@@ -158,6 +166,9 @@ struct Attributes {
     /// Unset without the request, or after `"null"` / `""`.
     std::optional<ShaderRef> atmosphere, interior, exterior;
     std::vector<int> lights_on; ///< indices into Scene::lights, ascending
+    /// The co-shaders in effect, in declaration order (a `Shader` with a
+    /// handle already here replaces that one).
+    std::vector<CoshaderRef> coshaders;
     /// Every `Attribute "group" params`, by group ("cull", "dice", "identifier"...).
     std::map<std::string, ParamList> groups;
     Basis u_basis = *named_basis("bezier");

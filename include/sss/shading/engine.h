@@ -40,7 +40,10 @@
 ///  - attribute/option/rendererinfo/rayinfo queries.
 ///  - message passing: lightsource() inside illuminance (and its
 ///    "light:NAME" options), surface() in light shaders;
-///  - resizable arrays (engine_arrays.cpp).
+///  - resizable arrays (engine_arrays.cpp);
+///  - RSL 2.0 class shaders: the member initialisers and the methods of the
+///    pipeline of the kind the shader runs as (execute_as), and co-shaders:
+///    `shader` handles, method calls, getvar (engine_coshader.cpp).
 /// Not supported (they run and return 0, warned once where it matters):
 /// displacement() and atmosphere() message passing,
 /// gather's "primitive:" outputs (a compile error).
@@ -135,12 +138,18 @@ public:
     std::optional<float> float_parameter(const std::string& name) const;
     /// The program's ops bound to implementations (engine internal).
     const detail::BoundProgram& bound() const { return *m_bound; }
+    /// The RIB handle of a co-shader (`Shader "name" "handle"`) or a light
+    /// (`LightSource "name" "handle"`): what getshader() and getlight() look
+    /// for. Empty for other shaders.
+    const std::string& handle() const { return m_handle; }
+    void set_handle(std::string handle) { m_handle = std::move(handle); }
 
 private:
     std::shared_ptr<const Program> m_program;
     std::shared_ptr<const detail::BoundProgram> m_bound;
     Matrix4 m_shader_to_world{1.0};
     std::string m_where;
+    std::string m_handle;
     std::vector<ShaderArgument> m_arguments;
     std::vector<int> m_argument_of; ///< per symbol: its index in m_arguments, or -1
 };
@@ -377,6 +386,10 @@ private:
 /// The lights a surface sees: light shader instances (LightSource and
 /// AreaLightSource calls that are on for the primitive).
 using LightList = std::span<const ShaderInstance* const>;
+/// The co-shaders a shader may reach by handle (getshader, getshaders): the
+/// `Shader "name" "handle"` calls in effect for the primitive (RSL 2.0),
+/// each with its handle (ShaderInstance::handle).
+using CoshaderList = std::span<const ShaderInstance* const>;
 
 /// One thread's shading state (scratch memory, light caches). Create one
 /// per thread; reuse it for every batch.
@@ -400,8 +413,19 @@ public:
     /// batch's Ci and Oi); uninitialised locals are 0 (strings
     /// ""). After it, non-finite values of Ci, Oi, P, N and the output
     /// parameters are replaced by 0; nonfinite_points() counts the points.
-    void execute(const ShaderInstance& shader, ShadingBatch& batch,
-                 LightList lights = {});
+    ///
+    /// `coshaders` are what the shader's getshader() and getshaders() find
+    /// (RSL 2.0 co-shaders; getlight() and getlights() find `lights`): their
+    /// frames are set up when first called and kept for the batch.
+    void execute(const ShaderInstance& shader, ShadingBatch& batch, LightList lights = {},
+                 CoshaderList coshaders = {});
+    /// execute() running `shader` as a shader of kind `kind`: a class shader
+    /// (RSL 2.0) with displacement and surface methods runs as a
+    /// displacement shader on the dicer's grids and as a surface at shading.
+    /// Throws ValueError when the shader cannot run as `kind`
+    /// (Program::runs_as).
+    void execute_as(ShaderKind kind, const ShaderInstance& shader, ShadingBatch& batch,
+                    LightList lights = {}, CoshaderList coshaders = {});
 
     /// Points of the last execute() whose results held NaN or infinity (and
     /// were written as 0).

@@ -567,8 +567,10 @@ std::vector<std::vector<Bake3dRecord>> shade_points(
         batch.Ng = batch.N;
         BakeServices::set_sink(&records[c]);
         const auto& lights = shaders.lights_of[job.prim];
+        const auto& coshaders = shaders.coshaders_of[job.prim];
         try {
-            context.execute(*job.shader, batch, LightList(lights.data(), lights.size()));
+            context.execute(*job.shader, batch, LightList(lights.data(), lights.size()),
+                            CoshaderList(coshaders.data(), coshaders.size()));
         } catch (...) {
             BakeServices::set_sink(nullptr);
             throw;

@@ -37,6 +37,8 @@ double world_bound(const Primitive& prim, const Scene& scene) {
         m = prim.object_to_world;
     else if (space == "shader" && attr.displacement)
         m = attr.displacement->shader_to_world;
+    else if (space == "shader" && attr.surface) // a class's displacement method
+        m = attr.surface->shader_to_world;
     else if (auto cs = scene.coordinate_systems.find(space);
              cs != scene.coordinate_systems.end())
         m = cs->second;
@@ -116,7 +118,8 @@ void Displacer::displace(std::size_t primitive, DisplaceGrid& grid) {
     batch.t = grid.t;
 
     ShadingContext& context = *m_contexts.local();
-    context.execute(shader, batch);
+    // A class shader bound by Surface runs its displacement method here.
+    context.execute_as(ShaderKind::Displacement, shader, batch);
     const std::size_t nonfinite = context.nonfinite_points();
 
     double moved = 0.0;

@@ -307,7 +307,9 @@ void SceneRays::Impl::run_volumes(const RayQuery& q, ShadingBatch& batch,
         }
         ShadingContext& context = context_at(q.depth);
         const auto& lights = shaders.lights_of[owner];
-        context.execute(*shader, v, LightList(lights.data(), lights.size()));
+        const auto& coshaders = shaders.coshaders_of[owner];
+        context.execute(*shader, v, LightList(lights.data(), lights.size()),
+                        CoshaderList(coshaders.data(), coshaders.size()));
         nonfinite.fetch_add(context.nonfinite_points(), std::memory_order_relaxed);
         for (std::size_t j = 0; j < n; ++j) {
             batch.Ci[which[j]] = v.Ci[j];
@@ -421,8 +423,10 @@ void SceneRays::Impl::shade(const RayQuery& q, const std::vector<Hit>& hits,
     } else {
         ShadingContext& context = context_at(q.depth);
         const auto& lights = shaders.lights_of[prim_index];
+        const auto& coshaders = shaders.coshaders_of[prim_index];
         context.execute(*shaders.surface_of[prim_index], batch,
-                        LightList(lights.data(), lights.size()));
+                        LightList(lights.data(), lights.size()),
+                        CoshaderList(coshaders.data(), coshaders.size()));
         nonfinite.fetch_add(context.nonfinite_points(), std::memory_order_relaxed);
         if (results) {
             for (std::size_t o = 0; o < q.outputs.size(); ++o) {

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <system_error>
 
 #include "sss/binding/texture_library.h"
@@ -93,7 +94,7 @@ bool program_uses_derivatives(const Program& program) {
 }
 
 bool SceneShaders::uses(std::string_view op) const {
-    for (const auto* list : {&surfaces, &displacements, &volumes, &lights})
+    for (const auto* list : {&surfaces, &displacements, &volumes, &lights, &coshaders})
         for (const auto& s : *list)
             if (program_uses(s->program(), op)) return true;
     return imager && program_uses(imager->program(), op);
@@ -167,6 +168,7 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
         out.lights.push_back(std::make_unique<ShaderInstance>(
             program, expand_strings(light.shader.params, frame, where),
             light.shader.shader_to_world, where, &out.warnings));
+        out.lights.back()->set_handle(light.handle); // getlight("handle")
     }
 
     if (image && scene.options.imager) {
@@ -198,11 +200,26 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
     out.interior_of.resize(scene.primitives.size(), nullptr);
     out.exterior_of.resize(scene.primitives.size(), nullptr);
     std::map<const ShaderRef*, const ShaderInstance*> displacement_by_ref;
+    std::set<const ShaderInstance*> overridden; // class displacements warned about
     std::map<const Attributes*, std::size_t> lights_by_attributes;
     const ShaderInstance* fallback = nullptr;
     out.surface_of.resize(scene.primitives.size(), nullptr);
     out.displacement_of.resize(scene.primitives.size(), nullptr);
     out.lights_of.resize(scene.primitives.size());
+    out.coshaders_of.resize(scene.primitives.size());
+    std::map<const ShaderRef*, const ShaderInstance*> coshader_by_ref;
+    const auto coshader = [&](const CoshaderRef& c) -> const ShaderInstance* {
+        if (auto it = coshader_by_ref.find(&c.shader); it != coshader_by_ref.end())
+            return it->second;
+        const std::string where = call_where(c.shader, "Shader");
+        auto program = library.load_any(c.shader.name, where);
+        out.coshaders.push_back(std::make_unique<ShaderInstance>(
+            program, expand_strings(c.shader.params, frame, where),
+            c.shader.shader_to_world, where, &out.warnings));
+        out.coshaders.back()->set_handle(c.handle);
+        coshader_by_ref.emplace(&c.shader, out.coshaders.back().get());
+        return out.coshaders.back().get();
+    };
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
         const Primitive& prim = scene.primitives[i];
         const Attributes& attr = attributes_of(prim);
@@ -227,7 +244,20 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
             out.surface_of[i] = out.surfaces.back().get();
             by_ref.emplace(ref, out.surface_of[i]);
         }
-        if (attr.displacement) {
+        const ShaderInstance* surface = out.surface_of[i];
+        const bool displaces = surface->program().is_class() &&
+                               surface->program().runs_as(ShaderKind::Displacement);
+        if (displaces && !attr.displacement) {
+            // An RSL 2.0 class with a displacement method displaces the
+            // surfaces it shades (PRMan runs it at displacement time).
+            out.displacement_of[i] = surface;
+        } else if (attr.displacement) {
+            if (displaces && overridden.insert(surface).second)
+                out.warnings.push_back(
+                    surface->where() + ": the displacement method of '" +
+                    surface->program().name +
+                    "' is not run: the primitive's Displacement " +
+                    sss::quoted(attr.displacement->name) + " displaces it");
             const ShaderRef* d = &*attr.displacement;
             if (auto it = displacement_by_ref.find(d); it != displacement_by_ref.end()) {
                 out.displacement_of[i] = it->second;
@@ -248,6 +278,8 @@ SceneShaders bind_scene_shaders(const Scene& scene, std::optional<int> frame,
         for (int l : attr.lights_on)
             if (l >= 0 && static_cast<std::size_t>(l) < out.lights.size())
                 out.lights_of[i].push_back(out.lights[static_cast<std::size_t>(l)].get());
+        for (const CoshaderRef& c : attr.coshaders)
+            out.coshaders_of[i].push_back(coshader(c));
     }
     return out;
 }
@@ -265,8 +297,8 @@ void record_shader_inputs(JobFiles& files, const SceneShaders& shaders) {
             }
         }
     };
-    for (const auto* list :
-         {&shaders.surfaces, &shaders.displacements, &shaders.volumes, &shaders.lights})
+    for (const auto* list : {&shaders.surfaces, &shaders.displacements, &shaders.volumes,
+                             &shaders.lights, &shaders.coshaders})
         for (const auto& s : *list) add(*s);
     if (shaders.imager) add(*shaders.imager);
     if (shaders.library)
@@ -287,8 +319,8 @@ std::vector<std::string> shader_input_files(const SceneShaders& shaders) {
                     files.push_back(v);
             }
     };
-    for (const auto* list :
-         {&shaders.surfaces, &shaders.displacements, &shaders.volumes, &shaders.lights})
+    for (const auto* list : {&shaders.surfaces, &shaders.displacements, &shaders.volumes,
+                             &shaders.lights, &shaders.coshaders})
         for (const auto& s : *list) add(*s);
     if (shaders.imager) add(*shaders.imager);
     if (shaders.library)

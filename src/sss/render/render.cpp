@@ -303,7 +303,9 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
             }
         }
         const auto& lights = job.shaders.lights_of[prim_index];
-        context.execute(shader, batch, LightList(lights.data(), lights.size()));
+        const auto& coshaders = job.shaders.coshaders_of[prim_index];
+        context.execute(shader, batch, LightList(lights.data(), lights.size()),
+                        CoshaderList(coshaders.data(), coshaders.size()));
         job.nan_points += context.nonfinite_points();
 
         std::vector<std::vector<float>> aov_values(job.aovs.size());

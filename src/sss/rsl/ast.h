@@ -24,7 +24,10 @@ enum class ExprKind {
     Unary,   ///< text = "-" or "!", args[0]
     Binary,  ///< text = operator, args[0], args[1]
     Ternary, ///< args[0] ? args[1] : args[2]
-    Assign   ///< args[0] (Ident or Index) text= args[1]; text "=", "+=", ...
+    Assign,  ///< args[0] (Ident or Index) text= args[1]; text "=", "+=", ...
+    /// RSL 2.0 co-shader call `obj->method(a, b)`: text = method, args[0] =
+    /// obj (a shader value), args[1...] = the arguments.
+    MethodCall
 };
 
 struct Expr;
@@ -73,6 +76,7 @@ using StmtPtr = std::unique_ptr<Stmt>;
 struct FuncDef {
     SrcLoc loc;
     std::string name;
+    bool is_public = false; ///< a class's `public` method
     ShadingType result = ShadingType::Void;
     std::vector<VarDecl> params; ///< one entry per parameter group
     StmtPtr body;                ///< a Block
@@ -116,7 +120,12 @@ struct ShaderDef {
     ShaderKind kind = ShaderKind::Surface;
     std::string name;
     std::vector<VarDecl> params;
-    StmtPtr body;
+    StmtPtr body; ///< null for a class
+    /// RSL 2.0 `class name(params) { members and methods }`: the kind is
+    /// decided by the methods it defines (codegen_class.cpp).
+    bool is_class = false;
+    std::vector<VarDecl> members;
+    std::vector<std::shared_ptr<FuncDef>> methods;
 };
 
 /// A parsed file: its shaders and top-level functions, in order.

@@ -63,6 +63,8 @@ unsigned kind_bit(ShaderKind k) {
         return kV;
     case ShaderKind::Imager:
         return kI;
+    case ShaderKind::Shader: // a co-shader runs on its caller's surface points
+        return kS;
     }
     return 0;
 }
@@ -74,7 +76,9 @@ const GlobalDef* find_global(const std::string& name) {
 }
 
 Program Generator::run() {
+    if (m_shader.is_class) return run_class();
     m_p.kind = m_shader.kind;
+    m_kind = m_shader.kind;
     m_p.name = m_shader.name;
     m_p.files = m_d.source().files;
     if (m_p.files.empty()) m_p.files.push_back("<string>");
@@ -192,14 +196,23 @@ const Var* Generator::global(const std::string& name, SrcLoc at) {
             return nullptr;
         }
     }
-    auto it = m_globals.find(name);
+    // One symbol per global; whether it is writable depends on the kind of
+    // the code using it (a class's displacement and surface methods differ).
+    const std::string key = name + "#" + std::to_string(m_kind_bit);
+    auto it = m_globals.find(key);
     if (it == m_globals.end()) {
         Var v;
-        m_names.insert(name);
-        v.sym = add_symbol(name, {g->type, 0}, g->varying, SymbolKind::Global);
+        auto sym = m_global_syms.find(name);
+        if (sym != m_global_syms.end()) {
+            v.sym = sym->second;
+        } else {
+            m_names.insert(name);
+            v.sym = add_symbol(name, {g->type, 0}, g->varying, SymbolKind::Global);
+            m_global_syms.emplace(name, v.sym);
+        }
         v.readonly = !(g->write & m_kind_bit);
         v.what = "global variable";
-        it = m_globals.emplace(name, v).first;
+        it = m_globals.emplace(key, v).first;
     }
     return &it->second;
 }
@@ -225,8 +238,8 @@ const Var* Generator::lookup(const std::string& name, SrcLoc at, bool report) {
         if (find_global(name)->read & m_kind_bit) return nullptr; // reported
         if (report)
             error(at, "'" + name + "' is not available in " +
-                          (m_shader.kind == ShaderKind::Imager ? "an " : "a ") +
-                          shader_kind_name(m_shader.kind) + " shader");
+                          (m_kind == ShaderKind::Imager ? "an " : "a ") +
+                          shader_kind_name(m_kind) + " shader");
         return nullptr;
     }
     if (report) error(at, "unknown variable '" + name + "'");

@@ -175,6 +175,7 @@ Val Generator::gen_call(const Expr& e, const TypeSpec* hint) {
         return {};
     }
     if (is_array_function(name)) return array_call(e, args);
+    if (is_coshader_function(name)) return coshader_call(e, args, -1);
 
     const Proto* bp = nullptr;
     Match bm;
@@ -364,7 +365,9 @@ Val Generator::inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args,
     const int inst = ++m_instances;
     const std::string suffix = "@" + std::to_string(inst);
     const std::string prefix = f.name + "::";
-    Scope* params = new_scope(nullptr);
+    // A class's methods see its member variables and parameters; other
+    // functions only their own parameters (and what they declare extern).
+    Scope* params = new_scope(fe.method ? fe.scope : nullptr);
     params->outer = fe.scope;
     const std::vector<UParam> ps = user_params(f);
     for (std::size_t i = 0; i < ps.size(); ++i) {
@@ -421,12 +424,21 @@ Val Generator::inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args,
                                 false, SymbolKind::Temp);
         m_auto.insert(ctx.result);
     }
+    m_inline.push_back(&f);
+    const bool exit_varying = function_block(ctx, params);
+    m_inline.pop_back();
+    if (ctx.result < 0) return {Val::kVoid};
+    m_p.symbols[ctx.result].varying = ctx.result_varying || exit_varying;
+    return {ctx.result};
+}
+
+bool Generator::function_block(FuncCtx& ctx, Scope* params) {
+    const FuncDef& f = *ctx.def;
     ctx.saved_loop_depth = m_loop_depth;
     ctx.entry_varying_cond = m_varying_cond;
     ctx.entry_region = m_regions.size();
     m_loop_depth = 0;
     m_funcs.push_back(ctx);
-    m_inline.push_back(&f);
     m_regions.push_back({Region::Function, {}, false});
     Scope* saved_scope = m_scope;
     m_scope = new_scope(params);
@@ -439,13 +451,10 @@ Val Generator::inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args,
     m_scope = saved_scope;
     const bool exit_varying = m_regions.back().varying_exit;
     pop_region();
-    m_inline.pop_back();
     ctx = m_funcs.back();
     m_funcs.pop_back();
     m_loop_depth = ctx.saved_loop_depth;
-    if (ctx.result < 0) return {Val::kVoid};
-    m_p.symbols[ctx.result].varying = ctx.result_varying || exit_varying;
-    return {ctx.result};
+    return exit_varying;
 }
 
 } // namespace sss::detail::codegen

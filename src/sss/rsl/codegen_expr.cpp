@@ -27,7 +27,9 @@ Val Generator::condition(const Expr& e) {
     }
     if (t.type == ShadingType::Float) return v;
     LocGuard lg(*this, e.loc);
-    int zero = convert({kfloat(0)}, t, e.loc).sym;
+    // A shader handle is true when it is not null.
+    int zero =
+        t.type == ShadingType::Shader ? knull() : convert({kfloat(0)}, t, e.loc).sym;
     int c = temp({ShadingType::Float, 0}, varying(v.sym));
     emit("ne", {c, v.sym, zero});
     return {c};
@@ -42,6 +44,7 @@ Val Generator::gen(const Expr& e, const TypeSpec* hint) {
         return {kstring(e.text)};
     case ExprKind::Ident: {
         if (e.text == "PI" && !shadowed("PI")) return {kfloat(kPi)};
+        if (e.text == "null" && !shadowed("null")) return {knull()};
         const Var* v = lookup(e.text, e.loc);
         return v ? Val{v->sym} : Val{};
     }
@@ -67,6 +70,8 @@ Val Generator::gen(const Expr& e, const TypeSpec* hint) {
         return gen_ternary(e, hint);
     case ExprKind::Assign:
         return gen_assign(e);
+    case ExprKind::MethodCall:
+        return gen_method_call(e, hint, false);
     }
     return {};
 }
@@ -343,6 +348,11 @@ Val Generator::gen_assign(const Expr& e) {
     const Var v = *var;
     const TypeSpec vt = type(v.sym);
     if (lhs.kind == ExprKind::Ident) {
+        if (vt.is_array() && op == "=" && is_array_producer(rhs)) {
+            if (!check_writable(v, lhs.text, lhs.loc)) return {};
+            produce_array(v.sym, lhs.text, rhs);
+            return {v.sym};
+        }
         if (vt.is_array()) {
             error(lhs.loc, "cannot assign a whole array ('" + lhs.text + "')");
             return {};

@@ -86,6 +86,7 @@ struct Scope;
 struct FuncEntry {
     const FuncDef* def = nullptr;
     Scope* scope = nullptr; ///< where it was defined (externs, visible functions)
+    bool method = false;    ///< a class's method: sees the members in `scope`
 };
 
 struct Scope {
@@ -274,6 +275,38 @@ private:
     bool match_user(const FuncDef& f, const std::vector<ArgInfo>& args, int& cost,
                     std::string* why = nullptr);
     Val inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args, const Expr& call);
+    /// Emits ctx.def's body as a `block` op with `params` as its parameter
+    /// scope; returns whether a return in it is varying.
+    bool function_block(FuncCtx& ctx, Scope* params);
+
+    // --- classes (codegen_class.cpp) -----------------------------------------
+    /// A class shader (RSL 2.0): parameters, member variables, the methods
+    /// other shaders and the renderer call, and the pipelines.
+    Program run_class();
+    /// Emits `f` as a Method of the program (its own parameter symbols; a
+    /// pipeline method's parameters are the globals they name), with the
+    /// rules of shader kind `kind`.
+    void standalone_method(const FuncDef& f, Scope* members, ShaderKind kind,
+                           bool pipeline);
+    /// The pipelines of the class from the methods it defines (indices into
+    /// m_p.methods by name); errors for impossible combinations.
+    void class_pipelines();
+
+    // --- co-shaders (codegen_coshader.cpp) -----------------------------------
+    /// getshader, getshaders, getlight, getlights, getvar, hasmethod.
+    static bool is_coshader_function(const std::string& name);
+    /// A call of one of them; getshaders and getlights fill `target` (a
+    /// resizable shader array) when it is >= 0, else a temporary.
+    Val coshader_call(const Expr& e, std::vector<ArgInfo>& args, int target);
+    /// Whether `e` is a call of getshaders or getlights (an array value).
+    bool is_array_producer(const Expr& e);
+    /// `array = getlights(...)`: the call writes the resizable array `target`.
+    void produce_array(int target, const std::string& name, const Expr& call);
+    /// `obj->method(args)`: its result takes the expected type (float without
+    /// one); `discard` for a call whose value is not used (a statement).
+    Val gen_method_call(const Expr& e, const TypeSpec* hint, bool discard);
+    /// The null shader handle.
+    int knull() { return konst({ShadingType::Shader, 0}, {0.0f}, {}); }
 
     // --- resizable arrays (codegen_arrays.cpp) ------------------------------
     /// arraylength, resize, push, pop, reserve.
@@ -319,12 +352,16 @@ private:
     std::set<std::string>& m_newly;
     const bool m_demote;
     Program m_p;
+    /// The kind of the code being generated: the shader's, or for a class
+    /// the kind of the method (displacement, surface...).
+    ShaderKind m_kind = ShaderKind::Surface;
     unsigned m_kind_bit = kS;
     SrcLoc m_loc;
 
     std::vector<std::unique_ptr<Scope>> m_scopes;
     Scope* m_scope = nullptr;
-    std::unordered_map<std::string, Var> m_globals;
+    std::unordered_map<std::string, Var> m_globals; ///< by name and kind bit
+    std::unordered_map<std::string, int> m_global_syms;
     std::unordered_set<std::string> m_names;
     std::unordered_map<std::string, int> m_consts;
     std::unordered_set<int>

@@ -14,7 +14,11 @@ void Generator::statement(const Stmt& s) {
     case StmtKind::Empty:
         return;
     case StmtKind::Expr:
-        gen(*s.expr, nullptr);
+        // A method called for its effects: whatever it returns is dropped.
+        if (s.expr->kind == ExprKind::MethodCall)
+            gen_method_call(*s.expr, nullptr, true);
+        else
+            gen(*s.expr, nullptr);
         return;
     case StmtKind::Block: {
         Scope* saved = m_scope;
@@ -115,6 +119,10 @@ void Generator::declaration(const VarDecl& d) {
 
 void Generator::initialise(int sym, const VarDecl& d, const Declarator& n) {
     const TypeSpec t = type(sym);
+    if (t.is_array() && n.init && is_array_producer(*n.init)) {
+        produce_array(sym, n.name, *n.init);
+        return;
+    }
     if (t.is_resizable() && !n.init) {
         // Each time the declaration runs, the array starts with the values
         // given (none: empty). The length is uniform; so is this store.
@@ -158,6 +166,11 @@ Val Generator::elem_value(const VarDecl& d, const Expr& e, const TypeSpec& et) {
 }
 
 void Generator::parameter_group(const VarDecl& g) {
+    if (g.type == ShadingType::Shader) {
+        error(g.loc, "a shader parameter cannot be of type shader: pass the co-shader's "
+                     "handle as a string and call getshader()");
+        return;
+    }
     for (const Declarator& n : g.names) {
         LocGuard lg(*this, n.loc);
         if (m_scope->vars.count(n.name)) {
@@ -335,7 +348,7 @@ void Generator::light_statement(const Stmt& s) {
     const int no_axis = ktriple(ShadingType::Vector, 0, 0, 0);
     const bool solar = s.kind == StmtKind::Solar;
     const char* name = solar ? "solar" : "illuminate";
-    if (m_shader.kind != ShaderKind::Light) {
+    if (m_kind != ShaderKind::Light) {
         error(s.loc, std::string(name) + " is only allowed in light shaders");
         return;
     }
@@ -368,7 +381,7 @@ void Generator::light_body(const Stmt& s, int op) {
 }
 
 void Generator::illuminance_statement(const Stmt& s) {
-    if (m_shader.kind != ShaderKind::Surface && m_shader.kind != ShaderKind::Volume) {
+    if (m_kind != ShaderKind::Surface && m_kind != ShaderKind::Volume) {
         error(s.loc, "illuminance is only allowed in surface and volume shaders");
         return;
     }
@@ -512,8 +525,8 @@ bool Generator::illuminance_options(const Stmt& s, std::size_t first,
 }
 
 void Generator::gather_statement(const Stmt& s) {
-    if (m_shader.kind != ShaderKind::Surface && m_shader.kind != ShaderKind::Light &&
-        m_shader.kind != ShaderKind::Displacement) {
+    if (m_kind != ShaderKind::Surface && m_kind != ShaderKind::Light &&
+        m_kind != ShaderKind::Displacement) {
         error(s.loc, "gather is only allowed in surface, light and displacement shaders");
         return;
     }

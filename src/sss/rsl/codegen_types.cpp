@@ -147,6 +147,11 @@ ShadingType Generator::binary_type(const std::string& op, ShadingType a, Shading
     }
     if (op == "&&" || op == "||")
         return a == T::Float && b == T::Float ? T::Float : T::Void;
+    if (a == T::Shader || b == T::Shader) {
+        if ((op == "==" || op == "!=") && a == b) return T::Float;
+        why = "shader handles only compare with == and != (with another shader or null)";
+        return T::Void;
+    }
     if (op == "==" || op == "!=") {
         if (a == b || (pa && pb) || (a == T::Float && (is_triple(b) || b == T::Matrix)) ||
             (b == T::Float && (is_triple(a) || a == T::Matrix)))
@@ -209,7 +214,7 @@ bool Generator::check_writable(const Var& v, const std::string& name, SrcLoc at)
     if (std::strcmp(v.what, "shader parameter") == 0)
         why = " (declare it output to write it)";
     else if (std::strcmp(v.what, "global variable") == 0)
-        why = std::string(" in a ") + shader_kind_name(m_shader.kind) + " shader";
+        why = std::string(" in a ") + shader_kind_name(m_kind) + " shader";
     else if (std::strcmp(v.what, "function parameter") == 0)
         why = " (declare it output to write it)";
     error(at, std::string("cannot assign to ") + v.what + " '" + name +

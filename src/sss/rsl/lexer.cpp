@@ -269,8 +269,9 @@ private:
     }
 
     bool punct(Token& t) {
-        static constexpr std::array<std::string_view, 12> two = {
-            "+=", "-=", "*=", "/=", "==", "!=", "<=", ">=", "&&", "||", "++", "--"};
+        // "->" calls a co-shader's method (RSL 2.0): `s->method(...)`.
+        static constexpr std::array<std::string_view, 13> two = {
+            "+=", "-=", "*=", "/=", "==", "!=", "<=", ">=", "&&", "||", "++", "--", "->"};
         t.kind = TokKind::Punct;
         if (m_pos + 1 < m_text.size()) {
             std::string_view s(m_text.data() + m_pos, 2);

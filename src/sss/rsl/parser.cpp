@@ -31,6 +31,7 @@ ShadingType type_of(std::string_view w) {
     if (w == "matrix") return ShadingType::Matrix;
     if (w == "string") return ShadingType::String;
     if (w == "void") return ShadingType::Void;
+    if (w == "shader") return ShadingType::Shader;
     return ShadingType::Float;
 }
 
@@ -108,7 +109,14 @@ private:
         return take().text;
     }
     bool at_type() const {
-        return peek().kind == TokKind::Keyword && is_type_word(peek().text);
+        return (peek().kind == TokKind::Keyword && is_type_word(peek().text)) ||
+               at_shader_type();
+    }
+    /// `shader name`: RSL 2.0's co-shader type, which is not reserved (old
+    /// shaders name variables `shader`), so only a type before a name.
+    bool at_shader_type(std::size_t ahead = 0) const {
+        return peek(ahead).kind == TokKind::Ident && peek(ahead).text == "shader" &&
+               peek(ahead + 1).kind == TokKind::Ident;
     }
 
     // Skips to just after the next `;` or to the next `}` of this level.
@@ -157,6 +165,11 @@ private:
             shader(out, t);
             return;
         }
+        if (t.kind == TokKind::Ident && t.text == "class" &&
+            peek(1).kind == TokKind::Ident && is("(", 2)) {
+            class_def(out);
+            return;
+        }
         if (at_type() || at_storage_function() ||
             (t.kind == TokKind::Ident && is("(", 1))) {
             out.functions.push_back(function());
@@ -201,6 +214,67 @@ private:
             return;
         }
         out.shaders.push_back(std::move(def));
+    }
+
+    /// `class name(params) { members and methods }` (RSL 2.0 shader objects).
+    void class_def(SourceFile& out) {
+        ShaderDef def;
+        def.loc = take().loc;
+        def.is_class = true;
+        def.name = ident("a class name");
+        expect("(", "after the class name");
+        while (accept(";")) {
+        }
+        while (!is(")")) {
+            def.params.push_back(var_decl(/*shader_param=*/true));
+            if (!accept(";")) break;
+            while (accept(";")) {
+            }
+        }
+        expect(")", "after the class parameters");
+        expect("{", "to start the body of the class");
+        while (!is("}")) {
+            if (at_end()) fail(peek(), "missing '}' at the end of the class");
+            try {
+                class_member(def);
+            } catch (const SyntaxError&) {
+                recover_stmt();
+            }
+        }
+        ++m_pos;
+        out.shaders.push_back(std::move(def));
+    }
+
+    /// One member of a class: `[public] type name(...) {...}` (a method) or a
+    /// member variable declaration (`constant` is PRMan 16's storage for
+    /// values set once: here uniform).
+    void class_member(ShaderDef& def) {
+        if (accept(";")) return;
+        const Token& start = peek();
+        const bool is_public = start.kind == TokKind::Ident && start.text == "public";
+        if (is_public) ++m_pos;
+        if (at_function_def() || at_storage_function() ||
+            (peek().kind == TokKind::Keyword && peek().text == "void")) {
+            std::shared_ptr<FuncDef> f = function();
+            f->is_public = is_public;
+            def.methods.push_back(std::move(f));
+            return;
+        }
+        if (is_public) fail(start, "'public' is only for methods");
+        bool constant = false;
+        if (peek().kind == TokKind::Ident && peek().text == "constant") {
+            ++m_pos;
+            constant = true;
+        }
+        VarDecl d = var_decl(/*shader_param=*/false);
+        if (d.is_extern) fail(start, "a member variable cannot be extern");
+        if (constant) {
+            if (d.storage == Storage::Varying)
+                fail(start, "a member variable cannot be both constant and varying");
+            d.storage = Storage::Uniform;
+        }
+        expect(";", "after the member declaration");
+        def.members.push_back(std::move(d));
     }
 
     /// At `uniform|varying type name (`: a function whose result has a
@@ -352,7 +426,9 @@ private:
     // True at `[type] name (...) {`: a function definition, not a call.
     bool at_function_def() const {
         std::size_t i = 0;
-        if (peek().kind == TokKind::Keyword && is_type_word(peek().text)) i = 1;
+        if ((peek().kind == TokKind::Keyword && is_type_word(peek().text)) ||
+            at_shader_type())
+            i = 1;
         if (peek(i).kind != TokKind::Ident || !is("(", i + 1)) return false;
         if (i == 1) return true;
         int depth = 0;
@@ -495,6 +571,17 @@ private:
             }
             if (w == "else") fail(t, "'else' without 'if'");
         }
+        if (at_shader_type()) {
+            if (at_function_def()) {
+                s->kind = StmtKind::Func;
+                s->func = function();
+                return s;
+            }
+            s->kind = StmtKind::Decl;
+            s->decl = std::make_unique<VarDecl>(var_decl(false));
+            expect(";", "after the declaration");
+            return s;
+        }
         if (t.kind == TokKind::Ident && at_function_def()) {
             s->kind = StmtKind::Func;
             s->func = function();
@@ -598,7 +685,8 @@ private:
         if (is("++") || is("--"))
             fail(t, "'" + t.text + "' is not supported; write " +
                         (t.text == "++" ? "x += 1" : "x -= 1"));
-        if (at_type() && peek().text != "void") {
+        if (peek().kind == TokKind::Keyword && is_type_word(peek().text) &&
+            peek().text != "void") {
             // Typecast: type ["space"] unary.
             const Token& type_tok = take();
             auto e = make(ExprKind::Cast, type_tok.loc);
@@ -615,6 +703,22 @@ private:
 
     ExprPtr postfix() {
         ExprPtr e = primary();
+        // obj->method(args): a co-shader's method (RSL 2.0).
+        std::vector<std::unique_ptr<DepthGuard>> chain;
+        while (is("->")) {
+            const Token& arrow = take();
+            chain.push_back(std::make_unique<DepthGuard>(*this));
+            auto m = make(ExprKind::MethodCall, arrow.loc);
+            m->text = ident("a method name");
+            m->args.push_back(std::move(e));
+            expect("(", ("after the method name '" + m->text + "'").c_str());
+            if (!is(")")) {
+                do m->args.push_back(assignment());
+                while (accept(","));
+            }
+            expect(")", ("to close the call of method " + m->text).c_str());
+            e = std::move(m);
+        }
         if (is("++") || is("--"))
             fail(peek(), "'" + peek().text + "' is not supported; write " +
                              (peek().text == "++" ? "x += 1" : "x -= 1"));

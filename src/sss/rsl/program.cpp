@@ -24,6 +24,8 @@ const char* shading_type_name(ShadingType t) {
         return "matrix";
     case ShadingType::String:
         return "string";
+    case ShadingType::Shader:
+        return "shader";
     }
     return "?";
 }
@@ -34,6 +36,7 @@ int shading_type_floats(ShadingType t) {
         return 0;
     case ShadingType::Float:
     case ShadingType::String:
+    case ShadingType::Shader:
         return 1;
     case ShadingType::Matrix:
         return 16;
@@ -70,8 +73,26 @@ const char* shader_kind_name(ShaderKind k) {
         return "volume";
     case ShaderKind::Imager:
         return "imager";
+    case ShaderKind::Shader:
+        return "shader";
     }
     return "?";
+}
+
+bool Program::runs_as(ShaderKind k) const {
+    return k == kind || pipeline(k) != nullptr;
+}
+
+const Pipeline* Program::pipeline(ShaderKind k) const {
+    for (const Pipeline& p : pipelines)
+        if (p.kind == k) return &p;
+    return nullptr;
+}
+
+int Program::find_method(const std::string& n) const {
+    for (std::size_t i = 0; i < methods.size(); ++i)
+        if (methods[i].name == n) return static_cast<int>(i);
+    return -1;
 }
 
 int Program::find(const std::string& n) const {

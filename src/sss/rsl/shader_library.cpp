@@ -81,7 +81,28 @@ ShaderLibrary::ShaderLibrary(std::vector<std::string> search_path)
 
 std::shared_ptr<const Program>
 ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string& where) {
+    std::shared_ptr<const Program> program = load_any(name, where);
+    if (program->kind == ShaderKind::Shader && kind != ShaderKind::Shader)
+        throw ShaderNotFoundError(
+            where + ": " + sss::quoted(name) +
+            " is a co-shader (a class without pipeline methods such "
+            "as surface or light): declare it with Shader \"" +
+            name + "\" \"handle\"");
+    if (!program->runs_as(kind))
+        throw ShaderNotFoundError(where + ": " + sss::quoted(name) + " is a " +
+                                  shader_kind_name(program->kind) + " shader, not a " +
+                                  shader_kind_name(kind) + " shader");
+    return program;
+}
+
+std::shared_ptr<const Program> ShaderLibrary::load_any(const std::string& name,
+                                                       const std::string& where) {
     std::lock_guard<std::mutex> lock(m_mutex);
+    return find(name, where);
+}
+
+std::shared_ptr<const Program> ShaderLibrary::find(const std::string& name,
+                                                   const std::string& where) {
     auto it = m_loaded.find(name);
     std::shared_ptr<const Program> program;
     if (it != m_loaded.end()) {
@@ -121,10 +142,6 @@ ShaderLibrary::load(const std::string& name, ShaderKind kind, const std::string&
                                       join_path(m_path) + ")");
         m_loaded.emplace(name, program);
     }
-    if (program->kind != kind)
-        throw ShaderNotFoundError(where + ": " + sss::quoted(name) + " is a " +
-                                  shader_kind_name(program->kind) + " shader, not a " +
-                                  shader_kind_name(kind) + " shader");
     return program;
 }
 

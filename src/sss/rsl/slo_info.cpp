@@ -119,7 +119,15 @@ std::string describe_shader_json(const Program& p, const std::string& file) {
         }
         out << "]}";
     }
-    out << "]}";
+    out << "]";
+    if (p.is_class()) {
+        // RSL 2.0 classes: the public methods other shaders may call.
+        out << ", \"methods\": [";
+        for (std::size_t i = 0; i < p.methods.size(); ++i)
+            out << (i ? ", " : "") << json_string(p.methods[i].name);
+        out << "]";
+    }
+    out << "}";
     return out.str();
 }
 

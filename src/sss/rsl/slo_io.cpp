@@ -14,6 +14,15 @@
 ///     body <body_begin>
 ///     end
 ///
+/// Version 2 (written for RSL 2.0 class shaders only; version 1 otherwise)
+/// has between `body` and `end`:
+///
+///     class <init_end>
+///     methods <n>          then n lines:
+///       method "<name>" <begin> <end> <result> <outputs> <nparams> <sym>...
+///     pipelines <n>        then n lines:
+///       pipeline <kind> <n> <method>...
+///
 /// Strings are quoted with C escapes. The reader checks everything the
 /// engine relies on (indices, jump ranges and their nesting, argument counts
 /// and types of the core ops, known op names), so a damaged file is a
@@ -36,7 +45,8 @@ namespace sss {
 namespace {
 
 constexpr const char* kMagic = "sss-slo";
-constexpr int kVersion = 1;
+constexpr int kVersion = 1;      ///< classic shaders
+constexpr int kClassVersion = 2; ///< class shaders (RSL 2.0)
 constexpr long kMaxCount = 50000000;
 
 std::string quote(const std::string& s) {
@@ -226,11 +236,68 @@ private:
 };
 
 ShadingType parse_type(Reader& r, const std::string& w) {
-    for (ShadingType t :
-         {ShadingType::Float, ShadingType::Color, ShadingType::Point, ShadingType::Vector,
-          ShadingType::Normal, ShadingType::Matrix, ShadingType::String})
+    for (ShadingType t : {ShadingType::Float, ShadingType::Color, ShadingType::Point,
+                          ShadingType::Vector, ShadingType::Normal, ShadingType::Matrix,
+                          ShadingType::String, ShadingType::Shader})
         if (w == shading_type_name(t)) return t;
     r.fail("unknown type '" + w + "'");
+}
+
+ShaderKind parse_shader_kind(Reader& r, const std::string& w) {
+    for (ShaderKind k : {ShaderKind::Surface, ShaderKind::Displacement, ShaderKind::Light,
+                         ShaderKind::Volume, ShaderKind::Imager, ShaderKind::Shader})
+        if (w == shader_kind_name(k)) return k;
+    r.fail("unknown shader kind '" + w + "'");
+}
+
+/// The class part of a version 2 file: member initialisers' end, methods
+/// (each a `block` of its own among the body's ops) and pipelines.
+void read_class(Reader& r, Program& p) {
+    const long nops = static_cast<long>(p.ops.size());
+    const long nsyms = static_cast<long>(p.symbols.size());
+    r.line("class");
+    p.init_end = static_cast<int>(r.integer(p.body_begin, nops));
+    r.end_of_line();
+    r.line("methods");
+    const long nmethods = r.integer(0, kMaxCount);
+    r.end_of_line();
+    for (long i = 0; i < nmethods; ++i) {
+        r.line("method");
+        Method m;
+        m.name = r.string();
+        m.begin = static_cast<int>(r.integer(p.init_end, nops - 1));
+        m.end = static_cast<int>(r.integer(m.begin + 1, nops));
+        if (p.ops[m.begin].name != "block" || p.ops[m.begin].jump[0] != m.end)
+            r.fail("method '" + m.name + "' is not a block of the program");
+        m.result = static_cast<int>(r.integer(-1, nsyms - 1));
+        m.outputs = r.bits();
+        const long nparams = r.integer(0, 63);
+        if ((m.outputs >> nparams) != 0) r.fail("output flag for a missing parameter");
+        for (long k = 0; k < nparams; ++k)
+            m.params.push_back(static_cast<int>(r.integer(0, nsyms - 1)));
+        r.end_of_line();
+        m.params.shrink_to_fit();
+        for (int s : m.params)
+            if (p.symbols[s].kind == SymbolKind::Const)
+                r.fail("a parameter of method '" + m.name + "' is a constant");
+        if (m.result >= 0 && p.symbols[m.result].kind == SymbolKind::Const)
+            r.fail("the result of method '" + m.name + "' is a constant");
+        p.methods.push_back(std::move(m));
+    }
+    r.line("pipelines");
+    const long npipelines = r.integer(0, 6);
+    r.end_of_line();
+    for (long i = 0; i < npipelines; ++i) {
+        r.line("pipeline");
+        Pipeline pl;
+        pl.kind = parse_shader_kind(r, r.word());
+        if (p.pipeline(pl.kind)) r.fail("two pipelines of one kind");
+        const long n = r.integer(0, kMaxCount);
+        for (long k = 0; k < n; ++k)
+            pl.methods.push_back(static_cast<int>(r.integer(0, nmethods - 1)));
+        r.end_of_line();
+        p.pipelines.push_back(std::move(pl));
+    }
 }
 
 SymbolKind parse_kind(Reader& r, const std::string& w) {
@@ -433,7 +500,42 @@ private:
                 if (type(a).is_array()) fail(i, "'" + n + "' of an array");
             return i + 1;
         }
+        if (n == "getshader" || n == "getlight" || n == "getshaders" ||
+            n == "getlights" || n == "getvar" || n == "hasmethod" || n == "callmethod")
+            return coshader_op(i);
         if (!detail::is_builtin(n)) fail(i, "unknown operation '" + n + "'");
+        return i + 1;
+    }
+
+    // The RSL 2.0 co-shader ops (program.h): argument types and write flags.
+    int coshader_op(int i) {
+        const Op& op = m_p.ops[i];
+        const std::string& n = op.name;
+        const std::size_t na = op.args.size();
+        const TypeSpec shader{ShadingType::Shader, 0};
+        bool ok = true;
+        if (n == "getshader" || n == "getlight") {
+            ok = na == 2 && type(op.args[0]) == shader &&
+                 is(op.args[1], ShadingType::String) && op.writes == 1;
+        } else if (n == "getshaders" || n == "getlights") {
+            ok = na >= 1 && na % 2 == 1 &&
+                 type(op.args[0]) == TypeSpec{ShadingType::Shader, kResizableArray} &&
+                 op.writes == 1;
+            for (std::size_t k = 1; k < na && ok; ++k)
+                ok = is(op.args[k], ShadingType::String);
+        } else if (n == "hasmethod") {
+            ok = na == 3 && is(op.args[0], ShadingType::Float) &&
+                 type(op.args[1]) == shader && is(op.args[2], ShadingType::String) &&
+                 op.writes == 1;
+        } else if (n == "getvar") {
+            ok = (na == 3 || na == 4) && is(op.args[0], ShadingType::Float) &&
+                 type(op.args[1]) == shader && is(op.args[2], ShadingType::String) &&
+                 op.writes == (na == 4 ? 9u : 1u);
+        } else { // callmethod d handle "name" args...
+            ok = na >= 3 && !type(op.args[0]).is_array() && type(op.args[1]) == shader &&
+                 is(op.args[2], ShadingType::String) && (op.writes & 6u) == 0;
+        }
+        if (!ok) fail(i, "bad arguments for '" + n + "'");
         return i + 1;
     }
 
@@ -445,7 +547,7 @@ private:
 } // namespace
 
 void write_program(const Program& p, std::ostream& out) {
-    out << kMagic << " " << kVersion << "\n";
+    out << kMagic << " " << (p.is_class() ? kClassVersion : kVersion) << "\n";
     out << "shader " << shader_kind_name(p.kind) << " " << quote(p.name) << "\n";
     out << "source " << quote(p.source_path) << "\n";
     out << "files " << p.files.size() << "\n";
@@ -469,6 +571,22 @@ void write_program(const Program& p, std::ostream& out) {
             << op.where.line << " " << op.where.column << "\n";
     }
     out << "body " << p.body_begin << "\n";
+    if (p.is_class()) {
+        out << "class " << p.init_end << "\n";
+        out << "methods " << p.methods.size() << "\n";
+        for (const Method& m : p.methods) {
+            out << "method " << quote(m.name) << " " << m.begin << " " << m.end << " "
+                << m.result << " " << m.outputs << " " << m.params.size();
+            for (int s : m.params) out << " " << s;
+            out << "\n";
+        }
+        out << "pipelines " << p.pipelines.size() << "\n";
+        for (const Pipeline& pl : p.pipelines) {
+            out << "pipeline " << shader_kind_name(pl.kind) << " " << pl.methods.size();
+            for (int m : pl.methods) out << " " << m;
+            out << "\n";
+        }
+    }
     out << "end\n";
 }
 
@@ -476,24 +594,18 @@ Program read_program(std::istream& in, const std::string& path) {
     Reader r(in, path);
     Program p;
     r.line(kMagic);
+    long version = 0;
     {
-        const long version = r.integer(0, 1000000);
-        if (version != kVersion)
+        version = r.integer(0, 1000000);
+        if (version != kVersion && version != kClassVersion)
             r.fail("unsupported .slo version " + std::to_string(version) +
-                   " (this build reads " + std::to_string(kVersion) + ")");
+                   " (this build reads " + std::to_string(kVersion) + " and " +
+                   std::to_string(kClassVersion) + ")");
         r.end_of_line();
     }
     r.line("shader");
     {
-        const std::string kind = r.word();
-        bool found = false;
-        for (ShaderKind k : {ShaderKind::Surface, ShaderKind::Displacement,
-                             ShaderKind::Light, ShaderKind::Volume, ShaderKind::Imager})
-            if (kind == shader_kind_name(k)) {
-                p.kind = k;
-                found = true;
-            }
-        if (!found) r.fail("unknown shader kind '" + kind + "'");
+        p.kind = parse_shader_kind(r, r.word());
         p.name = r.string();
         r.end_of_line();
     }
@@ -541,6 +653,10 @@ Program read_program(std::istream& in, const std::string& path) {
         if (s.kind == SymbolKind::Const && have == 0) r.fail("constant without a value");
         if (s.kind == SymbolKind::Const && s.varying)
             r.fail("a constant cannot be varying");
+        if (s.type.type == ShadingType::Shader &&
+            (s.kind == SymbolKind::Param || s.kind == SymbolKind::OutputParam ||
+             s.kind == SymbolKind::Global))
+            r.fail("a parameter or global cannot be a shader handle");
         if (s.type.is_resizable() &&
             (s.kind != SymbolKind::Local && s.kind != SymbolKind::Temp))
             r.fail("only locals can be resizable arrays");
@@ -577,6 +693,7 @@ Program read_program(std::istream& in, const std::string& path) {
     r.line("body");
     p.body_begin = static_cast<int>(r.integer(0, nops));
     r.end_of_line();
+    if (version == kClassVersion) read_class(r, p);
     r.line("end");
     r.end_of_line();
     while (r.next_line())

@@ -45,7 +45,7 @@ bool unsupported(std::string_view name) {
         name_set("Deformation Detail DetailRange "
                  "ClippingPlane IfBegin ElseIf Else IfEnd MakeBump "
                  "MakeBrickMap System Resource "
-                 "ResourceBegin ResourceEnd Shader Bxdf Pattern Integrator DisplayFilter "
+                 "ResourceBegin ResourceEnd Bxdf Pattern Integrator DisplayFilter "
                  "SampleFilter Light Volume Matte");
     return names.count(name) > 0;
 }
@@ -173,6 +173,7 @@ const Reader::HandlerTable& Reader::handlers() {
         {"ShadingRate", &Reader::do_shading_rate},
         {"ShadingInterpolation", &Reader::do_shading_interpolation},
         {"Surface", &Reader::do_surface},
+        {"Shader", &Reader::do_coshader},
         {"Displacement", &Reader::do_displacement},
         {"Atmosphere", &Reader::do_volume_shader},
         {"Interior", &Reader::do_volume_shader},

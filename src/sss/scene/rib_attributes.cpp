@@ -127,6 +127,21 @@ void Reader::do_surface(const Statement& s) {
     attrs_mut().surface = make_shader(s, name, std::move(params));
 }
 
+void Reader::do_coshader(const Statement& s) {
+    std::size_t i = 0;
+    std::string name = take_string(s, i, "shader name");
+    std::string handle = take_handle(s, i);
+    ParamList params = take_params(s, i, true, true);
+    CoshaderRef ref{handle, make_shader(s, name, std::move(params))};
+    auto& list = attrs_mut().coshaders;
+    auto it = std::find_if(list.begin(), list.end(),
+                           [&](const CoshaderRef& c) { return c.handle == handle; });
+    if (it != list.end())
+        *it = std::move(ref);
+    else
+        list.push_back(std::move(ref));
+}
+
 void Reader::do_displacement(const Statement& s) {
     std::size_t i = 0;
     std::string name = take_string(s, i, "shader name");

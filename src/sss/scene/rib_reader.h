@@ -232,6 +232,7 @@ private:
     void do_shading_rate(const Statement& s);
     void do_shading_interpolation(const Statement& s);
     void do_surface(const Statement& s);
+    void do_coshader(const Statement& s);
     void do_displacement(const Statement& s);
     /// Atmosphere, Interior and Exterior: a volume shader of the attributes.
     void do_volume_shader(const Statement& s);

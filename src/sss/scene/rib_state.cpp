@@ -139,6 +139,9 @@ void Reader::do_world_begin(const Statement& s) {
             ShaderRef& ref = *(attrs_mut().*member);
             ref.shader_to_world = camera_to_world * ref.shader_to_world;
         }
+    if (!attrs.coshaders.empty())
+        for (CoshaderRef& c : attrs_mut().coshaders)
+            c.shader.shader_to_world = camera_to_world * c.shader.shader_to_world;
     if (m_scene.options.imager) {
         ShaderRef& ref = *m_scene.options.imager;
         ref.shader_to_world = camera_to_world * ref.shader_to_world;

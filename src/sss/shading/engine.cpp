@@ -451,6 +451,7 @@ void ShadingContext::Impl::setup_frame(detail::Frame& f, const ShaderInstance& i
     f.instance = &instance;
     f.bound = &instance.bound();
     f.program = &instance.program();
+    f.kind = f.program->kind;
     f.n = n;
     const Program& p = *f.program;
     const std::size_t nsym = p.symbols.size();
@@ -548,8 +549,7 @@ void ShadingContext::Impl::load_surface_globals(detail::Frame& f) {
     if (auto* s = sl(G_Cs)) fill3(*s, n, &b.Cs, cs);
     if (auto* s = sl(G_Os)) fill3(*s, n, &b.Os, os);
     // Volume and imager shaders start from the Ci and Oi they are given.
-    const bool given =
-        f.program->kind == ShaderKind::Volume || f.program->kind == ShaderKind::Imager;
+    const bool given = f.kind == ShaderKind::Volume || f.kind == ShaderKind::Imager;
     if (auto* s = sl(G_Oi)) fill3(*s, n, given && has(b.Oi) ? &b.Oi : &b.Os, os);
     if (given)
         if (auto* s = sl(G_Ci)) fill3(*s, n, &b.Ci, glm::vec3(0.0f));
@@ -565,7 +565,15 @@ void ShadingContext::Impl::load_surface_globals(detail::Frame& f) {
 }
 
 void ShadingContext::Impl::run_body(detail::Frame& f) {
-    f.run(f.program->body_begin, static_cast<int>(f.program->ops.size()));
+    const Program& p = *f.program;
+    if (!p.is_class()) {
+        f.run(p.body_begin, static_cast<int>(p.ops.size()));
+        return;
+    }
+    f.run(p.body_begin, p.init_end);
+    if (const Pipeline* pipeline = p.pipeline(f.kind))
+        for (int m : pipeline->methods)
+            f.run(p.methods[std::size_t(m)].begin, p.methods[std::size_t(m)].end);
 }
 
 ShadingContext::ShadingContext(const ShadingResources& resources,
@@ -603,9 +611,20 @@ void read3(const detail::Slot& sl, std::size_t n, std::vector<glm::vec3>& out) {
 } // namespace
 
 void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
-                             LightList lights) {
+                             LightList lights, CoshaderList coshaders) {
+    execute_as(shader.program().kind, shader, batch, lights, coshaders);
+}
+
+void ShadingContext::execute_as(ShaderKind kind, const ShaderInstance& shader,
+                                ShadingBatch& batch, LightList lights,
+                                CoshaderList coshaders) {
     using namespace detail;
     Impl& c = *m_impl;
+    if (!shader.program().runs_as(kind))
+        throw ValueError((shader.where().empty() ? "" : shader.where() + ": ") +
+                         "shader '" + shader.program().name + "' is a " +
+                         shader_kind_name(shader.program().kind) + " shader and has no " +
+                         shader_kind_name(kind) + " method");
     const std::size_t n = batch.size;
     if (batch.layout == BatchLayout::Grid &&
         static_cast<std::size_t>(batch.nu) * static_cast<std::size_t>(batch.nv) != n)
@@ -617,6 +636,8 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
                          " points");
     c.batch = &batch;
     c.lights = lights;
+    c.coshaders = coshaders;
+    c.objects.clear();
     c.depth = 0;
     c.reset_strings();
     c.extra_storage.clear();
@@ -638,6 +659,7 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
 
     Frame& f = c.main;
     c.setup_frame(f, shader, n);
+    f.kind = kind;
     c.load_surface_globals(f);
     try {
         c.init_params(f, true);
@@ -660,10 +682,10 @@ void ShadingContext::execute(const ShaderInstance& shader, ShadingBatch& batch,
             clean_slot(f.slots[s], n, bad);
     c.nonfinite = static_cast<std::size_t>(std::count(bad.begin(), bad.end(), 1));
 
-    if (p.kind == ShaderKind::Displacement) {
+    if (kind == ShaderKind::Displacement) {
         if (g[G_P] >= 0) read3(f.slots[g[G_P]], n, batch.P);
         if (g[G_N] >= 0) read3(f.slots[g[G_N]], n, batch.N);
-    } else if (p.kind == ShaderKind::Volume || p.kind == ShaderKind::Imager) {
+    } else if (kind == ShaderKind::Volume || kind == ShaderKind::Imager) {
         // What the shader does not mention stays as it was given.
         if (g[G_Ci] >= 0) read3(f.slots[g[G_Ci]], n, batch.Ci);
         if (g[G_Oi] >= 0) read3(f.slots[g[G_Oi]], n, batch.Oi);

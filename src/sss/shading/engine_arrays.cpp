@@ -225,6 +225,15 @@ void op_aassign_resizable(Frame& f, const BoundOp& b) {
     });
 }
 
+void resize_array(Frame& f, const BoundOp& b, Slot& s, int ef, double length,
+                  const char* what) {
+    set_length(f, b, s, ef, length, what);
+}
+
+int resizable_length(const Frame& f, const Slot& s) {
+    return length_of(f, s);
+}
+
 void reset_resizable(Frame& f) {
     for (ResizableArray& r : f.resizable) {
         r.data.clear();

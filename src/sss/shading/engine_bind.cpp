@@ -37,6 +37,7 @@ const BinderTable& binders() {
         register_texture(t);
         register_raytrace(t);
         register_arrays(t);
+        register_coshader(t);
         return t;
     }();
     return table;
@@ -113,6 +114,32 @@ struct Validator {
     }
 };
 
+/// A class shader's methods are blocks among its ops, their parameters and
+/// results symbols, its pipelines lists of them.
+void validate_class(const Program& p, const Validator& val) {
+    const int nops = static_cast<int>(p.ops.size());
+    const int nsym = static_cast<int>(p.symbols.size());
+    if (p.init_end < p.body_begin || p.init_end > nops) val.fail(-1, "bad class layout");
+    for (const Method& m : p.methods) {
+        if (m.begin < p.init_end || m.begin >= nops || p.ops[m.begin].name != "block" ||
+            p.ops[m.begin].jump[0] != m.end)
+            val.fail(-1, "method '" + m.name + "' is not a block of the program");
+        if (m.result < -1 || m.result >= nsym || m.params.size() > 63 ||
+            (m.outputs >> m.params.size()) != 0)
+            val.fail(-1, "method '" + m.name + "' has a bad result or parameters");
+        for (int s : m.params)
+            if (s < 0 || s >= nsym || p.symbols[s].type.type == ShadingType::Void ||
+                p.symbols[s].kind == SymbolKind::Const)
+                val.fail(-1, "method '" + m.name + "' has a bad parameter");
+        if (m.result >= 0 && p.symbols[m.result].kind == SymbolKind::Const)
+            val.fail(-1, "method '" + m.name + "' returns into a constant");
+    }
+    for (const Pipeline& pl : p.pipelines)
+        for (int m : pl.methods)
+            if (m < 0 || static_cast<std::size_t>(m) >= p.methods.size())
+                val.fail(-1, "a pipeline names a method the shader does not have");
+}
+
 bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
     const std::string& name = in.op.name;
     const int n = in.nargs();
@@ -134,8 +161,10 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
     }
     if (name == "illuminance") {
         b.ia = C_Illuminance;
+        // A co-shader's methods run on the points of the surface calling them.
         if (in.program.kind != ShaderKind::Surface &&
-            in.program.kind != ShaderKind::Volume) {
+            in.program.kind != ShaderKind::Volume &&
+            in.program.kind != ShaderKind::Shader) {
             why = "illuminance is only for surface and volume shaders";
             return false;
         }
@@ -158,7 +187,8 @@ bool bind_control(const BindInfo& in, BoundOp& b, std::string& why) {
         b.ia = C_Gather;
         if (in.program.kind != ShaderKind::Surface &&
             in.program.kind != ShaderKind::Light &&
-            in.program.kind != ShaderKind::Displacement) {
+            in.program.kind != ShaderKind::Displacement &&
+            in.program.kind != ShaderKind::Shader) {
             why = "gather is only for surface, light and displacement shaders";
             return false;
         }
@@ -264,6 +294,7 @@ std::shared_ptr<const BoundProgram> bind_program(std::shared_ptr<const Program> 
         if (sym.init_begin >= 0) val.walk(sym.init_begin, sym.init_end, 0, 0, false);
     }
     val.walk(p.body_begin, nops, 0, 0, false);
+    if (p.is_class()) validate_class(p, val);
 
     bp->ops.resize(nops);
     const BinderTable& table = binders();

@@ -71,6 +71,7 @@ const char* global_name(int g);
 
 struct Frame;
 struct BoundOp;
+struct Slot;
 using OpFn = void (*)(Frame&, const BoundOp&);
 
 /// The kinds of the control-flow ops: set by bind_program, run by Frame::run.
@@ -146,12 +147,19 @@ void register_lighting(BinderTable& t); // engine_lighting.cpp
 void register_texture(BinderTable& t);  // engine_texture.cpp
 void register_raytrace(BinderTable& t); // engine_raytrace.cpp
 void register_arrays(BinderTable& t);   // engine_arrays.cpp
+void register_coshader(BinderTable& t); // engine_coshader.cpp
 /// aref and aassign of a resizable array (engine_arrays.cpp): b.ia = the
 /// floats per element; the length is the array's at run time.
 void op_aref_resizable(Frame& f, const BoundOp& b);
 void op_aassign_resizable(Frame& f, const BoundOp& b);
 /// Empties the resizable arrays of a frame (a new batch).
 void reset_resizable(Frame& f);
+/// Sets the length of the resizable array in slot s (ef floats per element;
+/// first elements kept, new ones 0); errors name op b of frame f and `what`.
+void resize_array(Frame& f, const BoundOp& b, Slot& s, int ef, double length,
+                  const char* what);
+/// The current length of the resizable array in slot s.
+int resizable_length(const Frame& f, const Slot& s);
 /// environment("raytrace", ...) (engine_raytrace.cpp; engine_texture.cpp
 /// routes the name "raytrace" to it).
 void environment_raytrace(Frame& f, const BoundOp& b);
@@ -196,6 +204,9 @@ struct Frame {
     const Program* program = nullptr;
     std::size_t n = 0;
     bool is_light = false;
+    /// What the shader runs as: its kind, or for a class one of its
+    /// pipelines (a class's displacement method at displacement time).
+    ShaderKind kind = ShaderKind::Surface;
 
     std::vector<float> arena;
     std::vector<Slot> slots;
@@ -294,6 +305,20 @@ struct LightState {
     bool described = false;
 };
 
+/// A shader object a shader holds a handle to (RSL 2.0 `shader` values): a
+/// co-shader of the batch (`Shader` in the RIB) or one of its lights. The
+/// handle value k names ShadingContext::Impl::objects[k - 1]; 0 is null.
+struct ShaderObject {
+    const ShaderInstance* instance = nullptr;
+    int light = -1; ///< index into the batch's lights, or -1 for a co-shader
+    /// A co-shader's storage over the batch, set up (parameters, member
+    /// variables, construct() and begin()) when a method or getvar first
+    /// needs it, and kept for the batch: member variables keep their values
+    /// from one call to the next.
+    std::unique_ptr<Frame> frame;
+    bool busy = false; ///< running one of its methods
+};
+
 /// A "send:light:NAME" option of a running illuminance: light shaders run
 /// with their parameter NAME set to `value` (a slot of the surface frame).
 struct LightSend {
@@ -321,6 +346,12 @@ inline int array_element(Frame& f, const BoundOp& b, const Slot& idx, std::size_
 bool copy_parameter(Frame& f, const BoundOp& b, int k, const Frame& from,
                     const std::string& name);
 
+/// Whether a shader of categories `shader` (its `__category`, split) is
+/// selected by the category expression `cat` (comma-separated names, each
+/// required, any of them; a leading '-' excludes): illuminance, getlights,
+/// getshaders (engine_lighting.cpp).
+bool category_matches(const std::string& cat, const std::vector<std::string>& shader);
+
 } // namespace sss::detail
 
 namespace sss {
@@ -347,6 +378,10 @@ struct ShadingContext::Impl {
 
     ShadingBatch* batch = nullptr;
     LightList lights;
+    CoshaderList coshaders;
+    /// The shader objects handed out in this execute (engine_coshader.cpp);
+    /// a deque: a method running may hand out more while its own is in use.
+    std::deque<detail::ShaderObject> objects;
     detail::Frame main;
     std::vector<detail::LightState> light_states;
     /// The running illuminance's "send:light:" options (light() applies them).
@@ -374,7 +409,9 @@ struct ShadingContext::Impl {
     void setup_frame(detail::Frame& frame, const ShaderInstance& instance, std::size_t n);
     void load_surface_globals(detail::Frame& frame);
     void init_params(detail::Frame& frame, bool primvars);
-    /// Runs the body over the running mask already set.
+    /// Runs the body over the running mask already set: a classic shader's
+    /// body, or a class's member initialisers and the methods of its
+    /// pipeline for frame.kind.
     void run_body(detail::Frame& frame);
 
     /// The light results for point positions P (stride 0 or 3) under `mask`

@@ -60,9 +60,8 @@ namespace sss {
 
 using namespace detail;
 
-namespace {
-
-bool category_matches(const std::string& cat, const std::vector<std::string>& light) {
+bool detail::category_matches(const std::string& cat,
+                              const std::vector<std::string>& light) {
     if (cat.empty()) return true;
     bool any_positive = false, positive_hit = false;
     for (const std::string& term : split_words(cat)) {
@@ -78,6 +77,8 @@ bool category_matches(const std::string& cat, const std::vector<std::string>& li
     }
     return !any_positive || positive_hit;
 }
+
+namespace {
 
 void store3(const Slot* s, std::size_t i, const glm::vec3& v) {
     if (s) st3(s->at(i), v);
@@ -524,7 +525,7 @@ void op_lightsource(Frame& f, const BoundOp& b) {
 void op_surface_message(Frame& f, const BoundOp& b) {
     const Frame& surface = f.ctx->main;
     const bool found = f.is_light && surface.program &&
-                       surface.program->kind == ShaderKind::Surface &&
+                       surface.kind == ShaderKind::Surface &&
                        copy_parameter(f, b, 2, surface, f.str(b, 1, f.first_active()));
     set_result(f, b, found);
 }
