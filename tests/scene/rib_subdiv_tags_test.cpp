@@ -17,8 +17,10 @@
 
 namespace {
 
-const std::string kCage = "[4 4 4 4 4 4] [0 1 3 2 2 3 5 4 4 5 7 6 6 7 1 0 1 7 5 3 6 0 2 4] ";
-const std::string kP = " \"P\" [-1 -1 1 1 -1 1 -1 1 1 1 1 1 -1 1 -1 1 1 -1 -1 -1 -1 1 -1 -1]";
+const std::string kCage =
+    "[4 4 4 4 4 4] [0 1 3 2 2 3 5 4 4 5 7 6 6 7 1 0 1 7 5 3 6 0 2 4] ";
+const std::string kP =
+    " \"P\" [-1 -1 1 1 -1 1 -1 1 1 1 1 1 -1 1 -1 1 1 -1 -1 -1 -1 1 -1 -1]";
 
 sss::Scene read(const std::string& mesh, bool lenient = false) {
     sss::RibReadOptions o;
@@ -38,15 +40,16 @@ std::string error_of(const std::string& mesh) {
 } // namespace
 
 TEST(RibSubdivTags, KnownTagsAreKeptAndFaceVaryingOnesAccepted) {
-    const sss::Scene s = read("SubdivisionMesh \"catmull-clark\" " + kCage +
-                              "[\"interpolateboundary\" \"facevaryinginterpolateboundary\" "
-                              "\"crease\" \"hole\"] [1 0 1 0 2 1 1 0] [1 2 0 1 5] [2.5]" +
-                              kP);
+    const sss::Scene s =
+        read("SubdivisionMesh \"catmull-clark\" " + kCage +
+             "[\"interpolateboundary\" \"facevaryinginterpolateboundary\" "
+             "\"crease\" \"hole\"] [1 0 1 0 2 1 1 0] [1 2 0 1 5] [2.5]" +
+             kP);
     ASSERT_EQ(s.primitives.size(), 1u);
     const sss::Primitive& p = s.primitives[0];
     EXPECT_EQ(p.tags, (std::vector<std::string>{"interpolateboundary",
-                                                "facevaryinginterpolateboundary", "crease",
-                                                "hole"}));
+                                                "facevaryinginterpolateboundary",
+                                                "crease", "hole"}));
     EXPECT_EQ(p.tag_intargs, (std::vector<int>{1, 2, 0, 1, 5}));
     EXPECT_TRUE(s.warnings.empty());
 }
