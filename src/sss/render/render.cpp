@@ -199,6 +199,31 @@ void shader_aovs(ShadingContext& context, const std::vector<Aov>& aovs,
     }
 }
 
+/// A batch of m hit points of `prim` (triplets: each hit with its two
+/// neighbours), every per-point array sized.
+void start_batch(const Renderer& job, const Primitive& prim, std::size_t m, bool triplets,
+                 bool parametric, ShadingBatch& batch) {
+    batch = ShadingBatch{};
+    batch.size = m;
+    batch.layout = triplets ? BatchLayout::Triplets : BatchLayout::Points;
+    batch.oriented_derivatives = true;
+    batch.primitive = &prim;
+    batch.time = static_cast<float>(job.shutter_open);
+    for (auto* v : {&batch.P, &batch.N, &batch.Ng, &batch.I, &batch.dPdu, &batch.dPdv,
+                    &batch.Cs, &batch.Os})
+        v->resize(m);
+    // At hits the batch's u and v directions are one pixel step along the
+    // camera's x and y (dPdu, dPdv are those steps' footprints), so du = dv
+    // = 1 pixel: Du(x) is x's change per pixel.
+    batch.du.assign(m, 1.0f);
+    batch.dv.assign(m, 1.0f);
+    if (parametric)
+        for (auto* v : {&batch.u, &batch.v, &batch.s, &batch.t}) v->resize(m);
+    batch.dicing_area.resize(m);
+    batch.radius.resize(m);
+    if (job.motion_blur) batch.ray_time.resize(m);
+}
+
 /// Shades the hits of one pass, primitive by primitive in batches, and
 /// composites each into its sample (front to back).
 void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>& hits,
@@ -227,36 +252,9 @@ void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>&
         const bool triplets = job.derivatives[prim_index] != 0;
         const std::size_t r = triplets ? 3 : 1;
         const std::size_t m = n * r;
-        batch = ShadingBatch{};
-        batch.size = m;
-        batch.layout = triplets ? BatchLayout::Triplets : BatchLayout::Points;
-        batch.oriented_derivatives = true;
-        batch.primitive = &prim;
-        batch.time = static_cast<float>(job.shutter_open);
-        batch.P.resize(m);
-        batch.N.resize(m);
-        batch.Ng.resize(m);
-        batch.I.resize(m);
-        batch.dPdu.resize(m);
-        batch.dPdv.resize(m);
-        batch.Cs.resize(m);
-        batch.Os.resize(m);
-        // At hits the batch's u and v directions are one pixel step along
-        // the camera's x and y (dPdu, dPdv are those steps' footprints),
-        // so du = dv = 1 pixel: Du(x) is x's change per pixel.
-        batch.du.assign(m, 1.0f);
-        batch.dv.assign(m, 1.0f);
         const DicedSurface& diced = job.surfaces[prim_index].diced;
         const bool parametric = !diced.vertex_uvst.empty();
-        if (parametric) {
-            batch.u.resize(m);
-            batch.v.resize(m);
-            batch.s.resize(m);
-            batch.t.resize(m);
-        }
-        batch.dicing_area.resize(m);
-        batch.radius.resize(m);
-        if (job.motion_blur) batch.ray_time.resize(m);
+        start_batch(job, prim, m, triplets, parametric, batch);
         // Point i of the batch draws its samples from hash(seed, i): the
         // first hit's key fixes them for the batch (tiles are split into
         // batches the same way for any thread count).

@@ -353,6 +353,31 @@ private:
         }
     }
 
+    // gather cat P dir angle samples ("name" value)...: hit body [i+1, jump0),
+    // else body [jump0, jump1); only token values written.
+    int gather_op(int i, int end, int loops) {
+        const Op& op = m_p.ops[i];
+        const std::size_t na = op.args.size();
+        if (na < 5 || (na - 5) % 2 != 0)
+            fail(i, "wrong number of arguments for 'gather'");
+        if (!is(op.args[0], ShadingType::String) ||
+            !is_point_like(type(op.args[1]).type) || type(op.args[1]).is_array() ||
+            !is_point_like(type(op.args[2]).type) || type(op.args[2]).is_array() ||
+            !is(op.args[3], ShadingType::Float) || !is(op.args[4], ShadingType::Float))
+            fail(i, "bad argument types for 'gather'");
+        for (std::size_t k = 5; k < na; k += 2)
+            if (!is(op.args[k], ShadingType::String))
+                fail(i, "gather option names must be strings");
+        for (std::size_t k = 0; k < na && k < 64; ++k)
+            if (((op.writes >> k) & 1u) && (k < 5 || (k - 5) % 2 == 0))
+                fail(i, "bad write flags for 'gather'");
+        if (na < 64 && (op.writes >> na) != 0) fail(i, "bad write flags for 'gather'");
+        jumps(i, 2, end);
+        range(i + 1, op.jump[0], loops);
+        range(op.jump[0], op.jump[1], loops);
+        return op.jump[1];
+    }
+
     // Validates op i (and its parts); returns the index after it.
     int op(int i, int end, int loops) {
         const Op& op = m_p.ops[i];
@@ -379,31 +404,7 @@ private:
             range(op.jump[2], op.jump[3], loops);
             return op.jump[3];
         }
-        if (n == "gather") {
-            // gather cat P dir angle samples ("name" value)...: hit body
-            // [i+1, jump0), else body [jump0, jump1); only token values written.
-            const std::size_t na = op.args.size();
-            if (na < 5 || (na - 5) % 2 != 0)
-                fail(i, "wrong number of arguments for 'gather'");
-            if (!is(op.args[0], ShadingType::String) ||
-                !is_point_like(type(op.args[1]).type) || type(op.args[1]).is_array() ||
-                !is_point_like(type(op.args[2]).type) || type(op.args[2]).is_array() ||
-                !is(op.args[3], ShadingType::Float) ||
-                !is(op.args[4], ShadingType::Float))
-                fail(i, "bad argument types for 'gather'");
-            for (std::size_t k = 5; k < na; k += 2)
-                if (!is(op.args[k], ShadingType::String))
-                    fail(i, "gather option names must be strings");
-            for (std::size_t k = 0; k < na && k < 64; ++k)
-                if (((op.writes >> k) & 1u) && (k < 5 || (k - 5) % 2 == 0))
-                    fail(i, "bad write flags for 'gather'");
-            if (na < 64 && (op.writes >> na) != 0)
-                fail(i, "bad write flags for 'gather'");
-            jumps(i, 2, end);
-            range(i + 1, op.jump[0], loops);
-            range(op.jump[0], op.jump[1], loops);
-            return op.jump[1];
-        }
+        if (n == "gather") return gather_op(i, end, loops);
         if (n == "block" || n == "illuminance" || n == "illuminate" || n == "solar") {
             const std::size_t want = n == "block"         ? 0
                                      : n == "illuminance" ? 4
