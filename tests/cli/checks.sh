@@ -9,6 +9,18 @@ fail() {
     failures=$((failures + 1))
 }
 
+# no_warnings STDERR: no warning or error line in a tool's stderr (the
+# sanitizer build adds its own summaries there, e.g. of suppressed leaks in
+# OpenImageIO, so an empty stderr is too much to ask).
+no_warnings() { ! grep -qE "WARNING|ERROR" <<<"$1"; }
+
+# render_clean ARGS...: runs render (needs $bin); fails unless it exits 0
+# without a warning.
+render_clean() {
+    run "$bin/render" "$@"
+    [[ "$rc" == 0 ]] && no_warnings "$err" || fail "render $*: exit $rc, stderr: $err"
+}
+
 # expect_rc CODE LABEL: checks the last run's exit status.
 expect_rc() {
     if [[ "$rc" != "$1" ]]; then

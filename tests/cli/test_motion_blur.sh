@@ -15,17 +15,8 @@ trap 'rm -rf "$work"' EXIT
 cd "$work"
 # shellcheck source=lib.sh
 source "$here/lib.sh"
-
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-quiet() { ! grep -qE "WARNING|ERROR" <<<"$1"; }
-render_clean() {
-    run "$bin/render" "$@"
-    [[ "$rc" == 0 ]] && quiet "$err" || fail "render $*: exit $rc, stderr: $err"
-}
+# shellcheck source=checks.sh
+source "$here/checks.sh"
 # The mean alpha of a pixel (x, y) of an image.
 alpha_at() {
     oiiotool "$1" --ch A --crop "$2,$3,$(($2 + 1)),$(($3 + 1))" --printstats 2>/dev/null |
@@ -157,7 +148,7 @@ WorldEnd
 RIB
 } >bake.rib
 run "$bin/ptbake" bake.rib
-[[ "$rc" == 0 ]] && quiet "$err" || fail "ptbake: exit $rc, stderr: $err"
+[[ "$rc" == 0 ]] && no_warnings "$err" || fail "ptbake: exit $rc, stderr: $err"
 # Every point of the sphere around x = -0.5 (the transform at time 0.25).
 bounds="$("$bin/ptinfo" ball.ptc 2>&1 | grep -i 'bbox\|bound' | head -1)"
 python3 - "$bounds" <<'PY' || fail "baked bounds: $bounds"

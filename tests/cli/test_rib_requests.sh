@@ -13,12 +13,8 @@ trap 'rm -rf "$work"' EXIT
 cd "$work"
 # shellcheck source=lib.sh
 source "$here/lib.sh"
-
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
+# shellcheck source=checks.sh
+source "$here/checks.sh"
 
 # The mean of an image's alpha: the share of the frame something covers.
 coverage() {
@@ -30,14 +26,6 @@ expect_coverage() {
     c="$(coverage "$1")"
     python3 -c "import sys; c = float('$c' or 'nan'); sys.exit(0 if $2 <= c <= $3 else 1)" ||
         fail "$1: coverage $c not in [$2, $3]"
-}
-# Whether a tool's stderr has no warning or error line (the sanitizer build
-# adds its own summaries, e.g. of suppressed leaks in OpenImageIO).
-quiet() { ! grep -qE "WARNING|ERROR" <<<"$1"; }
-# Runs render on a scene; fails unless it exits 0 without a warning.
-render_clean() {
-    run "$bin/render" "$@"
-    [[ "$rc" == 0 ]] && quiet "$err" || fail "render $*: exit $rc, stderr: $err"
 }
 
 header() {
@@ -155,7 +143,7 @@ WorldBegin
 WorldEnd
 RIB
 run "$bin/ptbake" -progress 1 -spacing 0.02 bake_points.rib
-[[ "$rc" == 0 ]] && quiet "$err" || fail "ptbake points and curves: exit $rc, stderr: $err"
+[[ "$rc" == 0 ]] && no_warnings "$err" || fail "ptbake points and curves: exit $rc, stderr: $err"
 area="$(sed -n 's/.*wrote points.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")"
 python3 -c "import sys, math; a = float('$area' or 'nan'); sys.exit(0 if abs(a - (2 * math.pi * 0.0625 + 0.4)) < 0.01 else 1)" ||
     fail "points.ptc: total area $area, expected $(python3 -c 'import math; print(2 * math.pi * 0.0625 + 0.4)')"
@@ -169,7 +157,7 @@ WorldBegin
 WorldEnd
 RIB
 run "$bin/ptbake" -progress 1 -spacing 0.02 bake_blobby.rib
-[[ "$rc" == 0 && -s blobby.ptc ]] && quiet "$err" || fail "ptbake blobby: exit $rc, stderr: $err"
+[[ "$rc" == 0 && -s blobby.ptc ]] && no_warnings "$err" || fail "ptbake blobby: exit $rc, stderr: $err"
 area="$(sed -n 's/.*wrote blobby.ptc: .* area \([0-9.e+-]*\),.*/\1/p' <<<"$out")"
 python3 -c "import sys, math; a = float('$area' or 'nan'); e = 4 * math.pi * (1 - 0.5 ** (1 / 3)); sys.exit(0 if abs(a - e) < 0.01 * e else 1)" ||
     fail "blobby.ptc: total area $area, expected $(python3 -c 'import math; print(4 * math.pi * (1 - 0.5 ** (1 / 3)))')"

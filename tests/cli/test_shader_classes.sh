@@ -19,7 +19,8 @@ source "$here/lib.sh"
 source "$here/checks.sh"
 
 # Whether a tool's stderr has no warning or error line (the sanitizer build
-# adds its own summaries, e.g. of suppressed leaks).
+# adds its own summaries, e.g. of suppressed leaks). Stricter than checks.sh's
+# render_clean: the compiler's "warning:" lines count too.
 quiet() { ! grep -qE "WARNING|ERROR|warning:|error:" <<<"$1"; }
 render_clean() {
     run "$bin/render" "$@"

@@ -13,19 +13,9 @@ trap 'rm -rf "$work"' EXIT
 cd "$work"
 # shellcheck source=lib.sh
 source "$here/lib.sh"
+# shellcheck source=checks.sh
+source "$here/checks.sh"
 
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-# Whether a tool's stderr has no warning or error line (the sanitizer build
-# adds its own summaries, e.g. of suppressed leaks in OpenImageIO).
-quiet() { ! grep -qE "WARNING|ERROR" <<<"$1"; }
-render_clean() {
-    run "$bin/render" "$@"
-    [[ "$rc" == 0 ]] && quiet "$err" || fail "render $*: exit $rc, stderr: $err"
-}
 # The mean of channel $2 of image $1 over the w x h box at (x, y).
 box_mean() {
     oiiotool "$1" --cut "$4x$5+$2+$3" --ch "$6" --printstats 2>/dev/null |

@@ -447,6 +447,21 @@ private:
         return false;
     }
 
+    /// `s` as the function definition the tokens start.
+    StmtPtr function_statement(StmtPtr s) {
+        s->kind = StmtKind::Func;
+        s->func = function();
+        return s;
+    }
+
+    /// `s` as the variable declaration the tokens start, up to its ';'.
+    StmtPtr declaration_statement(StmtPtr s) {
+        s->kind = StmtKind::Decl;
+        s->decl = std::make_unique<VarDecl>(var_decl(false));
+        expect(";", "after the declaration");
+        return s;
+    }
+
     StmtPtr statement() {
         DepthGuard guard(*this);
         auto s = std::make_unique<Stmt>();
@@ -554,39 +569,19 @@ private:
             if (w == "extern" || w == "uniform" || w == "varying" || w == "output" ||
                 (is_type_word(w) &&
                  (peek(1).kind == TokKind::Ident || peek(1).kind == TokKind::String))) {
-                if ((is_type_word(w) && at_function_def()) || at_storage_function()) {
-                    s->kind = StmtKind::Func;
-                    s->func = function();
-                    return s;
-                }
-                s->kind = StmtKind::Decl;
-                s->decl = std::make_unique<VarDecl>(var_decl(false));
-                expect(";", "after the declaration");
-                return s;
+                if ((is_type_word(w) && at_function_def()) || at_storage_function())
+                    return function_statement(std::move(s));
+                return declaration_statement(std::move(s));
             }
-            if (w == "void") {
-                s->kind = StmtKind::Func;
-                s->func = function();
-                return s;
-            }
+            if (w == "void") return function_statement(std::move(s));
             if (w == "else") fail(t, "'else' without 'if'");
         }
         if (at_shader_type()) {
-            if (at_function_def()) {
-                s->kind = StmtKind::Func;
-                s->func = function();
-                return s;
-            }
-            s->kind = StmtKind::Decl;
-            s->decl = std::make_unique<VarDecl>(var_decl(false));
-            expect(";", "after the declaration");
-            return s;
+            if (at_function_def()) return function_statement(std::move(s));
+            return declaration_statement(std::move(s));
         }
-        if (t.kind == TokKind::Ident && at_function_def()) {
-            s->kind = StmtKind::Func;
-            s->func = function();
-            return s;
-        }
+        if (t.kind == TokKind::Ident && at_function_def())
+            return function_statement(std::move(s));
         s->kind = StmtKind::Expr;
         s->expr = expression();
         expect(";", "after the expression");

@@ -28,6 +28,33 @@ bool facevarying_tag(std::string_view tag) {
            tag == "facevaryingpropagatecorners";
 }
 
+/// The tags a mesh keeps, with their arguments (SubdivisionMesh's layout:
+/// two argument counts per tag).
+struct KeptTags {
+    std::vector<std::string> tags;
+    std::vector<int> nargs, ints;
+    std::vector<double> floats;
+
+    /// Keeps tag t of p, whose ti integers start at ni and tf floats at nf.
+    void keep(const Primitive& p, std::size_t t, std::size_t ni, std::size_t ti,
+              std::size_t nf, std::size_t tf) {
+        tags.push_back(p.tags[t]);
+        nargs.push_back(static_cast<int>(ti));
+        nargs.push_back(static_cast<int>(tf));
+        const auto ib = p.tag_intargs.begin() + static_cast<long>(ni);
+        ints.insert(ints.end(), ib, ib + static_cast<long>(ti));
+        const auto fb = p.tag_floatargs.begin() + static_cast<long>(nf);
+        floats.insert(floats.end(), fb, fb + static_cast<long>(tf));
+    }
+    /// Makes them p's tags.
+    void apply(Primitive& p) {
+        p.tags = std::move(tags);
+        p.tag_nargs = std::move(nargs);
+        p.tag_intargs = std::move(ints);
+        p.tag_floatargs = std::move(floats);
+    }
+};
+
 } // namespace
 
 void Reader::hierarchical_tags(const Statement& s, Primitive& p,
@@ -36,11 +63,8 @@ void Reader::hierarchical_tags(const Statement& s, Primitive& p,
         fail(s, "nargs must have 3 numbers per tag: " + std::to_string(p.tags.size()) +
                     " tags, " + std::to_string(p.tag_nargs.size()) + " numbers");
     // Hierarchical edits need the refined mesh's addressing: not implemented.
-    std::vector<int> nargs;
+    KeptTags kept;
     std::size_t ni = 0, nf = 0, ns = 0;
-    std::vector<std::string> tags;
-    std::vector<int> ints;
-    std::vector<double> floats;
     for (std::size_t t = 0; t < p.tags.size(); ++t) {
         const int ti = p.tag_nargs[3 * t], tf = p.tag_nargs[3 * t + 1],
                   ts = p.tag_nargs[3 * t + 2];
@@ -62,13 +86,8 @@ void Reader::hierarchical_tags(const Statement& s, Primitive& p,
                             "hierarchical edits (\"" + tag + "\") are not supported",
                             "the tag is left out");
         } else {
-            tags.push_back(tag);
-            nargs.push_back(ti);
-            nargs.push_back(tf);
-            ints.insert(ints.end(), p.tag_intargs.begin() + static_cast<long>(ni),
-                        p.tag_intargs.begin() + static_cast<long>(ni + ti));
-            floats.insert(floats.end(), p.tag_floatargs.begin() + static_cast<long>(nf),
-                          p.tag_floatargs.begin() + static_cast<long>(nf + tf));
+            kept.keep(p, t, ni, static_cast<std::size_t>(ti), nf,
+                      static_cast<std::size_t>(tf));
         }
         ni += static_cast<std::size_t>(ti);
         nf += static_cast<std::size_t>(tf);
@@ -77,17 +96,12 @@ void Reader::hierarchical_tags(const Statement& s, Primitive& p,
     if (ni != p.tag_intargs.size() || nf != p.tag_floatargs.size() ||
         ns != string_args.size())
         fail(s, "tag argument counts do not match intargs/floatargs/stringargs");
-    p.tags = std::move(tags);
-    p.tag_nargs = std::move(nargs);
-    p.tag_intargs = std::move(ints);
-    p.tag_floatargs = std::move(floats);
+    kept.apply(p);
 }
 
 void Reader::check_subdivision_tags(const Statement& s, Primitive& p) {
     if (p.tag_nargs.size() != 2 * p.tags.size()) return; // the caller's error
-    std::vector<std::string> tags;
-    std::vector<int> nargs, ints;
-    std::vector<double> floats;
+    KeptTags kept;
     std::size_t ni = 0, nf = 0;
     for (std::size_t t = 0; t < p.tags.size(); ++t) {
         const int ti = std::max(p.tag_nargs[2 * t], 0),
@@ -100,23 +114,14 @@ void Reader::check_subdivision_tags(const Statement& s, Primitive& p) {
             not_implemented("subdivision tag " + tag, s,
                             "subdivision tag \"" + tag + "\" is not supported",
                             "the tag is left out");
-        if (keep) {
-            tags.push_back(tag);
-            nargs.push_back(ti);
-            nargs.push_back(tf);
-            ints.insert(ints.end(), p.tag_intargs.begin() + static_cast<long>(ni),
-                        p.tag_intargs.begin() + static_cast<long>(ni + ti));
-            floats.insert(floats.end(), p.tag_floatargs.begin() + static_cast<long>(nf),
-                          p.tag_floatargs.begin() + static_cast<long>(nf + tf));
-        }
+        if (keep)
+            kept.keep(p, t, ni, static_cast<std::size_t>(ti), nf,
+                      static_cast<std::size_t>(tf));
         ni += static_cast<std::size_t>(ti);
         nf += static_cast<std::size_t>(tf);
     }
     if (ni != p.tag_intargs.size() || nf != p.tag_floatargs.size()) return;
-    p.tags = std::move(tags);
-    p.tag_nargs = std::move(nargs);
-    p.tag_intargs = std::move(ints);
-    p.tag_floatargs = std::move(floats);
+    kept.apply(p);
 }
 
 } // namespace sss::rib
