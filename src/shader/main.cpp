@@ -3,6 +3,7 @@
 /// files, as PRMan's `shader` does: the C preprocessor first (-I, -D, -U),
 /// then one `<shadername>.slo` per shader in the current folder.
 
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -28,10 +29,15 @@ written to <shadername>.slo in the current folder (named after the shader,
 not the file). Errors are printed as file:line:column with the source line.
 
 options:
-  -o file.slo    output file (one input file defining one shader)
+  -o file.slo    output file (one input file defining one shader); -o -src
+                 names each .slo after its source file (a.sl -> a.slo),
+                 -o -shader after the shader (the default)
   -I dir         add dir to the #include search path (also -Idir)
   -D name[=val]  define a macro (val defaults to 1; also -Dname[=val])
   -U name        undefine a macro (also -Uname)
+  -C             keep comments in the preprocessor's output (as cpp -C);
+                 the .slo is the same
+  -nosd          accepted, as PRMan's shader takes it; the .slo is the same
   -q             quiet: no progress lines, no warnings
   -h, --help     this help
   --version      version information
@@ -126,20 +132,30 @@ int run(const std::vector<std::string>& args) {
         if (sss::standard_option(kTool, opt, kUsage)) {
             return 0;
         } else if (opt == "o") {
-            output = scan.value(opt);
+            // PRMan's special names look like options.
+            const std::string& next = scan.peek();
+            output =
+                next == "-src" || next == "-shader" ? scan.positional() : scan.value(opt);
         } else if (opt == "q") {
             quiet = true;
+        } else if (opt == "C" || opt == "nosd") {
+            // Options of PRMan's compiler that change nothing written here:
+            // scripts that pass them compile unchanged.
         } else if (opt[0] == 'I') {
-            options.include_dirs.push_back(attached_or_next(scan, "I" + opt.substr(1)));
+            options.include_dirs.push_back(attached_or_next(scan, opt));
         } else if (opt[0] == 'D') {
-            add_define(options, attached_or_next(scan, "D" + opt.substr(1)));
+            add_define(options, attached_or_next(scan, opt));
         } else if (opt[0] == 'U') {
-            options.undefines.push_back(attached_or_next(scan, "U" + opt.substr(1)));
+            options.undefines.push_back(attached_or_next(scan, opt));
         } else {
             throw sss::UsageError("unknown option -" + opt);
         }
     }
     if (files.empty()) throw sss::UsageError("missing input file");
+    // PRMan's special output names: -shader is the default naming, -src
+    // names each .slo after its source.
+    const bool by_source = output == "-src";
+    if (output == "-shader" || by_source) output.clear();
     if (!output.empty() && files.size() > 1)
         throw sss::UsageError("-o names one output: give one input file");
 
@@ -147,7 +163,8 @@ int run(const std::vector<std::string>& args) {
     std::vector<std::string> failed;
     std::vector<Compiled> compiled;
     for (const std::string& file : files) {
-        const std::string what = compile_one(file, options, output, quiet, compiled);
+        const std::string what =
+            compile_one(file, options, by_source ? "-o -src" : output, quiet, compiled);
         if (!what.empty()) failed.push_back(what);
     }
     if (!failed.empty()) {
@@ -163,9 +180,13 @@ int run(const std::vector<std::string>& args) {
                                            c.read[i] + "\"" +
                                            (i == 0 ? "" : " included by " + c.file));
     std::vector<std::pair<std::string, const sss::Program*>> writes;
+    auto slo_path = [&](const Compiled& c, const sss::Program& p) {
+        if (by_source) return std::filesystem::path(c.file).stem().string() + ".slo";
+        return output.empty() ? p.name + ".slo" : output;
+    };
     for (const Compiled& c : compiled)
         for (const sss::Program& p : c.shaders) {
-            const std::string path = output.empty() ? p.name + ".slo" : output;
+            const std::string path = slo_path(c, p);
             job_files.output(path, output.empty() ? "\"" + path + "\" (shader " + p.name +
                                                         " of " + c.file + ")"
                                                   : "option -o \"" + path + "\"");
@@ -183,8 +204,7 @@ int run(const std::vector<std::string>& args) {
         for (const Compiled& c : compiled)
             for (const sss::Program& p : c.shaders)
                 std::cout << c.file << ": " << sss::shader_kind_name(p.kind) << " "
-                          << p.name << " -> "
-                          << (output.empty() ? p.name + ".slo" : output) << "\n";
+                          << p.name << " -> " << slo_path(c, p) << "\n";
     sss::flush_standard_output();
     outputs.commit();
     return 0;

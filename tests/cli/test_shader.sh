@@ -126,6 +126,20 @@ rc=$(run_status out.txt err.txt "$shader" -o x.slo a.sl b.sl)
 rc=$(run_status out.txt err.txt "$shader" -I)
 [[ "$rc" = 2 ]] || fail "-I without a value exit $rc"
 
+# --- PRMan's options that scripts pass: -C, -nosd, -o -src / -shader ---------
+cat >glow.sl <<'SL'
+/* a comment the preprocessor keeps with -C */
+surface glowing(float Kd = 1) { Ci = Kd * Cs; Oi = Os; }
+SL
+rc=$(run_status out.txt err.txt "$shader" -C -nosd glow.sl)
+[[ "$rc" = 0 && -s glowing.slo ]] || fail "-C -nosd: exit $rc, $(cat err.txt)"
+mv glowing.slo glowing_c.slo
+rc=$(run_status out.txt err.txt "$shader" -o -src glow.sl)
+[[ "$rc" = 0 && -s glow.slo && ! -e glowing.slo ]] || fail "-o -src: exit $rc, $(cat err.txt)"
+cmp -s glow.slo glowing_c.slo || fail "-o -src and -C -nosd give different .slo files"
+rc=$(run_status out.txt err.txt "$shader" -o -shader glow.sl)
+[[ "$rc" = 0 && -s glowing.slo ]] || fail "-o -shader: exit $rc, $(cat err.txt)"
+
 # --- help and version on stdout, exit 0 -------------------------------------
 "$shader" --help | grep -q "^usage: shader" || fail "--help"
 "$shader" --version | grep -q "^shader (sss)" || fail "--version"

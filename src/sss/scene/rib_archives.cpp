@@ -261,7 +261,7 @@ void Reader::do_read_archive(const Statement& s) {
 void Reader::do_procedural(const Statement& s) {
     std::size_t i = 0;
     std::string kind = take_string(s, i, "procedural name");
-    if (kind != "DelayedReadArchive" && kind != "RunProgram") {
+    if (kind != "DelayedReadArchive" && kind != "RunProgram" && kind != "DynamicLoad") {
         not_implemented("procedural " + kind, s,
                         "Procedural " + sss::quoted(kind) + " is not supported",
                         "skipped");
@@ -272,13 +272,16 @@ void Reader::do_procedural(const Statement& s) {
     no_more_args(s, i);
     if (kind == "DelayedReadArchive" && args.size() != 1)
         fail(s, "DelayedReadArchive needs exactly one file name");
-    if (kind == "RunProgram" && args.size() != 2)
-        fail(s, "RunProgram needs two strings: the program and its data");
+    if (kind != "DelayedReadArchive" && args.size() != 2)
+        fail(s, kind + " needs two strings: the " +
+                    (kind == "RunProgram" ? "program" : "DSO") + " and its data");
     if (bound.size() != 6) fail(s, "bound must have 6 numbers");
     // A procedural runs in a copy of the graphics state.
     push(s, Block::Attribute);
     if (kind == "RunProgram")
         run_program(s, args[0], args[1], bound);
+    else if (kind == "DynamicLoad")
+        dynamic_load(s, args[0], args[1], bound);
     else
         read_archive(s, args[0]);
     SavedState saved = pop(s, Block::Attribute);

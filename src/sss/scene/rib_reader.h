@@ -14,6 +14,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "ri_context.h"
 #include "rib_lexer.h"
 #include "rib_params.h"
 #include "sss/scene/blobby.h"
@@ -70,6 +71,21 @@ public:
     void read_text(std::string_view text, const std::string& path);
     /// The scene read, after the checks at the end of the file.
     Scene finish(const std::string& path);
+
+    // --- rib_dynamic_load.cpp: what the Ri C binding's calls reach -------------
+
+    /// Carries out a statement an Ri call made.
+    void ri_execute(const Statement& s) { execute(s); }
+    /// What a parameter name is declared as (Declare or the predeclared
+    /// names); nullptr when it is not.
+    const Decl* declared(const std::string& name) const;
+    /// The step of the current u basis (v: of the v basis).
+    int basis_step(bool v) const;
+    /// RiProcedural with a subdivide function of the DSO's own: run at once,
+    /// in a copy of the graphics state, asked for the detail of its bound;
+    /// then its free function (always, if there is one).
+    void ri_procedural(const Statement& s, void* data, const double bound[6],
+                       void (*subdivide)(void*, float), void (*free_data)(void*));
 
 private:
     using Handler = void (Reader::*)(const Statement&);
@@ -132,6 +148,11 @@ private:
     /// Procedural "RunProgram": runs the program and reads the RIB it answers.
     void run_program(const Statement& s, const std::string& command,
                      const std::string& data, const std::vector<double>& bound);
+    /// Procedural "DynamicLoad": loads the DSO (once per read), converts its
+    /// parameter string and runs its Subdivide, whose Ri calls are carried
+    /// out as they come (rib_dynamic_load.cpp).
+    void dynamic_load(const Statement& s, const std::string& dso, const std::string& data,
+                      const std::vector<double>& bound);
     /// The raster area a bound (current object space) covers: the detail
     /// a procedural is asked for.
     double raster_area(const std::vector<double>& bound) const;
@@ -357,6 +378,10 @@ private:
     int m_record_line = 0;
     std::shared_ptr<const std::string> m_record_file;
     std::vector<Statement> m_record;
+    // DynamicLoad: the DSOs loaded (by file key; closed with the reader) and
+    // the Ri calls' context.
+    std::map<std::string, std::shared_ptr<void>> m_dsos;
+    std::unique_ptr<RiContext> m_ri;
 };
 
 } // namespace sss::rib
