@@ -79,6 +79,33 @@ TEST(ObjImport, UnsupportedStatementsWarnOnceAndGroupingIsSilent) {
                   "earlier", "w.obj:10: unsupported OBJ statement 'cstype', skipped"}));
 }
 
+TEST(ObjImport, RepeatedCornersAndOutlinesAreDroppedDegenerateFacesLeftOut) {
+    std::vector<std::string> warnings;
+    // A square walked 2000 times in one face, a triangle with a corner
+    // repeated (and its last corner on its first), and a face of two
+    // distinct corners.
+    std::string square = "f";
+    for (int k = 0; k < 2000; ++k) square += " 1//1 2//1 3//1 4//1";
+    auto mesh = import_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n" + square +
+                               "\nf 1//1 2//1 2//1 3//1 1//1\nf 1//1 2//1 1//1 2//1\n",
+                           "r.obj", warnings);
+    ASSERT_TRUE(mesh);
+    const sss::Primitive& p = mesh->primitive;
+    EXPECT_EQ(p.nverts, (std::vector<int>{4, 3}));
+    EXPECT_EQ(p.verts, (std::vector<int>{0, 1, 2, 3, 0, 1, 2}));
+    EXPECT_EQ(p.params.find("N")->element_count(), 7u);
+    EXPECT_EQ(warnings,
+              (std::vector<std::string>{
+                  "r.obj: 1 face with fewer than 3 distinct corners left out"}));
+    // A face that only looks periodic is kept whole.
+    warnings.clear();
+    auto kept = import_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 1 2 4\n", "k.obj",
+                           warnings);
+    ASSERT_TRUE(kept);
+    EXPECT_EQ(kept->primitive.nverts, (std::vector<int>{6}));
+    EXPECT_TRUE(warnings.empty());
+}
+
 TEST(ObjImport, NoFaces) {
     std::vector<std::string> warnings;
     EXPECT_FALSE(import_obj("v 0 0 0\n", "e.obj", warnings));

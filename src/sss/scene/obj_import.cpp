@@ -34,6 +34,10 @@ public:
             m_key = std::string(words[0]);
             statement(words);
         }
+        if (m_degenerate_faces > 0)
+            m_warnings.push_back(m_path + ": " + std::to_string(m_degenerate_faces) +
+                                 (m_degenerate_faces == 1 ? " face" : " faces") +
+                                 " with fewer than 3 distinct corners left out");
         if (m_nverts.empty()) {
             m_warnings.push_back(m_path + ": no faces, nothing imported");
             return std::nullopt;
@@ -167,7 +171,43 @@ private:
             if (normal < 0) m_all_normals = false;
             m_corner_normals.push_back(normal);
         }
-        m_nverts.push_back(static_cast<int>(words.size() - 1));
+        const std::size_t kept = clean_face(m_verts.size() - (words.size() - 1));
+        if (kept >= 3)
+            m_nverts.push_back(static_cast<int>(kept));
+        else
+            ++m_degenerate_faces;
+    }
+
+    /// Drops what a face (its corners from `first` on) repeats: a corner on
+    /// the same vertex as the one before it (the last one's too, against
+    /// the first), and the whole outline walked again, which would count
+    /// its area once per walk. Returns how many corners are kept (fewer
+    /// than 3: none, the face has no area).
+    std::size_t clean_face(std::size_t first) {
+        std::size_t n = first;
+        for (std::size_t k = first; k < m_verts.size(); ++k)
+            if (n == first || m_verts[k] != m_verts[n - 1]) {
+                m_verts[n] = m_verts[k];
+                m_corner_normals[n] = m_corner_normals[k];
+                ++n;
+            }
+        while (n - first > 1 && m_verts[n - 1] == m_verts[first]) --n;
+        std::size_t count = n - first;
+        // The shortest period that repeats to the whole outline.
+        for (std::size_t period = 1; period <= count / 2; ++period) {
+            if (count % period) continue;
+            bool repeats = true;
+            for (std::size_t k = period; k < count && repeats; ++k)
+                repeats = m_verts[first + k] == m_verts[first + k % period];
+            if (repeats) {
+                count = period;
+                break;
+            }
+        }
+        if (count < 3) count = 0;
+        m_verts.resize(first + count);
+        m_corner_normals.resize(first + count);
+        return count;
     }
 
     ObjMesh mesh() {
@@ -213,6 +253,7 @@ private:
     std::vector<int> m_nverts, m_verts, m_corner_normals;
     bool m_all_normals = true;
     int m_first_face_line = 0;
+    std::size_t m_degenerate_faces = 0;
     std::set<std::string> m_warned;
 };
 
