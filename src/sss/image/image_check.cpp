@@ -117,7 +117,9 @@ private:
     /// The chunk's data into `data` when it is kept, else skipped; CRC'd.
     void read_data(uint32_t length, std::vector<unsigned char>& data, uLong& crc) {
         if (!data.empty() || length == 0) {
-            if (length) read(data.data(), length);
+            // (zlib's crc32 of a null buffer is its initial value, not crc.)
+            if (length == 0) return;
+            read(data.data(), length);
             crc = crc32(crc, data.data(), uInt(data.size()));
             return;
         }

@@ -49,9 +49,40 @@ float clamp_option(float x, float hi) {
     return std::clamp(finite_or_zero(x), 0.0f, hi);
 }
 
-/// A derivative times its width, finite and at most kMaxFootprint either way.
-float footprint(float derivative, float width) {
-    return std::clamp(finite_or_zero(derivative * width), -kMaxFootprint, kMaxFootprint);
+/// A footprint axis (ds, dt along x or y) times the widths, finite and at
+/// most kMaxFootprint long: scaled as a whole (clamping each component
+/// would turn a wide ellipse into a line, on which OpenImageIO's blur
+/// asserts).
+void footprint_axis(float ds, float dt, float swidth, float twidth, float& s, float& t) {
+    s = finite_or_zero(ds * swidth);
+    t = finite_or_zero(dt * twidth);
+    const float len = std::hypot(s, t);
+    if (!std::isfinite(len)) {
+        s = t = 0.0f;
+    } else if (len > kMaxFootprint) {
+        s *= kMaxFootprint / len;
+        t *= kMaxFootprint / len;
+    }
+}
+
+/// Gives a footprint that is a line (its axes parallel, or one of them zero)
+/// a width of a thousandth of its length: OpenImageIO's blur asserts on an
+/// ellipse without area. Only with blur; a point (both axes zero) is fine.
+void widen_line(float& dsdx, float& dtdx, float& dsdy, float& dtdy) {
+    const float lx = std::hypot(dsdx, dtdx), ly = std::hypot(dsdy, dtdy);
+    const float major = std::max(lx, ly);
+    if (!(major > 0.0f)) return;
+    if (std::abs(dsdx * dtdy - dtdx * dsdy) > 1e-3f * major * major) return;
+    // The minor axis: perpendicular to the major one.
+    const float ms = lx >= ly ? dsdx : dsdy, mt = lx >= ly ? dtdx : dtdy;
+    const float ps = -mt * 1e-3f, pt = ms * 1e-3f;
+    if (lx >= ly) {
+        dsdy = ps;
+        dtdy = pt;
+    } else {
+        dsdx = ps;
+        dtdx = pt;
+    }
 }
 
 /// A direction's derivative, finite and at most kMaxFootprint times as long
@@ -357,6 +388,7 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
     // The widths applied here, so that each footprint is bounded.
     const float sw = opt.swidth, tw = opt.twidth;
     opt.swidth = opt.twidth = 1.0f;
+    const bool blur = opt.sblur > 0.0f || opt.tblur > 0.0f;
     bool ok = true;
     for (std::size_t i = 0; i < count; ++i) {
         if (mask && !mask[i]) continue;
@@ -366,10 +398,12 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
             std::fill(result, result + nchannels, 0.0f);
             continue;
         }
-        const float dsdx = ds_du ? footprint(ds_du[i], sw) : 0.0f;
-        const float dtdx = dt_du ? footprint(dt_du[i], tw) : 0.0f;
-        const float dsdy = ds_dv ? footprint(ds_dv[i], sw) : 0.0f;
-        const float dtdy = dt_dv ? footprint(dt_dv[i], tw) : 0.0f;
+        float dsdx, dtdx, dsdy, dtdy;
+        footprint_axis(ds_du ? ds_du[i] : 0.0f, dt_du ? dt_du[i] : 0.0f, sw, tw, dsdx,
+                       dtdx);
+        footprint_axis(ds_dv ? ds_dv[i] : 0.0f, dt_dv ? dt_dv[i] : 0.0f, sw, tw, dsdy,
+                       dtdy);
+        if (blur) widen_line(dsdx, dtdx, dsdy, dtdy);
         ok &= ts->texture(tex->handle, pt, opt, si, ti, dsdx, dtdx, dsdy, dtdy, read,
                           result);
         if (replicate) result[1] = result[2] = result[0];
