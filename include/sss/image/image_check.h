@@ -35,8 +35,9 @@ constexpr long long kMaxImageTiles = 1LL << 24;
 /// - every header's width and height are held against SSS_LIMIT_IMAGE_SIDE and
 ///   SSS_LIMIT_IMAGE_PIXELS (LimitError), its channels against
 ///   kMaxImageChannels and its tiles against kMaxImageTiles (FormatError).
-/// Returns the header, or nothing when OpenImageIO cannot read it (the
-/// caller's reader then reports the file in its own words).
+/// Returns the header, or nothing when OpenImageIO cannot read it or `path`
+/// is not a regular file (never opened: a FIFO would block); the caller's
+/// reader then reports the file in its own words.
 std::optional<ImageHeader> check_image_file(const std::string& path);
 
 } // namespace sss

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <vector>
@@ -239,6 +240,9 @@ private:
 } // namespace
 
 std::optional<ImageHeader> check_image_file(const std::string& path) {
+    // A FIFO or device would block or never end: the caller's reader refuses it.
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
     {
         std::ifstream in(path, std::ios::binary);
         unsigned char sig[8] = {};
