@@ -3,6 +3,7 @@
 /// by Debevec's median cut (sss/light/light_dome.h), or (-sky) a procedural
 /// sky probe written as OpenEXR. docs/lighting.md.
 
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <optional>
@@ -10,10 +11,12 @@
 #include <vector>
 
 #include "sss/cli/tool.h"
+#include "sss/image/image_check.h"
 #include "sss/light/light_dome.h"
 #include "sss/render/image_io.h"
 #include "sss/util/error.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 
 namespace {
 
@@ -52,8 +55,21 @@ options:
 Exit codes: 0 ok, 1 unreadable probe or unwritable output, 2 bad command line.
 )";
 
+/// What -sky holds per pixel at its peak: the sky (moved into the image
+/// written) and the writer's float copy, 12 bytes each, and room for the
+/// OpenEXR writer's buffers.
+constexpr uint64_t kSkyBytesPerPixel = 32;
+/// What the median cut holds per pixel of a probe besides the image read
+/// (which read_image() checks): the RGB copy (12), energy (8), directions (24).
+constexpr uint64_t kCutBytesPerPixel = 44;
+
 /// The probe as a float RGB lat-long image (one channel: grey).
 sss::LatLongImage load_probe(const std::string& path) {
+    if (const std::optional<sss::ImageHeader> h = sss::check_image_file(path))
+        sss::check_memory(uint64_t(h->width) * uint64_t(h->height) * kCutBytesPerPixel,
+                          "placing lights on the " + std::to_string(h->width) + " x " +
+                              std::to_string(h->height) + " probe " + path,
+                          "use a smaller probe");
     const sss::Image img = sss::read_image(path);
     if (img.height <= 0 || img.width != 2 * img.height)
         throw sss::FormatError(
@@ -167,10 +183,17 @@ int run(const std::vector<std::string>& args) {
         if (!files.empty())
             throw sss::UsageError("-sky takes no probe, only an output file");
         sss::ScopedStage stage("making the sky " + output);
-        const sss::LatLongImage img = sss::sky_probe(sky_w, sky_h, sky_opt);
+        // The sky, the image it moves into and the float copy the writer
+        // makes: 12 bytes a pixel each.
+        sss::check_memory(uint64_t(sky_w) * uint64_t(sky_h) * kSkyBytesPerPixel,
+                          "a " + std::to_string(sky_w) + " x " + std::to_string(sky_h) +
+                              " sky",
+                          "make a smaller sky (-sky W H)");
+        sss::LatLongImage img = sss::sky_probe(sky_w, sky_h, sky_opt);
+        const glm::dvec3 integral = sss::latlong_integral(img);
         job.progress()->update(1, 2);
         sss::Image out(sky_w, sky_h, {"R", "G", "B"});
-        out.pixels = img.rgb;
+        out.pixels = std::move(img.rgb);
         sss::DisplayTarget target;
         target.path = output;
         target.format = "openexr";
@@ -182,11 +205,9 @@ int run(const std::vector<std::string>& args) {
         meta.command_line = sss::quoted_command_line(kTool, args);
         sss::write_display(out, target, meta);
         job.progress()->finish();
-        if (job.verbose()) {
-            const glm::dvec3 e = sss::latlong_integral(img);
+        if (job.verbose())
             std::printf("envdome: %s: sky %d x %d, integral %.6g %.6g %.6g\n",
-                        output.c_str(), sky_w, sky_h, e.x, e.y, e.z);
-        }
+                        output.c_str(), sky_w, sky_h, integral.x, integral.y, integral.z);
         return 0;
     }
 

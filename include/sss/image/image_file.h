@@ -3,12 +3,18 @@
 /// Module image: writing image files through OpenImageIO, for every module
 /// that makes pictures (brick's brickinfo pictures, view's ptview pictures,
 /// render's displays), and the sRGB transfer curve they share.
-/// May use: util (OpenImageIO privately).
+/// May use: util (OpenImageIO and zlib privately).
 ///
 /// One writer: the file is written to a temporary beside the target and
 /// renamed when complete (AtomicOutput), the OpenImageIO writer is chosen by
 /// format name (the temporary's name does not end in the format's
-/// extension), and every failure is an IoError naming the file.
+/// extension), and every failure is an IoError naming the file. The writer
+/// writes through a checked file (OpenImageIO's I/O proxy), never through its
+/// own FILE: a write that fails part way (a full disk, a quota, an I/O error)
+/// is reported after close() and the temporary removed, whatever the format
+/// (libjpeg, which calls exit() on a failed write, never sees one), and the
+/// temporary's size is checked against what the writer wrote before it is
+/// renamed.
 
 #include <array>
 #include <string>
@@ -45,7 +51,9 @@ struct ImageFileSpec {
 
 /// Writes `pixels` (width x height x channels values of type `data`,
 /// interleaved, rows top to bottom) to `path` as `spec` says, atomically.
-/// Throws IoError (no writer for the format, or the write failed).
+/// Throws IoError (no writer for the format, a JPEG image wider or higher
+/// than 65500 pixels, or the write failed: "cannot write PNG: No space left
+/// on device").
 void write_image_file(const std::string& path, const ImageFileSpec& spec, PixelType data,
                       const void* pixels);
 

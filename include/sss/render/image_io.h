@@ -119,6 +119,11 @@ std::string display_format(const DisplaySpec& display);
 DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
                               bool primary, const DisplayDefaults& defaults = {});
 
+/// Throws ValueError, naming the Display, when its format cannot hold a
+/// width x height image (JPEG: at most 65500 pixels a side, libjpeg's bound).
+void check_display_size(const DisplaySpec& display, const DisplayTarget& target,
+                        int width, int height);
+
 /// The dither number r in [-1, 1) of pixel (x, y), channel k of a file: a
 /// hash of the three, the same for every run and thread count.
 double dither_noise(int x, int y, int k);

@@ -40,6 +40,7 @@ std::shared_ptr<const ShadowMap> TextureLibrary::shadow_map(const std::string& n
         entry = slot;
     }
     std::call_once(entry->once, [&] {
+        if (!m_impl->image_ok(file, &entry->error)) return;
         detail::Texture2dBackend* b = m_impl->textures(&entry->error);
         detail::DepthMapData data;
         if (!b || !b->read_depth_map(file, data, &entry->error)) {

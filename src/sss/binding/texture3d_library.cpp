@@ -226,6 +226,7 @@ void TextureLibrary::invalidate(const std::string& file) {
         // Calls in flight keep their entries (shared_ptr) until they finish.
         m_impl->files3d.erase(file);
         m_impl->shadow_maps.erase(file);
+        m_impl->checked.erase(file);
     }
     // The 2-D side only when the plugin is loaded: nothing else cached it.
     if (Texture2dBackend* b = m_impl->loaded.load(std::memory_order_acquire))

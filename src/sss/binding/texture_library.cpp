@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <dlfcn.h>
 
+#include "sss/image/image_check.h"
 #include "sss/scene/scene.h"
 #include "sss/util/install_layout.h"
 #include "sss/util/job_files.h"
@@ -95,6 +96,30 @@ std::string TextureLibrary::Impl::resolve(const std::string& file, bool* missing
     return *where;
 }
 
+bool TextureLibrary::Impl::image_ok(const std::string& file, std::string* error) {
+    std::shared_ptr<detail::CheckedImage> entry;
+    {
+        std::lock_guard lock(mutex);
+        auto& slot = checked[file];
+        if (!slot) slot = std::make_shared<detail::CheckedImage>();
+        entry = slot;
+    }
+    std::call_once(entry->once, [&] {
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(file, ec)) return; // the plugin says why
+        try {
+            (void)check_image_file(file);
+        } catch (const Error& e) {
+            entry->error = e.what();
+        } catch (const std::bad_alloc&) {
+            entry->error = file + ": out of memory while checking the image";
+        }
+    });
+    if (entry->error.empty()) return true;
+    if (error) *error = entry->error;
+    return false;
+}
+
 std::string TextureLibrary::Impl::path_note() const {
     return " (not found along the texture search path \"" +
            search_path_text(search_path) + "\", relative to the working folder)";
@@ -116,6 +141,7 @@ bool TextureLibrary::texture(const std::string& name, int channel, int nchannels
     bool missing = false;
     const std::string file = m_impl->resolve(name, &missing);
     if (!readable_by_job(file, "a texture lookup", error)) return false;
+    if (!m_impl->image_ok(file, error)) return false;
     Texture2dBackend* b = m_impl->textures(error);
     const bool ok = b && b->texture(file, channel, nchannels, options, count, s, t, ds_du,
                                     dt_du, ds_dv, dt_dv, mask, out, error);
@@ -160,6 +186,7 @@ bool TextureLibrary::environment(const std::string& name, int channel, int nchan
     bool missing = false;
     const std::string file = m_impl->resolve(name, &missing);
     if (!readable_by_job(file, "an environment lookup", error)) return false;
+    if (!m_impl->image_ok(file, error)) return false;
     Texture2dBackend* b = m_impl->textures(error);
     const bool ok = b && b->environment(file, channel, nchannels, options, count, dir,
                                         ddir_du, ddir_dv, mask, out, error);
@@ -173,6 +200,7 @@ bool TextureLibrary::texture_info(const std::string& name, const std::string& ke
     bool missing = false;
     const std::string file = m_impl->resolve(name, &missing);
     if (!readable_by_job(file, "a textureinfo lookup", nullptr)) return false;
+    if (!m_impl->image_ok(file, nullptr)) return false;
     Texture2dBackend* b = m_impl->textures(nullptr);
     return b && b->texture_info(file, key, expected_floats, numbers, text);
 }

@@ -56,6 +56,13 @@ struct Texture3dFile {
 
 class Texture2dBackend; // texture2d_backend.h
 
+/// A 2-D image file's check (check_image_file), made once before the plugin
+/// opens it.
+struct CheckedImage {
+    std::once_flag once;
+    std::string error; ///< "file: reason" when it is refused
+};
+
 /// A depth map (zfile or shadow map), read once.
 struct ShadowMapFile {
     std::once_flag once;
@@ -82,6 +89,13 @@ struct TextureLibrary::Impl {
     std::unordered_map<std::string, std::shared_ptr<detail::ShadowMapFile>> shadow_maps;
 
     std::shared_ptr<detail::Texture3dFile> open3d(const std::string& file);
+    /// 2-D image files by resolved name, checked once; guarded by mutex.
+    std::unordered_map<std::string, std::shared_ptr<detail::CheckedImage>> checked;
+    /// Whether `file` passed check_image_file() (false with *error: the
+    /// reason, the file named): a texture, environment or depth map is
+    /// checked before OpenImageIO reads it. A missing file passes (the
+    /// plugin names it).
+    bool image_ok(const std::string& file, std::string* error);
 
     std::vector<std::string> search_path;
     std::unordered_map<std::string, std::string> found; ///< by name; guarded by mutex

@@ -16,12 +16,14 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string_view>
 
 #include <OpenImageIO/imageio.h>
 
+#include "sss/image/image_check.h"
 #include "sss/image/image_file.h"
 #include "sss/light/shadow_map.h"
 #include "sss/util/atomic_output.h"
@@ -29,6 +31,7 @@
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 
@@ -396,6 +399,18 @@ DisplayTarget resolve_display(const DisplaySpec& display, const Image& image,
     return target;
 }
 
+void check_display_size(const DisplaySpec& display, const DisplayTarget& target,
+                        int width, int height) {
+    constexpr int kJpegMaxSide = 65500;
+    if (target.format != "jpeg" || std::max(width, height) <= kJpegMaxSide) return;
+    throw ValueError("display '" + std::string(display.additional ? "+" : "") +
+                     display.name + "'" +
+                     (display.where.empty() ? "" : " (" + display.where + ")") +
+                     ": a JPEG file holds at most " + std::to_string(kJpegMaxSide) +
+                     " pixels a side, the image is " + std::to_string(width) + " x " +
+                     std::to_string(height) + "; use a TIFF, PNG or OpenEXR display");
+}
+
 // ---------------------------------------------------------------------------
 // Writing
 // ---------------------------------------------------------------------------
@@ -741,6 +756,15 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
 } // namespace
 
 Image read_image(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    detail::require_regular_file(path);
+    if (const std::optional<ImageHeader> h = check_image_file(path))
+        check_memory(uint64_t(h->width) * uint64_t(h->height) * uint64_t(h->channels) * 4,
+                     "reading " + path + " (" + std::to_string(h->width) + " x " +
+                         std::to_string(h->height) + ", " + std::to_string(h->channels) +
+                         " channels)",
+                     "use a smaller image");
     auto in = open_input(path);
     const OIIO::ImageSpec& spec = in->spec();
     Image image;

@@ -909,8 +909,13 @@ RenderReport RenderJob::render_frame() const {
         // Every mode against the channels the image will have (the AOVs the
         // shaders output), before anything is baked or rendered.
         const Image probe(1, 1, image_channels(plan_aovs(scene, *m_shaders)));
+        const int xres = options.xres > 0 ? options.xres : scene.options.camera.xres;
+        const int yres = options.yres > 0 ? options.yres : scene.options.camera.yres;
         for (std::size_t i : written)
-            resolve_display(displays[i], probe, static_cast<int>(i) == primary, defaults);
+            check_display_size(displays[i],
+                               resolve_display(displays[i], probe,
+                                               static_cast<int>(i) == primary, defaults),
+                               xres, yres);
     }
 
     // Every file (the shaders' bakes, then the Displays) is written as a

@@ -19,6 +19,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/texture.h>
 
+#include <glm/geometric.hpp>
+
 #include "texture2d_backend.h"
 #include "texture2d_makers.h"
 
@@ -34,18 +36,75 @@ float finite_or_zero(float x) {
     return std::isfinite(x) ? x : 0.0f;
 }
 
+/// Bounds of the filter's options and footprints before OpenImageIO sees
+/// them: its filters assert on footprints whose squares overflow (a "width"
+/// of 1e38). A blur of 1 already averages the whole map, a footprint of 4
+/// (texture units) reaches the coarsest level, and a width beyond 1000 only
+/// multiplies derivatives to such footprints.
+constexpr float kMaxBlur = 1.0f;
+constexpr float kMaxWidth = 1000.0f;
+constexpr float kMaxFootprint = 4.0f;
+
+float clamp_option(float x, float hi) {
+    return std::clamp(finite_or_zero(x), 0.0f, hi);
+}
+
+/// A footprint axis (ds, dt along x or y) times the widths, finite and at
+/// most kMaxFootprint long: scaled as a whole (clamping each component
+/// would turn a wide ellipse into a line, on which OpenImageIO's blur
+/// asserts).
+void footprint_axis(float ds, float dt, float swidth, float twidth, float& s, float& t) {
+    s = finite_or_zero(ds * swidth);
+    t = finite_or_zero(dt * twidth);
+    const float len = std::hypot(s, t);
+    if (!std::isfinite(len)) {
+        s = t = 0.0f;
+    } else if (len > kMaxFootprint) {
+        s *= kMaxFootprint / len;
+        t *= kMaxFootprint / len;
+    }
+}
+
+/// Gives a footprint that is a line (its axes parallel, or one of them zero)
+/// a width of a thousandth of its length: OpenImageIO's blur asserts on an
+/// ellipse without area. Only with blur; a point (both axes zero) is fine.
+void widen_line(float& dsdx, float& dtdx, float& dsdy, float& dtdy) {
+    const float lx = std::hypot(dsdx, dtdx), ly = std::hypot(dsdy, dtdy);
+    const float major = std::max(lx, ly);
+    if (!(major > 0.0f)) return;
+    if (std::abs(dsdx * dtdy - dtdx * dsdy) > 1e-3f * major * major) return;
+    // The minor axis: perpendicular to the major one.
+    const float ms = lx >= ly ? dsdx : dsdy, mt = lx >= ly ? dtdx : dtdy;
+    const float ps = -mt * 1e-3f, pt = ms * 1e-3f;
+    if (lx >= ly) {
+        dsdy = ps;
+        dtdy = pt;
+    } else {
+        dsdx = ps;
+        dtdx = pt;
+    }
+}
+
+/// A direction's derivative, finite and at most kMaxFootprint times as long
+/// as the direction.
+glm::vec3 direction_footprint(glm::vec3 d, const glm::vec3& dir) {
+    for (int a = 0; a < 3; ++a) d[a] = finite_or_zero(d[a]);
+    const float len = glm::length(d), most = kMaxFootprint * glm::length(dir);
+    return std::isfinite(len) && len > most && len > 0.0f ? d * (most / len) : d;
+}
+
 /// RSL options -> OIIO's. The wrap modes stay WrapDefault: OIIO then takes
 /// them from the file's "wrapmodes" metadata (maketx writes it); the caller
 /// makes a file that says nothing periodic (TextureFile::periodic).
 OIIO::TextureOpt oiio_options(const TextureOptions& options, int channel) {
     OIIO::TextureOpt opt;
     opt.firstchannel = std::max(channel, 0);
-    opt.sblur = std::max(finite_or_zero(options.sblur), 0.0f);
-    opt.tblur = std::max(finite_or_zero(options.tblur), 0.0f);
-    opt.swidth = std::max(finite_or_zero(options.swidth), 0.0f);
-    opt.twidth = std::max(finite_or_zero(options.twidth), 0.0f);
-    opt.fill = options.fill;
-    opt.samples = std::max(options.samples, 1);
+    opt.sblur = clamp_option(options.sblur, kMaxBlur);
+    opt.tblur = clamp_option(options.tblur, kMaxBlur);
+    opt.swidth = clamp_option(options.swidth, kMaxWidth);
+    opt.twidth = clamp_option(options.twidth, kMaxWidth);
+    opt.fill = finite_or_zero(options.fill);
+    opt.samples = std::clamp(options.samples, 1, 1024);
     // Bilinear within a level: a point lookup at a pixel's centre returns
     // that pixel (OIIO's bicubic is a B-spline, which blurs even there).
     opt.interpmode = OIIO::TextureOpt::InterpBilinear;
@@ -326,6 +385,10 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
     // the file's last get the fill value (OIIO).
     const bool replicate = tex->nchannels == 1 && channel == 0 && nchannels == 3;
     const int read = replicate ? 1 : nchannels;
+    // The widths applied here, so that each footprint is bounded.
+    const float sw = opt.swidth, tw = opt.twidth;
+    opt.swidth = opt.twidth = 1.0f;
+    const bool blur = opt.sblur > 0.0f || opt.tblur > 0.0f;
     bool ok = true;
     for (std::size_t i = 0; i < count; ++i) {
         if (mask && !mask[i]) continue;
@@ -335,10 +398,12 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
             std::fill(result, result + nchannels, 0.0f);
             continue;
         }
-        const float dsdx = ds_du ? finite_or_zero(ds_du[i]) : 0.0f;
-        const float dtdx = dt_du ? finite_or_zero(dt_du[i]) : 0.0f;
-        const float dsdy = ds_dv ? finite_or_zero(ds_dv[i]) : 0.0f;
-        const float dtdy = dt_dv ? finite_or_zero(dt_dv[i]) : 0.0f;
+        float dsdx, dtdx, dsdy, dtdy;
+        footprint_axis(ds_du ? ds_du[i] : 0.0f, dt_du ? dt_du[i] : 0.0f, sw, tw, dsdx,
+                       dtdx);
+        footprint_axis(ds_dv ? ds_dv[i] : 0.0f, dt_dv ? dt_dv[i] : 0.0f, sw, tw, dsdy,
+                       dtdy);
+        if (blur) widen_line(dsdx, dtdx, dsdy, dtdy);
         ok &= ts->texture(tex->handle, pt, opt, si, ti, dsdx, dtdx, dsdy, dtdy, read,
                           result);
         if (replicate) result[1] = result[2] = result[0];
@@ -390,12 +455,8 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
             std::fill(result, result + nchannels, 0.0f);
             continue;
         }
-        glm::vec3 dx = ddir_du ? ddir_du[i] : zero;
-        glm::vec3 dy = ddir_dv ? ddir_dv[i] : zero;
-        for (int a = 0; a < 3; ++a) {
-            dx[a] = finite_or_zero(dx[a]);
-            dy[a] = finite_or_zero(dy[a]);
-        }
+        const glm::vec3 dx = ddir_du ? direction_footprint(ddir_du[i], r) : zero;
+        const glm::vec3 dy = ddir_dv ? direction_footprint(ddir_dv[i], r) : zero;
         if (cube)
             ok &= cube_lookup(*tex, pt, opt, r, dx, dy, read, result);
         else
