@@ -170,7 +170,7 @@ bake3d_clouds(std::span<const Bake3dRecord> records, const ChannelDeclarations& 
         try {
             cloud = bake3d_point_cloud(by_file[file], declared);
         } catch (const ValueError& e) {
-            throw ValueError("bake3d file " + sss::quoted(file) + ": " + e.what());
+            throw ValueError(escape_control(truncated(file, kMaxEcho)) + ": " + e.what());
         }
         by_file[file].clear();
         // Names the readers would refuse fail here, before any file is written.
