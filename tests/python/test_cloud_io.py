@@ -182,3 +182,28 @@ def test_write_errors(tmp_path):
         sss.write_cloud("/nonexistent/dir/x.ptc", ok)
     # Nothing is left behind by the failed writes (atomic output).
     assert os.listdir(tmp_path) == []
+
+
+def test_names_that_cannot_be_read_back_are_refused(tmp_path):
+    n = 4
+    cloud = {"P": np.zeros((n, 3), np.float32)}
+    # A NUL would cut the path: "x\0y.ptc" must not write "x".
+    for path in (str(tmp_path / "x\0y.ptc"), str(tmp_path / "x\0y.ply")):
+        with pytest.raises(sss.ValueError, match="a file name cannot hold a NUL byte"):
+            sss.write_cloud(path, cloud)
+    assert os.listdir(tmp_path) == []
+    with pytest.raises(sss.ValueError, match="NUL"):
+        sss.read_cloud(str(tmp_path / "x\0y.ptc"))
+    # The .ptc reader takes channel spec lines of at most 4095 bytes.
+    for name, ok in (("c" * 4089, True), ("c" * 4090, False), ("c" * 5001, False)):
+        path = tmp_path / "long.ptc"
+        if ok:
+            sss.write_cloud(path, {**cloud, name: np.ones(n, np.float32)})
+            assert name in sss.read_cloud(path)
+            continue
+        with pytest.raises(sss.ValueError, match=r"is %d bytes long: a float channel's name may "
+                                                 r"have at most 4089" % len(name)):
+            sss.write_cloud(tmp_path / "bad.ptc", {**cloud, name: np.ones(n, np.float32)})
+        assert not (tmp_path / "bad.ptc").exists()
+    with pytest.raises(sss.ValueError, match="whitespace or control"):
+        sss.write_cloud(tmp_path / "nul.ptc", {**cloud, "a\0b": np.ones(n, np.float32)})

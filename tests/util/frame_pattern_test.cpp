@@ -52,3 +52,20 @@ TEST(FramePattern, Detection) {
     EXPECT_FALSE(has_frame_pattern("a.ptc"));
     EXPECT_FALSE(has_frame_pattern("100%%d.ptc"));
 }
+
+TEST(FramePattern, WiderThanSixteenDigitsIsKeptAsWritten) {
+    // sss-farm applies the same bound (tests/farm/test_farm_hostile.sh).
+    const std::string hashes16(16, '#'), hashes17(17, '#');
+    EXPECT_EQ(expand_frame_pattern("a." + hashes16, 7), "a.0000000000000007");
+    EXPECT_EQ(expand_frame_pattern("a." + hashes17 + ".%02d", 7),
+              "a." + hashes17 + ".07");
+    EXPECT_EQ(expand_frame_pattern("a.%016d", 7), "a.0000000000000007");
+    EXPECT_EQ(expand_frame_pattern("a.%017d", 7), "a.%017d");
+    EXPECT_EQ(expand_frame_pattern("a.$F17.${F99999999999999999999}", 7),
+              "a.$F17.${F99999999999999999999}");
+    EXPECT_EQ(expand_frame_pattern("a.%099999999999999999999d", 7),
+              "a.%099999999999999999999d");
+    EXPECT_FALSE(has_frame_pattern("a." + hashes17 + ".ptc"));
+    EXPECT_EQ(expand_frame_pattern("a." + std::string(100000, '#'), std::nullopt),
+              "a." + std::string(100000, '#'));
+}

@@ -18,6 +18,17 @@ struct PointCloudWriteOptions {
     bool compress = false; ///< gzip the .ptc stream (Partio and PRMan read it)
 };
 
+/// Longest line "<type> <name>" declaring a channel in a .ptc header, newline
+/// left out: what the .ptc reader accepts, so also what the writers write.
+constexpr std::size_t kMaxChannelSpecLine = 4095;
+
+/// Throws ValueError unless `name` can name a channel of type `type` in a
+/// written cloud, one the readers read back: not empty, no whitespace or
+/// control bytes (NUL included), its spec line at most kMaxChannelSpecLine
+/// bytes (a color channel's name at most 4089). The name is quoted and cut in
+/// the message, so the cause stays in it.
+void check_channel_name(const std::string& name, ChannelType type);
+
 /// Reads a .ptc (any other extension) or .ply file. Validates everything and
 /// throws FormatError (bad magic, version, truncation, size mismatch, NaN/Inf)
 /// or IoError naming the file.

@@ -53,8 +53,9 @@ public:
 
     /// For a file a shader opens while the job runs: records it as an input
     /// of the current registry and returns "" or, when it is one of the
-    /// job's outputs, the error text (the caller fails the lookup with it).
-    /// Each name is checked once. Thread-safe; "" without a current registry.
+    /// job's outputs or holds a NUL byte, the error text (the caller fails the
+    /// lookup with it). Each name is checked once. Thread-safe; without a
+    /// current registry only the NUL is checked.
     static std::string opened(const std::string& path, const std::string& use);
 
 private:
@@ -101,5 +102,10 @@ std::string unknown_extension_text(const std::string& path, const std::string& w
 
 /// The extensions of the point cloud formats written (.ptc, .ply).
 const std::vector<std::string>& point_cloud_extensions();
+
+/// Throws ValueError when `path` holds a NUL byte, which the system would
+/// take for the end of the name (`"x\0y.ptc"` would open `x`). `use` says
+/// what the name is ("bake3d file ..."); empty: the quoted name.
+void check_file_name(const std::string& path, const std::string& use = "");
 
 } // namespace sss

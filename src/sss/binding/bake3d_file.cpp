@@ -10,6 +10,7 @@
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/job_files.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -169,9 +170,17 @@ bake3d_clouds(std::span<const Bake3dRecord> records, const ChannelDeclarations& 
         try {
             cloud = bake3d_point_cloud(by_file[file], declared);
         } catch (const ValueError& e) {
-            throw ValueError(file + ": " + e.what());
+            throw ValueError(escape_control(truncated(file, kMaxEcho)) + ": " + e.what());
         }
         by_file[file].clear();
+        // Names the readers would refuse fail here, before any file is written.
+        for (const Channel& c : cloud.channels) {
+            try {
+                check_channel_name(c.name, c.type);
+            } catch (const ValueError& e) {
+                throw ValueError("bake3d file " + sss::quoted(file) + ": " + e.what());
+            }
+        }
         if (camera) {
             store_matrix(camera->world_to_camera, cloud.world_to_eye);
             store_matrix(camera->world_to_ndc(), cloud.world_to_ndc);
@@ -192,7 +201,8 @@ std::vector<std::string> write_bake3d_files(std::span<const Bake3dRecord> record
     // Every name is checked before any file is written.
     JobFiles* job = JobFiles::current();
     for (const auto& [file, cloud] : clouds) {
-        const std::string use = "bake3d file \"" + file + "\"";
+        const std::string use = "bake3d file " + sss::quoted(file);
+        check_file_name(file, use);
         if (job) job->output(file, use);
         if (!has_extension_in(file, point_cloud_extensions()) &&
             !writes_into_existing(file))

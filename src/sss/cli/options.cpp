@@ -26,6 +26,18 @@ std::optional<glm::dvec3> triple_or_fromfile(ArgScanner& args, const std::string
     return args.triple(opt);
 }
 
+/// A channel name option's value: one a cloud can hold (a name no reader
+/// accepts can never be found, and is never written).
+std::string channel_option(ArgScanner& args, const std::string& opt, ChannelType type) {
+    std::string name = args.value(opt);
+    try {
+        check_channel_name(name, type);
+    } catch (const ValueError& e) {
+        throw UsageError("option -" + opt + ": " + e.what());
+    }
+    return name;
+}
+
 } // namespace
 
 bool material_option(ArgScanner& args, const std::string& o, MaterialSpec& m,
@@ -82,9 +94,9 @@ bool ssdiffusion_option(ArgScanner& args, const std::string& o, SsDiffusionOptio
     } else if (o == "exact") {
         opt.exact = true;
     } else if (o == "areachannel") {
-        opt.area_channel = args.value(o);
+        opt.area_channel = channel_option(args, o, ChannelType::Float);
     } else if (o == "radiancechannel") {
-        opt.radiance_channel = args.value(o);
+        opt.radiance_channel = channel_option(args, o, ChannelType::Color);
     } else if (o == "keepchannels") {
         opt.keep_channels = args.integer(o, 0, 1) != 0;
     } else {

@@ -16,8 +16,31 @@
 #include "point_cloud_io_detail.h"
 #include "sss/util/error.h"
 #include "sss/util/limits.h"
+#include "sss/util/messages.h"
 
 namespace sss {
+
+void check_channel_name(const std::string& name, ChannelType type) {
+    if (name.empty()) throw ValueError("channel with an empty name");
+    for (char ch : name) {
+        // isspace/iscntrl of the "C" locale: ASCII only, UTF-8 names pass.
+        if (ch == '\0' || std::isspace(static_cast<unsigned char>(ch)) ||
+            std::iscntrl(static_cast<unsigned char>(ch))) {
+            throw ValueError("channel name " + sss::quoted(name) +
+                             " contains whitespace or control characters");
+        }
+    }
+    const std::string_view type_name = channel_type_name(type);
+    if (type_name.size() + 1 + name.size() > kMaxChannelSpecLine) {
+        throw ValueError("channel name " + sss::quoted(name) + " is " +
+                         std::to_string(name.size()) + " bytes long: a " +
+                         std::string(type_name) + " channel's name may have at most " +
+                         std::to_string(kMaxChannelSpecLine - 1 - type_name.size()) +
+                         " (a .ptc header line \"<type> <name>\" at most " +
+                         std::to_string(kMaxChannelSpecLine) + ")");
+    }
+}
+
 namespace detail {
 
 namespace {
@@ -31,6 +54,15 @@ bool all_finite(const float* v, std::size_t n) {
 
 } // namespace
 
+void check_channel_names(const PointCloud& cloud) {
+    std::set<std::string> names;
+    for (const Channel& c : cloud.channels) {
+        check_channel_name(c.name, c.type);
+        if (!names.insert(c.name).second)
+            throw ValueError("duplicate channel " + sss::quoted(c.name));
+    }
+}
+
 void check_writable(const PointCloud& cloud) {
     const std::size_t n = cloud.size();
     if (cloud.normals.size() != n || cloud.radii.size() != n) {
@@ -43,23 +75,13 @@ void check_writable(const PointCloud& cloud) {
         !all_finite(cloud.format.data(), 3)) {
         throw ValueError("non-finite value in the header matrices or image format");
     }
-    std::set<std::string> names;
+    check_channel_names(cloud);
     for (const Channel& c : cloud.channels) {
-        if (c.name.empty()) throw ValueError("channel with an empty name");
-        for (char ch : c.name) {
-            if (std::isspace(static_cast<unsigned char>(ch)) ||
-                std::iscntrl(static_cast<unsigned char>(ch))) {
-                throw ValueError("channel name '" + c.name +
-                                 "' contains whitespace or control characters");
-            }
-        }
-        if (!names.insert(c.name).second)
-            throw ValueError("duplicate channel '" + c.name + "'");
         const std::size_t k = static_cast<std::size_t>(c.components());
         if (c.data.size() != n * k) {
-            throw ValueError("inconsistent point cloud: channel '" + c.name + "' holds " +
-                             std::to_string(c.data.size()) + " floats, expected " +
-                             std::to_string(n * k));
+            throw ValueError("inconsistent point cloud: channel " + sss::quoted(c.name) +
+                             " holds " + std::to_string(c.data.size()) +
+                             " floats, expected " + std::to_string(n * k));
         }
     }
     for (std::size_t i = 0; i < n; ++i) {
@@ -75,8 +97,8 @@ void check_writable(const PointCloud& cloud) {
         const std::size_t k = static_cast<std::size_t>(c.components());
         for (std::size_t i = 0; i < c.data.size(); ++i) {
             if (!std::isfinite(c.data[i])) {
-                throw ValueError("non-finite value in channel '" + c.name +
-                                 "' at point " + std::to_string(i / k));
+                throw ValueError("non-finite value in channel " + sss::quoted(c.name) +
+                                 " at point " + std::to_string(i / k));
             }
         }
     }
@@ -239,6 +261,7 @@ PointCloudWriter::PointCloudWriter(const std::string& path, const PointCloud& he
     : m_impl(std::make_unique<Impl>()) {
     m_impl->path = path;
     m_impl->count = count;
+    detail::check_channel_names(header);
     if (detail::has_extension(path, ".ply")) {
         m_impl->whole = header;
         m_impl->whole.resize(0);

@@ -118,6 +118,10 @@ private:
 /// header matrices. Called before any file is created.
 void check_writable(const PointCloud& cloud);
 
+/// The channel names part of check_writable: each one check_channel_name's,
+/// none repeated.
+void check_channel_names(const PointCloud& cloud);
+
 /// Lower-case extension test ("x.PLY" has extension ".ply").
 bool has_extension(const std::string& path, const std::string& ext);
 

@@ -30,7 +30,7 @@ using namespace detail;
 
 constexpr int32_t kPtcMagic = 0x63747070; // bytes on disk: "pptc"
 constexpr int kMaxVersion = 2;
-constexpr std::size_t kMaxSpecLine = 4096;
+constexpr std::size_t kMaxSpecLine = kMaxChannelSpecLine + 1; // with the newline
 constexpr std::size_t kRecordBase = 20; // 3 f32 position + 2 u16 normal + f32 radius
 constexpr uint16_t kZeroNormalCode = 65535;
 constexpr uint32_t kPadWord = 0xDEADBEEFu;

@@ -4,18 +4,28 @@
 
 #include "diagnostics.h"
 
+#include "sss/util/messages.h"
+
 namespace sss {
 
 std::string Diagnostic::format() const {
-    std::string out = file + ":" + std::to_string(line) + ":" + std::to_string(column) +
-                      ": " + (severity == Severity::Error ? "error" : "warning") + ": " +
-                      message;
+    // Control bytes from the source are escaped (an editor or a log reads one
+    // message per line); tabs stay in the echoed line so the caret lines up.
+    std::string out = escape_control(file) + ":" + std::to_string(line) + ":" +
+                      std::to_string(column) + ": " +
+                      (severity == Severity::Error ? "error" : "warning") + ": " +
+                      escape_control(message);
     if (!source_line.empty()) {
-        out += "\n  " + source_line + "\n  ";
-        // Tabs kept so that the caret lines up under tabbed source.
-        for (int i = 0; i + 1 < column && i < static_cast<int>(source_line.size()); ++i)
-            out += source_line[i] == '\t' ? '\t' : ' ';
-        out += '^';
+        std::string echo, caret;
+        for (int i = 0; i < static_cast<int>(source_line.size()); ++i) {
+            const char c = source_line[i];
+            const std::string shown =
+                c == '\t' ? std::string(1, c) : escape_control(std::string_view(&c, 1));
+            echo += shown;
+            if (i + 1 < column)
+                caret += c == '\t' ? std::string(1, c) : std::string(shown.size(), ' ');
+        }
+        out += "\n  " + echo + "\n  " + caret + '^';
     }
     return out;
 }

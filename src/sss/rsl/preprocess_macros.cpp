@@ -63,6 +63,12 @@ bool Preprocessor::invoke(const Macro& m, const Token& t, std::deque<Token>& in,
         int level = 0;
         size_t i = 0;
         const Token* close = nullptr;
+        // The invocations nested in the arguments, counted as they are read:
+        // each level expanded copies the rest of the arguments, so 40000
+        // nested calls must fail here, not after gigabytes of copies.
+        std::vector<bool> invocation_opens;
+        int invocations = 0;
+        const Token* previous = nullptr;
         for (;;) {
             if (i >= in.size()) {
                 if (fetch && (*fetch)(in, false)) continue;
@@ -71,17 +77,25 @@ bool Preprocessor::invoke(const Macro& m, const Token& t, std::deque<Token>& in,
             const Token& a = in[i++];
             if (is_punct(a, "(")) {
                 ++level;
+                const bool call = previous && previous->kind == Tok::Ident &&
+                                  m_macros.count(previous->text) > 0;
+                invocation_opens.push_back(call);
+                if (call && depth + ++invocations > kMaxArgumentDepth)
+                    fail(a, "macro arguments nested too deeply");
             } else if (is_punct(a, ")")) {
                 if (level == 0) {
                     close = &a;
                     break;
                 }
                 --level;
+                if (invocation_opens.back()) --invocations;
+                invocation_opens.pop_back();
             } else if (is_punct(a, ",") && level == 0 &&
                        !(m.variadic && args.size() == m.params.size())) {
                 args.emplace_back();
                 continue;
             }
+            if (a.kind != Tok::Space) previous = &a;
             args.back().push_back(a);
         }
         // hide = (hide of the name & hide of the ')') + this macro.

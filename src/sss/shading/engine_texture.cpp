@@ -42,6 +42,7 @@
 #include "sss/light/shadow_map.h"
 #include "sss/shading/texture_services.h"
 #include "sss/util/job_files.h"
+#include "sss/util/messages.h"
 #include "sss/util/parse.h"
 #include "sss/util/version.h"
 #include "texture_options.h"
@@ -685,6 +686,10 @@ void op_bake3d(Frame& f, const BoundOp& b) {
     const std::size_t i0 = f.first_active();
     Bake3dRecord rec;
     rec.file = f.str(b, 1, i0);
+    // The system would cut the name at the NUL: "x\0y.ptc" would write "x".
+    if (rec.file.find('\0') != std::string::npos)
+        f.fail(b, "bake3d " + sss::quoted(rec.file) +
+                      ": a file name cannot hold a NUL byte");
     Bake3dOptions o;
     std::vector<std::pair<std::string, int>> values;
     for_options(f, b, 5, [&](const std::string& name, int k) {
@@ -695,7 +700,7 @@ void op_bake3d(Frame& f, const BoundOp& b) {
             name == "interpolate") {
             if (!set_bake3d_option(o, name, str ? nullptr : s.at(i0), str ? 0 : s.nf,
                                    str ? &f.str(b, k, i0) : nullptr))
-                f.warn_once(b, "bad bake3d option \"" + name + "\"");
+                f.warn_once(b, "bad bake3d option " + sss::quoted(name));
             return;
         }
         values.emplace_back(name, k);
@@ -706,11 +711,12 @@ void op_bake3d(Frame& f, const BoundOp& b) {
         for (const auto& [name, k] : values)
             if (name == c) arg = k;
         if (arg < 0) {
-            f.fail(b, "bake3d \"" + rec.file + "\": channel \"" + c +
-                          "\" is listed but the call gives it no value");
+            f.fail(b, "bake3d " + sss::quoted(rec.file) + ": channel " + sss::quoted(c) +
+                          " is listed but the call gives it no value");
         }
         if (f.program->symbols[b.op->args[arg]].type.type == ShadingType::String) {
-            f.warn_once(b, "bake3d: channel \"" + c + "\" is a string; not baked");
+            f.warn_once(b,
+                        "bake3d: channel " + sss::quoted(c) + " is a string; not baked");
             continue;
         }
         rec.channels.push_back(c);

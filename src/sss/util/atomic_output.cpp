@@ -35,6 +35,7 @@
 
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+#include "sss/util/job_files.h"
 #include "sss/util/messages.h"
 
 namespace sss {
@@ -495,6 +496,7 @@ void flush_temp(const std::string& target, const std::string& temp, int fd) {
 // ---------------------------------------------------------------------------
 
 AtomicOutput::AtomicOutput(const std::string& target) : m_target(target) {
+    check_file_name(target);
     const Destination dest = resolve_destination(target);
     m_destination = dest.path;
     m_special = dest.special;
@@ -667,6 +669,7 @@ bool writes_into_existing(const std::string& path) {
 }
 
 void check_output_target(const std::string& path) {
+    check_file_name(path);
     const Destination dest = resolve_destination(path);
     if (dest.special) return;
     const std::string dir = parent_dir(dest.path);

@@ -14,6 +14,7 @@
 #include <zlib.h>
 
 #include "sss/util/error.h"
+#include "sss/util/job_files.h"
 
 namespace sss::detail {
 
@@ -32,6 +33,7 @@ gzFile as_gz(void* p) {
 } // namespace
 
 void require_regular_file(const std::string& path, const std::string& context) {
+    check_file_name(path);
     struct stat st {};
     if (::stat(path.c_str(), &st) != 0)
         throw IoError(path, "cannot open" + context + ": " + std::strerror(errno));

@@ -1,5 +1,6 @@
 #include "sss/util/frame_pattern.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 
@@ -7,6 +8,10 @@
 
 namespace sss {
 namespace {
+
+// The widest pattern expanded; a wider one (%017d, $F17, 17 #s) is kept as
+// written. sss-farm applies the same bound.
+constexpr int kMaxWidth = 16;
 
 std::string padded(int frame, int width) {
     char buf[64];
@@ -19,7 +24,18 @@ struct Match {
     std::size_t length = 0;
     int width = 0;
     bool lone_hash = false;
+    bool literal = false; // too wide: copied as written
 };
+
+// Digits of a width from s[j]; stops counting past kMaxWidth (no overflow).
+int read_width(const std::string& s, std::size_t& j) {
+    int width = 0;
+    while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) {
+        if (width <= kMaxWidth) width = width * 10 + (s[j] - '0');
+        ++j;
+    }
+    return width;
+}
 
 // Recognises a pattern starting at s[i]; length 0 if none.
 Match match_at(const std::string& s, std::size_t i) {
@@ -29,22 +45,21 @@ Match match_at(const std::string& s, std::size_t i) {
         std::size_t j = i;
         while (j < n && s[j] == '#') ++j;
         m.length = j - i;
-        m.width = static_cast<int>(m.length);
+        m.width = static_cast<int>(std::min<std::size_t>(m.length, kMaxWidth + 1));
         m.lone_hash = m.length == 1;
+        m.literal = m.width > kMaxWidth;
         return m;
     }
     if (s[i] == '%') {
         std::size_t j = i + 1;
         if (j < n && s[j] == '%') return m; // "%%" is a literal percent
-        int width = 0;
         bool zero = false;
         if (j < n && s[j] == '0') {
             zero = true;
             ++j;
         }
-        while (j < n && std::isdigit(static_cast<unsigned char>(s[j])))
-            width = width * 10 + (s[j++] - '0');
-        if (j < n && s[j] == 'd' && (zero || width == 0) && width <= 16) {
+        const int width = read_width(s, j);
+        if (j < n && s[j] == 'd' && (zero || width == 0) && width <= kMaxWidth) {
             m.length = j + 1 - i;
             m.width = width;
         }
@@ -57,14 +72,12 @@ Match match_at(const std::string& s, std::size_t i) {
         if (j >= n || s[j] != 'F') return m;
         ++j;
         if (j < n && s[j] == 'F') return m; // $FF (float frame) is not supported
-        int width = 0;
-        while (j < n && std::isdigit(static_cast<unsigned char>(s[j])))
-            width = width * 10 + (s[j++] - '0');
+        const int width = read_width(s, j);
         if (brace) {
             if (j >= n || s[j] != '}') return m;
             ++j;
         }
-        if (width > 16) return m;
+        if (width > kMaxWidth) return m;
         m.length = j - i;
         m.width = width;
         return m;
@@ -80,7 +93,9 @@ bool has_frame_pattern(const std::string& path) {
             ++i; // literal percent
             continue;
         }
-        if (match_at(path, i).length > 0) return true;
+        const Match m = match_at(path, i);
+        if (m.length > 0 && !m.literal) return true;
+        i += m.length > 0 ? m.length - 1 : 0;
     }
     return false;
 }
@@ -91,6 +106,11 @@ std::string expand_frame_pattern(const std::string& path, std::optional<int> fra
     out.reserve(path.size() + 8);
     for (std::size_t i = 0; i < path.size();) {
         Match m = match_at(path, i);
+        if (m.literal) {
+            out.append(path, i, m.length);
+            i += m.length;
+            continue;
+        }
         if (m.length == 0) {
             out += path[i];
             // Keep "%%" as a literal percent sign.

@@ -11,6 +11,9 @@
 
 #include <sys/stat.h>
 
+#include "sss/util/error.h"
+#include "sss/util/messages.h"
+
 namespace sss {
 
 namespace {
@@ -69,7 +72,15 @@ std::string JobFiles::conflict_of_input(const Identity& id,
     return {};
 }
 
+void check_file_name(const std::string& path, const std::string& use) {
+    if (path.find('\0') == std::string::npos) return;
+    // Escaped: what() is a C string, which would end at the NUL.
+    throw ValueError((use.empty() ? sss::quoted(path) : escape_control(use)) +
+                     ": a file name cannot hold a NUL byte");
+}
+
 void JobFiles::input(const std::string& path, const std::string& use) {
+    check_file_name(path, use);
     const Identity id = identify(path);
     std::lock_guard<std::mutex> lock(m_mutex);
     const std::string conflict = conflict_of_input(id, use);
@@ -78,6 +89,7 @@ void JobFiles::input(const std::string& path, const std::string& use) {
 }
 
 void JobFiles::output(const std::string& path, const std::string& use) {
+    check_file_name(path, use);
     const Identity id = identify(path);
     std::lock_guard<std::mutex> lock(m_mutex);
     for (const Entry& i : m_inputs)
@@ -101,6 +113,8 @@ bool JobFiles::same_file(const std::string& a, const std::string& b) {
 }
 
 std::string JobFiles::opened(const std::string& path, const std::string& use) {
+    if (path.find('\0') != std::string::npos)
+        return escape_control(use) + ": a file name cannot hold a NUL byte";
     JobFiles* files = current();
     if (!files) return {};
     {
