@@ -226,9 +226,10 @@ TEST(RslEngineArrays, AssignOutOfRangeAndEmptyPop) {
 TEST(RslEngineArrays, LengthLimit) {
     std::string what =
         runtime_error("surface t() {\n    float a[];\n    resize(a, 2000000);\n}\n");
-    EXPECT_NE(what.find("test.sl:3: shader 't': resize: an array of 2000000 elements (a "
-                        "resizable array has at most 1000000)"),
-              std::string::npos)
+    EXPECT_NE(
+        what.find("test.sl:3: shader 't': resize: an array of 2000000 elements "
+                  "exceeds the limit of 1000000 (set SSS_LIMIT_SHADER_ARRAY_LENGTH"),
+        std::string::npos)
         << what;
     what = runtime_error("surface t() {\n    float a[];\n    resize(a, -1);\n}\n");
     EXPECT_NE(what.find("resize: a negative array length (-1)"), std::string::npos)

@@ -404,6 +404,16 @@ TEST(RslFormat, ErrorsAreClear) {
 
 // --- match -------------------------------------------------------------------
 
+/// The ValueError's message of match(pattern, subject), or "no error".
+std::string match_error(const std::string& pattern, const std::string& subject) {
+    try {
+        rsl_match(pattern, subject);
+    } catch (const ValueError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
 TEST(RslMatch, ExtendedRegularExpressions) {
     EXPECT_TRUE(rsl_match("skin", "my_skin_shader"));
     EXPECT_FALSE(rsl_match("^skin", "my_skin_shader"));
@@ -411,9 +421,36 @@ TEST(RslMatch, ExtendedRegularExpressions) {
     EXPECT_TRUE(rsl_match("a{2,3}", "baaad"));
     EXPECT_FALSE(rsl_match("a{4}", "baaad"));
     EXPECT_TRUE(rsl_match("", "anything"));
-    // Invalid patterns match nothing.
-    EXPECT_FALSE(rsl_match("(unclosed", "(unclosed"));
-    EXPECT_FALSE(rsl_match("[z-a]", "a"));
+    EXPECT_TRUE(rsl_match("[[:alpha:]]+[]x]{2}(a|b)*$", "ab]x"));
+    EXPECT_TRUE(rsl_match("(a{1,10}){1,100}", "xaay"));
+}
+
+TEST(RslMatch, InvalidPatternsAreErrors) {
+    EXPECT_NE(match_error("(unclosed", "(unclosed")
+                  .find("match(\"(unclosed\"): invalid regular expression"),
+              std::string::npos);
+    EXPECT_THROW(rsl_match("[z-a]", "a"), ValueError);
+}
+
+TEST(RslMatch, BoundsBeforeCompiling) {
+    // Repetitions multiplied out: glibc would take gigabytes for this one.
+    const std::string bomb = match_error("((a{1,100}){1,100}){1,100}", "a");
+    EXPECT_NE(bomb.find("1020201 elements once its repetitions are multiplied out"),
+              std::string::npos)
+        << bomb;
+    EXPECT_NE(bomb.find("the bound of 2000"), std::string::npos) << bomb;
+    EXPECT_THROW(rsl_match("(a+)+(b+)+(c{1,50}){1,50}", "a"), ValueError);
+    EXPECT_NE(match_error("(a*)*\\1b", "aaab").find("back-references"),
+              std::string::npos);
+    EXPECT_NE(match_error(std::string(100, '(') + "a" + std::string(100, ')'), "a")
+                  .find("nest more than 64"),
+              std::string::npos);
+    EXPECT_THROW(rsl_match(std::string(5000, 'a'), "a"), ValueError);
+    // Matching time: the size times the subject's length is bounded.
+    EXPECT_TRUE(rsl_match("b", std::string(1 << 20, 'a') + "b"));
+    EXPECT_THROW(rsl_match("(a|b){1,400}c", std::string(1 << 16, 'a')), ValueError);
+    // Brackets and escapes count as one element.
+    EXPECT_TRUE(rsl_match("[(]{3}\\(", "x(((("));
 }
 
 TEST(RslMatch, ThreadSafeCache) {

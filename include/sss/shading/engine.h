@@ -407,7 +407,11 @@ public:
     /// ambient(), diffuse()... and cached for the batch. Throws
     /// ShaderRuntimeError for errors a shader cannot recover from, including
     /// a loop that runs more than kMaxLoopIterations times in one batch
-    /// ("loop does not end").
+    /// ("loop does not end") and a batch over one of the shading budgets
+    /// (sss/util/limits.h: SHADER_OPERATIONS, SHADER_STRING_LENGTH,
+    /// SHADER_ARRAY_LENGTH, and per job BAKE3D_POINTS, BAKE3D_FILES, read at
+    /// each execute). Throws OutOfMemoryError when the shader's strings,
+    /// arrays or bake3d points would pass the job's memory budget.
     ///
     /// Before the body: Ci = 0, Oi = Os (volume and imager shaders: the
     /// batch's Ci and Oi); uninitialised locals are 0 (strings

@@ -27,6 +27,11 @@ enum class Limit {
     ImagePixels,            ///< pixels of one rendered image (width * height)
     ImageSide,              ///< width or height of one rendered image
     Bricks,                 ///< bricks of one brick map
+    ShaderOperations,       ///< ops (and loop iterations) one shading batch runs
+    ShaderStringLength,     ///< bytes of one string a shader makes
+    ShaderArrayLength,      ///< elements of one resizable shader array
+    Bake3dPoints,           ///< points bake3d hands over in one job
+    Bake3dFiles,            ///< distinct bake3d files of one job
     Count_
 };
 
@@ -61,6 +66,10 @@ private:
 /// "<where>: <needed> <what> exceeds the limit of <limit> (set SSS_LIMIT_X to raise it)".
 /// `where` names the input ("scene.rib:12: Polygon").
 void check_limit(Limit which, uint64_t needed, const std::string& where);
+
+/// "exceeds the limit of <limit> (set SSS_LIMIT_X to raise it)": the tail of
+/// a message about `which` whose first part the caller words itself.
+std::string limit_exceeded(Limit which);
 
 // ---------------------------------------------------------------------------
 // Memory

@@ -27,6 +27,7 @@
 
 #include "engine_internal.h"
 #include "sss/util/hash.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 
@@ -138,6 +139,45 @@ void Frame::fail(const BoundOp& b, const std::string& what) const {
     throw ShaderRuntimeError(bound->describe(b.index) + ": " + what);
 }
 
+void Frame::check_string_length(const BoundOp& b, uint64_t length) const {
+    if (length > ctx->string_limit)
+        fail(b, "a string of " + std::to_string(length) + " bytes " +
+                    limit_exceeded(Limit::ShaderStringLength));
+}
+
+void Frame::check_memory_for(const BoundOp& b, uint64_t bytes,
+                             const std::string& what) const {
+    try {
+        check_memory(bytes, what, "");
+    } catch (const OutOfMemoryError& e) {
+        throw OutOfMemoryError(bound->describe(b.index) + ": " + e.what());
+    }
+}
+
+float Frame::intern(const BoundOp& b, const std::string& s) {
+    check_string_length(b, s.size());
+    ShadingContext::Impl& c = *ctx;
+    const float idx = c.intern(s);
+    if (c.string_bytes >= c.string_checked_bytes + kShaderMemoryStep) {
+        c.string_checked_bytes = c.string_bytes;
+        check_memory_for(b, kShaderMemoryStep,
+                         "the shader's strings (" + format_bytes(c.string_bytes) +
+                             " in this batch)");
+    }
+    return idx;
+}
+
+namespace {
+
+[[noreturn]] void fail_operations(const Frame& f, const BoundOp& b) {
+    f.fail(b, "more operations in one shading batch than the limit of " +
+                  std::to_string(f.ctx->ops_limit) +
+                  " (a loop or recursion that does not end?); set " +
+                  limit_variable(Limit::ShaderOperations) + " to raise it");
+}
+
+} // namespace
+
 void Frame::warn_once(const BoundOp& b, const std::string& what) const {
     const std::string text = bound->describe(b.index) + ": " + what;
     if (ctx->resources.impl().first_time(text)) ctx->services.warning(text);
@@ -193,6 +233,8 @@ void Frame::run(int begin, int end) {
     while (i < end) {
         if (active == 0) return;
         const BoundOp& b = ops[i];
+        if (++ctx->ops > ctx->ops_limit) [[unlikely]]
+            fail_operations(*this, b);
         if (b.fn) {
             b.fn(*this, b);
             ++i;
@@ -251,6 +293,9 @@ void Frame::run(int begin, int end) {
                     active = cnt;
                     if (active == 0) break;
                 }
+                // An iteration counts as an op: a loop may have none.
+                if (++ctx->ops > ctx->ops_limit) [[unlikely]]
+                    fail_operations(*this, b);
                 if (++iterations > ShadingContext::kMaxLoopIterations)
                     fail(b, "loop does not end (more than " +
                                 std::to_string(ShadingContext::kMaxLoopIterations) +
@@ -364,6 +409,7 @@ float ShadingContext::Impl::intern(const std::string& s) {
     if (strings.size() >= (1u << 24))
         throw ShaderRuntimeError("shading: too many strings in one batch");
     const int idx = static_cast<int>(strings.size());
+    string_bytes += s.size() + sizeof(std::string) * 2;
     strings.push_back(s);
     string_index.emplace(s, idx);
     return static_cast<float>(idx);
@@ -372,6 +418,7 @@ float ShadingContext::Impl::intern(const std::string& s) {
 void ShadingContext::Impl::reset_strings() {
     strings.clear();
     string_index.clear();
+    string_bytes = string_checked_bytes = 0;
     intern("");
 }
 
@@ -640,6 +687,10 @@ void ShadingContext::execute_as(ShaderKind kind, const ShaderInstance& shader,
     c.objects.clear();
     c.depth = 0;
     c.reset_strings();
+    c.ops = 0;
+    c.ops_limit = limit(Limit::ShaderOperations);
+    c.string_limit = limit(Limit::ShaderStringLength);
+    c.array_limit = limit(Limit::ShaderArrayLength);
     c.extra_storage.clear();
     const Scene& scene = c.services.scene();
     c.world_to_camera = scene.options.camera.world_to_camera;
@@ -668,6 +719,9 @@ void ShadingContext::execute_as(ShaderKind kind, const ShaderInstance& shader,
         // Name the RIB call too: "scene.rib:12: Surface "x": file.sl:7: ..."
         if (shader.where().empty()) throw;
         throw ShaderRuntimeError(shader.where() + ": " + e.what());
+    } catch (const OutOfMemoryError& e) {
+        if (shader.where().empty()) throw;
+        throw OutOfMemoryError(shader.where() + ": " + e.what());
     }
 
     // NaN / infinity: written as 0, counted.

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "engine_internal.h"
+#include "sss/util/limits.h"
 
 namespace sss::detail {
 
@@ -27,6 +28,12 @@ std::string count_text(double v) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.0f", v);
     return buf;
+}
+
+/// The most elements a resizable array may have (SHADER_ARRAY_LENGTH, kept
+/// within an int).
+long max_length(const Frame& f) {
+    return static_cast<long>(std::min<uint64_t>(f.ctx->array_limit, 1u << 30));
 }
 
 /// Makes room for `capacity` elements per value (keeping the values).
@@ -41,6 +48,12 @@ void set_capacity(Frame& f, const BoundOp& b, Slot& s, int ef, int capacity) {
                       std::to_string(ef) + " floats over " + std::to_string(reps) +
                       " points needs more than " + std::to_string(kMaxResizableFloats) +
                       " floats (1 GiB)");
+    // Large storage is counted against the job's memory budget.
+    const uint64_t bytes = uint64_t(floats) * sizeof(float);
+    if (bytes >= kShaderMemoryStep / 4)
+        f.check_memory_for(b, bytes,
+                           "a resizable array of " + std::to_string(capacity) +
+                               " elements over " + std::to_string(reps) + " points");
     std::vector<float> data(floats, 0.0f);
     const std::size_t keep = static_cast<std::size_t>(r.length) * ef;
     if (keep > 0)
@@ -61,10 +74,10 @@ void set_length(Frame& f, const BoundOp& b, Slot& s, int ef, double want,
     if (!(want >= 0.0))
         f.fail(b, std::string(what) + ": a negative array length (" + count_text(want) +
                       ")");
-    if (want > kMaxArrayLength)
-        f.fail(b, std::string(what) + ": an array of " + count_text(want) +
-                      " elements (a resizable array has at most " +
-                      std::to_string(kMaxArrayLength) + ")");
+    const long most = max_length(f);
+    if (want > static_cast<double>(most))
+        f.fail(b, std::string(what) + ": an array of " + count_text(want) + " elements " +
+                      limit_exceeded(Limit::ShaderArrayLength));
     const int length = static_cast<int>(want);
     ResizableArray& r = f.resizable[static_cast<std::size_t>(s.resizable)];
     if (length > r.capacity) {
@@ -72,7 +85,7 @@ void set_length(Frame& f, const BoundOp& b, Slot& s, int ef, double want,
         const std::size_t reps = s.varying ? f.n : 1;
         const std::size_t per = reps * static_cast<std::size_t>(ef);
         long cap = std::max<long>({length, 2L * r.capacity, 4L});
-        cap = std::min<long>(cap, kMaxArrayLength);
+        cap = std::min<long>(cap, most);
         if (static_cast<std::size_t>(cap) * per > kMaxResizableFloats)
             cap = std::max<long>(length, static_cast<long>(kMaxResizableFloats / per));
         set_capacity(f, b, s, ef, static_cast<int>(cap));
@@ -111,7 +124,7 @@ void op_reserve(Frame& f, const BoundOp& b) {
     const double n = std::floor(static_cast<double>(*f.slot(b, 1).p));
     const std::size_t per = (a.varying ? f.n : 1) * static_cast<std::size_t>(b.ia);
     const double most =
-        std::min<double>(kMaxArrayLength, double(kMaxResizableFloats / per));
+        std::min<double>(double(max_length(f)), double(kMaxResizableFloats / per));
     if (n > 0.0) set_capacity(f, b, a, b.ia, static_cast<int>(std::min(n, most)));
 }
 

@@ -277,6 +277,15 @@ struct Frame {
 
     std::string where(const BoundOp& b) const { return bound->where(b.index); }
     [[noreturn]] void fail(const BoundOp& b, const std::string& what) const;
+    /// The string table index of `s`, a string op b made: fails when s is
+    /// longer than the batch's string limit (SHADER_STRING_LENGTH), checks
+    /// the memory budget as the table grows.
+    float intern(const BoundOp& b, const std::string& s);
+    /// Fails unless a string of `length` bytes fits the string limit.
+    void check_string_length(const BoundOp& b, uint64_t length) const;
+    /// Consults the memory budget for `bytes` more that op b allocates.
+    void check_memory_for(const BoundOp& b, uint64_t bytes,
+                          const std::string& what) const;
     /// A warning given once per job.
     void warn_once(const BoundOp& b, const std::string& what) const;
 };
@@ -363,7 +372,21 @@ struct ShadingResources::Impl {
     mutable std::set<std::string> warned;
     /// True the first time `text` is seen.
     bool first_time(const std::string& text) const;
+
+    // The job's bake3d budget (every thread's batches): points and bytes
+    // handed over so far, and the files named.
+    std::mutex bake3d_mutex;
+    uint64_t bake3d_points = 0;
+    uint64_t bake3d_bytes = 0;
+    uint64_t bake3d_checked_bytes = 0; ///< bytes at the last memory check
+    std::set<std::string> bake3d_files;
 };
+
+namespace detail {
+/// The memory budget (check_memory) is consulted each time the shader
+/// allocations of a batch or a job grow by this much.
+constexpr uint64_t kShaderMemoryStep = uint64_t(64) << 20;
+} // namespace detail
 
 struct ShadingContext::Impl {
     Impl(const ShadingResources& r, ShadingServices& s) : resources(r), services(s) {}
@@ -375,6 +398,15 @@ struct ShadingContext::Impl {
     std::unordered_map<std::string, int> string_index;
     float intern(const std::string& s);
     void reset_strings();
+    /// Bytes of the batch's string table, and at its last memory check.
+    uint64_t string_bytes = 0, string_checked_bytes = 0;
+
+    // The batch's budgets (docs/limits.md), read at each execute.
+    /// Ops and loop iterations run in this batch (lights and co-shaders
+    /// included) and the most allowed: Frame::run counts them.
+    uint64_t ops = 0, ops_limit = 0;
+    uint64_t string_limit = 0; ///< bytes of one string
+    uint64_t array_limit = 0;  ///< elements of one resizable array
 
     ShadingBatch* batch = nullptr;
     LightList lights;

@@ -422,7 +422,7 @@ std::string format_at(Frame& f, const BoundOp& b, int pattern, std::size_t i) {
 void op_format(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     f.each(d.varying,
-           [&](std::size_t i) { *d.at(i) = f.ctx->intern(format_at(f, b, 1, i)); });
+           [&](std::size_t i) { *d.at(i) = f.intern(b, format_at(f, b, 1, i)); });
 }
 
 void op_printf(Frame& f, const BoundOp& b) {
@@ -451,9 +451,14 @@ void op_concat(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     const int n = static_cast<int>(b.op->args.size());
     f.each(d.varying, [&](std::size_t i) {
+        // Measured first: a doubling string stops before it is built.
+        uint64_t length = 0;
+        for (int k = 1; k < n; ++k) length += f.str(b, k, i).size();
+        f.check_string_length(b, length);
         std::string s;
+        s.reserve(length);
         for (int k = 1; k < n; ++k) s += f.str(b, k, i);
-        *d.at(i) = f.ctx->intern(s);
+        *d.at(i) = f.intern(b, s);
     });
 }
 
@@ -468,7 +473,11 @@ bool bind_concat(const BindInfo& in, BoundOp& b, std::string&) {
 void op_match(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     f.each(d.varying, [&](std::size_t i) {
-        *d.at(i) = rsl_match(f.str(b, 1, i), f.str(b, 2, i)) ? 1.0f : 0.0f;
+        try {
+            *d.at(i) = rsl_match(f.str(b, 1, i), f.str(b, 2, i)) ? 1.0f : 0.0f;
+        } catch (const ValueError& e) {
+            f.fail(b, e.what());
+        }
     });
 }
 

@@ -33,6 +33,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <mutex>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -42,6 +43,7 @@
 #include "sss/light/shadow_map.h"
 #include "sss/shading/texture_services.h"
 #include "sss/util/job_files.h"
+#include "sss/util/limits.h"
 #include "sss/util/messages.h"
 #include "sss/util/parse.h"
 #include "sss/util/version.h"
@@ -680,6 +682,48 @@ bool bind_texture3d(const BindInfo& in, BoundOp& b, std::string&) {
     return true;
 }
 
+/// Counts `rec` against the job's bake3d budget: its file among the job's
+/// files (BAKE3D_FILES), its points (BAKE3D_POINTS) and, every
+/// kShaderMemoryStep of records, the memory budget.
+void count_bake3d(Frame& f, const BoundOp& b, const Bake3dRecord& rec) {
+    ShadingResources::Impl& r = f.ctx->resources.impl();
+    const uint64_t points = rec.P.size();
+    const uint64_t bytes = sizeof(Bake3dRecord) + rec.file.size() +
+                           points * (2 * sizeof(glm::vec3) + 2 * sizeof(float)) +
+                           rec.values.size() * sizeof(float);
+    const uint64_t max_files = limit(Limit::Bake3dFiles);
+    const uint64_t max_points = limit(Limit::Bake3dPoints);
+    bool new_file = false, too_many_files = false, too_many_points = false;
+    uint64_t check_bytes = 0;
+    {
+        std::lock_guard<std::mutex> lock(r.bake3d_mutex);
+        if (!r.bake3d_files.count(rec.file)) {
+            new_file = true;
+            too_many_files = r.bake3d_files.size() >= max_files;
+            if (!too_many_files) r.bake3d_files.insert(rec.file);
+        }
+        r.bake3d_points += points;
+        too_many_points = r.bake3d_points > max_points;
+        r.bake3d_bytes += bytes;
+        if (r.bake3d_bytes >= r.bake3d_checked_bytes + kShaderMemoryStep) {
+            r.bake3d_checked_bytes = r.bake3d_bytes;
+            check_bytes = r.bake3d_bytes;
+        }
+    }
+    const std::string call = "bake3d \"" + rec.file + "\": ";
+    if (new_file && too_many_files)
+        f.fail(b, call + "a new file after " + std::to_string(max_files) +
+                      ": the files of one job " + limit_exceeded(Limit::Bake3dFiles));
+    if (too_many_points)
+        f.fail(b, call + "the points baked in one job exceed the limit of " +
+                      std::to_string(max_points) + " (set " +
+                      limit_variable(Limit::Bake3dPoints) + " to raise it)");
+    if (check_bytes)
+        f.check_memory_for(b, kShaderMemoryStep,
+                           call + "the job's bake3d points (" +
+                               format_bytes(check_bytes) + ")");
+}
+
 void op_bake3d(Frame& f, const BoundOp& b) {
     Slot& d = f.slot(b, 0);
     const std::size_t n = f.n;
@@ -765,7 +809,10 @@ void op_bake3d(Frame& f, const BoundOp& b) {
         }
     });
     (void)stride;
-    if (!rec.P.empty()) f.ctx->services.bake3d(std::move(rec));
+    if (!rec.P.empty()) {
+        count_bake3d(f, b, rec);
+        f.ctx->services.bake3d(std::move(rec));
+    }
     f.each(d.varying, [&](std::size_t i) { *d.at(i) = 1.0f; });
 }
 

@@ -4,6 +4,8 @@
 // string formatting and matching). No state besides caches; every function
 // is thread-safe.
 
+#include <cstddef>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <string_view>
@@ -90,10 +92,20 @@ struct RslFormatArg {
 /// sss::ValueError naming the pattern and the argument.
 std::string rsl_format(std::string_view pattern, std::span<const RslFormatArg> args);
 
+/// Bounds of match()'s patterns, checked before regcomp (glibc's compiled
+/// size grows with the repetitions multiplied out: `((a{1,100}){1,100}){1,100}`
+/// takes gigabytes; its matching time with the size times the subject).
+constexpr std::size_t kMaxRegexLength = 4096; ///< bytes of one pattern
+constexpr uint64_t kMaxRegexSize = 2000;      ///< elements, repetitions multiplied out
+constexpr int kMaxRegexNesting = 64;          ///< nested groups
+constexpr uint64_t kMaxRegexWork = uint64_t(1) << 24; ///< size x subject bytes
+
 /// match(pattern, subject): true if the POSIX extended regular expression
-/// matches anywhere in subject. An invalid pattern matches nothing (false),
-/// as RSL has no way to report it per point. Compiled patterns are cached
-/// (thread-safe).
+/// matches anywhere in subject. Compiled patterns are cached (thread-safe).
+/// Throws sss::ValueError naming the pattern for an invalid one (regcomp's
+/// reason), one over the bounds above, a back-reference (`\1`: glibc
+/// matches them by backtracking, in exponential time), and a subject too
+/// long for the pattern's size (kMaxRegexWork).
 bool rsl_match(std::string_view pattern, std::string_view subject);
 
 } // namespace sss::detail

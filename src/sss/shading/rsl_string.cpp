@@ -3,6 +3,8 @@
 
 #include <regex.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -106,12 +108,166 @@ const char* expected_type(char conversion) {
     return "a float";
 }
 
-/// A compiled regular expression, freed with it.
+/// The size of a POSIX extended regular expression once glibc has
+/// multiplied out its repetitions (an upper bound: a{2,5} is five copies of
+/// a, a+ two), or an error for what is refused before regcomp. Syntax errors
+/// are left to regcomp.
+class RegexSize {
+public:
+    explicit RegexSize(std::string_view p) : m_p(p) {}
+
+    /// The size; `error` set when the pattern is refused.
+    uint64_t measure(std::string& error) {
+        uint64_t size = alternation(0);
+        while (m_i < m_p.size() && m_error.empty()) { // a stray ')' and on
+            ++m_i;
+            size = add(size, alternation(0));
+        }
+        error = m_error;
+        return size;
+    }
+
+private:
+    static uint64_t add(uint64_t a, uint64_t b) {
+        return std::min<uint64_t>(a + b, uint64_t(1) << 60);
+    }
+    static uint64_t times(uint64_t a, uint64_t b) {
+        return b != 0 && a > (uint64_t(1) << 60) / b ? uint64_t(1) << 60 : a * b;
+    }
+
+    uint64_t alternation(int depth) {
+        uint64_t size = sequence(depth);
+        while (m_error.empty() && m_i < m_p.size() && m_p[m_i] == '|') {
+            ++m_i;
+            size = add(size, sequence(depth) + 1);
+        }
+        return size;
+    }
+
+    uint64_t sequence(int depth) {
+        uint64_t size = 0;
+        while (m_error.empty() && m_i < m_p.size() && m_p[m_i] != '|' && m_p[m_i] != ')')
+            size = add(size, repeated(atom(depth)));
+        return size;
+    }
+
+    uint64_t atom(int depth) {
+        const char c = m_p[m_i++];
+        if (c == '(') {
+            if (depth + 1 > kMaxRegexNesting) {
+                m_error =
+                    "groups nest more than " + std::to_string(kMaxRegexNesting) + " deep";
+                return 1;
+            }
+            const uint64_t inner = alternation(depth + 1);
+            if (m_i < m_p.size() && m_p[m_i] == ')') ++m_i;
+            return add(inner, 1);
+        }
+        if (c == '[') {
+            // A bracket expression: one element, whatever it lists.
+            if (m_i < m_p.size() && m_p[m_i] == '^') ++m_i;
+            if (m_i < m_p.size() && m_p[m_i] == ']') ++m_i;
+            while (m_i < m_p.size() && m_p[m_i] != ']') {
+                if (m_p[m_i] == '[' && m_i + 1 < m_p.size() &&
+                    (m_p[m_i + 1] == ':' || m_p[m_i + 1] == '=' || m_p[m_i + 1] == '.')) {
+                    const char close[] = {m_p[m_i + 1], ']', 0};
+                    const std::size_t end = m_p.find(close, m_i + 2);
+                    m_i = end == std::string_view::npos ? m_p.size() : end + 2;
+                } else {
+                    ++m_i;
+                }
+            }
+            if (m_i < m_p.size()) ++m_i;
+            return 1;
+        }
+        if (c == '\\' && m_i < m_p.size()) {
+            const char e = m_p[m_i++];
+            if (e >= '1' && e <= '9')
+                m_error = std::string("back-references (\\") + e +
+                          ") are not supported: they match in exponential time";
+        }
+        return 1;
+    }
+
+    /// `size` under the repetitions that follow it.
+    uint64_t repeated(uint64_t size) {
+        while (m_error.empty() && m_i < m_p.size()) {
+            const char c = m_p[m_i];
+            if (c == '*' || c == '?') {
+                size = add(size, 1);
+            } else if (c == '+') {
+                size = add(times(size, 2), 1);
+            } else if (c == '{') {
+                std::size_t j = m_i + 1;
+                uint64_t low = 0, high = 0;
+                bool has_low = false, has_comma = false, has_high = false;
+                while (j < m_p.size() &&
+                       std::isdigit(static_cast<unsigned char>(m_p[j]))) {
+                    low =
+                        std::min<uint64_t>(low * 10 + uint64_t(m_p[j++] - '0'), 1u << 30);
+                    has_low = true;
+                }
+                if (j < m_p.size() && m_p[j] == ',') {
+                    has_comma = true;
+                    ++j;
+                    while (j < m_p.size() &&
+                           std::isdigit(static_cast<unsigned char>(m_p[j]))) {
+                        high = std::min<uint64_t>(high * 10 + uint64_t(m_p[j++] - '0'),
+                                                  1u << 30);
+                        has_high = true;
+                    }
+                }
+                if (j >= m_p.size() || m_p[j] != '}' || (!has_low && !has_high))
+                    return size; // not an interval: regcomp decides
+                m_i = j;
+                // glibc copies the element for each repetition: {n} n times,
+                // {n,} n + 1 (the last starred), {n,m} m.
+                const uint64_t copies =
+                    !has_comma ? low : (has_high ? std::max(low, high) : low + 1);
+                size = add(times(size, std::max<uint64_t>(copies, 1)), 1);
+            } else {
+                return size;
+            }
+            ++m_i;
+        }
+        return size;
+    }
+
+    std::string_view m_p;
+    std::size_t m_i = 0;
+    std::string m_error;
+};
+
+/// A compiled regular expression, freed with it; `error` says why a
+/// pattern was refused or did not compile.
 struct Regex {
     regex_t re{};
     bool ok = false;
+    uint64_t size = 0;
+    std::string error;
     explicit Regex(const std::string& pattern) {
-        ok = regcomp(&re, pattern.c_str(), REG_EXTENDED | REG_NOSUB) == 0;
+        if (pattern.size() > kMaxRegexLength) {
+            error = "a pattern of " + std::to_string(pattern.size()) +
+                    " bytes is longer than the bound of " +
+                    std::to_string(kMaxRegexLength);
+            return;
+        }
+        size = RegexSize(pattern).measure(error);
+        if (!error.empty()) return;
+        if (size > kMaxRegexSize) {
+            error = "the pattern has " + std::to_string(size) +
+                    " elements once its repetitions are multiplied out, more than "
+                    "the bound of " +
+                    std::to_string(kMaxRegexSize);
+            return;
+        }
+        const int code = regcomp(&re, pattern.c_str(), REG_EXTENDED | REG_NOSUB);
+        ok = code == 0;
+        if (!ok) {
+            char text[256];
+            regerror(code, &re, text, sizeof text);
+            error = std::string("invalid regular expression: ") + text;
+        }
     }
     ~Regex() {
         if (ok) regfree(&re);
@@ -225,7 +381,18 @@ std::string rsl_format(std::string_view pattern, std::span<const RslFormatArg> a
 
 bool rsl_match(std::string_view pattern, std::string_view subject) {
     const auto re = regex_cache().get(pattern);
-    if (!re->ok) return false;
+    const auto refuse = [&](const std::string& why) -> bool {
+        std::string shown(pattern.substr(0, 200));
+        if (pattern.size() > 200) shown += "...";
+        throw ValueError("match(\"" + shown + "\"): " + why);
+    };
+    if (!re->ok) return refuse(re->error);
+    // regexec's time grows with the pattern's size times the subject's.
+    if (std::max<uint64_t>(re->size, 1) * subject.size() > kMaxRegexWork)
+        return refuse("a subject of " + std::to_string(subject.size()) +
+                      " bytes is too long for a pattern of " + std::to_string(re->size) +
+                      " elements (their product is bounded by " +
+                      std::to_string(kMaxRegexWork) + ")");
     // regexec reads a NUL-terminated string (an embedded NUL ends the subject).
     const std::string s(subject);
     return regexec(&re->re, s.c_str(), 0, nullptr, 0) == 0;

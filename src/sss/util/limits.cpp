@@ -38,6 +38,11 @@ constexpr std::array<LimitInfo, static_cast<size_t>(Limit::Count_)> kLimits{{
     {"IMAGE_PIXELS", "pixels in one image", 1u << 28},
     {"IMAGE_SIDE", "pixels across one image side", 1u << 16},
     {"BRICKS", "bricks in one brick map", 64'000'000},
+    {"SHADER_OPERATIONS", "shader operations in one shading batch", 100'000'000},
+    {"SHADER_STRING_LENGTH", "bytes in one shader string", 1u << 20},
+    {"SHADER_ARRAY_LENGTH", "elements in one resizable array", 1'000'000},
+    {"BAKE3D_POINTS", "bake3d points in one job", 1'000'000'000},
+    {"BAKE3D_FILES", "bake3d files in one job", 4096},
 }};
 
 const LimitInfo& info(Limit which) {
@@ -215,6 +220,11 @@ void check_limit(Limit which, uint64_t needed, const std::string& where) {
                                 format_count(needed) + " " + limit_what(which) +
                                 " exceeds the limit of " + format_count(allowed) +
                                 " (set " + limit_variable(which) + " to raise it)");
+}
+
+std::string limit_exceeded(Limit which) {
+    return "exceeds the limit of " + format_count(limit(which)) + " (set " +
+           limit_variable(which) + " to raise it)";
 }
 
 MemoryBudget usable_memory() {

@@ -1,4 +1,5 @@
-/* strings.sl: concat, format, printf and match. corpus_test.cpp also checks
+/* strings.sl: concat, format, printf and match (an invalid pattern is an error:
+ * engine_budgets_test.cpp). corpus_test.cpp also checks
  * what printf sent. Batch: a plane grid of 2 x 1 points (u = 0.25, 0.75). */
 #include "corpus.h"
 
@@ -21,7 +22,7 @@ surface strings(
         + TRUTH(format("n=%d s=%s", 2, "a") == "n=2 s=a");
     check_match = TRUTH(match("^sk", name) == 1) + TRUTH(match("in$", name) == 1)
         + TRUTH(match("^x", name) == 0) + TRUTH(match("k.n", name) == 1)
-        + TRUTH(match("[0-9]+", "frame12") == 1) + TRUTH(match("(", "x") == 0);
+        + TRUTH(match("[0-9]+", "frame12") == 1) + TRUTH(match("a|(b)", "xb") == 1);
     string f = format("%.2f", u);
     check_varying_format = TRUTH(f == (u < 0.5 ? "0.25" : "0.75"));
     printf("%s %.2f\n", name, u);
