@@ -5,11 +5,18 @@
 // reader instead, which must reject damage cleanly. docs/fuzzing.md.
 //
 // The preprocessor is not run: #include could read files outside the corpus.
+//
+// In the fuzzing build, a custom mutator changes RSL text a token at a time
+// (rsl_mutator.h) three times in four, and leaves the rest (and .slo inputs)
+// to libFuzzer's byte-level mutation.
 
+#include <cstring>
+#include <random>
 #include <sstream>
 #include <string>
 
 #include "fuzz_common.h"
+#include "rsl_mutator.h"
 #include "sss/rsl/compiler.h"
 #include "sss/rsl/program.h"
 
@@ -61,3 +68,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     });
     return 0;
 }
+
+#ifdef SSS_LIBFUZZER
+extern "C" size_t LLVMFuzzerMutate(uint8_t* data, size_t size, size_t max_size);
+
+extern "C" size_t LLVMFuzzerCustomMutator(uint8_t* data, size_t size, size_t max_size,
+                                          unsigned int seed) {
+    std::minstd_rand rng(seed);
+    const std::string_view in(reinterpret_cast<const char*>(data), size);
+    if (rng() % 4 == 0 || in.rfind("sss-slo", 0) == 0)
+        return LLVMFuzzerMutate(data, size, max_size);
+    std::string text(in);
+    // Now and then several changes at once, as libFuzzer stacks mutations.
+    const int rounds = 1 + static_cast<int>(rng() % 3);
+    bool changed = false;
+    for (int r = 0; r < rounds; ++r) changed |= sss::fuzz::mutate_rsl(text, rng);
+    if (!changed || text.size() > max_size) return LLVMFuzzerMutate(data, size, max_size);
+    std::memcpy(data, text.data(), text.size());
+    return text.size();
+}
+#endif
