@@ -229,9 +229,17 @@ std::vector<glm::vec3> vec3_values(const std::string& name, const py::handle& va
     return out;
 }
 
+/// A header value as one row of floats, whatever its shape; ValueError when
+/// it is not numeric (ensure() gives a null array then, which must not be
+/// reshaped).
+py::array_t<float> header_row(const std::string& name, const py::handle& value) {
+    auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!a) throw sss::ValueError("header['" + name + "']: not a numeric array");
+    return a.reshape({py::ssize_t(1), py::ssize_t(a.size())});
+}
+
 std::array<float, 16> matrix_value(const std::string& name, const py::handle& value) {
-    std::vector<float> f =
-        array_values(name, py::array_t<float>::ensure(value).reshape({1, -1}), 1, 16);
+    std::vector<float> f = array_values(name, header_row(name, value), 1, 16);
     std::array<float, 16> m;
     std::copy(f.begin(), f.end(), m.begin());
     return m;
@@ -285,9 +293,8 @@ sss::PointCloud cloud_from_python(const py::dict& arrays, const py::dict& types,
     if (header.contains("world_to_ndc"))
         cloud.world_to_ndc = matrix_value("world_to_ndc", header["world_to_ndc"]);
     if (header.contains("format")) {
-        std::vector<float> f = array_values(
-            "format", py::array_t<float>::ensure(header["format"]).reshape({1, -1}), 1,
-            3);
+        std::vector<float> f =
+            array_values("format", header_row("format", header["format"]), 1, 3);
         cloud.format = {f[0], f[1], f[2]};
     }
     return cloud;

@@ -136,10 +136,17 @@ def _parts(cloud, types=None):
     return dict(cloud), all_types, header
 
 
+def _native(name):
+    """A file name (or option word) as the bytes the OS uses: any name
+    os.fsdecode() gave back (undecodable bytes as surrogates) reaches the
+    library unchanged, where a str with surrogates could not."""
+    return os.fsencode(name)
+
+
 def _path_list(source):
     if isinstance(source, (str, bytes, os.PathLike)):
-        return [os.fsdecode(source)]
-    return [os.fsdecode(s) for s in source]
+        return [_native(source)]
+    return [_native(s) for s in source]
 
 
 def _is_cloud(source):
@@ -154,7 +161,7 @@ def read_cloud(path):
     NaN/Inf data), with the file name and, where it applies, the point index
     (the exceptions' ``path`` and ``point`` attributes).
     """
-    return _cloud(*_sss.read_cloud(os.fsdecode(path)))
+    return _cloud(*_sss.read_cloud(_native(path)))
 
 
 def write_cloud(path, cloud, *, types=None, ptcversion=0, compress=False):
@@ -167,7 +174,7 @@ def write_cloud(path, cloud, *, types=None, ptcversion=0, compress=False):
     file cannot be written.
     """
     arrays, all_types, header = _parts(cloud, types)
-    _sss.write_cloud(os.fsdecode(path), arrays, all_types, header, int(ptcversion),
+    _sss.write_cloud(_native(path), arrays, all_types, header, int(ptcversion),
                      bool(compress))
 
 
@@ -181,7 +188,7 @@ _REPEATED = {"blocker"}
 
 def _values(key, value):
     if isinstance(value, (str, bytes, os.PathLike)):
-        return [os.fsdecode(value)]
+        return [_native(value)]
     if isinstance(value, (bool, np.bool_)):
         return ["1" if value else "0"]
     if isinstance(value, numbers.Integral):
@@ -192,7 +199,7 @@ def _values(key, value):
         return [repr(float(value))]
     values = list(value)
     if key == "channels" and all(isinstance(v, str) for v in values):
-        return [",".join(values)]
+        return [_native(",".join(values))]
     return [w for v in values for w in _values(key, v)]
 
 
@@ -263,7 +270,7 @@ def ptfilter(inputs, output, *, progress=None, **options):
     ``frame`` (expands %04d, #### and $F4 in the file names). Returns the
     report dict.
     """
-    report = _sss.ptfilter(_path_list(inputs), os.fsdecode(output), _words(options),
+    report = _sss.ptfilter(_path_list(inputs), _native(output), _words(options),
                            progress)
     _warn(report)
     return report
@@ -287,7 +294,7 @@ def make_brickmap(source, output, *, progress=None, **options):
         src = [_parts(s) for s in source]
     else:
         src = _path_list(source)
-    return _sss.make_brickmap(src, os.fsdecode(output), _words(options), progress)
+    return _sss.make_brickmap(src, _native(output), _words(options), progress)
 
 
 def isa_names():
@@ -303,7 +310,7 @@ class BrickMap:
     """
 
     def __init__(self, path, cache_bytes=256 << 20):
-        self._map = _sss.BrickMap(os.fsdecode(path), int(cache_bytes))
+        self._map = _sss.BrickMap(_native(path), int(cache_bytes))
         self.path = os.fsdecode(path)
 
     @property

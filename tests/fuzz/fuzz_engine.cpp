@@ -10,10 +10,9 @@
 // NaN and infinities to 0). An sss::Error (a compile error, such as the
 // recursion's, or a limit) is an expected outcome. docs/fuzzing.md.
 //
-// The loops of the generated shaders are bounded: the engine has no
-// run-time budget yet, so a loop that never ends could only end in
-// libFuzzer's -timeout. SSS_FUZZ_RUNAWAY=1 lets about one loop in 256 have a
-// condition that may never become false (for when the engine bounds them).
+// About one loop in 256 has a condition that may never become false: the
+// engine's budgets (set low here) must end it with their error, well within
+// libFuzzer's -timeout. SSS_FUZZ_RUNAWAY=0 leaves such loops out.
 //
 // The inputs name no file: the generator writes every name, all relative to
 // the scratch folder (the current directory), which is emptied after every
@@ -127,8 +126,16 @@ struct Setup {
         sss::set_limit(sss::Limit::ImagePixels, 64 * 64);
         sss::set_limit(sss::Limit::ImageSide, 64);
         sss::set_limit(sss::Limit::Bricks, 4096);
+        // The engine's budgets, low: a runaway loop, string or array ends in
+        // well under libFuzzer's -timeout with the budget's error.
+        sss::set_limit(sss::Limit::ShaderOperations, 2'000'000);
+        sss::set_limit(sss::Limit::ShaderStringLength, 1 << 16);
+        sss::set_limit(sss::Limit::ShaderArrayLength, 1 << 16);
+        sss::set_limit(sss::Limit::Bake3dPoints, 1'000'000);
+        sss::set_limit(sss::Limit::Bake3dFiles, 16);
+        // SSS_FUZZ_RUNAWAY=0 leaves out the constructs that may not end.
         const char* r = std::getenv("SSS_FUZZ_RUNAWAY");
-        runaway = r && *r && std::string(r) != "0";
+        runaway = !(r && std::string(r) == "0");
         try {
             assets = make_assets();
         } catch (const sss::Error& e) {

@@ -9,9 +9,8 @@
 //
 // Every loop is bounded (at most kMaxTrips trips, nested at most two deep)
 // unless `runaway` is set: then about one loop in 256 has a condition that
-// may never become false. The engine has no run-time budget yet, so such a
-// loop can only end in libFuzzer's -timeout; the target enables them with
-// SSS_FUZZ_RUNAWAY=1 only.
+// may never become false, which the engine's budgets must end (the target
+// sets them low; SSS_FUZZ_RUNAWAY=0 leaves such loops out).
 //
 // Arithmetic that can leave the reals (division, sqrt, log, pow, overflow in
 // loops) is allowed: the shader ends with Ci, Oi and its output passed

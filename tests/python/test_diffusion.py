@@ -216,7 +216,11 @@ def test_ctrl_c_cancels(tool, tmp_path, threads):
     big = tmp_path / "big.ptc"
     tool("ptsynth", "-n", 300000, big)
     cloud = sss.read_cloud(big)
-    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    sss.ssdiffusion(cloud, threads=threads, maxsolidangle=0.1)
+    whole = time.perf_counter() - start
+    # The signal comes a third of the way through a run as long.
+    timer = threading.Timer(whole / 3, os.kill, (os.getpid(), signal.SIGINT))
     start = time.perf_counter()
     timer.start()
     try:
@@ -226,11 +230,8 @@ def test_ctrl_c_cancels(tool, tmp_path, threads):
         timer.cancel()
         timer.join()
     interrupted = time.perf_counter() - start
-    start = time.perf_counter()
-    sss.ssdiffusion(cloud, threads=threads, maxsolidangle=0.1)
-    whole = time.perf_counter() - start
-    # The signal came during the run, which stopped well before its end.
-    assert whole > 0.3 and interrupted < 0.8 * whole
+    # The run stopped well before its end.
+    assert whole > 0.1 and interrupted < 0.7 * whole
 
 
 def test_volume_with_blockers_as_ptfilter(tmp_path, tool, sphere):

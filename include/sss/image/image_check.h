@@ -40,4 +40,12 @@ constexpr long long kMaxImageTiles = 1LL << 24;
 /// reader then reports the file in its own words.
 std::optional<ImageHeader> check_image_file(const std::string& path);
 
+/// check_image_file()'s PNG part alone, without OpenImageIO: the header of a
+/// PNG file checked whole, nothing for another format (or not a regular file).
+std::optional<ImageHeader> check_png_file(const std::string& path);
+
+/// check_image_file()'s hold of a header read elsewhere (the texture plugin's
+/// OpenImageIO) against the limits: FormatError or LimitError naming `path`.
+void check_image_header(const std::string& path, const ImageHeader& header);
+
 } // namespace sss

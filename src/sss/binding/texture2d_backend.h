@@ -13,6 +13,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "sss/image/image_check.h"
 #include "sss/shading/texture_services.h"
 
 namespace sss::detail {
@@ -43,6 +44,9 @@ public:
     virtual bool texture_info(const std::string& file, const std::string& key,
                               int expected_floats, float* numbers, std::string* text) = 0;
     virtual void invalidate(const std::string& file) = 0;
+    /// The header of an image file (first subimage, level 0) as OpenImageIO
+    /// reads it, nothing more; false when it cannot read one.
+    virtual bool image_header(const std::string& file, ImageHeader& out) = 0;
     /// Makes a tiled, MIP-mapped TIFF texture (`latlong`: a lat-long
     /// environment) of the picture `input` into `output`, with OpenImageIO's
     /// wrap modes ("periodic,clamp") and resampling filter; false with

@@ -108,7 +108,13 @@ bool TextureLibrary::Impl::image_ok(const std::string& file, std::string* error)
         std::error_code ec;
         if (!std::filesystem::is_regular_file(file, ec)) return; // the plugin says why
         try {
-            (void)check_image_file(file);
+            // PNG files whole without OpenImageIO; other headers through the
+            // plugin, which this process loads for the lookup anyway.
+            if (check_png_file(file)) return;
+            ImageHeader header;
+            if (Texture2dBackend* backend = textures(nullptr);
+                backend && backend->image_header(file, header))
+                check_image_header(file, header);
         } catch (const Error& e) {
             entry->error = e.what();
         } catch (const std::bad_alloc&) {

@@ -1,5 +1,8 @@
 /// \file image_check.cpp
-/// check_image_file(): headers held against the limits, PNG files read whole.
+/// Image checks without OpenImageIO: headers held against the limits, PNG
+/// files read whole (check_image_file, which reads other headers with
+/// OpenImageIO, is in image_check_oiio.cpp: a tool that checks only through
+/// these does not load OpenImageIO).
 
 #include "sss/image/image_check.h"
 
@@ -13,7 +16,6 @@
 #include <memory>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
 #include <zlib.h>
 
 #include "sss/util/error.h"
@@ -239,38 +241,25 @@ private:
 
 } // namespace
 
-std::optional<ImageHeader> check_image_file(const std::string& path) {
-    // A FIFO or device would block or never end: the caller's reader refuses it.
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
-    {
-        std::ifstream in(path, std::ios::binary);
-        unsigned char sig[8] = {};
-        if (in && in.read(reinterpret_cast<char*>(sig), 8) &&
-            std::memcmp(sig, kPngSignature, 8) == 0) {
-            PngCheck png(path, in);
-            return png.run();
-        }
-    }
-    // Only the header: OpenImageIO's readers allocate nothing more on open.
-    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
-    if (!in) {
-        (void)OIIO::geterror(); // the caller's reader says why
-        return std::nullopt;
-    }
-    const OIIO::ImageSpec& spec = in->spec();
-    ImageHeader h;
-    h.width = spec.width;
-    h.height = spec.height;
-    h.channels = spec.nchannels;
-    h.tile_width = spec.tile_width;
-    h.tile_height = spec.tile_height;
-    in->close();
+void check_image_header(const std::string& path, const ImageHeader& h) {
     if (h.width <= 0 || h.height <= 0)
         throw FormatError(path, "an image of " + std::to_string(h.width) + " x " +
                                     std::to_string(h.height) + " pixels");
     check_size(path, h);
-    return h;
+}
+
+std::optional<ImageHeader> check_png_file(const std::string& path) {
+    // A FIFO or device would block or never end: the caller's reader refuses it.
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+    std::ifstream in(path, std::ios::binary);
+    unsigned char sig[8] = {};
+    if (in && in.read(reinterpret_cast<char*>(sig), 8) &&
+        std::memcmp(sig, kPngSignature, 8) == 0) {
+        PngCheck png(path, in);
+        return png.run();
+    }
+    return std::nullopt;
 }
 
 } // namespace sss

@@ -277,6 +277,21 @@ public:
     bool make_texture(const std::string& input, const std::string& output, bool latlong,
                       const std::string& wrapmodes, const std::string& filter,
                       std::string* error) override;
+    bool image_header(const std::string& file, ImageHeader& out) override {
+        // Only the header: OpenImageIO's readers allocate nothing more on open.
+        std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(file);
+        if (!in) {
+            (void)OIIO::geterror(); // the lookup that follows says why
+            return false;
+        }
+        const OIIO::ImageSpec& spec = in->spec();
+        out.width = spec.width;
+        out.height = spec.height;
+        out.channels = spec.nchannels;
+        out.tile_width = spec.tile_width;
+        out.tile_height = spec.tile_height;
+        return true;
+    }
     bool read_depth_map(const std::string& file, DepthMapData& out,
                         std::string* error) override {
         return read_depth_map_file(file, out, error);
@@ -382,9 +397,10 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
     OIIO::TextureOpt opt = oiio_options(options, channel);
     if (tex->periodic) opt.swrap = opt.twrap = OIIO::TextureOpt::WrapPeriodic;
     // A grey map read as colour gives grey (RenderMan); other channels past
-    // the file's last get the fill value (OIIO).
+    // the file's last get the fill value, here: OpenImageIO asserts when it
+    // is asked for channels a tile does not hold.
     const bool replicate = tex->nchannels == 1 && channel == 0 && nchannels == 3;
-    const int read = replicate ? 1 : nchannels;
+    const int read = replicate ? 1 : std::clamp(tex->nchannels - channel, 0, nchannels);
     // The widths applied here, so that each footprint is bounded.
     const float sw = opt.swidth, tw = opt.twidth;
     opt.swidth = opt.twidth = 1.0f;
@@ -398,6 +414,8 @@ bool OiioTextures::texture(const std::string& file, int channel, int nchannels,
             std::fill(result, result + nchannels, 0.0f);
             continue;
         }
+        if (!replicate) std::fill(result + read, result + nchannels, opt.fill);
+        if (read == 0) continue;
         float dsdx, dtdx, dsdy, dtdy;
         footprint_axis(ds_du ? ds_du[i] : 0.0f, dt_du ? dt_du[i] : 0.0f, sw, tw, dsdx,
                        dtdx);
@@ -443,7 +461,7 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
         opt.swrap = opt.twrap = OIIO::TextureOpt::WrapClamp;
     }
     const bool replicate = tex->nchannels == 1 && channel == 0 && nchannels == 3;
-    const int read = replicate ? 1 : nchannels;
+    const int read = replicate ? 1 : std::clamp(tex->nchannels - channel, 0, nchannels);
     const glm::vec3 zero(0.0f);
     bool ok = true;
     for (std::size_t i = 0; i < count; ++i) {
@@ -455,6 +473,8 @@ bool OiioTextures::environment(const std::string& file, int channel, int nchanne
             std::fill(result, result + nchannels, 0.0f);
             continue;
         }
+        if (!replicate) std::fill(result + read, result + nchannels, opt.fill);
+        if (read == 0) continue;
         const glm::vec3 dx = ddir_du ? direction_footprint(ddir_du[i], r) : zero;
         const glm::vec3 dy = ddir_dv ? direction_footprint(ddir_dv[i], r) : zero;
         if (cube)
