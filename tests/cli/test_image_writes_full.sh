@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CLI test of image writes on a full disk (docs/cli-conventions.md, "Outputs";
 # docs/images.md): every tool that writes an image (render's PNG, JPEG, TIFF
-# and OpenEXR, ptview's PNG and OpenEXR, brickinfo -picture, envdome -sky)
+# and OpenEXR, ptview's PNG and OpenEXR, brickinfo -picture, envdome -sky,
+# a MakeTexture in the RIB)
 # writes onto a small tmpfs filled up to its last 8 KB (a write that fails
 # part way, where the tools used to rename a truncated file over the output). Each must exit 1 with
 # exactly one ERROR line naming the file and the cause, leave the previous
@@ -89,6 +90,26 @@ full_disk "ptview exr" v.exr 8 "$bin/ptview" -o "$disk/v.exr" cloud.ptc
 # brickinfo's picture of a sparse map is 2.5 KB: no room at all.
 full_disk "brickinfo -picture" b.png 0 "$bin/brickinfo" -picture "$disk/b.png" map.bkm
 full_disk "envdome -sky" sky.exr 8 "$bin/envdome" -sky 1024 512 "$disk/sky.exr"
+
+# MakeTexture's texture (OpenImageIO's maker writes it, TIFF) on the full
+# disk: one ERROR line naming it, the old texture (older than the picture,
+# so remade) kept, no temporary.
+rm -f "$disk"/*
+printf 'previous texture\n' >"$disk/pic.tx"
+touch -d '2000-01-01' "$disk/pic.tx"
+before="$(cksum <"$disk/pic.tx")"
+dd if=/dev/zero of="$disk/fill" bs=4k 2>/dev/null || true
+truncate -s -8K "$disk/fill"
+oiiotool --pattern noise 256x256 3 -d float -o pic.exr
+printf 'MakeTexture "pic.exr" "%s/pic.tx" "periodic" "periodic" "gaussian" 2 2\n%s\n' \
+    "$disk" 'Format 16 16 1 WorldBegin Sphere 1 -1 1 360 WorldEnd' >make.rib
+run "$bin/render" -o make.exr make.rib
+if expect_rc 1 "MakeTexture on a full disk"; then
+    [[ "$(grep -c ERROR <<<"$err")" == 1 && "$err" == *"$disk/pic.tx"* ]] ||
+        fail "MakeTexture on a full disk: $err"
+fi
+[[ "$(cksum <"$disk/pic.tx")" == "$before" ]] || fail "MakeTexture: the previous texture changed"
+[[ -z "$(find "$disk" -name '*.tmp')" ]] || fail "MakeTexture: temporaries left"
 
 # The control: with room on the disk the same jobs write their files.
 rm -f "$disk"/*
