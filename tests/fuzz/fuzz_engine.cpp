@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include "fuzz_bake.h"
 #include "fuzz_cloud.h"
 #include "fuzz_common.h"
 #include "rsl_generator.h"
@@ -169,18 +170,6 @@ void render_tiny(const sss::Scene& scene) {
     }
 }
 
-void bake_tiny(const sss::Scene& scene) {
-    sss::BakeOptions options;
-    sss::BakeReport report;
-    for (const auto& [path, cloud] : sss::bake_clouds(scene, options, &report)) {
-        sss::fuzz::check_cloud(cloud);
-        if (sss::fuzz::verbose())
-            std::fprintf(stderr, "baked %zu points into %s\n", cloud.size(),
-                         path.c_str());
-        sss::write_point_cloud(cloud, path);
-    }
-}
-
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -201,7 +190,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const std::string rib_path = setup.folder.file("scene.rib");
         const sss::Scene scene = sss::parse_rib(kRib, rib_path);
         if (source.find("bake3d") != std::string::npos)
-            sss::fuzz::run_expecting_errors([&] { bake_tiny(scene); });
+            sss::fuzz::run_expecting_errors([&] { sss::fuzz::bake_tiny(scene); });
         sss::fuzz::run_expecting_errors([&] { render_tiny(scene); });
     });
     return 0;

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "fuzz_bake.h"
 #include "fuzz_cloud.h"
 #include "fuzz_common.h"
 #include "sss/bake/bake.h"
@@ -128,20 +129,6 @@ void render_tiny(const sss::Scene& scene) {
     }
 }
 
-/// Bakes, checks the clouds and writes them where the shaders name them (in
-/// the scratch folder), so that the render can look them up.
-void bake_tiny(const sss::Scene& scene) {
-    sss::BakeOptions options;
-    sss::BakeReport report;
-    for (const auto& [path, cloud] : sss::bake_clouds(scene, options, &report)) {
-        sss::fuzz::check_cloud(cloud);
-        if (sss::fuzz::verbose())
-            std::fprintf(stderr, "baked %zu points into %s\n", cloud.size(),
-                         path.c_str());
-        sss::write_point_cloud(cloud, path);
-    }
-}
-
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -158,7 +145,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         options.lenient = true;
         const sss::Scene scene = sss::parse_rib(text, folder.file("scene.rib"), options);
         if (!dice_everything(scene)) return;
-        sss::fuzz::run_expecting_errors([&] { bake_tiny(scene); });
+        sss::fuzz::run_expecting_errors([&] { sss::fuzz::bake_tiny(scene); });
         sss::fuzz::run_expecting_errors([&] { render_tiny(scene); });
     });
     folder.clear();
