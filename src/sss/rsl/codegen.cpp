@@ -146,7 +146,8 @@ int Generator::konst(TypeSpec type, std::vector<float> numbers,
         std::memcpy(b, &f, sizeof f);
         key.append(b, sizeof f);
     }
-    for (const std::string& s : strings) key += "|" + std::to_string(s.size()) + ":" + s;
+    for (const std::string& s : strings)
+        key.append("|").append(std::to_string(s.size())).append(":").append(s);
     auto it = m_consts.find(key);
     if (it != m_consts.end()) return it->second;
     std::string name = "$c";

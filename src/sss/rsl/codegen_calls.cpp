@@ -363,7 +363,7 @@ Val Generator::inline_call(const FuncEntry& fe, std::vector<ArgInfo>& args,
         throw CompileAbort{};
     }
     const int inst = ++m_instances;
-    const std::string suffix = "@" + std::to_string(inst);
+    const std::string suffix = std::string("@").append(std::to_string(inst));
     const std::string prefix = f.name + "::";
     // A class's methods see its member variables and parameters; other
     // functions only their own parameters (and what they declare extern).

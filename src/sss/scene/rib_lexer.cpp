@@ -154,7 +154,7 @@ std::string Lexer::tok_name(const Token& t) {
     case Tok::End:
         return "the end of the file";
     case Tok::Word:
-        return "'" + truncated(t.text, kMaxEcho) + "'";
+        return std::string("'").append(truncated(t.text, kMaxEcho)).append("'");
     case Tok::Number:
         return "a number";
     case Tok::String:

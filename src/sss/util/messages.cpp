@@ -42,7 +42,11 @@ std::string truncated(std::string_view text, std::size_t max_bytes) {
 }
 
 std::string quoted(std::string_view text, std::size_t max_bytes) {
-    return "\"" + escape_control(truncated(text, max_bytes)) + "\"";
+    // Appended, not "\"" + ...: GCC 12 warns falsely (-Wrestrict) on that.
+    std::string out = "\"";
+    out += escape_control(truncated(text, max_bytes));
+    out += '"';
+    return out;
 }
 
 // ---------------------------------------------------------------------------
