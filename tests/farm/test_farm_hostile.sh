@@ -39,11 +39,13 @@ mkdir tools stubs
 for t in ptbake ptfilter brickmake render ptinfo; do
     printf '#!/usr/bin/env bash\nprintf "%%s\\0" "$@" >"%s/args.%s"\n' "$work" "$t" >"tools/$t"
 done
-# sbatch runs the array's first task at once: --wrap through sh, in --chdir.
+# sbatch runs the array's first task at once: --wrap through sh, in --chdir;
+# it keeps its --output.
 cat >stubs/sbatch <<'EOF'
 #!/usr/bin/env bash
 for a in "$@"; do
     case "$a" in
+        --output=*) printf '%s\n' "${a#--output=}" >>"$STUB_DIR/outputs.log" ;;
         --wrap=*) wrap="${a#--wrap=}" ;;
         --chdir=*) chdir="${a#--chdir=}" ;;
         --array=*) task="${a#--array=}"; task="${task%%[-,]*}" ;;
@@ -74,6 +76,15 @@ EOF
 [[ "$(cat "$odd/.sss-farm/status/odd.render.3")" == done ]] || fail "odd names: status file: $(cat stubs/tasks.log)"
 found="$(find "$work" "$HOME" -maxdepth 3 -name 'PWNED*' 2>/dev/null | head -n3 || true)"
 [[ -z "$found" ]] || fail "a file name ran code: $found"
+
+# --- a % in the work folder: sbatch's log name keeps it (%% in its pattern) ------
+pct="$work/100%j done"
+mkdir "$pct"
+: >stubs/outputs.log
+run "$farm" submit --frames 3 --workdir "$pct" --name pct --render a.rib
+expect_rc 0 "submit from a folder with a %"
+grep -qxF "$work/100%%j done/logs/pct-render.%4a.log" stubs/outputs.log ||
+    fail "the log pattern of a folder with a %: $(cat stubs/outputs.log)"
 
 # --- huge ranges and counts: refused before anything is allocated ----------------------
 for frames in 1-1000000000 "1-$(printf '9%.0s' {1..5000})" 0-4000001 "1,2,x" "" "5-"; do
