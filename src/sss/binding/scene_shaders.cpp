@@ -32,7 +32,7 @@ ParamList expand_strings(const ParamList& params, std::optional<int> frame,
         for (std::string& s : p.strings) {
             if (s.find_first_of("%#$") == std::string::npos) continue;
             try {
-                s = expand_frame_pattern(s, frame, where + " \"" + p.name + "\"");
+                s = expand_frame_pattern(s, frame, where + " " + sss::quoted(p.name));
             } catch (const MissingFrameError&) {
                 throw;
             } catch (const Error&) {
@@ -292,8 +292,10 @@ void record_shader_inputs(JobFiles& files, const SceneShaders& shaders) {
             for (const std::string& v : a.strings) {
                 std::error_code ec;
                 if (v.empty() || !std::filesystem::is_regular_file(v, ec)) continue;
-                files.input(v, "parameter \"" + a.name + "\" \"" + v + "\" of " +
-                                   (s.where().empty() ? s.program().name : s.where()));
+                files.input(
+                    v,
+                    "parameter " + sss::quoted(a.name) + " " + sss::quoted(v) + " of " +
+                        (s.where().empty() ? sss::quoted(s.program().name) : s.where()));
             }
         }
     };

@@ -885,21 +885,22 @@ RenderReport RenderJob::render_frame() const {
         const std::string path = display_file(d);
         std::string use;
         if (static_cast<int>(i) == primary && !options.output.empty())
-            use = options.output_label + " \"" + path + "\"";
+            use = options.output_label + " " + sss::quoted(path);
         else if (d.where.empty())
-            use = "the output image \"" + path + "\"";
+            use = "the output image " + sss::quoted(path);
         else
-            use = "Display \"" + std::string(d.additional ? "+" : "") + d.name + "\" (" +
+            use = "Display " +
+                  sss::quoted(std::string(d.additional ? "+" : "") + d.name) + " (" +
                   d.where + ")";
         files.output(path, use);
         display_format(d);
         check_output_target(path);
         if (display_is_window(d))
             report.warnings.push_back(
-                "Display \"" + d.name + "\" \"" + d.type + "\"" +
+                "Display " + sss::quoted(d.name) + " " + sss::quoted(d.type) +
                 (d.where.empty() ? "" : " (" + d.where + ")") +
-                ": there is no framebuffer window here; the image is written to \"" +
-                path + "\"");
+                ": there is no framebuffer window here; the image is written to " +
+                sss::quoted(path));
     }
     DisplayDefaults defaults;
     defaults.exposure_gain = scene.options.exposure_gain;
