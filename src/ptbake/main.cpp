@@ -51,7 +51,7 @@ std::string usage() {
         "  -compress 0|1          gzip the .ptc (default 0)\n"
         "  -ptcversion 0|1|2      .ptc version written (default 0)\n"
         "  -lenient               skip what the scene asks for that is not\n"
-        "                         implemented (CSG, Blobby planes...) with a\n"
+        "                         implemented (CSG, unknown requests...) with a\n"
         "                         warning; by default it is an error\n"
         "  -newer 0|1             1: do nothing when every cloud the scene bakes is\n"
         "                         newer than the RIB, every archive, texture and\n"

@@ -42,7 +42,7 @@ std::string usage() {
            "  -res X Y               image size instead of Format (quick previews)\n"
            "  -samples N             N x N pixel samples instead of PixelSamples\n"
            "  -lenient               skip what the scene asks for that is not\n"
-           "                         implemented (CSG, Blobby planes...) with a\n"
+           "                         implemented (CSG, unknown requests...) with a\n"
            "                         warning; by default it is an error\n"
            "  -newer 0|1             1: do nothing when every image is newer than the\n"
            "                         RIB, its archives and the maps its shaders read\n"

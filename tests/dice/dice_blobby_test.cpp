@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "../../src/sss/dice/dice_common.h"
 #include "sss/dice/dice.h"
@@ -408,22 +410,61 @@ TEST(DiceBlobby, BadProgramsAreErrorsNamingTheStatement) {
            "\"Cs\"");
     // Not implemented: errors, and with -lenient warnings.
     expect(error_of("Blobby 1 [1001 0 8 0] " + m + " [\"\"]"), "unknown opcode 8");
+    // A ground plane needs its depth map, which the dicer reads only through
+    // DiceControl::depth_maps (the renderers' texture library).
     expect(error_of("Blobby 2 [1001 0 1003 0 16 0 2 0 1] [" + sphere_matrix(1) +
                     "0 1 1 1] [\"ground.z\"]"),
-           "repelling ground plane");
+           "which only ptbake and render read");
     expect(error_of("Blobby 1 [1001 0] " + m + " [\"\"] \"N\" [0 0 1]"), "\"N\"");
     const sss::Scene lenient =
-        scene_of("Blobby 2 [1001 0 1003 0 16 0 2 0 1] [" + sphere_matrix(1) +
-                     "0 1 1 1] [\"ground.z\"]\n"
+        scene_of("Blobby 2 [1001 0 1004 0 0 0 0 0 0 2 0 1] [" + sphere_matrix(1) +
+                     "] [\"field.so\"]\n"
                      "Blobby 1 [1001 0 8 0] " +
                      m + " [\"\"]",
                  true);
     ASSERT_EQ(lenient.primitives.size(), 1u);
     EXPECT_EQ(lenient.warnings.size(), 2u);
-    // The ground plane's field is 0: the lone blob remains.
+    // The plugin's field is 0: the lone blob remains.
     const Mesh left = mesh_of(lenient.primitives[0]);
     ASSERT_FALSE(left.P.empty());
     for (const dvec3& p : left.P) ASSERT_NEAR(glm::length(p), iso_radius(1.0), 1e-9);
+}
+
+TEST(DiceBlobby, AGroundPlaneKeepsTheBlobInFrontOfItsDepthMap) {
+    // A wall at z = 1 seen along +z by an orthographic map over x, y in
+    // [-2, 2]; a blob (iso radius 0.45) centred at z = 0.7 reaches z = 1.15.
+    auto wall = std::make_shared<sss::DepthGrid>();
+    wall->width = wall->height = 8;
+    wall->depth.assign(64, 1.0f);
+    wall->world_to_screen = glm::scale(sss::Matrix4(1.0), glm::dvec3(0.5, 0.5, 1.0));
+    sss::DiceControl c = control(0.02);
+    std::vector<std::string> asked;
+    c.depth_maps = [&](const std::string& name) {
+        asked.push_back(name);
+        return std::shared_ptr<const sss::DepthGrid>(wall);
+    };
+    const std::string ball = sphere_matrix(1.0, 0.0, 0.0, 0.7);
+    const sss::Scene alone = scene_of("Blobby 1 [1001 0] [" + ball + "] [\"\"]");
+    const sss::Scene repelled = scene_of("Blobby 2 [1001 0 1003 0 16 0 2 0 1] [" + ball +
+                                         "0.3 0.01 0.1 0.05] [\"wall.z\"]");
+    const auto zmax = [&](const sss::Primitive& prim) {
+        const sss::Primitive m = sss::detail::blobby_mesh(prim, c);
+        const sss::Param* P = m.params.find("P");
+        double z = -1e9;
+        for (std::size_t k = 2; P && k < P->numbers.size(); k += 3)
+            z = std::max(z, P->numbers[k]);
+        return z;
+    };
+    EXPECT_NEAR(zmax(alone.primitives.at(0)), 0.7 + iso_radius(1.0), 0.03);
+    const double z = zmax(repelled.primitives.at(0));
+    EXPECT_LT(z, 1.0);
+    EXPECT_GT(z, 0.85);
+    EXPECT_EQ(asked, (std::vector<std::string>{"wall.z"}));
+    // Beyond the map (the blob moved to x = 5) nothing repels.
+    const sss::Scene off =
+        scene_of("Blobby 2 [1001 0 1003 0 16 0 2 0 1] [" +
+                 sphere_matrix(1.0, 5.0, 0.0, 0.7) + "0.3 0.01 0.1 0.05] [\"wall.z\"]");
+    EXPECT_NEAR(zmax(off.primitives.at(0)), 0.7 + iso_radius(1.0), 0.03);
 }
 
 } // namespace

@@ -14,6 +14,7 @@
 namespace sss {
 
 struct ShadowMap; // sss/light/shadow_map.h
+struct DepthGrid; // sss/dice/dice.h
 
 /// 2-D textures through one OpenImageIO TextureSystem (MIP-mapped .tx/.tex
 /// made by maketx, and any image OIIO reads, MIP-mapped on the fly),
@@ -86,6 +87,11 @@ public:
     /// reason") when it cannot be read as one. Thread-safe.
     std::shared_ptr<const ShadowMap> shadow_map(const std::string& file,
                                                 std::string* error);
+
+    /// The same depth map as the dicer reads it (a Blobby's repelling ground
+    /// plane: DiceControl::depth_maps), made once per map; IoError naming
+    /// `file` when it cannot be read as one. Thread-safe.
+    std::shared_ptr<const DepthGrid> depth_grid(const std::string& file);
 
     /// MakeShadow: the zfile `input` as a shadow map in `output` (OpenEXR,
     /// atomically), unless `output` is already newer than `input` (returns

@@ -84,6 +84,26 @@ private:
     bool m_replaying = false;
 };
 
+/// A depth map as the dicer reads it: the surface a Blobby's repelling
+/// ground plane (opcode 1003) keeps its blobs off.
+struct DepthGrid {
+    int width = 0, height = 0;
+    /// The map camera's z of the nearest surface per texel, rows top to
+    /// bottom; kNoDepth (or more) where there is none.
+    std::vector<float> depth;
+    /// World to the map camera's space (z away from the eye) and to its
+    /// screen (x, y in [-1, 1] after the division by w, y up).
+    Matrix4 world_to_camera{1.0};
+    Matrix4 world_to_screen{1.0};
+    static constexpr float kNoDepth = 1e30f;
+};
+
+/// The depth map a Blobby names, read along the texture search path (the
+/// renderers' texture library); throws an sss::Error naming it when it
+/// cannot be read as one.
+using DepthGridSource =
+    std::function<std::shared_ptr<const DepthGrid>(const std::string&)>;
+
 /// How fine to dice.
 struct DiceControl {
     /// > 0: micropolygon edge length in world units. 0: from ShadingRate and the camera.
@@ -111,6 +131,9 @@ struct DiceControl {
     DisplaceHook displace;
     /// When set: the dicing's geometric choices go through it (DiceJournal).
     std::shared_ptr<DiceJournal> journal;
+    /// The depth maps of Blobby ground planes; unset, a ground plane is an
+    /// error naming the primitive.
+    DepthGridSource depth_maps;
 
     /// A choice made from the geometry: `value`, or its journal's.
     double note(double value, const Primitive& prim) const {

@@ -13,6 +13,7 @@
 /// numbered from 0 in code order: the per-leaf primitive variables follow
 /// that order. The surface is where the field is kBlobbyThreshold.
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -33,7 +34,7 @@ enum class BlobbyOp {
     Constant,  ///< 1000: a field of the same value everywhere
     Ellipsoid, ///< 1001: (1 - r^2)^3 in the unit ball a matrix maps onto the ellipsoid
     Segment,   ///< 1002: the same falloff at a distance of up to `radius` from a segment
-    GroundPlane, ///< 1003: a repelling ground plane from a depth map (not evaluated)
+    GroundPlane, ///< 1003: a repelling ground plane from a depth map
     Plugin,      ///< 1004: an implicit field plugin (not evaluated)
     Add,         ///< 0
     Multiply,    ///< 1
@@ -73,6 +74,12 @@ struct BlobbyItem {
     /// Segment: its ends and radius in blob space.
     glm::dvec3 start{0.0}, end{0.0};
     double radius = 1.0;
+    /// GroundPlane: the depth map (a zfile or shadow map) whose surface
+    /// repels, and A (the height above it where the field ends), B (the
+    /// barrier's strength, -B/z), C (where the bulge peaks, over 2) and D
+    /// (the bulge's height), as Application Note #31 defines them.
+    std::string depth_map;
+    std::array<double, 4> repel{};
 };
 
 /// A decoded, checked Blobby program.
@@ -100,8 +107,11 @@ private:
 /// one), finite numbers, affine invertible matrices, segment radii > 0,
 /// and `nleaf` equal to the number of primitive fields. Throws ValueError
 /// "code[4]: ..." saying what is wrong where (BlobbyOpcodeError for an
-/// unknown opcode). Ground planes and plugins are decoded (their operands
-/// checked) but not evaluated by anyone: callers decide what to do.
+/// unknown opcode). A ground plane's operands are its string (the depth
+/// map) then its 4 floats, as PRMan's note gives them, or the other way
+/// round, as RISpec's table does, whichever fits the arrays (the note's
+/// when both do). Plugins are decoded (their operands checked) but not
+/// evaluated by anyone: callers decide what to do.
 BlobbyProgram decode_blobby(int nleaf, const std::vector<int>& code,
                             const std::vector<double>& floats,
                             const std::vector<std::string>& strings);

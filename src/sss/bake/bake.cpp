@@ -285,10 +285,13 @@ void job_mean_free_paths(const Scene& scene, const BakeOptions& options,
 std::vector<DiceRequest> dice_requests(const Scene& scene, const BakeOptions& options,
                                        const SceneShaders& shaders, const BakePlan& plan,
                                        double spacing, bool any_hits,
-                                       Displacer& displacer) {
+                                       Displacer& displacer, TextureLibrary& textures) {
     DiceControl control;
     control.spacing = spacing;
     control.camera = &scene.options.camera;
+    control.depth_maps = [&textures](const std::string& name) {
+        return textures.depth_grid(name);
+    };
     // Shadow-only surfaces need their shape, not micropolygon density.
     DiceControl occluder_control = control;
     occluder_control.coarsening = any_hits ? kRayCoarsening : kOccluderCoarsening;
@@ -695,7 +698,7 @@ BakeJob::clouds(BakeReport* report_out) const {
     Displacer displacer(scene, shaders, resources, dice_services);
     const std::string name = scene.path.empty() ? std::string("the scene") : scene.path;
     const std::vector<DiceRequest> requests = dice_requests(
-        scene, options, shaders, plan, spacing.spacing, any_hits, displacer);
+        scene, options, shaders, plan, spacing.spacing, any_hits, displacer, textures);
     std::optional<ScopedStage> stage(std::in_place, "dicing " + name);
     check_dicing(scene, options, plan, requests, report);
     const std::vector<DicedSurface> diced = dice_all(scene, requests);

@@ -6,6 +6,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "sss/binding/texture_library.h"
+#include "sss/dice/dice.h"
 #include "sss/light/shadow_map.h"
 #include "sss/util/job_files.h"
 #include "texture2d_backend.h"
@@ -14,6 +15,9 @@
 namespace sss {
 
 namespace {
+
+static_assert(kNoSurfaceDepth == DepthGrid::kNoDepth,
+              "the dicer's depth maps mark texels without a surface as shadow maps do");
 
 /// The matrix stored row-vector row by row: glm's column-major order of the
 /// column-vector matrix.
@@ -57,6 +61,24 @@ std::shared_ptr<const ShadowMap> TextureLibrary::shadow_map(const std::string& n
     });
     if (!entry->map && error) *error = entry->error;
     return entry->map;
+}
+
+std::shared_ptr<const DepthGrid> TextureLibrary::depth_grid(const std::string& file) {
+    std::string error;
+    const std::shared_ptr<const ShadowMap> map = shadow_map(file, &error);
+    if (!map) throw IoError(file, "not a depth map the dicer can read (" + error + ")");
+    std::lock_guard lock(m_impl->mutex);
+    std::shared_ptr<const DepthGrid>& slot = m_impl->depth_grids[map.get()];
+    if (!slot) {
+        auto grid = std::make_shared<DepthGrid>();
+        grid->width = map->width;
+        grid->height = map->height;
+        grid->depth = map->depth;
+        grid->world_to_camera = map->world_to_camera;
+        grid->world_to_screen = map->world_to_screen;
+        slot = std::move(grid);
+    }
+    return slot;
 }
 
 bool TextureLibrary::shadow(const std::string& file, const TextureOptions& options,

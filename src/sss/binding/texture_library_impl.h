@@ -15,6 +15,7 @@
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_lookup.h"
+#include "sss/dice/dice.h"
 #include "sss/light/shadow_map.h"
 
 namespace sss {
@@ -87,6 +88,8 @@ struct TextureLibrary::Impl {
     std::unordered_map<std::string, std::shared_ptr<detail::Texture3dFile>> files3d;
     /// Depth maps by resolved name; guarded by mutex.
     std::unordered_map<std::string, std::shared_ptr<detail::ShadowMapFile>> shadow_maps;
+    /// The dicer's copies of depth maps, by map; guarded by mutex.
+    std::unordered_map<const ShadowMap*, std::shared_ptr<const DepthGrid>> depth_grids;
 
     std::shared_ptr<detail::Texture3dFile> open3d(const std::string& file);
     /// 2-D image files by resolved name, checked once; guarded by mutex.

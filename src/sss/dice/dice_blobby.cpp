@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,7 @@
 #include "mesh_common.h"
 #include "sss/scene/blobby.h"
 #include "sss/util/math.h"
+#include "sss/util/messages.h"
 
 namespace sss::detail {
 
@@ -177,7 +179,7 @@ struct Link {
 /// shared between threads (scratch space).
 class BlobbyField {
 public:
-    explicit BlobbyField(const Primitive& prim) {
+    BlobbyField(const Primitive& prim, const DiceControl& control) {
         try {
             m_program = decode_blobby(prim);
         } catch (const ValueError& e) {
@@ -186,13 +188,15 @@ public:
         const std::size_t n = m_program.items.size();
         m_boxes.resize(n);
         m_parents.resize(n);
+        m_grounds.resize(n);
         for (std::size_t k = 0; k < n; ++k) {
             const BlobbyItem& item = m_program.items[k];
-            if (item.op == BlobbyOp::GroundPlane || item.op == BlobbyOp::Plugin)
+            if (item.op == BlobbyOp::Plugin)
                 fail(prim,
                      std::string("code[") + std::to_string(item.code_begin) + "]: the " +
                          blobby_op_name(item.op) +
                          " is not supported (the RIB reader makes it 0 with -lenient)");
+            if (item.op == BlobbyOp::GroundPlane) add_ground(prim, control, k);
             if (item.op == BlobbyOp::Ellipsoid || item.op == BlobbyOp::Segment) {
                 m_boxes[k] = support_box(item);
                 m_bounds.add(m_boxes[k]);
@@ -215,7 +219,8 @@ public:
         m_bins = LeafBins(m_bounds, m_bounded, m_boxes);
         m_stamp.assign(n, 0);
         m_background.resize(n);
-        m_sum = sum_of_leaves();
+        m_sum = !m_dense && sum_of_leaves();
+        m_step = 1e-4 * glm::length(m_bounds.hi - m_bounds.lo);
         // Beyond every support only the constants remain.
         for (std::size_t k = 0; k < n; ++k) {
             const BlobbyItem& item = m_program.items[k];
@@ -247,6 +252,10 @@ public:
             const BlobbyItem& item = m_program.items[k];
             out[static_cast<std::size_t>(item.leaf)] = item.value;
         }
+        for (std::size_t k = 0; k < m_grounds.size(); ++k)
+            if (m_grounds[k].map)
+                out[static_cast<std::size_t>(m_program.items[k].leaf)] =
+                    ground<false>(k, p).v;
         if (!m_bounds.contains(p)) return;
         const auto [begin, end] = m_bins.at(p);
         for (const uint32_t* k = begin; k != end; ++k) {
@@ -256,6 +265,119 @@ public:
     }
 
 private:
+    /// A repelling ground plane's depth map, the primitive's object space to
+    /// its camera and screen, and its shape (A, B, C, D).
+    struct Ground {
+        std::shared_ptr<const DepthGrid> map;
+        Matrix4 to_camera{1.0}, to_screen{1.0};
+        std::array<double, 4> repel{};
+    };
+
+    void add_ground(const Primitive& prim, const DiceControl& control, std::size_t k) {
+        const BlobbyItem& item = m_program.items[k];
+        if (!control.depth_maps)
+            fail(prim, "code[" + std::to_string(item.code_begin) +
+                           "]: the repelling ground plane needs its depth map " +
+                           sss::quoted(item.depth_map) +
+                           ", which only ptbake and render read");
+        Ground& g = m_grounds[k];
+        try {
+            g.map = control.depth_maps(item.depth_map);
+        } catch (const Error& e) {
+            fail(prim, "code[" + std::to_string(item.code_begin) +
+                           "]: the repelling ground plane: " + e.what());
+        }
+        if (!g.map || g.map->width < 1 || g.map->height < 1 ||
+            g.map->depth.size() != std::size_t(g.map->width) * std::size_t(g.map->height))
+            fail(prim, "the depth map " + sss::quoted(item.depth_map) + " is empty");
+        g.to_camera = g.map->world_to_camera * prim.object_to_world;
+        g.to_screen = g.map->world_to_screen * prim.object_to_world;
+        g.repel = item.repel;
+        m_dense = true;
+    }
+
+    /// How far p lies above the depth map's surface, along the map
+    /// camera's view: false where p is off the map, behind its camera or
+    /// over texels without a surface.
+    static bool height_above(const Ground& g, const dvec3& p, double& z) {
+        const glm::dvec4 s = g.to_screen * glm::dvec4(p, 1.0);
+        if (!(s.w > 0.0)) return false;
+        const double x = s.x / s.w, y = s.y / s.w;
+        if (!(x >= -1.0 && x <= 1.0 && y >= -1.0 && y <= 1.0)) return false;
+        const DepthGrid& m = *g.map;
+        const double fx = 0.5 * (x + 1.0) * m.width - 0.5;
+        const double fy = 0.5 * (1.0 - y) * m.height - 0.5;
+        const int x0 = std::clamp(static_cast<int>(std::floor(fx)), 0, m.width - 1);
+        const int y0 = std::clamp(static_cast<int>(std::floor(fy)), 0, m.height - 1);
+        const int x1 = std::min(x0 + 1, m.width - 1), y1 = std::min(y0 + 1, m.height - 1);
+        const double tx = std::clamp(fx - x0, 0.0, 1.0),
+                     ty = std::clamp(fy - y0, 0.0, 1.0);
+        const auto at = [&](int xx, int yy) {
+            return double(
+                m.depth[std::size_t(yy) * std::size_t(m.width) + std::size_t(xx)]);
+        };
+        const double d00 = at(x0, y0), d10 = at(x1, y0), d01 = at(x0, y1),
+                     d11 = at(x1, y1);
+        const double none = 0.5 * DepthGrid::kNoDepth;
+        if (!(d00 < none && d10 < none && d01 < none && d11 < none)) return false;
+        const double surface =
+            (d00 * (1 - tx) + d10 * tx) * (1 - ty) + (d01 * (1 - tx) + d11 * tx) * ty;
+        z = surface - (g.to_camera * glm::dvec4(p, 1.0)).z;
+        return std::isfinite(z);
+    }
+
+    /// Application Note #31's repulsion at height z: a barrier -B/z under a
+    /// bulge of height D peaking at z = C, eased to 0 at z = A.
+    static double repulsion(double z, const std::array<double, 4>& r) {
+        const double a = r[0], b = r[1], c = r[2], d = r[3];
+        if (!(a > 0.0) || z >= a) return 0.0;
+        z = std::max(z, 1e-6);
+        const auto bump = [](double t) {
+            return t <= 0.0 || t >= 2.0 ? 0.0
+                                        : (((6.0 - t) * t - 12.0) * t + 8.0) * t * t * t;
+        };
+        const auto ease = [](double t) {
+            return t <= 0.0 ? 0.0 : t >= 1.0 ? 1.0 : t * t * (3.0 - 2.0 * t);
+        };
+        const double bulge = c > 0.0 ? d * bump(z / c) : 0.0;
+        return (bulge - b / z) * (1.0 - ease(z / a));
+    }
+
+    /// A ground plane's field at p (its gradient by central differences:
+    /// the depth map is sampled, it has no closed form).
+    template <bool Gradient>
+    Dual ground(std::size_t k, const dvec3& p) const {
+        const Ground& g = m_grounds[k];
+        const auto field = [&](const dvec3& q) {
+            double z = 0.0;
+            return height_above(g, q, z) ? repulsion(z, g.repel) : 0.0;
+        };
+        Dual out;
+        out.v = field(p);
+        if (Gradient)
+            for (int a = 0; a < 3; ++a) {
+                dvec3 lo = p, hi = p;
+                lo[a] -= m_step;
+                hi[a] += m_step;
+                out.g[a] = (field(hi) - field(lo)) / (2.0 * m_step);
+            }
+        return out;
+    }
+
+    /// Every item at p, in program order: the fields of ground planes reach
+    /// everywhere, so no item keeps a background value.
+    template <bool Gradient>
+    Dual evaluate_dense(const dvec3& p) const {
+        const std::size_t n = m_program.items.size();
+        for (std::size_t k = 0; k < n; ++k) {
+            const BlobbyItem& item = m_program.items[k];
+            m_values[k] = m_grounds[k].map ? ground<Gradient>(k, p)
+                          : item.leaf >= 0 ? leaf<Gradient>(item, k, p)
+                                           : combine<Gradient>(k, m_values);
+        }
+        return m_values[n - 1];
+    }
+
     /// The object-space box of the unit ball (ellipsoid) or of the capsule
     /// (segment) of blob space.
     static Box support_box(const BlobbyItem& item) {
@@ -476,6 +598,7 @@ private:
 
     template <bool Gradient>
     Dual evaluate(const dvec3& p) const {
+        if (m_dense) return evaluate_dense<Gradient>(p);
         const std::size_t last = m_program.items.size() - 1;
         if (!m_bounds.contains(p)) return m_background[last];
         const auto [begin, end] = m_bins.at(p);
@@ -538,6 +661,10 @@ private:
     LeafBins m_bins;
     std::vector<double> m_radii;
     bool m_sum = false;
+    /// A ground plane makes every evaluation run the whole program.
+    bool m_dense = false;
+    std::vector<Ground> m_grounds; ///< by item (map null: not a ground plane)
+    double m_step = 1e-6;          ///< of the ground planes' differences
     double m_constants = 0.0;
     std::vector<Dual> m_background;
     mutable std::vector<Dual> m_values;
@@ -945,7 +1072,7 @@ void estimate_blobby(const Primitive& prim, const DiceControl& control,
 } // namespace
 
 Primitive blobby_mesh(const Primitive& prim, const DiceControl& control) {
-    const BlobbyField field(prim);
+    const BlobbyField field(prim, control);
     const Grid grid = plan_grid(prim, control, field);
     std::vector<dvec3> points;
     std::vector<int> quads;
@@ -992,7 +1119,7 @@ Primitive blobby_mesh(const Primitive& prim, const DiceControl& control) {
 DicedSurface dice_blobby(const Primitive& prim, const DiceControl& control,
                          DiceEstimate* estimate) {
     if (estimate) {
-        const BlobbyField field(prim);
+        const BlobbyField field(prim, control);
         estimate_blobby(prim, control, field, *estimate);
         return {};
     }

@@ -384,6 +384,9 @@ void dice_surfaces(Renderer& job, const std::vector<std::size_t>& to_dice,
         }
         control.displace = displacer.hook(to_dice[k]);
         control.grids = job.parametric[to_dice[k]] != 0;
+        control.depth_maps = [textures = job.textures.get()](const std::string& name) {
+            return textures->depth_grid(name);
+        };
         requests[k] = {to_dice[k], control, dice_times(job.camera, prim)};
     }
     ScopedStage stage("dicing " +

@@ -183,10 +183,23 @@ private:
             matrix(begin, f + 7, info.name, item);
             break;
         }
-        case BlobbyOp::GroundPlane:
-            check_string(begin, ops[0], info.name);
-            floats(begin, ops[1], 4, info.name);
+        case BlobbyOp::GroundPlane: {
+            // Application Note #31 (PRMan) gives the depth map's string first,
+            // RISpec's table the floats first: the order whose indices are
+            // both in range, the note's when both are.
+            const bool note_order =
+                ops[0] >= 0 && std::size_t(ops[0]) < m_strings.size() && ops[1] >= 0 &&
+                std::size_t(ops[1]) + 4 <= m_floats.size();
+            const int string_at = note_order ? ops[0] : ops[1];
+            const int floats_at = note_order ? ops[1] : ops[0];
+            check_string(begin, string_at, info.name);
+            const double* f = floats(begin, floats_at, 4, info.name);
+            item.depth_map = m_strings[static_cast<std::size_t>(string_at)];
+            item.repel = {f[0], f[1], f[2], f[3]};
+            if (item.depth_map.empty())
+                fail(begin, "repelling ground plane: no depth map named");
             break;
+        }
         case BlobbyOp::Plugin:
             check_string(begin, ops[0], info.name);
             if (ops[1] < 0) fail(begin, "implicit field plugin: negative float count");

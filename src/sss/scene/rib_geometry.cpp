@@ -596,13 +596,7 @@ void Reader::lenient_blobby_fields(const Statement& s, Primitive& p,
                                    const BlobbyProgram& program) {
     bool rewrite = false;
     for (const BlobbyItem& item : program.items) {
-        if (item.op == BlobbyOp::GroundPlane)
-            not_implemented("blobby 1003", s,
-                            "the repelling ground plane of a Blobby (opcode 1003, code[" +
-                                std::to_string(item.code_begin) +
-                                "]) is not supported: its depth map cannot be read",
-                            "its field is 0");
-        else if (item.op == BlobbyOp::Plugin)
+        if (item.op == BlobbyOp::Plugin)
             not_implemented("blobby 1004", s,
                             "implicit field plugins of a Blobby (opcode 1004, code[" +
                                 std::to_string(item.code_begin) + "]) are not supported",
@@ -618,7 +612,7 @@ void Reader::lenient_blobby_fields(const Statement& s, Primitive& p,
     const auto zero = static_cast<int>(p.args.size());
     p.args.push_back(0.0);
     for (const BlobbyItem& item : program.items) {
-        if (item.op == BlobbyOp::GroundPlane || item.op == BlobbyOp::Plugin) {
+        if (item.op == BlobbyOp::Plugin) {
             code.insert(code.end(), {1000, zero});
             continue;
         }

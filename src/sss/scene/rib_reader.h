@@ -295,9 +295,9 @@ private:
     void do_curves(const Statement& s);
     void do_nupatch(const Statement& s);
     void do_blobby(const Statement& s);
-    /// Blobby ground planes (1003) and field plugins (1004) are not
-    /// implemented: an error, or when reading leniently a warning and each
-    /// made the constant field 0 (p's code rewritten).
+    /// Blobby field plugins (1004) are not implemented: an error, or when
+    /// reading leniently a warning and each made the constant field 0 (p's
+    /// code rewritten).
     void lenient_blobby_fields(const Statement& s, Primitive& p,
                                const BlobbyProgram& program);
     void do_make_texture(const Statement& s);
