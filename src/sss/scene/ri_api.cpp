@@ -84,8 +84,12 @@ void check_count(const RiCall& call, std::size_t n, std::size_t bytes_each,
                  const char* what) {
     if (n > (std::size_t(1) << 40) / bytes_each)
         call.fail(std::string(what) + ": " + std::to_string(n) + " values is too many");
-    check_memory(uint64_t(n) * bytes_each,
-                 where(call.statement()) + ": " + call.statement().name + " " + what, "");
+    // Small arrays are most calls: only a big one is worth reading the
+    // process's memory use for.
+    if (uint64_t(n) * bytes_each >= (uint64_t(1) << 20))
+        check_memory(uint64_t(n) * bytes_each,
+                     where(call.statement()) + ": " + call.statement().name + " " + what,
+                     "");
 }
 
 } // namespace
