@@ -129,7 +129,7 @@ struct Setup {
         sss::set_limit(sss::Limit::Bricks, 4096);
         // The engine's budgets, low: a runaway loop, string or array ends in
         // well under libFuzzer's -timeout with the budget's error.
-        sss::set_limit(sss::Limit::ShaderOperations, 2'000'000);
+        sss::set_limit(sss::Limit::ShaderOperations, 100'000);
         sss::set_limit(sss::Limit::ShaderStringLength, 1 << 16);
         sss::set_limit(sss::Limit::ShaderArrayLength, 1 << 16);
         sss::set_limit(sss::Limit::Bake3dPoints, 1'000'000);
