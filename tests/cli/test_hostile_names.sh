@@ -125,4 +125,19 @@ limit=1000000
 grep -q 'macro arguments nested too deeply' deep.err || fail "nested macro arguments: $(head -c 300 deep.err)"
 ((SECONDS - start <= 10)) || fail "nested macro arguments took $((SECONDS - start)) s"
 
+# --- a bake3d value that is not a number: an error at the shader's line ----------------
+cat >nanbake.sl <<'SL'
+surface nanbake() {
+    bake3d("nan.ptc", "_c", P, normalize(N), "interpolate", 1, "_c", color(pow(-0.25, s), 0, 0));
+    Ci = 0;
+}
+SL
+printf '%s\n' 'Format 16 16 1' 'Projection "perspective" "fov" 40' 'Translate 0 0 5' \
+    'WorldBegin' 'Attribute "cull" "hidden" 0 "backfacing" 0' 'Surface "nanbake"' \
+    'Sphere 1 -1 1 360' 'WorldEnd' >nanbake.rib
+run "$bin/ptbake" nanbake.rib
+expect_rc 1 "bake3d of NaN" &&
+    { [[ "$err" == *'nanbake.sl:2'*'channel "_c" is NaN'* ]] || fail "bake3d of NaN: $err"; }
+[[ ! -e nan.ptc ]] || fail "bake3d of NaN wrote nan.ptc"
+
 finish_checks hostile-names

@@ -805,8 +805,21 @@ void op_bake3d(Frame& f, const BoundOp& b) {
                                                                    : 0.0f);
         for (std::size_t c = 0; c < chan_args.size(); ++c) {
             const float* v = f.ptr(b, chan_args[c], i);
+            // A cloud holds finite numbers only: the shader's line, not the
+            // writer at the end of the job, says which value is not.
+            for (int k = 0; k < rec.channel_floats[c]; ++k)
+                if (!std::isfinite(v[k]))
+                    f.fail(b, "bake3d " + sss::quoted(rec.file) + ": channel " +
+                                  sss::quoted(rec.channels[c]) + " is " +
+                                  (std::isnan(v[k]) ? "NaN" : "infinite") +
+                                  " at a shaded point");
             rec.values.insert(rec.values.end(), v, v + rec.channel_floats[c]);
         }
+        const glm::dvec3 p = rec.P.back(), nn = rec.N.back();
+        if (!std::isfinite(p.x + p.y + p.z) || !std::isfinite(nn.x + nn.y + nn.z) ||
+            !std::isfinite(rec.radius.back()))
+            f.fail(b, "bake3d " + sss::quoted(rec.file) +
+                          ": a position, normal or radius that is not a finite number");
     });
     (void)stride;
     if (!rec.P.empty()) {
