@@ -67,11 +67,9 @@ extern RtToken RI_AMBIENTLIGHT, RI_POINTLIGHT, RI_DISTANTLIGHT, RI_SPOTLIGHT;
 extern RtToken RI_INTENSITY, RI_LIGHTCOLOR, RI_FROM, RI_TO, RI_CONEANGLE,
     RI_CONEDELTAANGLE, RI_BEAMDISTRIBUTION;
 extern RtToken RI_MATTE, RI_METAL, RI_SHINYMETAL, RI_PLASTIC, RI_PAINTEDPLASTIC;
-extern RtToken RI_KA, RI_KD, RI_KS, RI_ROUGHNESS, RI_KR, RI_TEXTURENAME,
-    RI_SPECULARCOLOR;
+extern RtToken RI_KA, RI_KD, RI_KS, RI_ROUGHNESS, RI_KR, RI_TEXTURENAME, RI_SPECULARCOLOR;
 extern RtToken RI_DEPTHCUE, RI_FOG, RI_BUMPY;
-extern RtToken RI_MINDISTANCE, RI_MAXDISTANCE, RI_BACKGROUND, RI_DISTANCE,
-    RI_AMPLITUDE;
+extern RtToken RI_MINDISTANCE, RI_MAXDISTANCE, RI_BACKGROUND, RI_DISTANCE, RI_AMPLITUDE;
 extern RtToken RI_INSIDE, RI_OUTSIDE, RI_LH, RI_RH;
 extern RtToken RI_P, RI_PZ, RI_PW, RI_N, RI_NP, RI_CS, RI_OS, RI_S, RI_T, RI_ST;
 extern RtToken RI_WIDTH, RI_CONSTANTWIDTH;
@@ -214,7 +212,8 @@ RtVoid RiPatchMesh(RtToken type, RtInt nu, RtToken uwrap, RtInt nv, RtToken vwra
 RtVoid RiPatchMeshV(RtToken type, RtInt nu, RtToken uwrap, RtInt nv, RtToken vwrap,
                     RtInt n, RtToken tokens[], RtPointer values[]);
 RtVoid RiNuPatch(RtInt nu, RtInt uorder, RtFloat uknot[], RtFloat umin, RtFloat umax,
-                 RtInt nv, RtInt vorder, RtFloat vknot[], RtFloat vmin, RtFloat vmax, ...);
+                 RtInt nv, RtInt vorder, RtFloat vknot[], RtFloat vmin, RtFloat vmax,
+                 ...);
 RtVoid RiNuPatchV(RtInt nu, RtInt uorder, RtFloat uknot[], RtFloat umin, RtFloat umax,
                   RtInt nv, RtInt vorder, RtFloat vknot[], RtFloat vmin, RtFloat vmax,
                   RtInt n, RtToken tokens[], RtPointer values[]);
@@ -226,8 +225,8 @@ RtVoid RiSubdivisionMesh(RtToken scheme, RtInt nfaces, RtInt nvertices[],
                          RtInt intargs[], RtFloat floatargs[], ...);
 RtVoid RiSubdivisionMeshV(RtToken scheme, RtInt nfaces, RtInt nvertices[],
                           RtInt vertices[], RtInt ntags, RtToken tags[], RtInt nargs[],
-                          RtInt intargs[], RtFloat floatargs[], RtInt n,
-                          RtToken tokens[], RtPointer values[]);
+                          RtInt intargs[], RtFloat floatargs[], RtInt n, RtToken tokens[],
+                          RtPointer values[]);
 RtVoid RiSphere(RtFloat radius, RtFloat zmin, RtFloat zmax, RtFloat thetamax, ...);
 RtVoid RiSphereV(RtFloat radius, RtFloat zmin, RtFloat zmax, RtFloat thetamax, RtInt n,
                  RtToken tokens[], RtPointer values[]);
@@ -258,14 +257,15 @@ RtVoid RiCurvesV(RtToken type, RtInt ncurves, RtInt nvertices[], RtToken wrap, R
 RtVoid RiBlobby(RtInt nleaf, RtInt ncode, RtInt code[], RtInt nflt, RtFloat flt[],
                 RtInt nstr, RtToken str[], ...);
 RtVoid RiBlobbyV(RtInt nleaf, RtInt ncode, RtInt code[], RtInt nflt, RtFloat flt[],
-                 RtInt nstr, RtToken str[], RtInt n, RtToken tokens[], RtPointer values[]);
+                 RtInt nstr, RtToken str[], RtInt n, RtToken tokens[],
+                 RtPointer values[]);
 RtVoid RiGeometry(RtToken type, ...);
 RtVoid RiGeometryV(RtToken type, RtInt n, RtToken tokens[], RtPointer values[]);
 RtVoid RiProcedural(RtPointer data, RtBound bound, RtProcSubdivFunc subdivfunc,
                     RtProcFreeFunc freefunc);
 RtVoid RiReadArchive(RtToken name, RtArchiveCallback callback, ...);
-RtVoid RiReadArchiveV(RtToken name, RtArchiveCallback callback, RtInt n,
-                      RtToken tokens[], RtPointer values[]);
+RtVoid RiReadArchiveV(RtToken name, RtArchiveCallback callback, RtInt n, RtToken tokens[],
+                      RtPointer values[]);
 RtVoid RiArchiveRecord(RtToken type, char* format, ...);
 
 /* Texture files made in the scene (carried out as the RIB requests are). */
