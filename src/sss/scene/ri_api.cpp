@@ -204,16 +204,9 @@ RiContext* usable_context(const char* request) {
     }
     if (context->error) return nullptr;
     if (!context->subdividing) {
-        try {
-            Statement s;
-            s.name = request;
-            s.file = context->file;
-            s.line = context->calls + 1;
-            rib::fail(s, "Ri calls are made in Subdivide, not in ConvertParameters or "
-                         "Free");
-        } catch (...) {
-            context->error = std::current_exception();
-        }
+        context->error = std::make_exception_ptr(
+            RibError(*context->file, context->calls + 1, request,
+                     "Ri calls are made in Subdivide, not in ConvertParameters or Free"));
         return nullptr;
     }
     return context;
