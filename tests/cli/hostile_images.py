@@ -27,10 +27,32 @@ def png_chunk(kind, data):
     return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body))
 
 
-def png(width, height, idat):
+def png(width, height, idat, extra=b""):
     ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", ihdr) + png_chunk(b"IDAT", idat) +
-            png_chunk(b"IEND", b""))
+    return (b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", ihdr) + extra +
+            png_chunk(b"IDAT", idat) + png_chunk(b"IEND", b""))
+
+
+# Valid images whose ancillary chunks are wrong in ways libpng warns about
+# (a bogus ICC profile, a zero gamma, repeated or short chunks, a keyword of
+# length 0): they must read with no line of libpng's on stderr.
+ODD_CHUNKS = {
+    "iccp": png_chunk(b"iCCP", b"bogus\0\0" + zlib.compress(b"not a profile" * 8)),
+    "gama0": png_chunk(b"gAMA", struct.pack(">I", 0)),
+    "gama2": png_chunk(b"gAMA", struct.pack(">I", 100000)) + png_chunk(b"gAMA", b"\0\0\0\1"),
+    "srgb": png_chunk(b"sRGB", b"\7\7"),
+    "srgb2": png_chunk(b"sRGB", b"\0") + png_chunk(b"sRGB", b"\0"),
+    "chrm": png_chunk(b"cHRM", b"\0" * 32),
+    "phys": png_chunk(b"pHYs", b"\0" * 9),
+    "time": png_chunk(b"tIME", b"\0" * 7),
+    "text0": png_chunk(b"tEXt", b"\0hello"),
+    "ztxt": png_chunk(b"zTXt", b"key\0\0garbage"),
+    "itxt": png_chunk(b"iTXt", b"key\0\1\0\0\0garbage"),
+    "bkgd": png_chunk(b"bKGD", b"\0"),
+    "sbit": png_chunk(b"sBIT", b"\x09\x09\x09"),
+    "trns": png_chunk(b"tRNS", b"\0" * 7),
+    "hist": png_chunk(b"hIST", b"\0\0"),
+}
 
 
 def png_rows(width, height):
@@ -85,6 +107,8 @@ def main():
     folder.mkdir(parents=True, exist_ok=True)
     ok = png(64, 32, png_rows(64, 32))
     (folder / "ok.png").write_bytes(ok)
+    for name, chunk in ODD_CHUNKS.items():
+        (folder / f"odd_{name}.png").write_bytes(png(64, 32, png_rows(64, 32), chunk))
     (folder / "huge.png").write_bytes(png(100000000, 100000000, png_rows(4, 4)))
     (folder / "wide.png").write_bytes(png(200000, 200000, png_rows(4, 4)))
     (folder / "corrupt.png").write_bytes(png(64, 32, b"\x78\x9c" + b"garbage" * 20))

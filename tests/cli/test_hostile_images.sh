@@ -98,6 +98,12 @@ scene t tx img/ok.png
 SSS_LIMIT_IMAGE_SIDE=32 run "$bin/render" t.rib
 one_error "texture under SSS_LIMIT_IMAGE_SIDE=32" "img/ok.png: 64 pixels across one image side exceeds the limit of 32"
 render_clean t.rib
+# Valid PNGs with odd ancillary chunks: read with nothing on stderr.
+for f in img/odd_*.png; do
+    scene t tx "$f"
+    run "$bin/render" t.rib
+    [[ "$rc" == 0 && -z "$err" ]] || fail "texture $f: exit $rc, stderr: $err"
+done
 
 # Filter options: absurd widths and blur are bounded, not asserted on.
 for params in '"float w" 1e38 "float b" 1' '"float w" 1000 "float b" 1' \
