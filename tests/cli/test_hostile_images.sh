@@ -133,7 +133,20 @@ one_error "ptfilter 1M points under 64M" "filtering the 1000000 points of big.pt
 SSS_MEMORY_LIMIT=64M run "$bin/envdome" -sky 8192 4096 sky8k.exr
 one_error "envdome -sky 8192 4096 under 64M" "a 8192 x 4096 sky needs about .* GB; this process may use 64.0 MB (SSS_MEMORY_LIMIT); make a smaller sky (-sky W H)"
 [[ ! -e sky8k.exr ]] || fail "envdome under 64M wrote sky8k.exr"
+# The volume diffusion's grids (checked as each level is made) and -merge.
+"$bin/ptsynth" -shape box -size 400 -thickness 4 -n 50000 -light 0 0 1 slab.ptc >/dev/null
+SSS_MEMORY_LIMIT=256M run "$bin/ptfilter" -ssdiffusion -material skin1 -volume 1 slab.ptc out.ptc
+one_error "ptfilter -volume under 256M" "the volume diffusion's grid of [0-9]*x[0-9]*x[0-9]* voxels needs about .*; this process may use 256 MB (SSS_MEMORY_LIMIT)"
+[[ ! -e out.ptc ]] || fail "ptfilter -volume under 256M wrote out.ptc"
+"$bin/ptfilter" -ssdiffusion -part 1/2 big.ptc p1.ptpart
+"$bin/ptfilter" -ssdiffusion -part 2/2 big.ptc p2.ptpart
+SSS_MEMORY_LIMIT=64M run "$bin/ptfilter" -merge p1.ptpart p2.ptpart out.ptc
+one_error "ptfilter -merge under 64M" "joining the 1000000 points of 2 parts needs about .*; this process may use 64.0 MB (SSS_MEMORY_LIMIT)"
+[[ ! -e out.ptc ]] || fail "ptfilter -merge under 64M wrote out.ptc"
 # What fits still runs.
+SSS_MEMORY_LIMIT=512M run "$bin/ptfilter" -merge p1.ptpart p2.ptpart out.ptc
+[[ "$rc" == 0 ]] || fail "ptfilter -merge 1M points under 512M: exit $rc: $err"
+rm -f out.ptc
 SSS_MEMORY_LIMIT=512M run "$bin/ptfilter" -ssdiffusion big.ptc out.ptc
 [[ "$rc" == 0 ]] || fail "ptfilter 1M points under 512M: exit $rc: $err"
 SSS_MEMORY_LIMIT=512M run "$bin/envdome" -sky 1024 512 sky1k.exr

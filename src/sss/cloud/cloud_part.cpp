@@ -19,6 +19,7 @@
 #include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 #include "sss/util/hash.h"
+#include "sss/util/limits.h"
 
 namespace sss {
 
@@ -412,6 +413,15 @@ PointCloud merge_cloud_parts(const std::vector<std::string>& paths,
                           "the parts hold " + std::to_string(next) + " points, not " +
                               std::to_string(h0.info.total));
 
+    // The whole cloud and the largest part held at once: their sizes are
+    // backed by the files' (read_header), the budget still decides.
+    const uint64_t per_point = 8 + 4 * floats_per_point(h0.channels);
+    uint64_t largest = 0;
+    for (const PartHeader& h : headers) largest = std::max(largest, h.info.count);
+    check_memory((h0.info.total + largest) * per_point + h0.info.total,
+                 "joining the " + std::to_string(h0.info.total) + " points of " +
+                     std::to_string(parts) + " parts",
+                 "join them where more memory is available");
     PointCloud whole = h0.shape;
     const std::size_t n = std::size_t(h0.info.total);
     whole.resize(n);

@@ -13,6 +13,7 @@
 
 #include "sss/diffusion/slab_transport.h"
 #include "sss/util/error.h"
+#include "sss/util/limits.h"
 #include "sss/util/progress.h"
 #include "volume_grid.h"
 
@@ -260,6 +261,16 @@ Level make_level(const glm::dvec3& lo, const glm::dvec3& hi, double h,
                  const std::vector<SurfaceSamples>& blockers, double beam_limit) {
     Level l;
     l.grid = make_grid(lo, hi, h, 2);
+    // What a level holds per voxel of its grid with the solve's vectors
+    // (measured: a whole run peaks at 73-80 bytes per voxel of its finest grid,
+    // slabs of 5M and 18M voxels; the coarser levels are resident by then).
+    constexpr uint64_t kBytesPerVoxel = 72;
+    check_memory(uint64_t(l.grid.count()) * kBytesPerVoxel,
+                 "the volume diffusion's grid of " + std::to_string(l.grid.dim.x) + "x" +
+                     std::to_string(l.grid.dim.y) + "x" + std::to_string(l.grid.dim.z) +
+                     " voxels",
+                 "run it where more memory is available (the grid holds at most 12M "
+                 "voxels in the object's box)");
     std::vector<int8_t> in = inside_voxels(l.grid, surface);
     l.grid.label.assign(l.grid.count(), kOutside);
     for (std::size_t v = 0; v < in.size(); ++v)
@@ -686,6 +697,10 @@ namespace {
 
 // The state of one volume_diffusion() call, built step by step.
 struct Run {
+    Run(const SurfaceSamples& s, const std::vector<glm::vec3>& e,
+        const std::vector<SurfaceSamples>& b, const VolumeOptions& options,
+        VolumeReport& report)
+        : surface(s), irradiance(e), blockers(b), o(options), rep(report) {}
     const SurfaceSamples& surface;
     const std::vector<glm::vec3>& irradiance;
     const std::vector<SurfaceSamples>& blockers;
@@ -1034,7 +1049,7 @@ std::vector<glm::vec3> volume_diffusion(const SurfaceSamples& surface,
             throw ValueError("volume diffusion: blocker arrays of different sizes");
     std::vector<glm::vec3> out = profile_result;
     if (n == 0) return out;
-    Run r{surface, irradiance, blockers, o, rep};
+    Run r(surface, irradiance, blockers, o, rep);
     r.n = n;
     plan(r, channels);
     // The profiles describe light entering straight; diffuse light first
