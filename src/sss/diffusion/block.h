@@ -28,6 +28,10 @@ struct BucketBlock {
     alignas(64) int32_t idx[kMaxBucket];
     alignas(64) float frac[kMaxBucket], keep[kMaxBucket];
     alignas(64) float val[18][kMaxBucket];
+    // With per-point materials (BlockTables::profile_rows): each receiver's
+    // profile per channel, as its float offset into the profile rows (the
+    // lanes past count up to a multiple of 8 hold 0).
+    alignas(64) int32_t base[3][kMaxBucket];
 };
 
 // The three channel tables every receiver of a block reads, and the table
@@ -39,6 +43,10 @@ struct BlockTables {
     int32_t last;  // index of the last entry
     // Tables::rows when t are channels 0, 1 and 2, else null.
     const float* rows;
+    // Tables::profile_rows when the receivers' profiles differ (read through
+    // BucketBlock::base; t and rows are then unused by far, mono, near and
+    // near_disks), else null.
+    const float* profile_rows = nullptr;
 };
 
 struct BlockKernels {

@@ -86,6 +86,108 @@ struct CoincidentSum {
     double sum[3] = {0, 0, 0};
 };
 
+// Per-point materials through the block loops (each receiver reads its own
+// profiles' rows).
+bool per_point_rows(const EvaluationContext& cx) {
+    return !cx.pb.profile_index.empty() && !cx.tables.profile_rows.empty();
+}
+
+// Per-point materials: the local expansions about `centre`, one per distinct
+// table of each channel among a node's receivers (the expansion is linear in
+// the profile, so each receiver takes its own table's). Neighbours mostly
+// share a few tables.
+struct MixedLocal {
+    glm::dvec3 centre{0.0};
+    std::vector<const ChannelTable*> tables[3];
+    // Per table: l0, l1 (x y z), l2 (xx xy xz yy yz zz), as LocalExpansion.
+    std::vector<std::array<double, 10>> coef[3];
+};
+
+uint32_t find_table(const std::vector<const ChannelTable*>& v, const ChannelTable* t,
+                    uint32_t hint) {
+    if (hint < v.size() && v[hint] == t) return hint;
+    return uint32_t(std::find(v.begin(), v.end(), t) - v.begin());
+}
+
+// translate() for one channel's coefficients, moved by s.
+std::array<double, 10> translate_channel(const std::array<double, 10>& c,
+                                         const glm::dvec3& s) {
+    const double* L2 = c.data() + 4;
+    const glm::dvec3 l1(c[1], c[2], c[3]);
+    const glm::dvec3 l2s(L2[0] * s.x + L2[1] * s.y + L2[2] * s.z,
+                         L2[1] * s.x + L2[3] * s.y + L2[4] * s.z,
+                         L2[2] * s.x + L2[4] * s.y + L2[5] * s.z);
+    std::array<double, 10> out = c;
+    out[0] = c[0] + glm::dot(l1, s) + glm::dot(s, l2s);
+    for (int a = 0; a < 3; ++a) out[1 + a] = l1[a] + 2.0 * l2s[a];
+    return out;
+}
+
+// local_value() of one channel's coefficients.
+double mixed_value(const std::array<double, 10>& c, const glm::dvec3& d) {
+    const double* L2 = c.data() + 4;
+    return c[0] + c[1] * d.x + c[2] * d.y + c[3] * d.z +
+           d.x * (L2[0] * d.x + 2.0 * (L2[1] * d.y + L2[2] * d.z)) +
+           d.y * (L2[3] * d.y + 2.0 * L2[4] * d.z) + L2[5] * d.z * d.z;
+}
+
+// The expansions of the receivers [first, first + count) (sorted) about
+// `centre`: the parent's (null: none) moved there, plus `nodes` expanded with
+// each distinct table. `index` (or null) gets each receiver's table per
+// channel.
+void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
+                 const glm::dvec3& centre, uint32_t first, uint32_t count,
+                 const std::vector<uint32_t>& nodes, MixedLocal& out,
+                 uint32_t (*index)[kMaxBucket]) {
+    out.centre = centre;
+    thread_local KeyPositions seen[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        out.tables[ch].clear();
+        seen[ch].reset(cx.tables.channels.size());
+    }
+    for (uint32_t r = 0; r < count; ++r) {
+        const glm::u32vec3 k = cx.pb.profile_index[cx.tree.order[first + r]];
+        for (int ch = 0; ch < 3; ++ch) {
+            auto& v = out.tables[ch];
+            uint32_t i = seen[ch].find(k[ch]);
+            if (i == KeyPositions::kNone) {
+                i = uint32_t(v.size());
+                seen[ch].set(k[ch], i);
+                v.push_back(&cx.tables.channels[k[ch]]);
+            }
+            if (index) index[ch][r] = i;
+        }
+    }
+    std::size_t calls = 0;
+    for (int ch = 0; ch < 3; ++ch) {
+        auto& coef = out.coef[ch];
+        coef.assign(out.tables[ch].size(), std::array<double, 10>{});
+        if (parent)
+            for (std::size_t j = 0; j < coef.size(); ++j) {
+                const uint32_t pi = find_table(parent->tables[ch], out.tables[ch][j], 0);
+                coef[j] =
+                    translate_channel(parent->coef[ch][pi], centre - parent->centre);
+            }
+        calls = std::max(calls, coef.size());
+    }
+    if (nodes.empty()) return;
+    const double c[3] = {centre.x, centre.y, centre.z};
+    for (std::size_t i = 0; i < calls; ++i) {
+        BlockTables t{
+            {}, int32_t(cx.tables.bits0), int32_t(cx.tables.count) - 1, nullptr};
+        for (int ch = 0; ch < 3; ++ch)
+            t.t[ch] =
+                out.tables[ch][std::min(i, out.tables[ch].size() - 1)]->entries.data();
+        double sums[3][10];
+        cx.kernels.local(t, cx.tree.expansions.data(), nodes.data(), nodes.size(), c,
+                         sums);
+        for (int ch = 0; ch < 3; ++ch)
+            if (i < out.coef[ch].size())
+                for (int a = 0; a < 10; ++a)
+                    out.coef[ch][i][std::size_t(a)] += sums[ch][a];
+    }
+}
+
 // One thread's scratch, reused from bucket to bucket, and its counters.
 struct Scratch {
     NodeLists lists;
@@ -95,6 +197,11 @@ struct Scratch {
     CoincidentSum coincident;
     LocalExpansion local_expansion;
     DiffusionStats local;
+    // A block of mixed materials: each receiver's channels, its bucket's
+    // local expansions and which of them each receiver reads per channel.
+    ReceiverChannels rcs[kMaxBucket];
+    MixedLocal bucket_local;
+    uint32_t le_index[3][kMaxBucket];
 };
 
 // The interleaved rows when the receivers read channels 0, 1 and 2.
@@ -105,20 +212,26 @@ const float* rows_of(const Tables& tables, const ReceiverChannels& rc) {
     return tables.rows.data();
 }
 
-// Buckets of one material with the error criterion: one traversal for the
-// bucket, then the vectorised block loops over its receivers. Always the whole
-// bucket, wanted or not: each receiver then keeps its place in the vector
-// loops, so a subset gets the whole run's numbers bit for bit.
-// `inherited`: the local expansion of the bucket's receiver group, or null.
+// Buckets with the error criterion: one traversal for the bucket, then the
+// vectorised block loops over its receivers. Always the whole bucket, wanted
+// or not: each receiver then keeps its place in the vector loops, so a subset
+// gets the whole run's numbers bit for bit. One material: every receiver
+// reads first_rc's tables, and `inherited` is the local expansion of the
+// bucket's receiver group (or null). `mixed` (per-point materials): each
+// reads its own profiles' rows (Tables::profile_rows) and its own tables'
+// local expansions, on top of `inherited_mixed` (the group's, or null).
 void evaluate_block(const EvaluationContext& cx, const Node& bucket,
-                    const ReceiverChannels& first_rc, Scratch& w,
-                    std::vector<glm::vec3>& result, const LocalExpansion* inherited) {
+                    const ReceiverChannels& first_rc, bool mixed, Scratch& w,
+                    std::vector<glm::vec3>& result, const LocalExpansion* inherited,
+                    const MixedLocal* inherited_mixed = nullptr) {
     const Tree& tree = cx.tree;
     const Tables& tables = cx.tables;
     const DiffusionProblem& pb = cx.pb;
     BucketBlock& block = *w.block;
     DiffusionStats& local = w.local;
     block.count = bucket.count;
+    // The receivers' smallest core: the near loops' quadrature test.
+    float core2 = first_rc.near_core2;
     for (uint32_t r = 0; r < bucket.count; ++r) {
         const glm::vec4& pr = tree.pos_rho2[bucket.first + r];
         block.x[r] = pr.x;
@@ -136,13 +249,29 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             __builtin_prefetch(&pb.irradiance[original], 0, 1);
             __builtin_prefetch(&result[cx.slot(s, original)], 1, 1);
         }
+        if (mixed) {
+            const ReceiverChannels& rc = w.rcs[r] =
+                receiver_channels(pb, tables, tree.order[s]);
+            core2 = std::min(core2, rc.near_core2);
+            for (int ch = 0; ch < 3; ++ch)
+                block.base[ch][r] =
+                    int32_t(std::size_t(rc.table[ch] - tables.channels.data()) *
+                            tables.count * kProfileRowFloats);
+        }
     }
+    if (mixed)
+        for (uint32_t r = bucket.count; r < ((bucket.count + 7) & ~7u); ++r)
+            for (int ch = 0; ch < 3; ++ch) block.base[ch][r] = 0;
     const BlockTables t{{first_rc.table[0]->entries.data(),
                          first_rc.table[1]->entries.data(),
                          first_rc.table[2]->entries.data()},
                         int32_t(tables.bits0),
                         int32_t(tables.count) - 1,
-                        rows_of(tables, first_rc)};
+                        mixed ? nullptr : rows_of(tables, first_rc),
+                        mixed ? tables.profile_rows.data() : nullptr};
+    const auto rc_of = [&](uint32_t r) -> const ReceiverChannels& {
+        return mixed ? w.rcs[r] : first_rc;
+    };
     const BlockKernels& kernels = cx.kernels;
     const float* pos_rho2 = &tree.pos_rho2.data()->x;
     const float* power_area = &tree.power_area.data()->x;
@@ -154,7 +283,7 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         const Node& leaf = tree.nodes[k];
         float d2 = box_distance2(bucket.lo, bucket.hi, leaf.lo, leaf.hi);
         plain += leaf.count;
-        if (leaf.max_rho * leaf.max_rho <= kNearKappa2 * (d2 + first_rc.near_core2)) {
+        if (leaf.max_rho * leaf.max_rho <= kNearKappa2 * (d2 + core2)) {
             kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block, -1.0f);
             continue;
         }
@@ -169,11 +298,9 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             kernels.near_disks(t, pos_rho2, power_area, &tree.normal.data()->x,
                                leaf.first, leaf.count, block);
         else
-            kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block,
-                         first_rc.near_core2);
+            kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block, core2);
         const auto left = [&](float rho2, float q) {
-            return coreless ? rho2 > kTaylorDisk2 * q
-                            : needs_quadrature(rho2, q, first_rc.near_core2);
+            return coreless ? rho2 > kTaylorDisk2 * q : needs_quadrature(rho2, q, core2);
         };
         float max_rho2 = 0.0f; // (exact: max_rho is its rounded square root)
         for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
@@ -190,7 +317,7 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                 const glm::vec3 wv = x - glm::vec3(tree.pos_rho2[j]);
                 const float q = glm::dot(wv, wv);
                 if (j != s && left(tree.pos_rho2[j].w, q)) {
-                    quadrature_source(tree, tables, first_rc, wv, q, j, acc, local,
+                    quadrature_source(tree, tables, rc_of(r), wv, q, j, acc, local,
                                       w.memo);
                     any = true;
                 }
@@ -208,7 +335,11 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         translate(*inherited, centre, le);
     else
         le = LocalExpansion{centre};
-    add_local(cx, t, w.lists.local, le);
+    if (mixed)
+        mixed_level(cx, inherited_mixed, centre, bucket.first, bucket.count,
+                    w.lists.local, w.bucket_local, w.le_index);
+    else
+        add_local(cx, t, w.lists.local, le);
     for (uint32_t r = 0; r < bucket.count; ++r) {
         uint32_t s = bucket.first + r;
         if (!cx.wants(s)) continue;
@@ -216,14 +347,14 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         double rho = std::sqrt(double(tree.pos_rho2[s].w));
         // Self term: the receiver's own disk, integrated exactly.
         double self[3];
-        w.self(first_rc, rho, pb.irradiance[original], self);
+        w.self(rc_of(r), rho, pb.irradiance[original], self);
         glm::vec3& out = result[cx.slot(s, original)];
+        const glm::dvec3 d = glm::dvec3(block.x[r], block.y[r], block.z[r]) - centre;
         for (int ch = 0; ch < 3; ++ch) {
-            double v =
-                double(block.acc[ch][r]) +
-                local_value(le, ch,
-                            glm::dvec3(block.x[r], block.y[r], block.z[r]) - le.centre) +
-                self[ch];
+            const double l =
+                mixed ? mixed_value(w.bucket_local.coef[ch][w.le_index[ch][r]], d)
+                      : local_value(le, ch, d);
+            double v = double(block.acc[ch][r]) + l + self[ch];
             out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
@@ -320,7 +451,8 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
 void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch& w,
                      std::vector<glm::vec3>& result,
                      const std::vector<uint32_t>* start = nullptr,
-                     const LocalExpansion* inherited = nullptr) {
+                     const LocalExpansion* inherited = nullptr,
+                     const MixedLocal* inherited_mixed = nullptr) {
     const Tree& tree = cx.tree;
     const Node& bucket = tree.nodes[bucket_node];
     ReceiverChannels first_rc =
@@ -328,12 +460,19 @@ void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch&
     if (cx.options.criterion == Criterion::Error) {
         BucketTolerance tol =
             bucket_tolerance(cx.tolerance, cx.pb, cx.tables, tree, bucket_node, first_rc);
-        const bool uniform = bucket.count <= kMaxBucket && tol.tables[0].size() == 1 &&
-                             tol.tables[1].size() == 1 && tol.tables[2].size() == 1;
-        if (uniform) {
+        if (bucket.count <= kMaxBucket && per_point_rows(cx)) {
+            // Per-point materials: the walk's lists hold for every receiver's
+            // (it takes the worst), and each receiver reads its own profiles.
             traverse_error(tree, cx.tables, tol, bucket.lo, bucket.hi, true, w.lists,
                            start);
-            evaluate_block(cx, bucket, first_rc, w, result, inherited);
+            evaluate_block(cx, bucket, first_rc, true, w, result, nullptr,
+                           inherited_mixed);
+            return;
+        }
+        if (bucket.count <= kMaxBucket && tol.one_material) {
+            traverse_error(tree, cx.tables, tol, bucket.lo, bucket.hi, true, w.lists,
+                           start);
+            evaluate_block(cx, bucket, first_rc, false, w, result, inherited);
             return;
         }
         // Every node from the root: what the group shared is not used here.
@@ -361,7 +500,8 @@ std::size_t wanted_in(const EvaluationContext& cx, const Node& bucket) {
 constexpr uint32_t kMaxGroup = 4096;
 
 bool groups_allowed(const EvaluationContext& cx) {
-    return cx.options.criterion == Criterion::Error && cx.pb.profile_index.empty();
+    return cx.options.criterion == Criterion::Error &&
+           (cx.pb.profile_index.empty() || per_point_rows(cx));
 }
 
 bool is_group(const EvaluationContext& cx, const Node& node) {
@@ -373,6 +513,7 @@ bool is_group(const EvaluationContext& cx, const Node& node) {
 struct GroupLevel {
     std::vector<uint32_t> start;
     LocalExpansion le;
+    MixedLocal mixed; // per-point materials
 };
 
 // Node k of a receiver group, holding the (sorted, wanted) buckets
@@ -382,13 +523,13 @@ struct GroupLevel {
 template <class Done>
 void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
                     const std::vector<uint32_t>& start, const LocalExpansion& parent,
-                    const uint32_t* b0, const uint32_t* b1, Scratch& w,
-                    std::deque<GroupLevel>& levels, std::vector<glm::vec3>& result,
-                    Done&& done) {
+                    const MixedLocal* parent_mixed, const uint32_t* b0,
+                    const uint32_t* b1, Scratch& w, std::deque<GroupLevel>& levels,
+                    std::vector<glm::vec3>& result, Done&& done) {
     const Tree& tree = cx.tree;
     const Node& node = tree.nodes[k];
     if (b1 - b0 == 1 && *b0 == k) {
-        evaluate_bucket(cx, k, w, result, &start, &parent);
+        evaluate_bucket(cx, k, w, result, &start, &parent, parent_mixed);
         done(k);
         return;
     }
@@ -398,13 +539,20 @@ void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
     BucketTolerance tol = bucket_tolerance(cx.tolerance, cx.pb, cx.tables, tree, k, rc);
     traverse_group(tree, cx.tables, tol, node.lo, node.hi, start, w.lists);
     lv.start.swap(w.lists.near);
-    translate(parent, 0.5 * (glm::dvec3(node.lo) + glm::dvec3(node.hi)), lv.le);
-    const BlockTables t{{rc.table[0]->entries.data(), rc.table[1]->entries.data(),
-                         rc.table[2]->entries.data()},
-                        int32_t(cx.tables.bits0),
-                        int32_t(cx.tables.count) - 1,
-                        rows_of(cx.tables, rc)};
-    add_local(cx, t, w.lists.local, lv.le);
+    const glm::dvec3 centre = 0.5 * (glm::dvec3(node.lo) + glm::dvec3(node.hi));
+    const bool mixed = per_point_rows(cx);
+    if (mixed) {
+        mixed_level(cx, parent_mixed, centre, node.first, node.count, w.lists.local,
+                    lv.mixed, nullptr);
+    } else {
+        translate(parent, centre, lv.le);
+        const BlockTables t{{rc.table[0]->entries.data(), rc.table[1]->entries.data(),
+                             rc.table[2]->entries.data()},
+                            int32_t(cx.tables.bits0),
+                            int32_t(cx.tables.count) - 1,
+                            rows_of(cx.tables, rc)};
+        add_local(cx, t, w.lists.local, lv.le);
+    }
     w.local.local_terms += w.lists.local.size();
     for (uint32_t c = node.child_first; c < node.child_first + node.child_count; ++c) {
         const Node& child = tree.nodes[c];
@@ -414,8 +562,9 @@ void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
             return tree.nodes[b].first < child.first + child.count;
         });
         if (c1 > c0)
-            evaluate_group(cx, c, depth + 1, levels[depth].start, levels[depth].le, c0,
-                           c1, w, levels, result, done);
+            evaluate_group(cx, c, depth + 1, levels[depth].start, levels[depth].le,
+                           mixed ? &levels[depth].mixed : nullptr, c0, c1, w, levels,
+                           result, done);
     }
 }
 
@@ -486,7 +635,7 @@ void evaluate_buckets(const EvaluationContext& cx, const std::vector<uint32_t>& 
             for (std::size_t g = range.begin(); g != range.end(); ++g) {
                 const std::size_t end =
                     g + 1 < groups.size() ? groups[g + 1].second : buckets.size();
-                evaluate_group(cx, groups[g].first, 0, from_root, none,
+                evaluate_group(cx, groups[g].first, 0, from_root, none, nullptr,
                                buckets.data() + groups[g].second, buckets.data() + end, w,
                                levels, result, count_done);
             }

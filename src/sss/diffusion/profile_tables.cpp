@@ -4,6 +4,7 @@
 
 #include "profile_tables.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace sss::diffusion_detail {
@@ -14,9 +15,56 @@ double q_of_bits(uint32_t bits) {
     return double(std::bit_cast<float>(bits));
 }
 
+// A class holds profiles whose transport lengths (1 / sigma_tr) fall in one
+// bin of this ratio and whose totals (the albedo's effect) are within this
+// ratio of its smallest: their bounds then differ little, so the class's
+// largest bound is close to each of its own.
+constexpr double kEnvelopeLength = 1.05, kEnvelopeTotal = 1.02;
+
+void make_envelopes(const std::vector<Profile>& profiles, Tables& t) {
+    const auto bin = [&](uint32_t i) {
+        const double s = profiles[i].sigma_tr();
+        return s > 0.0 && std::isfinite(s)
+                   ? int64_t(std::floor(-std::log(s) / std::log(kEnvelopeLength)))
+                   : INT64_MIN;
+    };
+    std::vector<std::pair<int64_t, uint32_t>> order;
+    for (uint32_t i = 0; i < profiles.size(); ++i) order.push_back({bin(i), i});
+    std::stable_sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
+        return a.first != b.first
+                   ? a.first < b.first
+                   : profiles[a.second].total() < profiles[b.second].total();
+    });
+    t.envelope_of.assign(profiles.size(), 0);
+    int64_t first_bin = 0;
+    double first_total = 0.0;
+    for (auto [b, i] : order) {
+        if (t.envelopes.empty() || b != first_bin ||
+            !(profiles[i].total() <= kEnvelopeTotal * first_total)) {
+            first_bin = b;
+            first_total = profiles[i].total();
+            ChannelTable e;
+            e.error_bound.assign(t.count, 0.0f);
+            e.max_value.assign(t.count, 0.0f);
+            e.max_d1.assign(t.count, 0.0f);
+            e.max_d2.assign(t.count, 0.0f);
+            t.envelopes.push_back(std::move(e));
+        }
+        ChannelTable& e = t.envelopes.back();
+        const ChannelTable& c = t.channels[i];
+        for (uint32_t k = 0; k < t.count; ++k) {
+            e.error_bound[k] = std::max(e.error_bound[k], c.error_bound[k]);
+            e.max_value[k] = std::max(e.max_value[k], c.max_value[k]);
+            e.max_d1[k] = std::max(e.max_d1[k], c.max_d1[k]);
+            e.max_d2[k] = std::max(e.max_d2[k], c.max_d2[k]);
+        }
+        t.envelope_of[i] = uint32_t(t.envelopes.size() - 1);
+    }
+}
+
 } // namespace
 
-Tables build_tables(const std::vector<Profile>& profiles) {
+Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
     Tables t;
     double lmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
     for (const Profile& p : profiles) {
@@ -90,6 +138,28 @@ Tables build_tables(const std::vector<Profile>& profiles) {
                 row[8 + 2 * ch + 1] = b.df - a.df;
                 row[16 + 2 * ch] = a.d2f;
                 row[16 + 2 * ch + 1] = b.d2f - a.d2f;
+            }
+        }
+    }
+    if (per_point) make_envelopes(profiles, t);
+    // (The kernels address them with 32-bit offsets; beyond that the
+    // receivers go one by one.)
+    const std::size_t per_profile = std::size_t(t.count) * kProfileRowFloats;
+    if (per_point && per_profile * t.channels.size() < std::size_t(INT32_MAX)) {
+        t.profile_rows.assign(per_profile * t.channels.size(), 0.0f);
+        for (std::size_t pi = 0; pi < t.channels.size(); ++pi) {
+            const std::vector<TableEntry>& e = t.channels[pi].entries;
+            for (uint32_t k = 0; k < t.count; ++k) {
+                float* row = t.profile_rows.data() + pi * per_profile +
+                             std::size_t(k) * kProfileRowFloats;
+                const TableEntry& a = e[k];
+                const TableEntry& b = k + 1 < t.count ? e[k + 1] : e[k];
+                row[0] = a.f;
+                row[1] = b.f - a.f;
+                row[2] = a.df;
+                row[3] = b.df - a.df;
+                row[4] = a.d2f;
+                row[5] = b.d2f - a.d2f;
             }
         }
     }

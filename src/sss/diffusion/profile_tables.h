@@ -47,11 +47,24 @@ struct ChannelTable {
 // floats.
 constexpr int kRowFloats = 24;
 
+// Per-point materials: every profile's table as rows of kProfileRowFloats
+// per entry k, {F, dF, F', dF', F'', dF'', 0, 0} (d: value(k + 1) -
+// value(k), as in the interleaved rows), so that each receiver of a block
+// reads its own profile per channel with one 32-byte load.
+constexpr int kProfileRowFloats = 8;
+
 struct Tables {
     uint32_t bits0 = 0;
     uint32_t count = 0;
     std::vector<ChannelTable> channels;
     std::vector<float> rows; // channels 0-2 interleaved (empty with fewer channels)
+    std::vector<float> profile_rows; // with per-point materials, profile p at p * count
+    // With per-point materials: the bounds of classes of similar profiles
+    // (error_bound and the running maxima, each the largest of its class's;
+    // no entries), and each profile's class. A bucket's walk tests its nodes
+    // against the few classes of its receivers instead of every profile.
+    std::vector<ChannelTable> envelopes;
+    std::vector<uint32_t> envelope_of;
 
     struct Lookup {
         uint32_t index;
@@ -66,9 +79,38 @@ struct Tables {
     }
 };
 
+// The distinct keys (table or class indices) met in a scan, each with its
+// position in the caller's list: O(1) per key, reset in O(1) between scans.
+class KeyPositions {
+public:
+    static constexpr uint32_t kNone = UINT32_MAX;
+    void reset(std::size_t keys) {
+        if (m_stamp.size() < keys) {
+            m_stamp.assign(keys, 0);
+            m_slot.assign(keys, 0);
+        }
+        if (++m_generation == 0) {
+            std::fill(m_stamp.begin(), m_stamp.end(), 0u);
+            m_generation = 1;
+        }
+    }
+    uint32_t find(uint32_t key) const {
+        return m_stamp[key] == m_generation ? m_slot[key] : kNone;
+    }
+    void set(uint32_t key, uint32_t position) {
+        m_stamp[key] = m_generation;
+        m_slot[key] = position;
+    }
+
+private:
+    std::vector<uint32_t> m_stamp, m_slot;
+    uint32_t m_generation = 0;
+};
+
 // Tables of every profile over one q range, from 1e-8 of the smallest core
 // length squared out to where the widest profile has lost all but 1e-7.
-Tables build_tables(const std::vector<Profile>& profiles);
+// With `per_point`, also the profile rows.
+Tables build_tables(const std::vector<Profile>& profiles, bool per_point = false);
 
 // The tables and profiles one receiver reads, per channel.
 struct ReceiverChannels {

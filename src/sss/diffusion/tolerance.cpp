@@ -79,22 +79,47 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
                                  const ReceiverChannels& first_rc) {
     BucketTolerance bt;
     const Node& node = tree.nodes[bucket];
-    // Channels of the bucket's receivers (distinct tables).
-    std::vector<double> bucket_totals[3], bucket_reach[3];
-    for (uint32_t s = node.first; s < node.first + node.count; ++s) {
-        ReceiverChannels rc = pb.profile_index.empty()
-                                  ? first_rc
-                                  : receiver_channels(pb, tables, tree.order[s]);
-        for (int ch = 0; ch < 3; ++ch) {
-            auto& v = bt.tables[ch];
-            if (std::find(v.begin(), v.end(), rc.table[ch]) == v.end()) {
-                v.push_back(rc.table[ch]);
-                bucket_totals[ch].push_back(rc.profile[ch]->total());
-                bucket_reach[ch].push_back(
-                    model.reach[std::size_t(rc.profile[ch] - pb.profiles.data())]);
+    // The smallest total and reach of the receivers' profiles per channel, and
+    // the bounds the walk tests (distinct tables, or their envelopes).
+    double tot_min[3], reach_min[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        tot_min[ch] = first_rc.profile[ch]->total();
+        reach_min[ch] =
+            model.reach[std::size_t(first_rc.profile[ch] - pb.profiles.data())];
+        bt.tables[ch].assign(1, first_rc.table[ch]);
+    }
+    if (!pb.profile_index.empty()) {
+        const bool envelopes = !tables.envelopes.empty();
+        const glm::u32vec3 first = pb.profile_index[tree.order[node.first]];
+        const Profile* last[3] = {nullptr, nullptr, nullptr};
+        for (uint32_t s = node.first; s < node.first + node.count; ++s) {
+            const glm::u32vec3 idx = pb.profile_index[tree.order[s]];
+            if (idx != first) bt.one_material = false;
+            for (int ch = 0; ch < 3; ++ch) {
+                const Profile* p = &pb.profiles[idx[ch]];
+                if (p == last[ch]) continue; // (neighbours often share one)
+                last[ch] = p;
+                tot_min[ch] = std::min(tot_min[ch], p->total());
+                reach_min[ch] = std::min(reach_min[ch], model.reach[idx[ch]]);
             }
         }
-        if (pb.profile_index.empty()) break;
+        if (!bt.one_material) {
+            // (A group's scan covers thousands of receivers.)
+            thread_local KeyPositions seen;
+            for (int ch = 0; ch < 3; ++ch) {
+                auto& v = bt.tables[ch];
+                v.clear();
+                seen.reset(envelopes ? tables.envelopes.size() : tables.channels.size());
+                for (uint32_t s = node.first; s < node.first + node.count; ++s) {
+                    const uint32_t k = pb.profile_index[tree.order[s]][ch];
+                    const uint32_t key = envelopes ? tables.envelope_of[k] : k;
+                    if (seen.find(key) != KeyPositions::kNone) continue;
+                    seen.set(key, uint32_t(v.size()));
+                    v.push_back(envelopes ? &tables.envelopes[key]
+                                          : &tables.channels[key]);
+                }
+            }
+        }
     }
     const uint32_t up = reference_node(tree, bucket, model.region);
     // Area density of the region: its points' areas against a quarter
@@ -108,11 +133,7 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
                            ? tree.expansions[up].abs_phi[ch] / tree.nodes[up].area
                            : 0.0;
         level = std::max(level, 0.05 * model.global_abs[ch]);
-        double tot =
-            *std::min_element(bucket_totals[ch].begin(), bucket_totals[ch].end());
-        double reach_min =
-            *std::min_element(bucket_reach[ch].begin(), bucket_reach[ch].end());
-        bt.tol[ch] = model.tau * std::min(tot * density, reach_min) * level;
+        bt.tol[ch] = model.tau * std::min(tot_min[ch] * density, reach_min[ch]) * level;
         bt.skip[ch] = 0.05 * bt.tol[ch];
     }
     return bt;

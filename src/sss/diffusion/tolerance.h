@@ -35,7 +35,10 @@ DiffusionReference reference_of(const UninitVector<glm::vec4>& power_area);
 // One bucket's tolerance per channel, and the distinct tables of its receivers
 // (the error bounds hold for every one of them).
 struct BucketTolerance {
+    // The bounds the walk tests per channel: the receivers' tables, or with
+    // per-point materials their classes' envelopes (Tables::envelopes).
     std::vector<const ChannelTable*> tables[3];
+    bool one_material = true;   // every receiver reads the same three tables
     double tol[3] = {0, 0, 0};  // largest error accepted from one node
     double skip[3] = {0, 0, 0}; // largest contribution taken as a monopole untested
 };

@@ -136,12 +136,11 @@ void far_nodes_tables(const BlockTables& tb, const Expansion* expansions,
 // loaded whole and transposed in registers; receivers past n read row 0
 // (locate_rows() clears their positions) into scratch slots nobody reads.
 #if defined(__AVX2__)
-// Rows of receivers [r0, r0 + 8), group g, into b.val: the 8 x 8 transpose
-// of the rows' first six columns (unpack pairs, shuffle quads, then the
-// 128-bit halves).
-inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
+// The first six floats of the eight rows at p[0..8) as six columns (the 8 x 8
+// transpose: unpack pairs, shuffle quads, then the 128-bit halves).
+inline void transpose8(const float* const p[8], __m256 col[6]) {
     __m256 r[8], t[8], tt[8];
-    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows + b.idx[r0 + i] + 8 * g);
+    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(p[i]);
     for (int i = 0; i < 4; ++i) {
         t[2 * i] = _mm256_unpacklo_ps(r[2 * i], r[2 * i + 1]);
         t[2 * i + 1] = _mm256_unpackhi_ps(r[2 * i], r[2 * i + 1]);
@@ -152,44 +151,98 @@ inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
         tt[4 * h + 2] = _mm256_shuffle_ps(t[4 * h + 1], t[4 * h + 3], 0x44);
         tt[4 * h + 3] = _mm256_shuffle_ps(t[4 * h + 1], t[4 * h + 3], 0xEE);
     }
-    _mm256_storeu_ps(b.val[6 * g + 0] + r0, _mm256_permute2f128_ps(tt[0], tt[4], 0x20));
-    _mm256_storeu_ps(b.val[6 * g + 1] + r0, _mm256_permute2f128_ps(tt[1], tt[5], 0x20));
-    _mm256_storeu_ps(b.val[6 * g + 2] + r0, _mm256_permute2f128_ps(tt[2], tt[6], 0x20));
-    _mm256_storeu_ps(b.val[6 * g + 3] + r0, _mm256_permute2f128_ps(tt[3], tt[7], 0x20));
-    _mm256_storeu_ps(b.val[6 * g + 4] + r0, _mm256_permute2f128_ps(tt[0], tt[4], 0x31));
-    _mm256_storeu_ps(b.val[6 * g + 5] + r0, _mm256_permute2f128_ps(tt[1], tt[5], 0x31));
+    col[0] = _mm256_permute2f128_ps(tt[0], tt[4], 0x20);
+    col[1] = _mm256_permute2f128_ps(tt[1], tt[5], 0x20);
+    col[2] = _mm256_permute2f128_ps(tt[2], tt[6], 0x20);
+    col[3] = _mm256_permute2f128_ps(tt[3], tt[7], 0x20);
+    col[4] = _mm256_permute2f128_ps(tt[0], tt[4], 0x31);
+    col[5] = _mm256_permute2f128_ps(tt[1], tt[5], 0x31);
+}
+
+// Rows of receivers [r0, r0 + 8), group g, into b.val.
+inline void read_rows8(const float* rows, BucketBlock& b, int32_t r0, int g) {
+    const float* p[8];
+    for (int i = 0; i < 8; ++i) p[i] = rows + b.idx[r0 + i] + 8 * g;
+    __m256 col[6];
+    transpose8(p, col);
+    for (int c = 0; c < 6; ++c) _mm256_storeu_ps(b.val[6 * g + c] + r0, col[c]);
+}
+
+// Per-point materials: channel ch's profile rows of receivers [r0, r0 + 8)
+// into the slots the interleaved rows fill ({F}: 2 ch, 2 ch + 1; {F'}: 6 +
+// 2 ch, ...; the first `groups` of them).
+inline void read_profile_rows8(const float* rows, BucketBlock& b, int32_t r0, int ch,
+                               int groups) {
+    const float* p[8];
+    for (int i = 0; i < 8; ++i) p[i] = rows + b.base[ch][r0 + i] + b.idx[r0 + i];
+    __m256 col[6];
+    transpose8(p, col);
+    for (int g = 0; g < groups; ++g) {
+        _mm256_storeu_ps(b.val[6 * g + 2 * ch] + r0, col[2 * g]);
+        _mm256_storeu_ps(b.val[6 * g + 2 * ch + 1] + r0, col[2 * g + 1]);
+    }
 }
 #else
-// Rows of receivers [r0, r0 + 4), group g, into b.val (SSE: two 4 x 4
-// transposes).
-inline void read_rows4(const float* rows, BucketBlock& b, int32_t r0, int g) {
-    const float* p[4];
-    for (int i = 0; i < 4; ++i) p[i] = rows + b.idx[r0 + i] + 8 * g;
+// The first eight floats of the four rows at p[0..4) as eight columns (SSE:
+// two 4 x 4 transposes).
+inline void transpose4(const float* const p[4], __m128 col[8]) {
     __m128 a0 = _mm_loadu_ps(p[0]), a1 = _mm_loadu_ps(p[1]), a2 = _mm_loadu_ps(p[2]),
            a3 = _mm_loadu_ps(p[3]);
     _MM_TRANSPOSE4_PS(a0, a1, a2, a3);
     __m128 c0 = _mm_loadu_ps(p[0] + 4), c1 = _mm_loadu_ps(p[1] + 4),
            c2 = _mm_loadu_ps(p[2] + 4), c3 = _mm_loadu_ps(p[3] + 4);
     _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
-    _mm_storeu_ps(b.val[6 * g + 0] + r0, a0);
-    _mm_storeu_ps(b.val[6 * g + 1] + r0, a1);
-    _mm_storeu_ps(b.val[6 * g + 2] + r0, a2);
-    _mm_storeu_ps(b.val[6 * g + 3] + r0, a3);
-    _mm_storeu_ps(b.val[6 * g + 4] + r0, c0);
-    _mm_storeu_ps(b.val[6 * g + 5] + r0, c1);
+    col[0] = a0, col[1] = a1, col[2] = a2, col[3] = a3;
+    col[4] = c0, col[5] = c1, col[6] = c2, col[7] = c3;
+}
+
+// Rows of receivers [r0, r0 + 4), group g, into b.val.
+inline void read_rows4(const float* rows, BucketBlock& b, int32_t r0, int g) {
+    const float* p[4];
+    for (int i = 0; i < 4; ++i) p[i] = rows + b.idx[r0 + i] + 8 * g;
+    __m128 col[8];
+    transpose4(p, col);
+    for (int c = 0; c < 6; ++c) _mm_storeu_ps(b.val[6 * g + c] + r0, col[c]);
+}
+
+// read_profile_rows8() for four receivers.
+inline void read_profile_rows4(const float* rows, BucketBlock& b, int32_t r0, int ch,
+                               int groups) {
+    const float* p[4];
+    for (int i = 0; i < 4; ++i) p[i] = rows + b.base[ch][r0 + i] + b.idx[r0 + i];
+    __m128 col[8];
+    transpose4(p, col);
+    for (int g = 0; g < groups; ++g) {
+        _mm_storeu_ps(b.val[6 * g + 2 * ch] + r0, col[2 * g]);
+        _mm_storeu_ps(b.val[6 * g + 2 * ch + 1] + r0, col[2 * g + 1]);
+    }
 }
 #endif
 
-template <int Groups>
-inline void read_rows(const float* rows, BucketBlock& b, int32_t n) {
+// The first Groups groups of every receiver's row into b.val: the interleaved
+// rows (PerLane false) or, per channel, each receiver's own profile rows.
+template <int Groups, bool PerLane = false>
+inline void read_rows(const BlockTables& tb, BucketBlock& b, int32_t n) {
 #if defined(__AVX2__)
     // (The AVX-512 path too: its kernels prefer 256-bit vectors, which were
     // faster than 512-bit ones here.)
-    for (int32_t r0 = 0; r0 < n; r0 += 8)
-        for (int g = 0; g < Groups; ++g) read_rows8(rows, b, r0, g);
+    for (int32_t r0 = 0; r0 < n; r0 += 8) {
+        if constexpr (PerLane) {
+            for (int ch = 0; ch < 3; ++ch)
+                read_profile_rows8(tb.profile_rows, b, r0, ch, Groups);
+        } else {
+            for (int g = 0; g < Groups; ++g) read_rows8(tb.rows, b, r0, g);
+        }
+    }
 #else
-    for (int32_t r0 = 0; r0 < n; r0 += 4)
-        for (int g = 0; g < Groups; ++g) read_rows4(rows, b, r0, g);
+    for (int32_t r0 = 0; r0 < n; r0 += 4) {
+        if constexpr (PerLane) {
+            for (int ch = 0; ch < 3; ++ch)
+                read_profile_rows4(tb.profile_rows, b, r0, ch, Groups);
+        } else {
+            for (int g = 0; g < Groups; ++g) read_rows4(tb.rows, b, r0, g);
+        }
+    }
 #endif
 }
 
@@ -204,7 +257,7 @@ inline bool needs_quadrature(float rho2, float q, float core2) {
 // (px, py, pz): b.idx (row offset), b.frac, and b.keep = 0 past the tables'
 // end, for the receiver `self` (sorted position; -1: none) and, with Quad,
 // where a source disk of radius^2 rho2 needs the quadrature (see near()).
-template <bool Quad = false>
+template <bool Quad = false, int Stride = kRowFloats>
 inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int32_t self,
                         BucketBlock& b, int32_t n, float rho2 = 0.0f,
                         float core2 = 0.0f) {
@@ -219,7 +272,7 @@ inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int
         bool keep = idx < last && b.sorted[r] != self;
         if constexpr (Quad) keep = keep && !needs_quadrature(rho2, q, core2);
         b.keep[r] = keep ? 1.0f : 0.0f;
-        b.idx[r] = imin(idx, last - 1) * kRowFloats;
+        b.idx[r] = imin(idx, last - 1) * Stride;
     }
     // read_rows() reads whole vectors of (at most 8) receivers.
     for (int32_t r = n; r < ((n + 7) & ~7); ++r) b.idx[r] = 0;
@@ -227,7 +280,7 @@ inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int
 
 // far_nodes_tables() and near_tables() on the interleaved rows: the same
 // operations in the same order, so the same bits.
-template <bool Quadrupole>
+template <bool Quadrupole, bool PerLane>
 void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
                     const uint32_t* nodes, std::size_t count, BucketBlock& b) {
     const int32_t n = int32_t(b.count);
@@ -240,8 +293,9 @@ void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
         const NodeTerms m(expansions[nodes[k]]);
         const float cx = m.cx, cy = m.cy, cz = m.cz;
         const float* phi = m.phi;
-        locate_rows(tb, cx, cy, cz, -1, b, n);
-        read_rows<Quadrupole ? 3 : 1>(tb.rows, b, n);
+        locate_rows<false, PerLane ? kProfileRowFloats : kRowFloats>(tb, cx, cy, cz, -1,
+                                                                     b, n);
+        read_rows<Quadrupole ? 3 : 1, PerLane>(tb, b, n);
         const float* frac = b.frac;
         const float* keep = b.keep;
         SSS_IVDEP
@@ -266,7 +320,7 @@ void far_nodes_rows(const BlockTables& tb, const Expansion* expansions,
     }
 }
 
-template <bool Quad>
+template <bool Quad, bool PerLane>
 void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_area,
                uint32_t first, uint32_t count, BucketBlock& b, float core2) {
     const int32_t n = int32_t(b.count);
@@ -278,9 +332,10 @@ void near_rows(const BlockTables& tb, const float* pos_rho2, const float* power_
     for (uint32_t j = first; j < first + count; ++j) {
         const float e0 = power_area[4 * j], e1 = power_area[4 * j + 1],
                     e2 = power_area[4 * j + 2];
-        locate_rows<Quad>(tb, pos_rho2[4 * j], pos_rho2[4 * j + 1], pos_rho2[4 * j + 2],
-                          int32_t(j), b, n, pos_rho2[4 * j + 3], core2);
-        read_rows<1>(tb.rows, b, n);
+        locate_rows<Quad, PerLane ? kProfileRowFloats : kRowFloats>(
+            tb, pos_rho2[4 * j], pos_rho2[4 * j + 1], pos_rho2[4 * j + 2], int32_t(j), b,
+            n, pos_rho2[4 * j + 3], core2);
+        read_rows<1, PerLane>(tb, b, n);
         const float* frac = b.frac;
         const float* keep = b.keep;
         SSS_IVDEP
@@ -316,6 +371,7 @@ void near_tables(const BlockTables& tb, const float* pos_rho2, const float* powe
     const float nn = nx * nx + ny * ny + nz * nz;                                        \
     const float inv_n2 = nn > 0.0f ? 1.0f / nn : 0.0f, has = nn > 0.0f ? 1.0f : 0.0f
 
+template <bool PerLane>
 void near_disks_rows(const BlockTables& tb, const float* pos_rho2,
                      const float* power_area, const float* normals, uint32_t first,
                      uint32_t count, BucketBlock& b) {
@@ -330,8 +386,9 @@ void near_disks_rows(const BlockTables& tb, const float* pos_rho2,
                     pz = pos_rho2[4 * j + 2];
         const float rho2 = pos_rho2[4 * j + 3], h = 0.5f * rho2;
         SSS_DISK_PLANE(normals, j);
-        locate_rows(tb, px, py, pz, int32_t(j), b, n);
-        read_rows<3>(tb.rows, b, n);
+        locate_rows<false, PerLane ? kProfileRowFloats : kRowFloats>(tb, px, py, pz,
+                                                                     int32_t(j), b, n);
+        read_rows<3, PerLane>(tb, b, n);
         const float* frac = b.frac;
         const float* keep = b.keep;
         SSS_IVDEP
@@ -393,8 +450,10 @@ void near_disks_tables(const BlockTables& tb, const float* pos_rho2,
 
 void near_disks(const BlockTables& t, const float* pos_rho2, const float* power_area,
                 const float* normals, uint32_t first, uint32_t count, BucketBlock& b) {
-    if (t.rows)
-        near_disks_rows(t, pos_rho2, power_area, normals, first, count, b);
+    if (t.profile_rows)
+        near_disks_rows<true>(t, pos_rho2, power_area, normals, first, count, b);
+    else if (t.rows)
+        near_disks_rows<false>(t, pos_rho2, power_area, normals, first, count, b);
     else
         near_disks_tables(t, pos_rho2, power_area, normals, first, count, b);
 }
@@ -402,8 +461,10 @@ void near_disks(const BlockTables& t, const float* pos_rho2, const float* power_
 template <bool Quadrupole>
 void far_nodes(const BlockTables& t, const Expansion* expansions, const uint32_t* nodes,
                std::size_t n, BucketBlock& b) {
-    if (t.rows)
-        far_nodes_rows<Quadrupole>(t, expansions, nodes, n, b);
+    if (t.profile_rows)
+        far_nodes_rows<Quadrupole, true>(t, expansions, nodes, n, b);
+    else if (t.rows)
+        far_nodes_rows<Quadrupole, false>(t, expansions, nodes, n, b);
     else
         far_nodes_tables<Quadrupole>(t, expansions, nodes, n, b);
 }
@@ -411,8 +472,10 @@ void far_nodes(const BlockTables& t, const Expansion* expansions, const uint32_t
 template <bool Quad>
 void near_pairs(const BlockTables& t, const float* pos_rho2, const float* power_area,
                 uint32_t first, uint32_t count, BucketBlock& b, float core2) {
-    if (t.rows)
-        near_rows<Quad>(t, pos_rho2, power_area, first, count, b, core2);
+    if (t.profile_rows)
+        near_rows<Quad, true>(t, pos_rho2, power_area, first, count, b, core2);
+    else if (t.rows)
+        near_rows<Quad, false>(t, pos_rho2, power_area, first, count, b, core2);
     else
         near_tables<Quad>(t, pos_rho2, power_area, first, count, b, core2);
 }
