@@ -32,6 +32,7 @@ struct BucketBlock {
     // profile per channel, as its float offset into the profile rows (the
     // lanes past count up to a multiple of 8 hold 0).
     alignas(64) int32_t base[3][kMaxBucket];
+    alignas(64) float core2[kMaxBucket]; // each receiver's near_core2
 };
 
 // The three channel tables every receiver of a block reads, and the table
@@ -62,7 +63,8 @@ struct BlockKernels {
     // sorted arrays as floats (4 per point). With quadrature_core2 >= 0 (the
     // receivers' near_core2), the pairs whose source disk needs the disk
     // quadrature (near_source()'s test) are skipped too, for the caller to
-    // add; below 0, the caller has checked that no pair does.
+    // add (with profile_rows: each receiver's own b.core2, quadrature_core2
+    // their smallest); below 0, the caller has checked that no pair does.
     void (*near)(const BlockTables& t, const float* pos_rho2, const float* power_area,
                  uint32_t first, uint32_t count, BucketBlock& b, float quadrature_core2);
     // The same for receivers whose profiles have no core (near_core2 = 0):

@@ -253,6 +253,7 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             const ReceiverChannels& rc = w.rcs[r] =
                 receiver_channels(pb, tables, tree.order[s]);
             core2 = std::min(core2, rc.near_core2);
+            block.core2[r] = rc.near_core2;
             for (int ch = 0; ch < 3; ++ch)
                 block.base[ch][r] =
                     int32_t(std::size_t(rc.table[ch] - tables.channels.data()) *
@@ -299,8 +300,10 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                                leaf.first, leaf.count, block);
         else
             kernels.near(t, pos_rho2, power_area, leaf.first, leaf.count, block, core2);
-        const auto left = [&](float rho2, float q) {
-            return coreless ? rho2 > kTaylorDisk2 * q : needs_quadrature(rho2, q, core2);
+        // (Receiver r's own core with per-point materials, as the kernel.)
+        const auto left = [&](float rho2, float q, uint32_t r) {
+            return coreless ? rho2 > kTaylorDisk2 * q
+                            : needs_quadrature(rho2, q, mixed ? block.core2[r] : core2);
         };
         float max_rho2 = 0.0f; // (exact: max_rho is its rounded square root)
         for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
@@ -310,13 +313,13 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             const glm::vec3 x(block.x[r], block.y[r], block.z[r]);
             // No pair of this receiver needs it when the leaf's largest disk
             // does not at the leaf box's distance (q >= that distance).
-            if (!left(max_rho2, box_distance2(x, x, leaf.lo, leaf.hi))) continue;
+            if (!left(max_rho2, box_distance2(x, x, leaf.lo, leaf.hi), r)) continue;
             double acc[3] = {0, 0, 0};
             bool any = false;
             for (uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j) {
                 const glm::vec3 wv = x - glm::vec3(tree.pos_rho2[j]);
                 const float q = glm::dot(wv, wv);
-                if (j != s && left(tree.pos_rho2[j].w, q)) {
+                if (j != s && left(tree.pos_rho2[j].w, q, r)) {
                     quadrature_source(tree, tables, rc_of(r), wv, q, j, acc, local,
                                       w.memo);
                     any = true;

@@ -257,10 +257,13 @@ inline bool needs_quadrature(float rho2, float q, float core2) {
 // (px, py, pz): b.idx (row offset), b.frac, and b.keep = 0 past the tables'
 // end, for the receiver `self` (sorted position; -1: none) and, with Quad,
 // where a source disk of radius^2 rho2 needs the quadrature (see near()).
+// With per-point materials (Stride kProfileRowFloats) the quadrature test
+// takes each receiver's own core (b.core2).
 template <bool Quad = false, int Stride = kRowFloats>
 inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int32_t self,
                         BucketBlock& b, int32_t n, float rho2 = 0.0f,
                         float core2 = 0.0f) {
+    constexpr bool kPerLane = Stride == kProfileRowFloats;
     const int32_t bits0 = tb.bits0, last = tb.last;
     SSS_IVDEP
     for (int32_t r = 0; r < n; ++r) {
@@ -270,7 +273,8 @@ inline void locate_rows(const BlockTables& tb, float px, float py, float pz, int
         int32_t idx = imin(off >> kShift, last);
         b.frac[r] = float(off & ((1 << kShift) - 1)) * kFracScale;
         bool keep = idx < last && b.sorted[r] != self;
-        if constexpr (Quad) keep = keep && !needs_quadrature(rho2, q, core2);
+        if constexpr (Quad)
+            keep = keep && !needs_quadrature(rho2, q, kPerLane ? b.core2[r] : core2);
         b.keep[r] = keep ? 1.0f : 0.0f;
         b.idx[r] = imin(idx, last - 1) * Stride;
     }
