@@ -41,6 +41,8 @@ std::string usage() {
            "                         every frame of the file is rendered, in order)\n"
            "  -res X Y               image size instead of Format (quick previews)\n"
            "  -samples N             N x N pixel samples instead of PixelSamples\n"
+           "  -pixelshading 0|1      1: shade every pixel sample on its own instead\n"
+           "                         of at the ShadingRate (default 0)\n"
            "  -lenient               skip what the scene asks for that is not\n"
            "                         implemented (CSG, unknown requests...) with a\n"
            "                         warning; by default it is an error\n"
@@ -90,8 +92,9 @@ void render_frame(const sss::Scene& scene, const std::string& rib,
                 rib.c_str(), scene.primitives.size(), scene.lights.size(),
                 report.triangles, xres, yres, nx, ny);
             std::printf("render: %zu camera rays, %zu shadow and occlusion rays, %zu "
-                        "secondary rays\n",
-                        report.camera_rays, report.shadow_rays, report.secondary_rays);
+                        "secondary rays, %zu shading points\n",
+                        report.camera_rays, report.shadow_rays, report.secondary_rays,
+                        report.shading_points);
         }
         for (const std::string& f : report.files)
             std::printf("render: wrote %s\n", f.c_str());
@@ -123,6 +126,8 @@ int run(const std::vector<std::string>& argv) {
             opt.yres = args.integer(o, 1, INT_MAX);
         } else if (o == "samples") {
             opt.pixel_samples = args.integer(o, 1, 64);
+        } else if (o == "pixelshading") {
+            opt.pixel_shading = args.integer(o, 0, 1) != 0;
         } else if (o == "lenient") {
             read.lenient = true;
         } else if (sss::prman_thread_option(o, running)) {

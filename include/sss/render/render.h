@@ -35,6 +35,9 @@ struct RenderJobOptions {
     /// Overrides for quick tests: 0 = use the scene's Format / PixelSamples.
     int xres = 0, yres = 0;
     int pixel_samples = 0;
+    /// Shade every camera sample on its own (-pixelshading 1) instead of at
+    /// the ShadingRate (docs/render.md, "Shading rate").
+    bool pixel_shading = false;
 };
 
 /// What happened.
@@ -55,6 +58,9 @@ struct RenderReport {
     /// (trace, gather, occlusion, indirectdiffuse, transmission with
     /// opacity), the hit shaders' own rays included.
     std::size_t secondary_rays = 0;
+    /// Points the surface shaders ran at (at the ShadingRate: the lattice
+    /// points the samples hit; with pixel shading: every hit).
+    std::size_t shading_points = 0;
     double bake_seconds = 0.0;   ///< a bake RIB's bake pass
     double setup_seconds = 0.0;  ///< dicing, Embree build, maps opened
     double render_seconds = 0.0; ///< pixels

@@ -17,6 +17,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -203,6 +204,11 @@ struct Renderer {
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> bad_samples{0};
     std::atomic<uint64_t> nan_points{0};
+    /// Shading at the ShadingRate (shade_pass_cached) rather than at every
+    /// camera sample; the camera's world-to-NDC for its lattice points.
+    bool shading_cache = false;
+    glm::dmat4 world_to_ndc{1.0};
+    std::atomic<uint64_t> shading_points{0}; ///< points the surface shaders ran at
 };
 
 /// One camera sample of a tile, while its ray goes through the layers.
@@ -234,6 +240,56 @@ struct SurfaceHit {
     double lift = 0.0; ///< distance of p above the flat triangle
     float time = 0.0f; ///< the ray's time (0 = shutter open, 1 = close)
 };
+
+/// Shading points already shaded in a tile (render_shading.cpp): the values
+/// of each lattice point (primitive, triangle, point of its lattice), so that
+/// every later sample that hits it takes them.
+struct ShadingCache {
+    /// A lattice point of a primitive: `tag` says which kind (its top two
+    /// bits) and a, b where: a cell of triangle a, b its (i, j, upper); a
+    /// mesh vertex a (a corner, shared by the triangles around it); the
+    /// point of edge (a, b), a < b, at the fraction the tag's low bits hold
+    /// (shared by the edge's two triangles when both cut it there); a point
+    /// inside triangle a, b its (i, j).
+    struct Key {
+        uint32_t prim = 0, tag = 0, a = 0, b = 0;
+        bool operator==(const Key&) const = default;
+    };
+    struct KeyHash {
+        std::size_t operator()(const Key& k) const {
+            return std::size_t(
+                detail::splitmix64((uint64_t(k.prim) << 32 | k.tag) ^
+                                   detail::splitmix64(uint64_t(k.a) << 32 | k.b)));
+        }
+    };
+    /// A lattice point the camera cannot see (off its projection, or facing
+    /// away on a one-sided surface).
+    static constexpr uint32_t kUnseen = UINT32_MAX;
+    std::unordered_map<Key, uint32_t, KeyHash> slot;
+    std::vector<float> values; ///< per slot: Ci, Oi, then the AOVs' floats
+    /// Cells per edge of each triangle met (primitive << 32 | triangle).
+    std::unordered_map<uint64_t, int> lattice;
+};
+
+/// Finds what each active sample's ray hits next; samples whose ray leaves
+/// the scene (or runs out of layers) become inactive. Hits that are not
+/// shaded (slivers, one-sided back faces, transparent surfaces) only move
+/// the ray on.
+void trace_pass(const Renderer& job, std::vector<CameraSample>& samples,
+                std::vector<SurfaceHit>& hits, uint64_t& camera_count);
+
+/// Shades every hit of one pass on its own, primitive by primitive in
+/// batches, and composites each into its sample (front to back).
+void shade_pass(Renderer& job, ShadingContext& context, std::vector<SurfaceHit>& hits,
+                std::vector<CameraSample>& samples, std::vector<float>& values);
+
+/// shade_pass() at the ShadingRate: each hit takes the values of its
+/// triangle's lattice cell (ShadingInterpolation "constant") or of the cell's
+/// corners blended at the hit ("smooth"), shading the points the tile's cache
+/// lacks. Deterministic: a point's values depend only on the point.
+void shade_pass_cached(Renderer& job, ShadingContext& context,
+                       std::vector<SurfaceHit>& hits, std::vector<CameraSample>& samples,
+                       std::vector<float>& values, ShadingCache& cache);
 
 /// The times a moving primitive is diced at: evenly over the shutter with
 /// motion blur (a step at each of its motion samples when they fall on an

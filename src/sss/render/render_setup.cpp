@@ -67,6 +67,12 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
         }
     }
     job.rays.emplace(job.camera);
+    // Shading at the ShadingRate: a lattice point is shaded once for every
+    // sample that hits it, which holds while the surfaces and the camera
+    // stand still over the shutter (with motion blur each sample is shaded
+    // at its own time).
+    job.shading_cache = !options.pixel_shading && !job.motion_blur;
+    job.world_to_ndc = job.camera.world_to_ndc();
     const PixelFilterSpec& filter = scene.options.pixel_filter;
     job.filter.emplace(filter);
     job.reach_x = job.filter->reach_x();
