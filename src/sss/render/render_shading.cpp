@@ -24,7 +24,7 @@ namespace {
 /// transparent surface).
 bool fill_hit(const Renderer& job, uint32_t prim_index, uint32_t triangle, double b1,
               double b2, glm::dvec3 ng, const glm::dvec3& dir, double t, double units,
-              float time, SurfaceHit& h, bool full = true) {
+              float time, SurfaceHit& h, bool full = true, bool lattice = false) {
     const Surface& surf = job.surfaces[prim_index];
     const Primitive& prim = job.scene->primitives[prim_index];
     const Attributes& attr = attributes_of(prim);
@@ -88,11 +88,15 @@ bool fill_hit(const Renderer& job, uint32_t prim_index, uint32_t triangle, doubl
     h.radius = 0.5 * std::sqrt(std::max(attr.shading_rate, 0.0)) * pixel;
     // The pixel's footprint: the camera's x and y steps of one pixel,
     // projected along the ray onto the tangent plane (capped at grazing
-    // angles).
-    const double cosine = glm::dot(dir, ng);
+    // angles). A lattice point of a triangle whose vertex normals lie almost
+    // in its plane (a patch collapsed to a pole or a crease) takes the plane
+    // of its shading normal: the triangle's would make calculatenormal()
+    // turn away from N there.
+    const glm::dvec3 plane = lattice && std::abs(glm::dot(n, ng)) < 0.5 ? n : ng;
+    const double cosine = glm::dot(dir, plane);
     const auto project = [&](const glm::dvec3& step) {
         glm::dvec3 v = step;
-        if (std::abs(cosine) > 1e-6) v -= dir * (glm::dot(step, ng) / cosine);
+        if (std::abs(cosine) > 1e-6) v -= dir * (glm::dot(step, plane) / cosine);
         const double cap = 8.0 * pixel;
         const double len = glm::length(v);
         return len > cap ? v * (cap / len) : v;
@@ -103,7 +107,7 @@ bool fill_hit(const Renderer& job, uint32_t prim_index, uint32_t triangle, doubl
     // parameters: v steps the way that makes dPdu x dPdv point along the
     // oriented normal, as the parametric derivatives do, so that
     // calculatenormal(P) (and of a displaced P) faces like N.
-    if (glm::dot(glm::cross(h.dpdx, h.dpdy), ng) < 0.0) h.dpdy = -h.dpdy;
+    if (glm::dot(glm::cross(h.dpdx, h.dpdy), plane) < 0.0) h.dpdy = -h.dpdy;
     return true;
 }
 
@@ -463,7 +467,7 @@ bool lattice_hit(const Renderer& job, uint32_t prim, uint32_t triangle, double b
     if (!std::isfinite(dir.x)) return false;
     const double t = glm::dot(p - origin, glm::dvec3(ray.direction));
     return fill_hit(job, prim, triangle, b1, b2, glm::cross(v1 - v0, v2 - v0), dir,
-                    std::max(t, 0.0), units, 0.0f, h);
+                    std::max(t, 0.0), units, 0.0f, h, true, true);
 }
 
 /// The key of lattice point (i, j) (barycentrics i / k, j / k) of triangle
