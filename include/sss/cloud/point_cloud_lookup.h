@@ -5,6 +5,7 @@
 /// brick-map tests compare against).
 
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,12 +16,21 @@
 
 namespace sss {
 
-/// The same lookup directly on a point cloud, for checks: a normal-aware
-/// average of the nearest points (those whose normal agrees with n, within
-/// about 60 degrees; all of them when n is zero), weighted by distance within
-/// the filter radius or, when 0, over the k nearest.
+/// The same lookup directly on a point cloud: a normal-aware average of the
+/// nearest points (those whose normal agrees with n, within about 60 degrees;
+/// all of them when n is zero), weighted by distance within the filter
+/// radius or, when 0, over the k = 8 nearest (a tent reaching zero at the
+/// 9th). The neighbours are exact (ties broken by point order), so results
+/// do not depend on the order of lookups, the thread or the thread count;
+/// consecutive lookups near each other on one thread are faster.
 class PointCloudLookup {
 public:
+    /// Some of a lookup's floats: `floats` of them from `offset` on.
+    struct Range {
+        int offset = 0;
+        int floats = 0;
+    };
+
     /// Indexes the cloud's positions (the cloud must outlive this object).
     /// channels: the channels to return, in order (empty: every float and
     /// color channel).
@@ -35,6 +45,12 @@ public:
     /// Fills out; false when no point qualifies. Thread-safe.
     bool lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
                 float* out) const;
+    /// The same with only the ranges' floats, one range after another in out
+    /// (each value identical to lookup's). *nearest, when given, gets the
+    /// distance from p to the nearest point averaged (infinity on a miss).
+    bool lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
+                std::span<const Range> ranges, float* out,
+                float* nearest = nullptr) const;
 
 private:
     struct Impl;

@@ -76,12 +76,16 @@ void Texture3dFile::index_cloud() {
     }
 }
 
-bool Texture3dFile::near_data(const glm::vec3& p, float radius) const {
-    if (occupied.empty()) return false;
+bool Texture3dFile::outside_box(const glm::vec3& p, float radius) const {
     const float reach = std::max(cell, std::isfinite(radius) ? radius : 0.0f);
-    // Far outside the bounding box: no point there.
     for (int a = 0; a < 3; ++a)
-        if (p[a] < lo[a] - reach || p[a] > hi[a] + reach) return false;
+        if (p[a] < lo[a] - reach || p[a] > hi[a] + reach) return true;
+    return false;
+}
+
+bool Texture3dFile::near_data(const glm::vec3& p, float radius) const {
+    if (occupied.empty() || outside_box(p, radius)) return false;
+    const float reach = std::max(cell, std::isfinite(radius) ? radius : 0.0f);
     const int range = static_cast<int>(std::ceil(reach / cell));
     if (range > kMaxCellRange) return true; // a large filter: the box suffices
     const glm::vec3 g = glm::floor((p - origin) / cell);
@@ -190,7 +194,16 @@ bool TextureLibrary::texture3d(const std::string& name,
     }
     if (stride == 0) return false;
 
-    std::vector<float> buf(std::size_t(std::max(f->data_size, 1)));
+    // Point clouds average only the channels asked for, straight into the
+    // call's buffer; brick maps fill all their floats, then the channels are
+    // copied out. Scratch space per thread: no allocation per call.
+    thread_local std::vector<float> t_buf;
+    thread_local std::vector<PointCloudLookup::Range> t_ranges;
+    t_buf.resize(std::size_t(std::max({f->data_size, stride, 1})));
+    float* const buf = t_buf.data();
+    t_ranges.clear();
+    for (const Texture3dFile::Channel* c : sources)
+        if (c) t_ranges.push_back({c->offset, c->floats});
     for (std::size_t i = 0; i < count; ++i) {
         if (mask && !mask[i]) continue;
         const glm::vec3 p = P[i];
@@ -200,20 +213,24 @@ bool TextureLibrary::texture3d(const std::string& name,
             n = glm::vec3(0.0f);
         float r = radius ? radius[i] : 0.0f;
         if (!(r > 0.0f) || !std::isfinite(r)) r = 0.0f;
-        bool hit = false;
-        if (f->map) {
-            hit = f->map->lookup(p, n, r, buf.data());
-        } else {
-            // Point clouds: always the nearest points (a fixed radius may hold
-            // none), as the renderer reads them; found only near the data.
-            hit = f->near_data(p, r) && f->lookup->lookup(p, n, 0.0f, buf.data());
-        }
-        if (!hit) continue;
         float* dst = out + i * std::size_t(stride);
-        for (const Texture3dFile::Channel* c : sources) {
-            if (!c) continue;
-            std::copy_n(buf.data() + c->offset, c->floats, dst);
-            dst += c->floats;
+        if (f->map) {
+            if (!f->map->lookup(p, n, r, buf)) continue;
+            for (const Texture3dFile::Channel* c : sources) {
+                if (!c) continue;
+                std::copy_n(buf + c->offset, c->floats, dst);
+                dst += c->floats;
+            }
+        } else {
+            // Point clouds: always the nearest points (a fixed radius may
+            // hold none), as the renderer reads them; found only near the
+            // data. A point within half a cell is near (its cell is a
+            // neighbour of p's), which spares the cell test almost always.
+            if (f->outside_box(p, r)) continue;
+            float nearest = 0.0f;
+            if (!f->lookup->lookup(p, n, 0.0f, t_ranges, buf, &nearest)) continue;
+            if (!(nearest <= 0.5f * f->cell) && !f->near_data(p, r)) continue;
+            std::copy_n(buf, stride, dst);
         }
         if (found) found[i] = 1;
     }

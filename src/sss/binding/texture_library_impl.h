@@ -52,6 +52,9 @@ struct Texture3dFile {
     }
     /// Whether some point may lie within max(cell, radius) of p (clouds).
     bool near_data(const glm::vec3& p, float radius) const;
+    /// Whether p is farther than max(cell, radius) outside the points' box
+    /// (then no point is near it).
+    bool outside_box(const glm::vec3& p, float radius) const;
     void index_cloud();
 };
 
