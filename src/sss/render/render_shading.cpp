@@ -508,122 +508,150 @@ struct CachedRef {
 
 } // namespace
 
+namespace {
+
+/// The points a pass must shade: new lattice points, and hits whose own
+/// lattice point is not seen; each with its eye and its slot in the cache.
+struct Pending {
+    std::vector<SurfaceHit> hits;
+    std::vector<glm::dvec3> origins;
+    std::vector<uint32_t> slots;
+};
+
+/// A new slot at the end of the cache's values.
+uint32_t new_slot(ShadingCache& cache, std::size_t floats) {
+    const auto slot = uint32_t(cache.values.size() / floats);
+    cache.values.resize(cache.values.size() + floats, 0.0f);
+    return slot;
+}
+
+/// The slot of lattice point `key` at barycentrics (b1, b2) of triangle
+/// `tri`, queued in `pending` when new; false where it cannot be seen.
+bool lattice_slot(const Renderer& job, ShadingCache& cache, std::size_t floats,
+                  const ShadingCache::Key& key, uint32_t tri, double b1, double b2,
+                  Pending& pending, uint32_t& slot) {
+    if (auto it = cache.slot.find(key); it != cache.slot.end()) {
+        slot = it->second;
+        return slot != ShadingCache::kUnseen;
+    }
+    SurfaceHit h;
+    glm::dvec3 origin;
+    if (!lattice_hit(job, key.prim, tri, b1, b2, h, origin)) {
+        cache.slot.emplace(key, ShadingCache::kUnseen);
+        return false;
+    }
+    slot = new_slot(cache, floats);
+    cache.slot.emplace(key, slot);
+    h.seed = ShadingCache::KeyHash()(key) ^ 0x5EED5EEDull;
+    pending.hits.push_back(h);
+    pending.origins.push_back(origin);
+    pending.slots.push_back(slot);
+    return true;
+}
+
+/// The lattice points of hit h and their weights (count 0: one of them is not
+/// seen, and the hit must be shaded on its own).
+CachedRef lattice_ref(const Renderer& job, ShadingCache& cache, std::size_t floats,
+                      const SurfaceHit& h, Pending& pending) {
+    const uint64_t tri_key = uint64_t(h.primitive) << 32 | h.triangle;
+    auto [kit, fresh] = cache.lattice.try_emplace(tri_key, 0);
+    if (fresh) kit->second = lattice_size(job, h.primitive, h.triangle);
+    const int k = kit->second;
+    const double x = std::clamp(double(h.b1), 0.0, 1.0) * k;
+    const double y = std::clamp(double(h.b2), 0.0, 1.0) * k;
+    int ci = std::min(int(x), k - 1), cj = std::min(int(y), k - 1);
+    if (ci + cj > k - 1) ci = k - 1 - cj; // on the far edge
+    const double fx = x - ci, fy = y - cj;
+    const bool upper = fx + fy > 1.0;
+    CachedRef ref;
+    if (attributes_of(job.scene->primitives[h.primitive]).shading_interpolation !=
+        "smooth") {
+        // The cell's centroid.
+        const double o = upper ? 2.0 / 3.0 : 1.0 / 3.0;
+        const ShadingCache::Key key{h.primitive, 0, h.triangle,
+                                    (uint32_t(ci) << 16 | uint32_t(cj)) << 1 |
+                                        (upper ? 1u : 0u)};
+        ref.weight[0] = 1.0f;
+        ref.count = lattice_slot(job, cache, floats, key, h.triangle, (ci + o) / k,
+                                 (cj + o) / k, pending, ref.slot[0])
+                        ? 1
+                        : 0;
+        return ref;
+    }
+    // The cell's corners, blended linearly at the hit.
+    int vi[3], vj[3];
+    double w[3];
+    if (!upper) {
+        vi[0] = ci, vj[0] = cj, w[0] = 1.0 - fx - fy;
+        vi[1] = ci + 1, vj[1] = cj, w[1] = fx;
+        vi[2] = ci, vj[2] = cj + 1, w[2] = fy;
+    } else {
+        vi[0] = ci + 1, vj[0] = cj + 1, w[0] = fx + fy - 1.0;
+        vi[1] = ci, vj[1] = cj + 1, w[1] = 1.0 - fx;
+        vi[2] = ci + 1, vj[2] = cj, w[2] = 1.0 - fy;
+    }
+    const uint32_t* tri =
+        &job.surfaces[h.primitive].diced.triangles[3 * std::size_t(h.triangle)];
+    for (int c = 0; c < 3; ++c) {
+        const ShadingCache::Key key =
+            lattice_key(h.primitive, h.triangle, tri, vi[c], vj[c], k);
+        if (!lattice_slot(job, cache, floats, key, h.triangle, double(vi[c]) / k,
+                          double(vj[c]) / k, pending, ref.slot[c]))
+            return CachedRef{};
+        ref.weight[c] = static_cast<float>(w[c]);
+    }
+    ref.count = 3;
+    return ref;
+}
+
+/// Queues hit h of `cs` to be shaded on its own, in a slot of its own.
+uint32_t queue_hit(const Renderer& job, ShadingCache& cache, std::size_t floats,
+                   const SurfaceHit& h, const CameraSample& cs, Pending& pending) {
+    // Completed first: trace_pass kept only where it is (it accepted the hit
+    // with the tracer's normal, which can only differ from this one in sign).
+    SurfaceHit full = h;
+    const DicedSurface& d = job.surfaces[h.primitive].diced;
+    const uint32_t* tri = &d.triangles[3 * std::size_t(h.triangle)];
+    const glm::dvec3 v0(d.vertex_at(tri[0], h.time)), v1(d.vertex_at(tri[1], h.time)),
+        v2(d.vertex_at(tri[2], h.time));
+    fill_hit(job, h.primitive, h.triangle, h.b1, h.b2, glm::cross(v1 - v0, v2 - v0),
+             glm::dvec3(cs.ray.direction), double(h.depth) * cs.units, cs.units, h.time,
+             full);
+    full.sample = h.sample;
+    full.seed = h.seed;
+    const uint32_t slot = new_slot(cache, floats);
+    pending.hits.push_back(full);
+    pending.origins.push_back(glm::dvec3(cs.ray.origin));
+    pending.slots.push_back(slot);
+    return slot;
+}
+
+} // namespace
+
 void shade_pass_cached(Renderer& job, ShadingContext& context,
                        std::vector<SurfaceHit>& hits, std::vector<CameraSample>& samples,
                        std::vector<float>& values, ShadingCache& cache) {
     const std::size_t floats = std::size_t(point_floats(job));
     std::vector<CachedRef> refs(hits.size());
-    // The points to shade: new lattice points, and hits whose own lattice
-    // point is not seen; each with its eye and its slot.
-    std::vector<SurfaceHit> todo;
-    std::vector<glm::dvec3> todo_origin;
-    std::vector<uint32_t> todo_slot;
-    // The slot of lattice point `key` at barycentrics (b1, b2) of triangle
-    // tri, shaded (queued) when new; false where it cannot be seen.
-    const auto slot_of = [&](const ShadingCache::Key& key, uint32_t tri, double b1,
-                             double b2, uint32_t& slot) {
-        if (auto it = cache.slot.find(key); it != cache.slot.end()) {
-            slot = it->second;
-            return slot != ShadingCache::kUnseen;
-        }
-        SurfaceHit h;
-        glm::dvec3 origin;
-        if (!lattice_hit(job, key.prim, tri, b1, b2, h, origin)) {
-            cache.slot.emplace(key, ShadingCache::kUnseen);
-            return false;
-        }
-        slot = uint32_t(cache.values.size() / floats);
-        cache.values.resize(cache.values.size() + floats, 0.0f);
-        cache.slot.emplace(key, slot);
-        h.seed = ShadingCache::KeyHash()(key) ^ 0x5EED5EEDull;
-        todo.push_back(h);
-        todo_origin.push_back(origin);
-        todo_slot.push_back(slot);
-        return true;
-    };
+    Pending pending;
     for (std::size_t i = 0; i < hits.size(); ++i) {
-        const SurfaceHit& h = hits[i];
-        const uint64_t tri_key = uint64_t(h.primitive) << 32 | h.triangle;
-        auto [kit, fresh] = cache.lattice.try_emplace(tri_key, 0);
-        if (fresh) kit->second = lattice_size(job, h.primitive, h.triangle);
-        const int k = kit->second;
-        const double x = std::clamp(double(h.b1), 0.0, 1.0) * k;
-        const double y = std::clamp(double(h.b2), 0.0, 1.0) * k;
-        int ci = std::min(int(x), k - 1), cj = std::min(int(y), k - 1);
-        if (ci + cj > k - 1) ci = k - 1 - cj; // on the far edge
-        const double fx = x - ci, fy = y - cj;
-        const bool upper = fx + fy > 1.0;
-        CachedRef& ref = refs[i];
-        const bool smooth =
-            attributes_of(job.scene->primitives[h.primitive]).shading_interpolation ==
-            "smooth";
-        bool ok = true;
-        if (!smooth) {
-            // The cell's centroid.
-            const double o = upper ? 2.0 / 3.0 : 1.0 / 3.0;
-            const ShadingCache::Key key{h.primitive, 0, h.triangle,
-                                        (uint32_t(ci) << 16 | uint32_t(cj)) << 1 |
-                                            (upper ? 1u : 0u)};
-            ok = slot_of(key, h.triangle, (ci + o) / k, (cj + o) / k, ref.slot[0]);
-            ref.weight[0] = 1.0f;
-            ref.count = 1;
-        } else {
-            // The cell's corners, blended linearly at the hit.
-            int vi[3], vj[3];
-            double w[3];
-            if (!upper) {
-                vi[0] = ci, vj[0] = cj, w[0] = 1.0 - fx - fy;
-                vi[1] = ci + 1, vj[1] = cj, w[1] = fx;
-                vi[2] = ci, vj[2] = cj + 1, w[2] = fy;
-            } else {
-                vi[0] = ci + 1, vj[0] = cj + 1, w[0] = fx + fy - 1.0;
-                vi[1] = ci, vj[1] = cj + 1, w[1] = 1.0 - fx;
-                vi[2] = ci + 1, vj[2] = cj, w[2] = 1.0 - fy;
-            }
-            const uint32_t* tri =
-                &job.surfaces[h.primitive].diced.triangles[3 * std::size_t(h.triangle)];
-            for (int c = 0; c < 3 && ok; ++c) {
-                const ShadingCache::Key key =
-                    lattice_key(h.primitive, h.triangle, tri, vi[c], vj[c], k);
-                ok = slot_of(key, h.triangle, double(vi[c]) / k, double(vj[c]) / k,
-                             ref.slot[c]);
-                ref.weight[c] = static_cast<float>(w[c]);
-            }
-            ref.count = 3;
-        }
-        if (!ok) {
-            // Shaded where the sample hit, for this sample alone (its hit
-            // completed: trace_pass kept only where it is).
-            SurfaceHit full = h;
-            const CameraSample& cs = samples[h.sample];
-            const DicedSurface& d = job.surfaces[h.primitive].diced;
-            const uint32_t* tri = &d.triangles[3 * std::size_t(h.triangle)];
-            const glm::dvec3 v0(d.vertex_at(tri[0], h.time)),
-                v1(d.vertex_at(tri[1], h.time)), v2(d.vertex_at(tri[2], h.time));
-            fill_hit(job, h.primitive, h.triangle, h.b1, h.b2,
-                     glm::cross(v1 - v0, v2 - v0), glm::dvec3(cs.ray.direction),
-                     double(h.depth) * cs.units, cs.units, h.time, full);
-            full.sample = h.sample;
-            full.seed = h.seed;
-            ref.count = 0;
-            ref.slot[0] = uint32_t(cache.values.size() / floats);
-            cache.values.resize(cache.values.size() + floats, 0.0f);
-            todo.push_back(full);
-            todo_origin.push_back(glm::dvec3(cs.ray.origin));
-            todo_slot.push_back(ref.slot[0]);
-        }
+        refs[i] = lattice_ref(job, cache, floats, hits[i], pending);
+        if (refs[i].count == 0)
+            refs[i].slot[0] =
+                queue_hit(job, cache, floats, hits[i], samples[hits[i].sample], pending);
     }
     // Shade the new points, by primitive in batches.
-    std::vector<uint32_t> order(todo.size());
+    const std::size_t n_new = pending.hits.size();
+    std::vector<uint32_t> order(n_new);
     for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
     std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        return todo[a].primitive < todo[b].primitive;
+        return pending.hits[a].primitive < pending.hits[b].primitive;
     });
-    std::vector<SurfaceHit> sorted(todo.size());
-    std::vector<glm::dvec3> origins(todo.size());
-    for (std::size_t i = 0; i < order.size(); ++i) {
-        sorted[i] = todo[order[i]];
-        origins[i] = todo_origin[order[i]];
+    std::vector<SurfaceHit> sorted(n_new);
+    std::vector<glm::dvec3> origins(n_new);
+    for (std::size_t i = 0; i < n_new; ++i) {
+        sorted[i] = pending.hits[order[i]];
+        origins[i] = pending.origins[order[i]];
     }
     std::vector<float> shaded;
     for_batches(sorted, [&](std::size_t begin, std::size_t end) {
@@ -631,10 +659,11 @@ void shade_pass_cached(Renderer& job, ShadingContext& context,
         shaded.resize(n * floats);
         shade_batch(job, context, &sorted[begin], &origins[begin], n, shaded.data());
         for (std::size_t k = 0; k < n; ++k)
-            std::copy_n(&shaded[k * floats], floats,
-                        &cache.values[std::size_t(todo_slot[order[begin + k]]) * floats]);
+            std::copy_n(
+                &shaded[k * floats], floats,
+                &cache.values[std::size_t(pending.slots[order[begin + k]]) * floats]);
     });
-    job.shading_points += todo.size();
+    job.shading_points += n_new;
     // Each sample takes its points' values.
     std::vector<float> point(floats);
     for (std::size_t i = 0; i < hits.size(); ++i) {
