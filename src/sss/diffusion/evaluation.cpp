@@ -11,6 +11,7 @@
 #include <cmath>
 #include <deque>
 #include <memory>
+#include <stdexcept>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
@@ -162,9 +163,13 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
     for (int ch = 0; ch < 3; ++ch) {
         auto& coef = out.coef[ch];
         coef.assign(out.tables[ch].size(), std::array<double, 10>{});
+        // (A node's receivers are among its parent's, so are their tables.)
         if (parent)
             for (std::size_t j = 0; j < coef.size(); ++j) {
                 const uint32_t pi = find_table(parent->tables[ch], out.tables[ch][j], 0);
+                if (pi >= parent->coef[ch].size())
+                    throw std::logic_error("diffusion: a receiver's table is not its "
+                                           "group's");
                 coef[j] =
                     translate_channel(parent->coef[ch][pi], centre - parent->centre);
             }

@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+
+#include "sss/util/limits.h"
 
 namespace sss::diffusion_detail {
 
@@ -82,6 +85,14 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
     double qend = std::min(1e36, std::max(rmax * rmax, 4.0 * double(q0)));
     uint32_t bend = std::bit_cast<uint32_t>(float(qend));
     t.count = ((bend - t.bits0) >> kShift) + 3;
+    // Per profile and entry: the entry and four bounds, with per-point
+    // materials its row and its class's share of the bounds at most.
+    const uint64_t per_entry =
+        sizeof(TableEntry) + 4 * sizeof(float) +
+        (per_point ? kProfileRowFloats * sizeof(float) + 4 * sizeof(float) : 0);
+    check_memory(uint64_t(profiles.size()) * t.count * per_entry,
+                 "the tables of " + std::to_string(profiles.size()) + " profiles",
+                 "give fewer distinct per-point materials");
     t.channels.resize(profiles.size());
     for (std::size_t pi = 0; pi < profiles.size(); ++pi) {
         const Profile& p = profiles[pi];
