@@ -557,8 +557,11 @@ CachedRef lattice_ref(const Renderer& job, ShadingCache& cache, std::size_t floa
     auto [kit, fresh] = cache.lattice.try_emplace(tri_key, 0);
     if (fresh) kit->second = lattice_size(job, h.primitive, h.triangle);
     const int k = kit->second;
-    const double x = std::clamp(double(h.b1), 0.0, 1.0) * k;
-    const double y = std::clamp(double(h.b2), 0.0, 1.0) * k;
+    // (Barycentrics from the tracer; a non-finite one would make no cell.)
+    const auto unit = [](float b) {
+        return std::isfinite(b) ? std::clamp(double(b), 0.0, 1.0) : 0.0;
+    };
+    const double x = unit(h.b1) * k, y = unit(h.b2) * k;
     int ci = std::min(int(x), k - 1), cj = std::min(int(y), k - 1);
     if (ci + cj > k - 1) ci = k - 1 - cj; // on the far edge
     const double fx = x - ci, fy = y - cj;
