@@ -48,6 +48,10 @@ struct BlockTables {
     // BucketBlock::base; t and rows are then unused by far, mono, near and
     // near_disks), else null.
     const float* profile_rows = nullptr;
+    // local(): the channel whose node moments slot c of the output takes
+    // with table t[c] (the identity but for per-point materials, which pack
+    // any channel's tables three to a call).
+    int32_t moment[3] = {0, 1, 2};
 };
 
 struct BlockKernels {

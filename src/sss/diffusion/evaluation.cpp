@@ -159,7 +159,7 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
             if (index) index[ch][r] = i;
         }
     }
-    std::size_t calls = 0;
+    std::size_t pairs = 0;
     for (int ch = 0; ch < 3; ++ch) {
         auto& coef = out.coef[ch];
         coef.assign(out.tables[ch].size(), std::array<double, 10>{});
@@ -173,23 +173,32 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
                 coef[j] =
                     translate_channel(parent->coef[ch][pi], centre - parent->centre);
             }
-        calls = std::max(calls, coef.size());
+        pairs += coef.size();
     }
     if (nodes.empty()) return;
+    // Every (channel, table) pair once, three to a kernel call whatever their
+    // channels (a call's slot takes its pair's channel's moments).
+    const auto pair = [&](std::size_t p, int& ch, std::size_t& j) {
+        for (ch = 0; p >= out.tables[ch].size(); ++ch) p -= out.tables[ch].size();
+        j = p;
+    };
     const double c[3] = {centre.x, centre.y, centre.z};
-    for (std::size_t i = 0; i < calls; ++i) {
+    for (std::size_t first = 0; first < pairs; first += 3) {
         BlockTables t{
             {}, int32_t(cx.tables.bits0), int32_t(cx.tables.count) - 1, nullptr};
-        for (int ch = 0; ch < 3; ++ch)
-            t.t[ch] =
-                out.tables[ch][std::min(i, out.tables[ch].size() - 1)]->entries.data();
+        int ch[3];
+        std::size_t j[3];
+        for (int slot = 0; slot < 3; ++slot) {
+            pair(std::min(first + std::size_t(slot), pairs - 1), ch[slot], j[slot]);
+            t.t[slot] = out.tables[ch[slot]][j[slot]]->entries.data();
+            t.moment[slot] = ch[slot];
+        }
         double sums[3][10];
         cx.kernels.local(t, cx.tree.expansions.data(), nodes.data(), nodes.size(), c,
                          sums);
-        for (int ch = 0; ch < 3; ++ch)
-            if (i < out.coef[ch].size())
-                for (int a = 0; a < 10; ++a)
-                    out.coef[ch][i][std::size_t(a)] += sums[ch][a];
+        for (int slot = 0; slot < 3 && first + std::size_t(slot) < pairs; ++slot)
+            for (int a = 0; a < 10; ++a)
+                out.coef[ch[slot]][j[slot]][std::size_t(a)] += sums[slot][a];
     }
 }
 
