@@ -506,10 +506,6 @@ struct CachedRef {
     int count = 0;
 };
 
-} // namespace
-
-namespace {
-
 /// The points a pass must shade: new lattice points, and hits whose own
 /// lattice point is not seen; each with its eye and its slot in the cache.
 struct Pending {
