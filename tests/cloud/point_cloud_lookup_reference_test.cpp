@@ -2,10 +2,9 @@
 /// PointCloudLookup against a brute-force reference: the k + 1 = 9 nearest
 /// qualifying points by sorting every point, weighted as documented
 /// (point_cloud_lookup.h), on random clouds with and without normals, with
-/// filter radii, in coherent and scattered query orders (each thread reuses
-/// its previous neighbours to bound the next search, which must never change
-/// a result), and at the edges: an empty cloud, one point, coincident
-/// points, points without normals, fewer points than k, queries far away.
+/// filter radii, in coherent and scattered query orders (a result must not
+/// depend on the lookups before it), and at the edges: an empty cloud, one point,
+/// coincident points, points without normals, fewer points than k, queries far away.
 ///
 /// The reference adds the same terms in the same order as the lookup when
 /// averaging the nearest points, so those results agree to the last bit in

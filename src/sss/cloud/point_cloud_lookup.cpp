@@ -6,17 +6,12 @@
 /// data are stored in tree order so a leaf is one contiguous run.
 ///
 /// The k + 1 nearest qualifying points are found exactly, ties broken by
-/// tree order, so a result depends only on its query. Shading asks for
-/// neighbouring points one after another: each thread keeps the last
-/// lookup's neighbours, and their distances to the next query bound its
-/// search from the start (never below the true bound, so the result is
-/// the same, only found with fewer nodes and candidates).
+/// tree order, so a result depends only on its query.
 
 #include "sss/cloud/point_cloud_lookup.h"
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -69,21 +64,16 @@ struct Candidate {
 struct Best {
     std::array<Candidate, kWanted> c;
     int count = 0;
-    /// A squared distance within which k + 1 qualifying points are known
-    /// to lie (from an earlier search): nothing farther is offered.
-    float bound = kInfinity;
-    Best() = default;
-    explicit Best(float b) : bound(b) {}
 
     float d2(int k) const { return c[k].d2; }
     uint32_t index(int k) const { return c[k].index; }
     int found() const { return count; }
     bool full() const { return count == kWanted; }
     /// Squared distance beyond which nothing can enter.
-    float limit() const { return count == kWanted ? c[kWanted - 1].d2 : bound; }
+    float limit() const { return count == kWanted ? c[kWanted - 1].d2 : kInfinity; }
     void offer(float d2, uint32_t index) {
         const Candidate x{d2, index};
-        if (count == kWanted ? !(x < c[kWanted - 1]) : d2 > bound) return;
+        if (count == kWanted && !(x < c[kWanted - 1])) return;
         int at = count < kWanted ? count++ : kWanted - 1;
         while (at > 0 && x < c[at - 1]) {
             c[at] = c[at - 1];
@@ -101,22 +91,11 @@ struct Weights {
     double sum = 0.0;
 };
 
-/// One thread's last nearest-point search: whose it was (an Impl's id,
-/// never reused) and the points it found.
-struct RecentNeighbours {
-    uint64_t owner = 0;
-    std::array<uint32_t, kWanted> index{};
-};
-
-thread_local RecentNeighbours t_recent;
-std::atomic<uint64_t> g_next_id{1};
-
 } // namespace
 
 struct PointCloudLookup::Impl {
     std::vector<std::pair<std::string, ChannelType>> channels;
     int data_size = 0;
-    uint64_t id = g_next_id.fetch_add(1, std::memory_order_relaxed);
     // Tree order.
     std::vector<glm::vec3> positions;
     std::vector<glm::vec3> normals; ///< unit, or zero (no normal)
@@ -258,28 +237,9 @@ void PointCloudLookup::Impl::nearest_tree(const glm::vec3& p, const glm::vec3& n
 bool PointCloudLookup::Impl::nearest_weights(const glm::vec3& p, const glm::vec3& n,
                                              bool use_normal, Weights& w,
                                              float* nearest_d2) const {
-    // Shading asks for neighbouring points one after another: the previous
-    // lookup's k + 1 points, when they all qualify, bound this one's.
-    RecentNeighbours& recent = t_recent;
-    float bound = kInfinity;
-    if (recent.owner == id) {
-        float worst = 0.0f;
-        int k = 0;
-        for (; k < kWanted; ++k) {
-            const uint32_t i = recent.index[k];
-            if (use_normal && !qualifies(i, n)) break;
-            const glm::vec3 d = positions[i] - p;
-            worst = std::max(worst, glm::dot(d, d));
-        }
-        if (k == kWanted) bound = worst;
-    }
-    Best best(bound);
+    Best best;
     nearest_tree(p, n, use_normal, best);
     const int found = best.found();
-    if (found == kWanted) {
-        recent.owner = id;
-        for (int k = 0; k < kWanted; ++k) recent.index[k] = best.index(k);
-    }
     if (found == 0) return false;
     if (nearest_d2) *nearest_d2 = best.d2(0);
     const int used = std::min(found, kNearest);
