@@ -104,9 +104,7 @@ struct MixedLocal {
     std::vector<std::array<double, 10>> coef[3];
 };
 
-uint32_t find_table(const std::vector<const ChannelTable*>& v, const ChannelTable* t,
-                    uint32_t hint) {
-    if (hint < v.size() && v[hint] == t) return hint;
+uint32_t find_table(const std::vector<const ChannelTable*>& v, const ChannelTable* t) {
     return uint32_t(std::find(v.begin(), v.end(), t) - v.begin());
 }
 
@@ -166,7 +164,7 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
         // (A node's receivers are among its parent's, so are their tables.)
         if (parent)
             for (std::size_t j = 0; j < coef.size(); ++j) {
-                const uint32_t pi = find_table(parent->tables[ch], out.tables[ch][j], 0);
+                const uint32_t pi = find_table(parent->tables[ch], out.tables[ch][j]);
                 if (pi >= parent->coef[ch].size())
                     throw std::logic_error("diffusion: a receiver's table is not its "
                                            "group's");

@@ -208,6 +208,8 @@ struct Renderer {
     /// camera sample; the camera's world-to-NDC for its lattice points.
     bool shading_cache = false;
     glm::dmat4 world_to_ndc{1.0};
+    /// Per primitive: ShadingInterpolation "smooth" (else "constant").
+    std::vector<char> smooth_shading;
     std::atomic<uint64_t> shading_points{0}; ///< points the surface shaders ran at
 };
 

@@ -73,6 +73,10 @@ void setup_camera(Renderer& job, const Scene& scene, const RenderJobOptions& opt
     // at its own time).
     job.shading_cache = !options.pixel_shading && !job.motion_blur;
     job.world_to_ndc = job.camera.world_to_ndc();
+    job.smooth_shading.assign(scene.primitives.size(), 0);
+    for (std::size_t i = 0; i < scene.primitives.size(); ++i)
+        job.smooth_shading[i] =
+            attributes_of(scene.primitives[i]).shading_interpolation == "smooth";
     const PixelFilterSpec& filter = scene.options.pixel_filter;
     job.filter.emplace(filter);
     job.reach_x = job.filter->reach_x();

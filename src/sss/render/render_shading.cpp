@@ -563,8 +563,7 @@ CachedRef lattice_ref(const Renderer& job, ShadingCache& cache, std::size_t floa
     const double fx = x - ci, fy = y - cj;
     const bool upper = fx + fy > 1.0;
     CachedRef ref;
-    if (attributes_of(job.scene->primitives[h.primitive]).shading_interpolation !=
-        "smooth") {
+    if (!job.smooth_shading[h.primitive]) {
         // The cell's centroid.
         const double o = upper ? 2.0 / 3.0 : 1.0 / 3.0;
         const ShadingCache::Key key{h.primitive, 0, h.triangle,
