@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
-#include <time.h>
 
 #include <tbb/parallel_for.h>
 
+#include "bench_util.h"
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/cloud/synthetic.h"
@@ -36,12 +36,7 @@
 
 namespace {
 
-/// CPU time of the calling thread, in seconds.
-double thread_seconds() {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
+using sss_bench::thread_seconds;
 
 struct Result {
     double max_error = 0;

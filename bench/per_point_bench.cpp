@@ -16,13 +16,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numeric>
-#include <random>
 #include <string>
 #include <vector>
 
 #include <sys/resource.h>
 
+#include "bench_util.h"
 #include "sss/cli/args.h"
 #include "sss/cli/tool.h"
 #include "sss/cloud/synthetic.h"
@@ -80,20 +79,6 @@ sss::PointCloud varying_sphere(std::size_t n, glm::dvec3& mean_albedo,
         mean_dmfp += dm / double(c.size());
     }
     return c;
-}
-
-std::vector<std::size_t> samples_of(std::size_t n, std::size_t count) {
-    std::vector<std::size_t> idx(n);
-    std::iota(idx.begin(), idx.end(), std::size_t(0));
-    std::mt19937_64 rng(12345);
-    count = std::min(count, n);
-    for (std::size_t k = 0; k < count; ++k) {
-        std::uniform_int_distribution<std::size_t> pick(k, n - 1);
-        std::swap(idx[k], idx[pick(rng)]);
-    }
-    idx.resize(count);
-    std::sort(idx.begin(), idx.end());
-    return idx;
 }
 
 // The exact evaluation at the samples, each sampled receiver with its own
@@ -195,7 +180,8 @@ int run(const std::vector<std::string>& argv) {
     sss::ThreadLimit limit(sss::resolve_thread_count(threads));
     glm::dvec3 albedo, dmfp;
     const sss::PointCloud c = varying_sphere(n, albedo, dmfp);
-    const std::vector<std::size_t> samples = samples_of(c.size(), sample_count);
+    const std::vector<std::size_t> samples =
+        sss_bench::random_samples(c.size(), sample_count, 12345);
 
     sss::SsDiffusionOptions uniform;
     uniform.material.albedo = albedo;
@@ -214,7 +200,8 @@ int run(const std::vector<std::string>& argv) {
     // against its near field, where close disks need the quadrature), so the
     // cost a per-point cloud should match is the mean over its own materials,
     // not the cost of their mean (timing only).
-    const std::vector<std::size_t> picks = samples_of(c.size(), std::size_t(picked));
+    const std::vector<std::size_t> picks =
+        sss_bench::random_samples(c.size(), std::size_t(picked), 12345);
     std::vector<Row> taken;
     for (std::size_t i : picks) {
         sss::SsDiffusionOptions o = uniform;

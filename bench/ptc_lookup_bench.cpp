@@ -22,10 +22,10 @@
 #include <string>
 #include <vector>
 
-#include <time.h>
 
 #include <glm/geometric.hpp>
 
+#include "bench_util.h"
 #include "sss/brick/brickmap.h"
 #include "sss/cloud/point_cloud_lookup.h"
 #include "sss/cloud/synthetic.h"
@@ -35,12 +35,7 @@
 
 namespace {
 
-/// CPU time of the calling thread, in seconds.
-double thread_seconds() {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
+using sss_bench::thread_seconds;
 
 struct Queries {
     std::vector<glm::vec3> p, n;

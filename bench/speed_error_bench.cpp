@@ -70,6 +70,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
+#include "bench_util.h"
 #include "latlong_mesh.h"
 #include "sss/bake/bake.h"
 #include "sss/brick/brickmap.h"
@@ -377,24 +378,10 @@ struct Reference {
     double seconds = 0;
 };
 
-std::vector<std::size_t> random_samples(std::size_t n, std::size_t count, uint64_t seed) {
-    std::vector<std::size_t> idx(n);
-    std::iota(idx.begin(), idx.end(), std::size_t(0));
-    std::mt19937_64 rng(seed);
-    count = std::min(count, n);
-    for (std::size_t k = 0; k < count; ++k) {
-        std::uniform_int_distribution<std::size_t> pick(k, n - 1);
-        std::swap(idx[k], idx[pick(rng)]);
-    }
-    idx.resize(count);
-    std::sort(idx.begin(), idx.end());
-    return idx;
-}
-
 Reference reference(const sss::PointCloud& cloud, const sss::SsDiffusionOptions& o,
                     std::size_t count) {
     Reference r;
-    r.samples = random_samples(cloud.size(), count, 12345);
+    r.samples = sss_bench::random_samples(cloud.size(), count, 12345);
     sss::DiffusionProblem pb = make_problem(cloud, o);
     sss::Stopwatch w;
     r.exact = sss::evaluate_diffusion_exact(pb, r.samples);
