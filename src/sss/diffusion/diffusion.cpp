@@ -69,8 +69,7 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
     Stopwatch watch;
     DiffusionStats stats;
     std::optional<ScopedStage> stage(std::in_place, "building the octree");
-    Tables tables =
-        build_tables(pb.profiles, !pb.profile_index.empty() && !getenv("SSS_OLD"));
+    Tables tables = build_tables(pb.profiles, !pb.profile_index.empty());
     // The normals only when some disk may need the quadrature; frees pb's
     // geometry with `release`.
     Tree tree = build_tree(pb, release, normals_needed(pb, tables));
