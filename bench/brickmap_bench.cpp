@@ -23,7 +23,6 @@
 #include <string>
 #include <vector>
 
-
 #include <tbb/parallel_for.h>
 
 #include "bench_util.h"

@@ -22,7 +22,6 @@
 #include <string>
 #include <vector>
 
-
 #include <glm/geometric.hpp>
 
 #include "bench_util.h"
