@@ -1,7 +1,7 @@
 #pragma once
 /// \file bench_util.h
-/// Small helpers the bench programs share: the thread's CPU time and a
-/// fixed random choice of sample points.
+/// Small helpers the bench programs share: the thread's CPU time, a fixed
+/// random choice of sample points, and a cloud's diffusion problem.
 
 #include <time.h>
 
@@ -11,6 +11,9 @@
 #include <numeric>
 #include <random>
 #include <vector>
+
+#include "sss/cloud/point_cloud.h"
+#include "sss/diffusion/diffusion.h"
 
 namespace sss_bench {
 
@@ -36,6 +39,20 @@ inline std::vector<std::size_t> random_samples(std::size_t n, std::size_t count,
     idx.resize(count);
     std::sort(idx.begin(), idx.end());
     return idx;
+}
+
+/// The points, normals, areas (_area) and irradiance (_radiance_t) of a
+/// baked cloud as a diffusion problem, without profiles.
+inline sss::DiffusionProblem cloud_problem(const sss::PointCloud& c) {
+    sss::DiffusionProblem pb;
+    pb.positions = c.positions;
+    pb.normals = c.normals;
+    pb.areas = c.find_channel("_area")->data;
+    const sss::Channel* rad = c.find_channel("_radiance_t");
+    pb.irradiance.resize(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i)
+        pb.irradiance[i] = {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]};
+    return pb;
 }
 
 } // namespace sss_bench

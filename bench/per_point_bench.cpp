@@ -86,14 +86,7 @@ sss::PointCloud varying_sphere(std::size_t n, glm::dvec3& mean_albedo,
 std::vector<glm::dvec3> exact_at(const sss::PointCloud& c,
                                  const std::vector<std::size_t>& samples, bool per_point,
                                  const glm::dvec3& albedo, const glm::dvec3& dmfp) {
-    sss::DiffusionProblem pb;
-    pb.positions = c.positions;
-    pb.normals = c.normals;
-    pb.areas = c.find_channel("_area")->data;
-    const sss::Channel* rad = c.find_channel("_radiance_t");
-    pb.irradiance.resize(c.size());
-    for (std::size_t i = 0; i < c.size(); ++i)
-        pb.irradiance[i] = {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]};
+    sss::DiffusionProblem pb = sss_bench::cloud_problem(c);
     for (int ch = 0; ch < 3; ++ch)
         pb.profiles.push_back(sss::Profile::from_albedo_dmfp(sss::ProfileKind::Classic,
                                                              albedo[ch], dmfp[ch], kIor));

@@ -354,14 +354,7 @@ sss::SsDiffusionOptions options_for(const std::string& material, double unitleng
 /// channels, areas and profiles), for the exact reference.
 sss::DiffusionProblem make_problem(const sss::PointCloud& c,
                                    const sss::SsDiffusionOptions& o) {
-    sss::DiffusionProblem pb;
-    pb.positions = c.positions;
-    pb.normals = c.normals;
-    pb.areas = c.find_channel("_area")->data;
-    const sss::Channel* rad = c.find_channel("_radiance_t");
-    pb.irradiance.resize(c.size());
-    for (std::size_t i = 0; i < c.size(); ++i)
-        pb.irradiance[i] = {rad->data[3 * i], rad->data[3 * i + 1], rad->data[3 * i + 2]};
+    sss::DiffusionProblem pb = sss_bench::cloud_problem(c);
     glm::dvec3 ss, sa;
     o.material.resolve_coefficients(ss, sa);
     const double u = o.material.unitlength, ior = o.material.resolved_ior();
