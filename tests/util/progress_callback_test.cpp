@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "sss/util/error.h"
 #include "sss/util/progress.h"
 
 TEST(ProgressCallback, CalledOncePerPercentWhenNotPrinting) {
@@ -87,4 +88,18 @@ TEST(ProgressCallback, SerialisedAndMonotoneAcrossThreads) {
     ASSERT_FALSE(seen.empty());
     for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_LT(seen[i - 1], seen[i]);
     EXPECT_EQ(seen.back(), 100);
+}
+
+TEST(ProgressCallback, ReturningFalseCancels) {
+    std::vector<uint64_t> seen;
+    sss::Progress progress(false);
+    progress.set_callback([&](uint64_t done, uint64_t) {
+        seen.push_back(done);
+        return done < 3;
+    });
+    progress.update(1, 10);
+    EXPECT_THROW(progress.update(3, 10), sss::Cancelled);
+    EXPECT_STREQ(sss::Cancelled().what(), "cancelled");
+    const std::vector<uint64_t> expected = {1, 3};
+    EXPECT_EQ(seen, expected);
 }

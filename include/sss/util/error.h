@@ -67,4 +67,12 @@ public:
     explicit ValueError(const std::string& what) : Error(what) {}
 };
 
+/// A run stopped because a Progress callback returned false (progress.h).
+/// Not an Error: nothing went wrong, and no handler of the library's own
+/// errors takes it for one; the call that was running leaves with it.
+class Cancelled : public std::exception {
+public:
+    const char* what() const noexcept override { return "cancelled"; }
+};
+
 } // namespace sss

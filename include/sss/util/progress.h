@@ -8,6 +8,7 @@
 #include <functional>
 #include <mutex>
 #include <string>
+#include <type_traits>
 
 namespace sss {
 
@@ -23,8 +24,10 @@ namespace sss {
 ///   Farm logs are never terminals, so they keep only the ALF lines.
 class Progress {
 public:
-    /// Receives (done, total) each time the integer percentage grows.
-    using Callback = std::function<void(uint64_t done, uint64_t total)>;
+    /// Receives (done, total) each time the integer percentage grows, and
+    /// returns whether the work goes on: false cancels it (update() throws
+    /// sss::Cancelled, which leaves the library call that was running).
+    using Callback = std::function<bool(uint64_t done, uint64_t total)>;
 
     explicit Progress(bool enabled) : m_enabled(enabled) {}
     ~Progress();
@@ -47,10 +50,34 @@ public:
     bool on_terminal() const { return m_terminal; }
     /// Also (or, when not enabled, only) calls `callback` each time the
     /// percentage grows, serialised (one call at a time, percentages in
-    /// order), from whichever thread made the progress. An exception it
-    /// throws leaves update() and ends the caller's work (the Python module
-    /// cancels a run this way). Set it before the work starts.
-    void set_callback(Callback callback) { m_callback = std::move(callback); }
+    /// order), from whichever thread made the progress. When it returns
+    /// false, the running library call stops at its next progress step and
+    /// throws sss::Cancelled (sss/util/error.h); a callback that returns
+    /// nothing never cancels. An exception it throws leaves update() the
+    /// same way (the Python module cancels a run so). Set it before the work
+    /// starts. This is how a program embedding the library shows progress and
+    /// offers a Cancel button:
+    ///
+    ///     sss::Progress progress(false);
+    ///     progress.set_callback([&](uint64_t done, uint64_t total) {
+    ///         bar.set(double(done) / total);
+    ///         return !cancel_pressed.load();
+    ///     });
+    ///     options.progress = &progress;
+    ///     try { out = sss::ssdiffusion(cloud, options); }
+    ///     catch (const sss::Cancelled&) { /* the user cancelled */ }
+    template <class F>
+    void set_callback(F callback) {
+        if constexpr (std::is_void_v<std::invoke_result_t<F&, uint64_t, uint64_t>>) {
+            m_callback = [f = std::move(callback)](uint64_t done,
+                                                   uint64_t total) mutable {
+                f(done, total);
+                return true;
+            };
+        } else {
+            m_callback = std::move(callback);
+        }
+    }
 
 private:
     void draw(uint64_t done, uint64_t total, int64_t now_ns); // under m_mutex

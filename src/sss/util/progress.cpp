@@ -13,6 +13,7 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include "sss/util/error.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
 
@@ -177,7 +178,7 @@ void Progress::update(uint64_t done, uint64_t total) {
         std::cout << "ALF_PROGRESS " << pct << "%\n";
         flush_standard_output();
     }
-    if (m_callback) m_callback(done, total);
+    if (m_callback && !m_callback(done, total)) throw Cancelled();
 }
 
 void Progress::finish() {
