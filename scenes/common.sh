@@ -6,7 +6,8 @@
 # sets `here` (the scene's folder), `root` (the repository), `out` (the output
 # folder: OUTPUT_DIR, or out/scenes/NAME; created; never inside scenes/) and
 # `quick` (1 when SSS_QUICK=1), puts the tools' folder first in PATH (SSS_BIN_DIR,
-# default build/bin, or $BUILD_DIR/bin) so that the commands in the run scripts
+# default build/bin, or $BUILD_DIR/bin; in an install, the install's bin
+# folder, else the tools on PATH) so that the commands in the run scripts
 # read exactly as a user types them, and changes to `out`.
 # See docs/scenes.md.
 
@@ -21,7 +22,22 @@ scene_setup() {
     root="$(cd "$here/../.." && pwd)"
     local build="${BUILD_DIR:-build}"
     [[ "$build" == /* ]] || build="$root/$build"
-    local bin="${SSS_BIN_DIR:-$build/bin}"
+    local bin="${SSS_BIN_DIR:-}" installed=0
+    if [[ -z "$bin" ]]; then
+        # A source tree's build, else an install's bin folder (the scenes are
+        # in <prefix>/share/sss/scenes), else the tools on PATH.
+        if [[ -d "$build/bin" ]]; then
+            bin="$build/bin"
+        elif [[ -x "$root/../../bin/ptfilter" ]]; then
+            bin="$root/../../bin"
+            installed=1
+        elif command -v ptfilter >/dev/null 2>&1; then
+            bin="$(dirname "$(command -v ptfilter)")"
+            installed=1
+        else
+            die "no tools: build first (scripts/build), or set SSS_BIN_DIR"
+        fi
+    fi
     [[ -d "$bin" ]] || die "no tools folder $bin (build first: scripts/build, or set SSS_BIN_DIR)"
     bin="$(cd "$bin" && pwd)"
     local tool
@@ -32,7 +48,11 @@ scene_setup() {
         die "oiiotool not found (Debian: openimageio-tools; scripts/install-deps installs it)"
     export PATH="$bin:$PATH"
 
-    out="$(realpath -m -- "${2:-$root/out/scenes/$scene_name}")"
+    # Installed, the scenes' folder is not writable: the outputs go to the
+    # current folder's out/scenes/NAME.
+    local default_out="$root/out/scenes/$scene_name"
+    [[ "$installed" == 0 && -w "$root" ]] || default_out="$PWD/out/scenes/$scene_name"
+    out="$(realpath -m -- "${2:-$default_out}")"
     case "$out/" in
     "$root/scenes/"*) die "the output folder $out is inside scenes/; give another one" ;;
     esac
