@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The Debian packages as a farm node gets them (docs/install.md): cpack makes
-# sss, sss-dev and (with the Python module) python3-sss from the build tree;
-# their dependencies must be Debian packages this machine has; they are
+# sss, libsss<major.minor>, sss-dev and (with the Python module) python3-sss
+# from the build tree; lintian reports no error on any of them; their
+# dependencies must be Debian packages this machine has; they are
 # unpacked into a temporary root (dpkg -x: the machine's own /usr is not
 # touched) and the bundled teapot scene runs its whole pipeline (ptbake ->
 # ptfilter -> brickmake -> ptview -> render) with the installed tools, shaders
@@ -24,6 +25,28 @@ version="$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "$build/CMakeCache.txt")
 deb="$tmp/packages/sss_${version}_amd64.deb"
 dev="$tmp/packages/sss-dev_${version}_amd64.deb"
 [[ -f "$deb" && -f "$dev" ]] || { ls "$tmp/packages" >&2; fail "cpack made no sss/sss-dev $version"; }
+libname="libsss${version%.*}"
+lib="$tmp/packages/${libname}_${version}_amd64.deb"
+[[ -f "$lib" ]] || { ls "$tmp/packages" >&2; fail "cpack made no $libname"; }
+grep -q "/libsss\\.so\\.${version%.*} -> " <<<"$(dpkg-deb -c "$lib")" ||
+    fail "$libname lacks libsss.so.${version%.*}"
+grep -q "^libsss ${version%.*} $libname" <<<"$(dpkg-deb -I "$lib" shlibs)" ||
+    fail "$libname has no shlibs entry: $(dpkg-deb -I "$lib" shlibs)"
+[[ "$(dpkg-deb -f "$dev" Depends)" == *"$libname (= $version)"* ]] || fail "sss-dev must depend on $libname"
+
+# lintian: no error on any package (warnings are reported, not fatal).
+if command -v lintian >/dev/null; then
+    for p in "$tmp/packages/"*.deb; do
+        lintian --tag-display-limit 0 "$p" >"$tmp/lintian.txt" 2>&1 || true
+        if grep -q '^E: ' "$tmp/lintian.txt"; then
+            cat "$tmp/lintian.txt" >&2
+            fail "lintian reports errors on $(basename "$p")"
+        fi
+        grep '^W: ' "$tmp/lintian.txt" >&2 || true
+    done
+else
+    fail "lintian is not installed (scripts/install-deps installs it)"
+fi
 py=""
 if grep -q '^SSS_BUILD_PYTHON:BOOL=ON$' "$build/CMakeCache.txt"; then
     py="$tmp/packages/python3-sss_${version}_amd64.deb"
@@ -53,8 +76,7 @@ check_depends() { # check_depends "a (>= 1), b, ..."
     done
 }
 check_depends "$depends"
-[[ "$(dpkg-deb -f "$dev" Depends)" == *"sss (= $version)"* ]] || fail "sss-dev must depend on sss $version"
-check_depends "$(dpkg-deb -f "$dev" Depends | sed "s/sss (= $version), //")"
+check_depends "$(dpkg-deb -f "$dev" Depends | sed "s/$libname (= $version), //")"
 if [[ -n "$py" ]]; then
     pydeps="$(dpkg-deb -f "$py" Depends)"
     [[ "$pydeps" == *"sss (= $version)"* && "$pydeps" == *python3-numpy* ]] ||
@@ -70,13 +92,18 @@ grep -q '\./usr/.*/cmake/sss/sssConfig\.cmake' "$tmp/dev.txt" || fail "no CMake 
 root="$tmp/root"
 dpkg -x "$deb" "$root"
 dpkg -x "$dev" "$root"
+dpkg -x "$lib" "$root"
 [[ -z "$py" ]] || dpkg -x "$py" "$root"
 
-# The teapot pipeline (quick version) from the installed tree alone.
-unset SSS_SHADER_DIR SSS_PLUGIN_DIR
-PATH="/usr/bin:/bin" SSS_QUICK=1 SSS_BIN_DIR="$root/usr/bin" \
-    "$root/usr/share/sss/scenes/teapot/run" "$tmp/out" >"$tmp/run.log" 2>&1 ||
-    { cat "$tmp/run.log" >&2; fail "the teapot pipeline with the installed tools"; }
+# The teapot pipeline (quick version) from the installed tree alone: the
+# installed scene finds the installed tools by itself, and writes under the
+# current folder.
+unset SSS_SHADER_DIR SSS_PLUGIN_DIR SSS_BIN_DIR BUILD_DIR
+mkdir "$tmp/work"
+(cd "$tmp/work" && PATH="/usr/bin:/bin" SSS_QUICK=1 "$root/usr/share/sss/scenes/teapot/run") \
+    >"$tmp/run.log" 2>&1 || { cat "$tmp/run.log" >&2; fail "the teapot pipeline with the installed tools"; }
+mv "$tmp/work/out/scenes/teapot" "$tmp/out"
+grep -q "^+ ptbake " "$tmp/run.log" || fail "the scene printed no commands"
 for f in teapot.ptc teapot_ssd.ptc teapot_ssd.bkm teapot_clouds.png teapot.exr; do
     [[ -s "$tmp/out/$f" ]] || fail "the pipeline wrote no $f"
 done

@@ -21,7 +21,9 @@ enum class DataFolder {
 
 /// The folder of `kind` beside the running executable: the install's place
 /// (relative to its bin folder, fixed when the build was configured), else
-/// the build tree's; the first that exists, normalised. "" when neither does.
+/// the build tree's; the first that exists, normalised. A program that is
+/// not one of the tools, using libsss.so, finds them the same way relative
+/// to the library's folder. "" when none exists.
 std::string data_folder(DataFolder kind);
 
 } // namespace sss
