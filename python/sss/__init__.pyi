@@ -1,6 +1,6 @@
 # Typing stub of the sss package (docs/python.md). tests/python/test_stub.py
 # checks that it names what the module has, no more and no less, with the
-# same parameters.
+# same parameters; python.stubtest runs mypy's stubtest on it.
 
 import builtins
 import os
@@ -11,7 +11,26 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
-__all__: List[str]
+__all__ = [
+    "BrickMap",
+    "Cloud",
+    "Error",
+    "FormatError",
+    "IoError",
+    "LimitError",
+    "OutOfMemoryError",
+    "PointCloudLookup",
+    "UsageError",
+    "__version__",
+    "expand_frame_pattern",
+    "has_frame_pattern",
+    "isa_names",
+    "make_brickmap",
+    "ptfilter",
+    "read_cloud",
+    "ssdiffusion",
+    "write_cloud",
+]
 
 _Path = Union[str, bytes, os.PathLike[str], os.PathLike[bytes]]
 _Floats = npt.NDArray[np.float32]
@@ -20,7 +39,10 @@ _Progress = Optional[Callable[[int, int], Any]]
 _Channels = Union[None, str, Sequence[str]]
 _Report = Dict[str, Any]
 
-class Error(Exception): ...
+# help() lists only what a class defines (sss/_errors.py).
+class _Brief(type): ...
+
+class Error(Exception, metaclass=_Brief): ...
 class UsageError(Error, builtins.ValueError): ...
 class ValueError(Error, builtins.ValueError): ...
 class LimitError(Error, builtins.ValueError): ...

@@ -2,12 +2,14 @@
 
     run_interpreter.py --python EXE --module-dir DIR [--borrow-from MAIN] pytest FILE
     run_interpreter.py --python EXE --module-dir DIR script FILE
+    run_interpreter.py --python EXE --module-dir DIR stubtest PACKAGE
 
 DIR holds the sss package built for EXE. `pytest` runs FILE with pytest
 under EXE; when EXE has no numpy or pytest of its own but the same ABI as
 MAIN (another build of the same CPython version), it borrows MAIN's, placed
 after its own site-packages. `script` runs FILE without any site-packages
-(-I -S), so without numpy. Exits 77 (CTest's skip) with the reason when there
+(-I -S), so without numpy. `stubtest` runs mypy's stubtest on PACKAGE (its
+typing stub against the module). Exits 77 (CTest's skip) with the reason when there
 is no EXE or it lacks what the tests need.
 """
 
@@ -16,6 +18,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 
 SKIP = 77
 
@@ -52,12 +55,26 @@ def skip(reason):
     sys.exit(SKIP)
 
 
+def stubtest(args, env):
+    """mypy's stubtest on the package `args.file` (the stub against the module)."""
+    found = subprocess.run([args.python, "-c", "import mypy.stubtest"], env=env,
+                           capture_output=True)
+    if found.returncode != 0:
+        skip(f"{args.python} has no mypy (Debian: apt-get install python3-mypy)")
+    env["PYTHONPATH"] = args.module_dir
+    with tempfile.TemporaryDirectory() as cache:
+        env["MYPY_CACHE_DIR"] = cache
+        result = subprocess.run([args.python, "-m", "mypy.stubtest", args.file],
+                                env=env, cwd=cache)
+    sys.exit(result.returncode)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--python", default="")
     parser.add_argument("--module-dir", default="")
     parser.add_argument("--borrow-from", default="")
-    parser.add_argument("mode", choices=["pytest", "script"])
+    parser.add_argument("mode", choices=["pytest", "script", "stubtest"])
     parser.add_argument("file")
     args = parser.parse_args()
     if not args.python:
@@ -67,6 +84,8 @@ def main():
     env["SSS_MODULE_DIR"] = args.module_dir
     if args.mode == "script":
         sys.exit(subprocess.run([args.python, "-I", "-S", args.file], env=env).returncode)
+    if args.mode == "stubtest":
+        return stubtest(args, env)
 
     info = probe(args.python)
     borrowed = []
