@@ -25,6 +25,7 @@
 #include "sss/cli/args.h"
 #include "sss/cli/job.h"
 #include "sss/cli/options.h"
+#include "sss/cloud/cloud_texture3d.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/diffusion/filter_job.h"
@@ -45,59 +46,76 @@ namespace py = pybind11;
 namespace {
 
 // ---------------------------------------------------------------------------
-// Exceptions: sss.Error and its subclasses, which also derive from the
-// builtin a Python caller would catch (OSError, ValueError, MemoryError).
+// Exceptions: sss.Error and its subclasses (python/sss/_errors.py), which
+// also derive from the builtin a Python caller would catch (OSError,
+// FileNotFoundError, ValueError, MemoryError).
 // ---------------------------------------------------------------------------
 
-PyObject* g_error = nullptr;
-PyObject* g_usage_error = nullptr;
-PyObject* g_io_error = nullptr;
-PyObject* g_format_error = nullptr;
-PyObject* g_value_error = nullptr;
-PyObject* g_limit_error = nullptr;
-PyObject* g_memory_error = nullptr;
+/// The classes, looked up once when the module is imported (references kept
+/// for the interpreter's life: never released at exit).
+struct ErrorTypes {
+    PyObject* error = nullptr;
+    PyObject* usage = nullptr;
+    PyObject* format = nullptr;
+    PyObject* value = nullptr;
+    PyObject* limit = nullptr;
+    PyObject* memory = nullptr;
+    PyObject* io_error = nullptr; ///< io_error(message, path, errno): the instance
+};
+ErrorTypes g_errors;
 
-PyObject* new_exception(py::module_& m, const char* name, PyObject* bases,
-                        const char* doc) {
-    const std::string full = std::string("sss.") + name;
-    PyObject* type = PyErr_NewExceptionWithDoc(full.c_str(), doc, bases, nullptr);
-    if (!type) throw py::error_already_set();
-    m.add_object(name, py::handle(type));
-    return type;
+void load_error_types() {
+    py::module_ errors = py::module_::import("sss._errors");
+    const auto get = [&](const char* name) {
+        return py::object(errors.attr(name)).release().ptr();
+    };
+    g_errors.error = get("Error");
+    g_errors.usage = get("UsageError");
+    g_errors.format = get("FormatError");
+    g_errors.value = get("ValueError");
+    g_errors.limit = get("LimitError");
+    g_errors.memory = get("OutOfMemoryError");
+    g_errors.io_error = get("io_error");
 }
 
-/// Raises `type(message)` with the attributes `path` and `point` when given.
-void raise(PyObject* type, const char* message, const std::string* path = nullptr,
-           int64_t point = -1) {
-    py::object exc =
-        py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", message));
-    if (!exc) return; // the call set an error itself
-    exc.attr("path") = path ? py::object(py::str(*path)) : py::object(py::none());
-    exc.attr("point") = point >= 0 ? py::object(py::int_(point)) : py::object(py::none());
-    PyErr_SetObject(type, exc.ptr());
+/// Raises what make(*args) returns: an exception class (its constructor
+/// takes the message first) or a function that makes the instance.
+template <class... Args>
+void raise(PyObject* make, Args&&... args) {
+    try {
+        py::object exc =
+            py::reinterpret_borrow<py::object>(make)(std::forward<Args>(args)...);
+        PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(exc.ptr())), exc.ptr());
+    } catch (py::error_already_set& e) {
+        e.restore(); // making the exception failed: raise why
+    }
+}
+
+py::object path_object(const std::string& path) {
+    return path.empty() ? py::object(py::none()) : py::object(py::str(path));
 }
 
 void translate_exception(std::exception_ptr p) {
     try {
         if (p) std::rethrow_exception(p);
     } catch (const sss::IoError& e) {
-        raise(g_io_error, e.what(), &e.path());
+        raise(g_errors.io_error, e.what(), path_object(e.path()), e.error_number());
     } catch (const sss::FormatError& e) {
-        raise(g_format_error, e.what(), &e.path(), e.point());
+        raise(g_errors.format, e.what(), path_object(e.path()),
+              e.point() >= 0 ? py::object(py::int_(e.point())) : py::object(py::none()));
     } catch (const sss::MissingFrameError& e) {
         // The cli adds "-frame N" (sss::option_wording); here it is a keyword.
-        raise(g_usage_error,
-              (std::string(e.what()) + "; give the frame with frame=N").c_str());
+        raise(g_errors.usage, std::string(e.what()) + "; give the frame with frame=N");
     } catch (const sss::UsageError& e) {
-        raise(g_usage_error, e.what());
+        raise(g_errors.usage, e.what());
     } catch (const sss::ValueError& e) {
-        raise(g_value_error, e.what());
+        raise(g_errors.value, e.what());
     } catch (const sss::OutOfMemoryError& e) {
-        raise(g_memory_error, e.what());
+        raise(g_errors.memory, e.what());
     } catch (const sss::LimitError& e) {
-        raise(g_limit_error, e.what());
+        raise(g_errors.limit, e.what());
     } catch (const sss::Error& e) {
-        raise(g_error, e.what());
+        raise(g_errors.error, e.what());
     }
 }
 
@@ -564,67 +582,173 @@ py::dict brickmap_info(const sss::BrickMap& map) {
     return d;
 }
 
-/// texture3d at many points: (N, k) float32 values (k: the channel's width,
-/// or every channel's), and (N,) bool "found" flags.
-py::tuple brickmap_lookup(const sss::BrickMap& map, const py::object& points,
-                          const std::optional<std::string>& channel,
-                          const py::object& normals, const py::object& filter_radius,
-                          int threads) {
+// ---------------------------------------------------------------------------
+// texture3d lookups (brick maps and point clouds), many points per call
+// ---------------------------------------------------------------------------
+
+/// The points, normals and filter radii of a lookup call.
+struct LookupQuery {
+    std::vector<glm::vec3> points;
+    std::vector<glm::vec3> normals; ///< empty: no normals
+    std::vector<float> radii;       ///< empty: `radius` for every point
+    float radius = 0.0f;
+};
+
+LookupQuery lookup_query(const py::object& points, const py::object& normals,
+                         const py::object& filter_radius) {
     auto pts =
         py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(points);
     if (!pts || pts.ndim() != 2 || pts.shape(1) != 3)
         throw sss::ValueError("lookup: points must be an (N, 3) array");
     const std::size_t n = std::size_t(pts.shape(0));
-    std::vector<glm::vec3> p = vec3_values("points", pts, n);
-    std::vector<glm::vec3> nn =
-        normals.is_none() ? std::vector<glm::vec3>() : vec3_values("normals", normals, n);
-    std::vector<float> radii;
-    float radius = 0.0f;
+    LookupQuery q;
+    q.points = vec3_values("points", pts, n);
+    if (!normals.is_none()) q.normals = vec3_values("normals", normals, n);
     auto r = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(
         filter_radius);
     if (!r)
         throw sss::ValueError("lookup: filterradius must be a number or an (N,) array");
     if (r.ndim() == 0)
-        radius = *r.data();
+        q.radius = *r.data();
     else
-        radii = array_values("filterradius", r, n, 1);
-    int offset = 0, width = map.info().data_size;
-    if (channel) {
-        const int index = map.channel_index(*channel);
-        if (index < 0) {
-            std::string names;
-            for (const auto& c : map.info().channels)
-                names += (names.empty() ? "" : ", ") + c.first;
-            throw sss::ValueError("lookup: the brick map has no channel '" + *channel +
-                                  "' (channels: " + (names.empty() ? "none" : names) +
-                                  ")");
-        }
-        offset = map.channel_offset(*channel);
-        width = sss::channel_type_size(map.info().channels[index].second);
+        q.radii = array_values("filterradius", r, n, 1);
+    return q;
+}
+
+/// A channel of a 3-D texture: its name and where its floats are.
+struct TextureChannel {
+    std::string name;
+    int offset = 0;
+    int floats = 0;
+};
+
+/// The ranges of the channels asked for: a name, a list of names, or None
+/// for every channel in order. ValueError names what the texture has.
+std::vector<sss::PointCloudLookup::Range>
+select_channels(const std::vector<TextureChannel>& channels, const py::object& channel,
+                const char* what) {
+    std::vector<std::string> names;
+    if (channel.is_none()) {
+        for (const TextureChannel& c : channels) names.push_back(c.name);
+    } else if (py::isinstance<py::str>(channel)) {
+        names.push_back(channel.cast<std::string>());
+    } else {
+        names = channel.cast<std::vector<std::string>>();
     }
-    const int data_size = map.info().data_size;
+    std::vector<sss::PointCloudLookup::Range> ranges;
+    for (const std::string& name : names) {
+        const TextureChannel* found = nullptr;
+        for (const TextureChannel& c : channels)
+            if (c.name == name) found = &c;
+        if (!found) {
+            std::string have;
+            for (const TextureChannel& c : channels)
+                have += (have.empty() ? "" : ", ") + c.name;
+            throw sss::ValueError(std::string("lookup: the ") + what +
+                                  " has no channel '" + name +
+                                  "' (channels: " + (have.empty() ? "none" : have) + ")");
+        }
+        ranges.push_back({found->offset, found->floats});
+    }
+    return ranges;
+}
+
+int range_floats(const std::vector<sss::PointCloudLookup::Range>& ranges) {
+    int width = 0;
+    for (const auto& r : ranges) width += r.floats;
+    return width;
+}
+
+/// Runs lookup(p, n, radius, out_row) for every point without the GIL, in
+/// parallel over blocks of 1024 points: (N, width) float32 values (0 where
+/// it returned false) and (N,) bool "found" flags.
+template <class F>
+py::tuple run_lookups(const LookupQuery& q, int width, int threads, F&& lookup) {
+    const std::size_t n = q.points.size();
     std::vector<float> out(n * std::size_t(width));
     std::vector<uint8_t> found(n);
     {
         py::gil_scoped_release release;
         sss::ThreadLimit limit(sss::resolve_thread_count(threads));
-        tbb::parallel_for(
-            tbb::blocked_range<std::size_t>(0, n, 1024),
-            [&](const tbb::blocked_range<std::size_t>& range) {
-                std::vector<float> sample(std::size_t(std::max(data_size, 1)));
-                for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                    const glm::vec3 normal = nn.empty() ? glm::vec3(0.0f) : nn[i];
-                    const float fr = radii.empty() ? radius : radii[i];
-                    found[i] = map.lookup(p[i], normal, fr, sample.data());
-                    std::memcpy(&out[i * width], sample.data() + offset,
-                                std::size_t(width) * sizeof(float));
-                }
-            });
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                                  const glm::vec3 normal =
+                                      q.normals.empty() ? glm::vec3(0.0f) : q.normals[i];
+                                  const float r = q.radii.empty() ? q.radius : q.radii[i];
+                                  float* row = out.data() + i * std::size_t(width);
+                                  found[i] = lookup(q.points[i], normal, r, row);
+                                  if (!found[i]) std::fill(row, row + width, 0.0f);
+                              }
+                          });
     }
     py::array values = own_array(std::move(out), {py::ssize_t(n), py::ssize_t(width)});
     py::array_t<bool> hit{py::ssize_t(n)};
-    std::memcpy(hit.mutable_data(), found.data(), n);
+    if (n) std::memcpy(hit.mutable_data(), found.data(), n);
     return py::make_tuple(values, hit);
+}
+
+std::vector<TextureChannel> brickmap_channels(const sss::BrickMap& map) {
+    std::vector<TextureChannel> out;
+    for (const auto& [name, type] : map.info().channels)
+        out.push_back({name, map.channel_offset(name), sss::channel_type_size(type)});
+    return out;
+}
+
+/// texture3d at many points of a brick map.
+py::tuple brickmap_lookup(const sss::BrickMap& map, const py::object& points,
+                          const py::object& channel, const py::object& normals,
+                          const py::object& filter_radius, int threads) {
+    const LookupQuery q = lookup_query(points, normals, filter_radius);
+    const auto ranges = select_channels(brickmap_channels(map), channel, "brick map");
+    const int data_size = std::max(map.info().data_size, 1);
+    return run_lookups(q, range_floats(ranges), threads,
+                       [&](const glm::vec3& p, const glm::vec3& n, float r, float* row) {
+                           thread_local std::vector<float> sample;
+                           sample.resize(std::size_t(data_size));
+                           const bool hit = map.lookup(p, n, r, sample.data());
+                           for (const auto& range : ranges) {
+                               std::memcpy(row, sample.data() + range.offset,
+                                           std::size_t(range.floats) * sizeof(float));
+                               row += range.floats;
+                           }
+                           return hit;
+                       });
+}
+
+/// A point cloud opened for texture3d lookups as the renderer does them
+/// (sss::CloudTexture3d): from a file or from (arrays, types, header).
+std::unique_ptr<sss::CloudTexture3d> open_cloud_texture(const py::object& source) {
+    if (py::isinstance<py::tuple>(source)) {
+        py::tuple t = source;
+        sss::PointCloud cloud = cloud_from_python(t[0], t[1], t[2]);
+        py::gil_scoped_release release;
+        return std::make_unique<sss::CloudTexture3d>(std::move(cloud));
+    }
+    const std::string path = source.cast<std::string>();
+    py::gil_scoped_release release;
+    return std::make_unique<sss::CloudTexture3d>(sss::read_point_cloud(path));
+}
+
+py::list cloud_texture_channels(const sss::CloudTexture3d& tex) {
+    py::list out;
+    for (const auto& c : tex.channels())
+        out.append(py::make_tuple(c.name, sss::channel_type_name(c.type)));
+    return out;
+}
+
+/// texture3d at many points of a point cloud.
+py::tuple cloud_texture_lookup(const sss::CloudTexture3d& tex, const py::object& points,
+                               const py::object& channel, const py::object& normals,
+                               const py::object& filter_radius, int threads) {
+    const LookupQuery q = lookup_query(points, normals, filter_radius);
+    std::vector<TextureChannel> channels;
+    for (const auto& c : tex.channels()) channels.push_back({c.name, c.offset, c.floats});
+    const auto ranges = select_channels(channels, channel, "point cloud");
+    return run_lookups(q, range_floats(ranges), threads,
+                       [&](const glm::vec3& p, const glm::vec3& n, float r, float* row) {
+                           return tex.lookup(p, n, r, ranges, row);
+                       });
 }
 
 } // namespace
@@ -632,27 +756,7 @@ py::tuple brickmap_lookup(const sss::BrickMap& map, const py::object& points,
 PYBIND11_MODULE(_sss, m) {
     m.doc() = "sss: the binding of the sss library (use the `sss` package)";
 
-    g_error = new_exception(m, "Error", PyExc_Exception,
-                            "Base class of every error the sss library reports.");
-    auto bases = [](PyObject* a, PyObject* b) {
-        return py::make_tuple(py::handle(a), py::handle(b)).release().ptr();
-    };
-    g_usage_error = new_exception(m, "UsageError", bases(g_error, PyExc_ValueError),
-                                  "A bad option: unknown keyword, bad or missing value.");
-    g_io_error = new_exception(m, "IoError", bases(g_error, PyExc_OSError),
-                               "A file could not be opened, read or written.");
-    g_format_error =
-        new_exception(m, "FormatError", bases(g_error, PyExc_ValueError),
-                      "A file's content is malformed (bad magic, truncation, "
-                      "NaN/Inf data...).");
-    g_value_error = new_exception(m, "ValueError", bases(g_error, PyExc_ValueError),
-                                  "A value that is impossible (negative lengths, albedo "
-                                  "outside [0,1], a missing channel...).");
-    g_limit_error = new_exception(m, "LimitError", bases(g_error, PyExc_ValueError),
-                                  "An input beyond one of the SSS_LIMIT_* limits.");
-    g_memory_error =
-        new_exception(m, "OutOfMemoryError", bases(g_error, PyExc_MemoryError),
-                      "A job that would not fit in memory.");
+    load_error_types();
     py::register_exception_translator(translate_exception);
 
     m.attr("__version__") = sss::version_string();
@@ -692,4 +796,13 @@ PYBIND11_MODULE(_sss, m) {
              })
         .def_property_readonly("bricks_loaded", &sss::BrickMap::bricks_loaded)
         .def_property_readonly("cached_bytes", &sss::BrickMap::cached_bytes);
+
+    py::class_<sss::CloudTexture3d>(m, "CloudTexture3d")
+        .def(py::init(&open_cloud_texture), py::arg("source"))
+        .def_property_readonly("channels", &cloud_texture_channels)
+        .def_property_readonly("data_size", &sss::CloudTexture3d::data_size)
+        .def_property_readonly(
+            "size", [](const sss::CloudTexture3d& t) { return t.cloud().size(); })
+        .def("lookup", &cloud_texture_lookup, py::arg("points"), py::arg("channel"),
+             py::arg("normals"), py::arg("filterradius"), py::arg("threads"));
 }

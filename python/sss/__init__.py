@@ -3,9 +3,11 @@
 The binding of the sss library (docs/python.md). Point clouds are dicts of
 numpy arrays (:class:`Cloud`); the diffusion takes ptfilter's options as
 keyword arguments and gives the same numbers as the ``ptfilter`` executable;
-brick maps are built and looked up many points at a time. Long calls release
-the GIL and report progress to a callback; errors are :class:`Error`
-subclasses carrying the library's message.
+brick maps and point clouds are looked up (texture3d) many points at a time.
+Long calls release the GIL and report progress to a callback; errors are
+:class:`Error` subclasses carrying the library's message, which are also the
+builtin exceptions a caller catches anyway (OSError, FileNotFoundError,
+ValueError). numpy is needed for arrays; typing stubs come with the package.
 
 Example::
 
@@ -18,29 +20,28 @@ Example::
                                                  normals=out["N"])
 """
 
-import numbers
-import os
-import warnings
-
-import numpy as np
+import numbers as _numbers
+import os as _os
+import sys as _sys
+import warnings as _warnings
 
 from . import _sss
-from ._sss import (
+from ._errors import (
     Error,
+    FileNotFoundError,
     FormatError,
     IoError,
     LimitError,
     OutOfMemoryError,
     UsageError,
-    __version__,
-    expand_frame_pattern,
-    has_frame_pattern,
+    ValueError,
+    _Brief,
 )
+from ._sss import __version__
 
-# sss.ValueError derives from the builtin ValueError; it is left out of
-# __all__ so that `from sss import *` does not hide the builtin.
-ValueError = _sss.ValueError
-
+# sss.ValueError and sss.FileNotFoundError derive from the builtins of the
+# same names; they are left out of __all__ so that `from sss import *` does
+# not hide the builtins.
 __all__ = [
     "BrickMap",
     "Cloud",
@@ -49,6 +50,7 @@ __all__ = [
     "IoError",
     "LimitError",
     "OutOfMemoryError",
+    "PointCloudLookup",
     "UsageError",
     "__version__",
     "expand_frame_pattern",
@@ -61,11 +63,33 @@ __all__ = [
     "write_cloud",
 ]
 
-_IDENTITY = np.eye(4, dtype=np.float32)
+
+def __dir__():
+    # The API only: the imports and helpers behind it are not part of it.
+    return sorted(__all__ + ["FileNotFoundError", "ValueError", "__all__", "__doc__",
+                             "__file__", "__name__", "__path__"])
+
+
+def _numpy():
+    """numpy, which every call that takes or returns arrays needs; a clear
+    ImportError where this interpreter has none."""
+    try:
+        import numpy
+    except ImportError as e:
+        raise ImportError(
+            "sss needs numpy for point clouds and lookups (arrays), and this Python "
+            f"({_sys.executable}, {_sys.version.split()[0]}) has none: install numpy "
+            "for it (pip install numpy; Debian's python3: apt-get install "
+            "python3-numpy). ptfilter(), make_brickmap() from files, BrickMap's info "
+            "and the frame patterns work without it.") from e
+    return numpy
+
+
 _GEOMETRY = ("P", "N", "radius")
+_CLOUD_EXTENSIONS = (".ptc", ".ply")
 
 
-class Cloud(dict):
+class Cloud(dict, metaclass=_Brief):
     """A point cloud: a dict of numpy float32 arrays, one row per point.
 
     Keys: ``"P"`` (N, 3) positions, ``"N"`` (N, 3) normals (zero: no normal),
@@ -111,8 +135,9 @@ class Cloud(dict):
 
 
 def _matrix(m):
+    np = _numpy()
     if m is None:
-        return _IDENTITY.copy()
+        return np.eye(4, dtype=np.float32)
     return np.asarray(m, dtype=np.float32).reshape(4, 4)
 
 
@@ -128,6 +153,7 @@ def _parts(cloud, types=None):
     """(arrays, types, header) of a Cloud or a plain dict for the binding."""
     all_types = dict(getattr(cloud, "types", {}) or {})
     all_types.update(types or {})
+    np = _numpy()
     header = {}
     for key in ("world_to_eye", "world_to_ndc", "format"):
         value = getattr(cloud, key, None)
@@ -140,11 +166,11 @@ def _native(name):
     """A file name (or option word) as the bytes the OS uses: any name
     os.fsdecode() gave back (undecodable bytes as surrogates) reaches the
     library unchanged, where a str with surrogates could not."""
-    return os.fsencode(name)
+    return _os.fsencode(name)
 
 
 def _path_list(source):
-    if isinstance(source, (str, bytes, os.PathLike)):
+    if isinstance(source, (str, bytes, _os.PathLike)):
         return [_native(source)]
     return [_native(s) for s in source]
 
@@ -159,20 +185,27 @@ def read_cloud(path):
     The arrays own the memory the library read into (no copy). Raises
     IoError (missing or unreadable file) and FormatError (corrupt, truncated,
     NaN/Inf data), with the file name and, where it applies, the point index
-    (the exceptions' ``path`` and ``point`` attributes).
+    (the exceptions' ``path`` and ``point`` attributes); a missing file is
+    a FileNotFoundError.
     """
+    _numpy()
     return _cloud(*_sss.read_cloud(_native(path)))
 
 
 def write_cloud(path, cloud, *, types=None, ptcversion=0, compress=False):
     """Writes a Cloud (or any dict of arrays, see Cloud) atomically.
 
-    The format is chosen by extension: .ply, else .ptc (``ptcversion`` 0, 1
-    or 2, gzip with ``compress``). ``types`` adds or overrides channel types.
-    The arrays are converted to float32 and copied once. Raises ValueError
-    for arrays of the wrong shape and for NaN/Inf values, IoError when the
-    file cannot be written.
+    The format is chosen by extension: .ptc (``ptcversion`` 0, 1 or 2, gzip
+    with ``compress``) or .ply; any other name is a ValueError. ``types``
+    adds or overrides channel types. The arrays are converted to float32 and
+    copied once. Raises ValueError for arrays of the wrong shape and for
+    NaN/Inf values, IoError when the file cannot be written.
     """
+    name = _os.fsdecode(path)
+    extension = _os.path.splitext(name)[1]
+    if extension.lower() not in _CLOUD_EXTENSIONS:
+        raise ValueError(f"{name}: unknown extension {extension or '(none)'!r}: "
+                         "write_cloud writes .ptc or .ply files")
     arrays, all_types, header = _parts(cloud, types)
     _sss.write_cloud(_native(path), arrays, all_types, header, int(ptcversion),
                      bool(compress))
@@ -187,13 +220,13 @@ _REPEATED = {"blocker"}
 
 
 def _values(key, value):
-    if isinstance(value, (str, bytes, os.PathLike)):
+    if isinstance(value, (str, bytes, _os.PathLike)):
         return [_native(value)]
-    if isinstance(value, (bool, np.bool_)):
+    if isinstance(value, bool) or _is_numpy_bool(value):
         return ["1" if value else "0"]
-    if isinstance(value, numbers.Integral):
+    if isinstance(value, _numbers.Integral):
         return [str(int(value))]
-    if isinstance(value, numbers.Real):
+    if isinstance(value, _numbers.Real):
         # repr() of a float reads back as the same double: the library gets
         # exactly the value ptfilter gets from the same digits.
         return [repr(float(value))]
@@ -201,6 +234,11 @@ def _values(key, value):
     if key == "channels" and all(isinstance(v, str) for v in values):
         return [_native(",".join(values))]
     return [w for v in values for w in _values(key, v)]
+
+
+def _is_numpy_bool(value):
+    np = _sys.modules.get("numpy")  # not loaded: value is no numpy bool
+    return np is not None and isinstance(value, np.bool_)
 
 
 def _words(options):
@@ -213,7 +251,7 @@ def _words(options):
             if value:
                 words.append("-" + key)
             continue
-        if key in _REPEATED and not isinstance(value, (str, bytes, os.PathLike)):
+        if key in _REPEATED and not isinstance(value, (str, bytes, _os.PathLike)):
             for v in value:  # blocker=["a.ptc", "b.ptc"]: -blocker a.ptc -blocker b.ptc
                 words.extend(["-" + key] + _values(key, v))
             continue
@@ -224,7 +262,7 @@ def _words(options):
 
 def _warn(report):
     for w in report.get("warnings", []):
-        warnings.warn(w, RuntimeWarning, stacklevel=3)
+        _warnings.warn(w, RuntimeWarning, stacklevel=3)
 
 
 def ssdiffusion(source, *, progress=None, **options):
@@ -250,6 +288,7 @@ def ssdiffusion(source, *, progress=None, **options):
     values, timings) is its ``report`` attribute; the library's warnings are
     issued as RuntimeWarning.
     """
+    _numpy()
     if _is_cloud(source):
         src = _parts(source)
     else:
@@ -289,7 +328,7 @@ def make_brickmap(source, output, *, progress=None, **options):
     """
     if _is_cloud(source):
         src = [_parts(source)]
-    elif not isinstance(source, (str, bytes, os.PathLike)) and source and all(
+    elif not isinstance(source, (str, bytes, _os.PathLike)) and source and all(
             _is_cloud(s) for s in source):
         src = [_parts(s) for s in source]
     else:
@@ -302,16 +341,41 @@ def isa_names():
     return _sss.isa_names()
 
 
+def _lookup(native, points, channel, normals, filterradius, threads, return_found):
+    """texture3d at one point (3 numbers) or many ((N, 3)); see BrickMap.lookup."""
+    np = _numpy()
+    pts = np.asarray(points, dtype=np.float32)
+    single = pts.ndim == 1
+    if single:
+        if pts.shape != (3,):
+            raise ValueError("lookup: a point is 3 numbers, points an (N, 3) array "
+                             f"(got shape {pts.shape})")
+        pts = pts.reshape(1, 3)
+    if normals is not None:
+        normals = np.asarray(normals, dtype=np.float32)
+        if normals.shape == (3,):  # one normal for every point
+            normals = np.broadcast_to(normals, pts.shape)
+    if single:
+        radius = np.asarray(filterradius, dtype=np.float32)
+        if radius.shape == (1,):
+            filterradius = radius.reshape(())
+    values, found = native.lookup(pts, channel, normals, filterradius, int(threads))
+    if single:
+        values, found = values[0], bool(found[0])
+    return (values, found) if return_found else values
+
+
 class BrickMap:
     """A brick map file opened for texture3d lookups (sss::BrickMap).
 
     Bricks are read on demand into a cache of at most ``cache_bytes``.
-    Raises IoError and FormatError (corrupt, truncated, wrong version).
+    Raises IoError (FileNotFoundError when missing) and FormatError
+    (corrupt, truncated, wrong version).
     """
 
     def __init__(self, path, cache_bytes=256 << 20):
         self._map = _sss.BrickMap(_native(path), int(cache_bytes))
-        self.path = os.fsdecode(path)
+        self.path = _os.fsdecode(path)
 
     @property
     def info(self):
@@ -325,22 +389,23 @@ class BrickMap:
 
     def lookup(self, points, channel=None, *, normals=None, filterradius=0.0, threads=0,
                return_found=False):
-        """texture3d at many points at once.
+        """texture3d at many points at once, or at one.
 
-        ``points``: (N, 3) array; ``normals``: (N, 3) array of the surface
-        normals (None: the map's no-normal tree, which holds only points baked
-        without normals); ``filterradius``: a number or an (N,) array (0: the
-        finest data). ``channel``: a channel name, or None for every channel
-        (in order). Runs without the GIL on ``threads`` threads (0 = all
-        cores); the values do not depend on the thread count.
+        ``points``: (N, 3) array, or one point (3 numbers); ``normals``: the
+        surface normals, (N, 3) or one for every point (None: the map's
+        no-normal tree, which holds only points baked without normals);
+        ``filterradius``: a number or an (N,) array (0: the finest data).
+        ``channel``: a channel name, a list of names, or None for every
+        channel (in order). Runs without the GIL on ``threads`` threads (0 =
+        all cores); the values do not depend on the thread count.
 
-        Returns an (N, k) float32 array (k = the channel's width, or the sum
-        of all widths); where the map has no data the values are 0. With
-        ``return_found`` also an (N,) bool array of the points that had data.
+        Returns an (N, k) float32 array (k = the channels' widths summed), or
+        (k,) for one point; where the map has no data the values are 0. With
+        ``return_found`` also an (N,) bool array of the points that had data
+        (a bool for one point).
         """
-        values, found = self._map.lookup(points, channel, normals, filterradius,
-                                         int(threads))
-        return (values, found) if return_found else values
+        return _lookup(self._map, points, channel, normals, filterradius, threads,
+                       return_found)
 
     def verify(self):
         """Reads and checks every brick (what brickinfo does); returns the count."""
@@ -354,3 +419,66 @@ class BrickMap:
     def __repr__(self):
         names = ", ".join(f"{t} {n}" for n, t in self.channels)
         return f"sss.BrickMap({self.path!r}; {names})"
+
+
+class PointCloudLookup:
+    """A point cloud opened for texture3d lookups as ``render`` does them
+    when a shader names a .ptc or .ply file (sss::CloudTexture3d).
+
+    ``source``: a file name, or a Cloud (or dict of arrays; copied). A
+    lookup averages the nearest points whose normals agree with the
+    query's (the 8 nearest, tent-weighted); it is found only near the
+    points: within four median point radii (about two point spacings) or
+    the filter radius. Raises IoError (FileNotFoundError when missing) and
+    FormatError as read_cloud().
+    """
+
+    def __init__(self, source):
+        if _is_cloud(source):
+            self._cloud = _sss.CloudTexture3d(_parts(source))
+            self.path = None
+        else:
+            self._cloud = _sss.CloudTexture3d(_native(source))
+            self.path = _os.fsdecode(source)
+
+    @property
+    def channels(self):
+        """[(name, type)] of the cloud's channels, in order."""
+        return self._cloud.channels
+
+    @property
+    def size(self):
+        """The number of points."""
+        return self._cloud.size
+
+    def lookup(self, points, channel=None, *, normals=None, filterradius=0.0, threads=0,
+               return_found=False):
+        """texture3d at many points at once, or at one: BrickMap.lookup's
+        arguments and results, the renderer's values.
+
+        ``filterradius`` widens only where a lookup counts as found (the
+        renderer always averages the nearest points in a cloud). Non-finite
+        points are misses, non-finite normals no normal. Runs without the
+        GIL on ``threads`` threads (0 = all cores); each value depends only
+        on its query.
+        """
+        return _lookup(self._cloud, points, channel, normals, filterradius, threads,
+                       return_found)
+
+    def __repr__(self):
+        names = ", ".join(f"{t} {n}" for n, t in self.channels)
+        where = repr(self.path) if self.path is not None else "a Cloud"
+        return f"sss.PointCloudLookup({where}; {self.size} points; {names})"
+
+
+def has_frame_pattern(path):
+    """Whether ``path`` holds a frame pattern: %04d, %d, ####, $F4 or ${F}."""
+    return _sss.has_frame_pattern(_os.fsdecode(path))
+
+
+def expand_frame_pattern(path, frame=None, what="path"):
+    """``path`` with its frame pattern replaced by ``frame``, as the tools'
+    ``-frame`` does (docs/cli-conventions.md); ``path`` itself when it has
+    none. UsageError, naming ``what``, for a pattern without a frame and for
+    a lone ``#``."""
+    return _sss.expand_frame_pattern(_os.fsdecode(path), frame, what)

@@ -90,7 +90,8 @@ def tool_modules(root):
 
 def python_modules(root):
     text = (root / "python/CMakeLists.txt").read_text()
-    match = re.search(r"sss_deny_higher_modules\(sss_python([^)]*)\)", text)
+    # One call for every interpreter's extension target (sss_python_module()).
+    match = re.search(r"sss_deny_higher_modules\(\$\{target\}([^)]*)\)", text)
     return set(match.group(1).split()) if match else set()
 
 

@@ -1,11 +1,13 @@
 /// \file services_test.cpp
 /// Tests of the runtime services every stage uses (sss/util): thread counts,
-/// progress lines, atomic output files and their signal cleanup, the stopwatch.
+/// progress lines, atomic output files and their signal cleanup, the stopwatch,
+/// the errno an IoError carries.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
 #include <sstream>
@@ -16,6 +18,7 @@
 #include <oneapi/tbb/global_control.h>
 
 #include "sss/util/atomic_output.h"
+#include "sss/util/byte_io.h"
 #include "sss/util/error.h"
 #include "sss/util/progress.h"
 #include "sss/util/threads.h"
@@ -265,8 +268,27 @@ TEST(AtomicOutput, MissingFolderIsIoError) {
         EXPECT_NE(std::string(e.what()).find("No such file or directory"),
                   std::string::npos)
             << e.what();
+        EXPECT_EQ(e.error_number(), ENOENT);
     }
     EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(ByteSource, MissingFileAndFolderCarryTheirErrno) {
+    TempFolder dir;
+    const std::string missing = (dir.path() / "missing.ptc").string();
+    try {
+        sss::detail::ByteSource in(missing);
+        FAIL() << "expected IoError";
+    } catch (const sss::IoError& e) {
+        EXPECT_EQ(e.path(), missing);
+        EXPECT_EQ(e.error_number(), ENOENT) << e.what();
+    }
+    try {
+        sss::detail::ByteSource in(dir.path().string());
+        FAIL() << "expected IoError";
+    } catch (const sss::IoError& e) {
+        EXPECT_EQ(e.error_number(), EISDIR) << e.what();
+    }
 }
 
 TEST(AtomicOutput, FolderTargetIsRefusedAtOnce) {
@@ -279,6 +301,7 @@ TEST(AtomicOutput, FolderTargetIsRefusedAtOnce) {
     } catch (const sss::IoError& e) {
         EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos)
             << e.what();
+        EXPECT_EQ(e.error_number(), EISDIR);
     }
     EXPECT_EQ(dir.entries(), std::vector<std::string>{"sub"}) << "no temporary made";
 }

@@ -91,7 +91,9 @@ public:
 
 private:
     void flush_buffer();
-    [[noreturn]] void fail(const std::string& what);
+    [[noreturn]] void fail(const std::string& what, int error_number = 0);
+    /// fail() with `what` followed by errno's text, errno as the error number.
+    [[noreturn]] void fail_errno(const char* what);
 
     std::string m_display;
     std::FILE* m_file = nullptr;

@@ -29,12 +29,16 @@ public:
 /// A file could not be opened, read or written (operating-system level).
 class IoError : public Error {
 public:
-    IoError(const std::string& path, const std::string& what)
-        : Error(path + ": " + what), m_path(path) {}
+    /// error_number: the errno behind the failure, 0 when none applies.
+    IoError(const std::string& path, const std::string& what, int error_number = 0)
+        : Error(path + ": " + what), m_path(path), m_error_number(error_number) {}
     const std::string& path() const { return m_path; }
+    /// The operating system's error number (errno), 0 when not known.
+    int error_number() const { return m_error_number; }
 
 private:
     std::string m_path;
+    int m_error_number;
 };
 
 /// A file's content is malformed: bad magic, truncation, inconsistent sizes,

@@ -1,16 +1,14 @@
 // The texture library's 3-D side: texture3d on brick maps and point clouds,
 // as RenderMan looks them up: brick maps blend their levels by the filter
-// radius, point clouds average their nearest points.
+// radius, point clouds average their nearest points (sss::CloudTexture3d).
 
 #include "sss/binding/texture_library.h"
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
-#include <limits>
-
-#include <glm/common.hpp>
 
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/error.h"
@@ -30,74 +28,7 @@ bool ends_with_nocase(const std::string& s, const std::string& suffix) {
     });
 }
 
-/// Cells per axis are kept below 2^20 so that a cell's three coordinates
-/// pack into one 64-bit key.
-constexpr int kCellBits = 21;
-constexpr float kMaxCells = float(1 << (kCellBits - 1));
-/// A query is near the data within this many median point radii (about two
-/// point spacings of a bake: points are as far apart as their diameter).
-constexpr float kReachInRadii = 4.0f;
-/// Neighbour cells searched each way; farther reaches use the bounding box.
-constexpr int kMaxCellRange = 2;
-
-uint64_t cell_key(int64_t x, int64_t y, int64_t z) {
-    const uint64_t mask = (uint64_t(1) << kCellBits) - 1;
-    return (uint64_t(x) & mask) | ((uint64_t(y) & mask) << kCellBits) |
-           ((uint64_t(z) & mask) << (2 * kCellBits));
-}
-
 } // namespace
-
-void Texture3dFile::index_cloud() {
-    const PointCloud& c = *cloud;
-    if (c.size() == 0) return;
-    const Bounds3 b = c.bounds();
-    lo = b.lo;
-    hi = b.hi;
-    const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-    std::vector<float> radii;
-    radii.reserve(c.radii.size());
-    for (float r : c.radii)
-        if (r > 0.0f && std::isfinite(r)) radii.push_back(r);
-    float reach = 0.0f;
-    if (!radii.empty()) {
-        auto mid = radii.begin() + radii.size() / 2;
-        std::nth_element(radii.begin(), mid, radii.end());
-        reach = kReachInRadii * *mid;
-    } else {
-        // No radii: about two mean spacings of points spread over the box.
-        reach = 2.0f * extent / std::cbrt(float(c.size()));
-    }
-    cell = std::max({reach, extent / kMaxCells, 1e-6f});
-    origin = lo;
-    for (const glm::vec3& p : c.positions) {
-        const glm::vec3 g = (p - origin) / cell;
-        occupied.insert(cell_key(int64_t(g.x), int64_t(g.y), int64_t(g.z)));
-    }
-}
-
-bool Texture3dFile::outside_box(const glm::vec3& p, float radius) const {
-    const float reach = std::max(cell, std::isfinite(radius) ? radius : 0.0f);
-    for (int a = 0; a < 3; ++a)
-        if (p[a] < lo[a] - reach || p[a] > hi[a] + reach) return true;
-    return false;
-}
-
-bool Texture3dFile::near_data(const glm::vec3& p, float radius) const {
-    if (occupied.empty() || outside_box(p, radius)) return false;
-    const float reach = std::max(cell, std::isfinite(radius) ? radius : 0.0f);
-    const int range = static_cast<int>(std::ceil(reach / cell));
-    if (range > kMaxCellRange) return true; // a large filter: the box suffices
-    const glm::vec3 g = glm::floor((p - origin) / cell);
-    const int64_t cx = int64_t(g.x), cy = int64_t(g.y), cz = int64_t(g.z);
-    for (int64_t z = cz - range; z <= cz + range; ++z)
-        for (int64_t y = cy - range; y <= cy + range; ++y)
-            for (int64_t x = cx - range; x <= cx + range; ++x) {
-                if (x < 0 || y < 0 || z < 0) continue;
-                if (occupied.count(cell_key(x, y, z))) return true;
-            }
-    return false;
-}
 
 } // namespace sss::detail
 
@@ -117,20 +48,16 @@ std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& f
         Texture3dFile& f = *entry;
         try {
             std::error_code ec;
-            if (!std::filesystem::is_regular_file(file, ec))
-                throw IoError(file, std::filesystem::exists(file, ec)
-                                        ? "not a regular file"
-                                        : "no such file or directory");
+            if (!std::filesystem::is_regular_file(file, ec)) {
+                if (std::filesystem::exists(file, ec))
+                    throw IoError(file, "not a regular file");
+                throw IoError(file, "no such file or directory", ENOENT);
+            }
             if (ends_with_nocase(file, ".ptc") || ends_with_nocase(file, ".ply")) {
-                f.cloud = std::make_unique<PointCloud>(read_point_cloud(file));
-                std::vector<std::string> names;
-                for (const Channel& c : f.cloud->channels) {
-                    names.push_back(c.name);
-                    f.channels.push_back({c.name, f.data_size, c.components()});
-                    f.data_size += c.components();
-                }
-                f.lookup = std::make_unique<PointCloudLookup>(*f.cloud, names);
-                f.index_cloud();
+                f.cloud = std::make_unique<CloudTexture3d>(read_point_cloud(file));
+                for (const CloudTexture3d::Channel& c : f.cloud->channels())
+                    f.channels.push_back({c.name, c.offset, c.floats});
+                f.data_size = f.cloud->data_size();
             } else {
                 f.map = std::make_unique<BrickMap>(file);
                 for (const auto& [name, type] : f.map->info().channels)
@@ -143,7 +70,6 @@ std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& f
             // Library messages already start with the file name.
             f.error = what.rfind(file, 0) == 0 ? what : file + ": " + what;
             f.map.reset();
-            f.lookup.reset();
             f.cloud.reset();
         }
     });
@@ -222,14 +148,8 @@ bool TextureLibrary::texture3d(const std::string& name,
                 dst += c->floats;
             }
         } else {
-            // Point clouds: always the nearest points (a fixed radius may
-            // hold none), as the renderer reads them; found only near the
-            // data. A point within half a cell is near (its cell is a
-            // neighbour of p's), which spares the cell test almost always.
-            if (f->outside_box(p, r)) continue;
-            float nearest = 0.0f;
-            if (!f->lookup->lookup(p, n, 0.0f, t_ranges, buf, &nearest)) continue;
-            if (!(nearest <= 0.5f * f->cell) && !f->near_data(p, r)) continue;
+            // Point clouds average only the channels asked for.
+            if (!f->cloud->lookup(p, n, r, t_ranges, buf)) continue;
             std::copy_n(buf, stride, dst);
         }
         if (found) found[i] = 1;

@@ -8,11 +8,11 @@
 #include <mutex>
 #include <string>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "sss/binding/texture_library.h"
 #include "sss/brick/brickmap.h"
+#include "sss/cloud/cloud_texture3d.h"
 #include "sss/cloud/point_cloud.h"
 #include "sss/cloud/point_cloud_lookup.h"
 #include "sss/dice/dice.h"
@@ -27,8 +27,7 @@ struct Texture3dFile {
     std::once_flag once;
     std::string error; ///< "file: reason" when it could not be opened
     std::unique_ptr<BrickMap> map;
-    std::unique_ptr<PointCloud> cloud; ///< outlives `lookup` (its contract)
-    std::unique_ptr<PointCloudLookup> lookup;
+    std::unique_ptr<CloudTexture3d> cloud;
     struct Channel {
         std::string name;
         int offset = 0; ///< first float in a lookup's result
@@ -37,25 +36,11 @@ struct Texture3dFile {
     std::vector<Channel> channels; ///< every channel of the file
     int data_size = 0;             ///< floats of a lookup's result
 
-    // Point clouds: where there is data. The nearest-point lookup always
-    // finds something, so "found" also needs a point within `reach` of the
-    // query: occupied cells of edge `cell` (hash of the cell coordinates).
-    float cell = 0.0f;
-    glm::vec3 origin{0.0f};
-    glm::vec3 lo{0.0f}, hi{0.0f}; ///< bounding box of the points
-    std::unordered_set<uint64_t> occupied;
-
     const Channel* find(const std::string& name) const {
         for (const Channel& c : channels)
             if (c.name == name) return &c;
         return nullptr;
     }
-    /// Whether some point may lie within max(cell, radius) of p (clouds).
-    bool near_data(const glm::vec3& p, float radius) const;
-    /// Whether p is farther than max(cell, radius) outside the points' box
-    /// (then no point is near it).
-    bool outside_box(const glm::vec3& p, float radius) const;
-    void index_cloud();
 };
 
 class Texture2dBackend; // texture2d_backend.h

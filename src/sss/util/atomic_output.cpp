@@ -307,7 +307,7 @@ Destination resolve_destination(const std::string& target) {
         throw IoError(target, "not a file name (it names a folder)");
     struct stat st {};
     if (::stat(target.c_str(), &st) == 0) {
-        if (S_ISDIR(st.st_mode)) throw IoError(target, "is a directory");
+        if (S_ISDIR(st.st_mode)) throw IoError(target, "is a directory", EISDIR);
         if (!S_ISREG(st.st_mode)) return {target, true};
         struct stat lst {};
         if (::lstat(target.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {
@@ -379,8 +379,8 @@ int open_special(const std::string& target, bool& socket) {
         fd = ::open(target.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
     } while (fd < 0 && errno == EINTR);
     if (fd >= 0) return fd;
-    if (errno != ENXIO)
-        throw IoError(target, "cannot open for writing: " + errno_text(errno));
+    if (const int err = errno; err != ENXIO)
+        throw IoError(target, "cannot open for writing: " + errno_text(err), err);
     // A socket cannot be opened: connect to it.
     sockaddr_un addr{};
     addr.sun_family = AF_UNIX;
@@ -441,7 +441,7 @@ void copy_into(const std::string& target, const std::string& temp, int temp_fd) 
         err = errno;
         what = "cannot write into it: ";
     }
-    if (err != 0) throw IoError(target, what + errno_text(err));
+    if (err != 0) throw IoError(target, what + errno_text(err), err);
 }
 
 /// fsyncs a folder so that a rename in it survives a crash.
@@ -526,8 +526,10 @@ AtomicOutput::AtomicOutput(const std::string& target) : m_target(target) {
         const int err = errno;
         unregister_temp_file(temp);
         if (err != EEXIST)
-            throw IoError(target, "cannot create a temporary file in '" + dir +
-                                      "': " + errno_text(err));
+            throw IoError(target,
+                          "cannot create a temporary file in '" + dir +
+                              "': " + errno_text(err),
+                          err);
     }
     throw IoError(target, "cannot find an unused temporary file name");
 }
@@ -674,14 +676,19 @@ void check_output_target(const std::string& path) {
     if (dest.special) return;
     const std::string dir = parent_dir(dest.path);
     struct stat st {};
-    if (::stat(dir.c_str(), &st) != 0)
-        throw IoError(path,
-                      "cannot write into folder '" + dir + "': " + errno_text(errno));
+    if (::stat(dir.c_str(), &st) != 0) {
+        const int err = errno;
+        throw IoError(path, "cannot write into folder '" + dir + "': " + errno_text(err),
+                      err);
+    }
     if (!S_ISDIR(st.st_mode))
-        throw IoError(path, "cannot write into '" + dir + "': it is not a folder");
-    if (::access(dir.c_str(), W_OK | X_OK) != 0)
-        throw IoError(path,
-                      "cannot write into folder '" + dir + "': " + errno_text(errno));
+        throw IoError(path, "cannot write into '" + dir + "': it is not a folder",
+                      ENOTDIR);
+    if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+        const int err = errno;
+        throw IoError(path, "cannot write into folder '" + dir + "': " + errno_text(err),
+                      err);
+    }
 }
 
 void write_text_file(const std::string& path, const std::string& text) {

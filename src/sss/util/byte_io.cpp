@@ -35,8 +35,10 @@ gzFile as_gz(void* p) {
 void require_regular_file(const std::string& path, const std::string& context) {
     check_file_name(path);
     struct stat st {};
-    if (::stat(path.c_str(), &st) != 0)
-        throw IoError(path, "cannot open" + context + ": " + std::strerror(errno));
+    if (::stat(path.c_str(), &st) != 0) {
+        const int err = errno;
+        throw IoError(path, "cannot open" + context + ": " + std::strerror(err), err);
+    }
     if (S_ISREG(st.st_mode)) return;
     const char* what = S_ISDIR(st.st_mode)    ? "is a directory"
                        : S_ISFIFO(st.st_mode) ? "is a FIFO (a pipe), not a regular file"
@@ -44,22 +46,25 @@ void require_regular_file(const std::string& path, const std::string& context) {
                        : S_ISCHR(st.st_mode) ? "is a character device, not a regular file"
                        : S_ISBLK(st.st_mode) ? "is a block device, not a regular file"
                                              : "is not a regular file";
-    throw IoError(path, std::string(what) + context);
+    throw IoError(path, std::string(what) + context, S_ISDIR(st.st_mode) ? EISDIR : 0);
 }
 
 ByteSource::ByteSource(const std::string& path) : m_path(path), m_buf(kInputBuffer) {
     require_regular_file(path);
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+    if (fd < 0) {
+        const int err = errno;
+        throw IoError(path, std::string("cannot open: ") + std::strerror(err), err);
+    }
     struct stat st {};
     if (::fstat(fd, &st) != 0) {
         const int err = errno;
         ::close(fd);
-        throw IoError(path, std::string("cannot stat: ") + std::strerror(err));
+        throw IoError(path, std::string("cannot stat: ") + std::strerror(err), err);
     }
     if (S_ISDIR(st.st_mode)) {
         ::close(fd);
-        throw IoError(path, "is a directory");
+        throw IoError(path, "is a directory", EISDIR);
     }
     if (S_ISREG(st.st_mode)) m_file_size = static_cast<uint64_t>(st.st_size);
     attach(fd);
@@ -97,8 +102,10 @@ std::size_t ByteSource::raw_read(void* dst, std::size_t n) {
     if (got < 0) {
         int errnum = 0;
         const char* msg = gzerror(as_gz(m_gz), &errnum);
-        if (errnum == Z_ERRNO)
-            throw IoError(m_path, std::string("read error: ") + std::strerror(errno));
+        if (errnum == Z_ERRNO) {
+            const int err = errno;
+            throw IoError(m_path, std::string("read error: ") + std::strerror(err), err);
+        }
         // zlib prefixes the name it was opened with, "<fd:3>" for gzdopen.
         std::string what = msg ? msg : "?";
         if (what.rfind("<fd:", 0) == 0 && what.find(">: ") != std::string::npos)
@@ -168,11 +175,11 @@ ByteSink::ByteSink(const std::string& file, const std::string& display_path,
     : m_display(display_path), m_buf(kOutputBuffer) {
     if (compress) {
         m_gz = gzopen(file.c_str(), "wb");
-        if (!m_gz) fail(std::string("cannot create: ") + std::strerror(errno));
+        if (!m_gz) fail_errno("cannot create: ");
         gzbuffer(as_gz(m_gz), 1 << 17);
     } else {
         m_file = std::fopen(file.c_str(), "wb");
-        if (!m_file) fail(std::string("cannot create: ") + std::strerror(errno));
+        if (!m_file) fail_errno("cannot create: ");
     }
 }
 
@@ -182,8 +189,13 @@ ByteSink::~ByteSink() {
     if (m_file) std::fclose(m_file);
 }
 
-void ByteSink::fail(const std::string& what) {
-    throw IoError(m_display, what);
+void ByteSink::fail(const std::string& what, int error_number) {
+    throw IoError(m_display, what, error_number);
+}
+
+void ByteSink::fail_errno(const char* what) {
+    const int err = errno;
+    fail(what + std::string(std::strerror(err)), err);
 }
 
 void ByteSink::flush_buffer() {
@@ -197,7 +209,7 @@ void ByteSink::flush_buffer() {
                  (errnum == Z_ERRNO ? std::strerror(errno) : (msg ? msg : "?")));
         }
     } else if (std::fwrite(m_buf.data(), 1, m_used, m_file) != m_used) {
-        fail(std::string("write error: ") + std::strerror(errno));
+        fail_errno("write error: ");
     }
     m_used = 0;
 }
@@ -226,7 +238,7 @@ void ByteSink::close() {
         const int err = errno;
         const bool closed = std::fclose(m_file) == 0;
         m_file = nullptr;
-        if (!ok || !closed) fail(std::string("write error: ") + std::strerror(err));
+        if (!ok || !closed) fail(std::string("write error: ") + std::strerror(err), err);
     }
 }
 
