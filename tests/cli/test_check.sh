@@ -23,8 +23,9 @@ accepted() {
     local tool="$1"
     shift
     run "$bin/$tool" -check "$@"
-    expect_rc 0 "$tool -check $*" && [[ -z "$out$err" ]] ||
-        fail "$tool -check $*: printed '$out' '$err'"
+    if expect_rc 0 "$tool -check $*"; then
+        [[ -z "$out$err" ]] || fail "$tool -check $*: printed '$out' '$err'"
+    fi
 }
 # refused TOOL 'message part' ARGS...: -check exits 2 with one ERROR line
 # holding the message part (and the usual --help hint for usage errors).
