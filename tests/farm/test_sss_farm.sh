@@ -60,6 +60,8 @@ run "$farm" submit --frames 1-1002 --render a.rib --dry-run
 expect_error 1 "1002 frames to queue, more than Slurm's array limit MaxArraySize = 1001" "more frames than MaxArraySize"
 run "$farm" submit --frames 1 --filter "-ssdiffusion -frame 1 a.ptc b.ptc" --dry-run
 expect_error 2 "leave out -frame" "-frame in the arguments"
+run "$farm" submit --frames 1 --render "-check a.rib" --dry-run
+expect_error 2 "--render: leave out -check, sss-farm adds it" "-check in the arguments"
 run "$farm" submit --frames 1 --filter "-ssdiffusion a.ptc b.ptc" --parts 2 --dry-run
 expect_error 2 "--splitpoints and --parts go together" "--parts alone"
 run "$farm" submit --frames 1 --render a.rib --splitpoints 5 --parts 2 --dry-run
