@@ -24,7 +24,7 @@
 #      frames are pending.
 # The daemons are stopped by their pid files on exit and the folder removed.
 # Needs root (installs slurm-wlm and munge through scripts/install-deps when
-# they are missing); skips (exit 77) otherwise. Takes about a minute.
+# they are missing); skips (exit 77) otherwise. Takes about two minutes.
 #
 # usage: tests/farm/test_slurm.sh      env: SSS_BIN_DIR (default build/bin)
 #        SSS_FARM_KEEP=1 keeps the temp folder (the daemons are stopped anyway).
@@ -329,7 +329,7 @@ phase "cancels: pending tasks, and a running ptfilter"
 mkdir -p "$work/cancel"
 "$bin/ptsynth" -n 60000 -size 5 "$work/cancel/big.0001.ptc" >/dev/null
 cp "$work/cancel/big.0001.ptc" "$work/cancel/big.0002.ptc"
-# Frame 1 runs ptfilter -exact (minutes); frame 2 waits for the only core.
+# Frame 1 runs ptfilter -exact (minutes); frame 2 waits for the cores frame 1 holds.
 "${farm[@]}" submit --frames 1-2 --workdir "$work/cancel" --name long -c "$(nproc)" --mem 1024 \
     --filter "-ssdiffusion -exact -material marble big.####.ptc long.####.ptc" --brick "long.####.ptc long.####.bkm"
 for ((t = 0; t < 120; t++)); do
