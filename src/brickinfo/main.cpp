@@ -58,6 +58,8 @@ options:
   -frame N                 frame number: expands %04d, #### and $F4 in file names
   -threads N               worker threads, 0 = all usable cores (default 0)
   -progress 0|1|2          ALF_PROGRESS lines during -lookup
+  -check                   check the command line only, reading and writing
+                           no file: exit 0 if it would run, 2 if not
   -h, --help               this help
   --version                version information
 
@@ -290,16 +292,15 @@ int run(const std::vector<std::string>& argv) {
     if (!request->lookup_in.empty())
         files.input(request->lookup_in,
                     "the -lookup input \"" + request->lookup_in + "\"");
-    if (!request->picture_path.empty()) {
+    if (!request->picture_path.empty())
         files.output(request->picture_path,
                      "option -picture \"" + request->picture_path + "\"");
-        sss::check_output_target(request->picture_path);
-    }
-    if (!request->lookup_in.empty()) {
+    if (!request->lookup_in.empty())
         files.output(request->lookup_out,
                      "the -lookup output \"" + request->lookup_out + "\"");
-        sss::check_output_target(request->lookup_out);
-    }
+    if (sss::check_only()) return 0;
+    if (!request->picture_path.empty()) sss::check_output_target(request->picture_path);
+    if (!request->lookup_in.empty()) sss::check_output_target(request->lookup_out);
     sss::Job job(kTool, request->running);
     const sss::BrickMap map(request->map_path);
     // Everything is checked before anything is reported: a corrupt map gives

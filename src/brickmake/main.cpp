@@ -43,6 +43,8 @@ options:
   -threads N             worker threads, 0 = all usable cores (default 0)
   -progress 0|1|2        1: counts, size and time, ALF_PROGRESS lines; 2: also
                          the bricks per level (-Progress = 1)
+  -check                 check the command line only, reading and writing
+                         no file: exit 0 if it would run, 2 if not
   -h, --help             this help
   --version              version information
 
@@ -89,6 +91,7 @@ int run(const std::vector<std::string>& argv) {
     for (const std::string& f : files)
         job_files.input(f, "the input cloud \"" + f + "\"");
     job_files.output(out_path, "the output \"" + out_path + "\"");
+    if (sss::check_only()) return 0;
     sss::check_output_target(out_path);
 
     sss::Job job(kTool, running);

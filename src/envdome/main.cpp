@@ -49,6 +49,8 @@ options:
                        +y from +z towards +x (default 45 30)
   -progress 0|1        1: a summary line and ALF_PROGRESS lines
   -threads N           accepted for uniformity (the cut is serial)
+  -check               check the command line only, reading and writing
+                       no file: exit 0 if it would run, 2 if not
   -h, --help           this help
   --version            version information
 
@@ -171,17 +173,20 @@ int run(const std::vector<std::string>& args) {
         throw sss::UsageError(
             "-sky writes OpenEXR: " +
             sss::unknown_extension_text(output, "an OpenEXR file", {".exr"}));
+    if (sky && !files.empty())
+        throw sss::UsageError("-sky takes no probe, only an output file");
+    if (!sky && files.empty()) throw sss::UsageError("no probe file given");
+    if (!sky && files.size() > 1) throw sss::UsageError("more than one probe given");
     // The dome never replaces its probe.
     sss::JobFiles job_files;
     if (!sky)
         for (const std::string& f : files) job_files.input(f, "the probe \"" + f + "\"");
     job_files.output(output, "the output \"" + output + "\"");
+    if (sss::check_only()) return 0;
     sss::check_output_target(output);
     sss::Job job(kTool, running);
 
     if (sky) {
-        if (!files.empty())
-            throw sss::UsageError("-sky takes no probe, only an output file");
         sss::ScopedStage stage("making the sky " + output);
         // The sky, the image it moves into and the float copy the writer
         // makes: 12 bytes a pixel each.
@@ -211,8 +216,6 @@ int run(const std::vector<std::string>& args) {
         return 0;
     }
 
-    if (files.empty()) throw sss::UsageError("no probe file given");
-    if (files.size() > 1) throw sss::UsageError("more than one probe given");
     const std::string& probe = files[0];
     std::optional<sss::ScopedStage> stage(std::in_place, "reading " + probe);
     const sss::LatLongImage img = load_probe(probe);

@@ -60,6 +60,8 @@ std::string usage() {
         "  -p:N, -t:N             the same as -threads N (prman's spelling)\n"
         "  -p, -t, -t:all         all usable cores (-threads 0)\n"
         "  -progress 0|1|2        1: counts and timings, and ALF_PROGRESS lines\n"
+        "  -check                 check the command line only, reading and writing\n"
+        "                         no file: exit 0 if it would run, 2 if not\n"
         "  -h, --help             this help\n"
         "  --version              version information\n"
         "\n"
@@ -131,6 +133,7 @@ int run_job(const std::vector<std::string>& argv) {
                                                       opt.output, "a point cloud file",
                                                       sss::point_cloud_extensions()));
     }
+    if (sss::check_only()) return 0;
 
     sss::Job job(kTool, running);
     opt.progress = job.progress();

@@ -78,6 +78,8 @@ std::string usage() {
         "  -newer 0|1                1: do nothing when out.ptc is newer than every\n"
         "                            input (exit 0)\n"
         "  -organize 0|1             accepted for compatibility; output is unorganized\n"
+        "  -check                    check the command line only, reading and writing\n"
+        "                            no file: exit 0 if it would run, 2 if not\n"
         "  --help, --version\n",
         sss::material_names().c_str());
     return buf;
@@ -201,7 +203,9 @@ int run(const std::vector<std::string>& argv) {
                                     : "need at least one input file and an output file");
     fj.output = fj.inputs.back();
     fj.inputs.pop_back();
-    const std::vector<std::string> material = sss::prepare_filter_job(fj, running.frame);
+    const std::vector<std::string> material =
+        sss::prepare_filter_job(fj, running.frame, !sss::check_only());
+    if (sss::check_only()) return 0;
 
     sss::Job job(kTool, running);
     // A blocker is an input too: a newer one makes the output stale.

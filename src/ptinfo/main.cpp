@@ -25,6 +25,8 @@ min / mean / max of each channel component and of the radius.
 
 options:
   -stats 0|1     print per-channel statistics (default 1)
+  -check         check the command line only, reading and writing
+                 no file: exit 0 if it would run, 2 if not
   -h, --help     this help
   --version      version information
 
@@ -47,6 +49,7 @@ int run(const std::vector<std::string>& args) {
         }
     }
     if (files.empty()) throw sss::UsageError("missing input file");
+    if (sss::check_only()) return 0;
 
     for (std::size_t i = 0; i < files.size(); ++i) {
         sss::ScopedStage stage("reading " + files[i]);

@@ -41,6 +41,8 @@ options:
   -lightcolor r g b         light colour (default 1 1 1)
   -ambient a                constant irradiance added everywhere (default 0)
   -compress 0|1             gzip the .ptc output (default 0)
+  -check                    check the command line only, reading and writing
+                            no file: exit 0 if it would run, 2 if not
   -h, --help                this help
   --version                 version information
 
@@ -107,6 +109,7 @@ int run(const std::vector<std::string>& args) {
         throw sss::UsageError("output " +
                               sss::unknown_extension_text(output, "a point cloud file",
                                                           sss::point_cloud_extensions()));
+    if (sss::check_only()) return 0;
     sss::check_output_target(output);
 
     sss::Stopwatch watch;

@@ -59,6 +59,8 @@ options:
   -frame N               frame number: expands %04d, #### and $F4 in file names
   -threads N             worker threads, 0 = all usable cores (default 0)
   -progress 0|1|2        ALF_PROGRESS lines, the exposure and per-tile counts
+  -check                 check the command line only, reading and writing
+                         no file: exit 0 if it would run, 2 if not
   -h, --help             this help
   --version              version information
 
@@ -210,6 +212,7 @@ int run(const std::vector<std::string>& argv) {
     for (const std::string& in : r.inputs)
         files.input(in, "the point cloud \"" + in + "\"");
     files.output(r.output, "the picture \"" + r.output + "\"");
+    if (sss::check_only()) return 0;
     sss::check_output_target(r.output);
     sss::Job job(kTool, r.running);
 

@@ -39,6 +39,8 @@ options:
                  the .slo is the same
   -nosd          accepted, as PRMan's shader takes it; the .slo is the same
   -q             quiet: no progress lines, no warnings
+  -check         check the command line only, reading and writing
+                 no file: exit 0 if it would run, 2 if not
   -h, --help     this help
   --version      version information
 
@@ -158,6 +160,7 @@ int run(const std::vector<std::string>& args) {
     if (output == "-shader" || by_source) output.clear();
     if (!output.empty() && files.size() > 1)
         throw sss::UsageError("-o names one output: give one input file");
+    if (sss::check_only()) return 0;
 
     // Every file compiles before any .slo is written: all of them, or none.
     std::vector<std::string> failed;

@@ -27,6 +27,8 @@ out). A default the shader computes when it runs prints as
 options:
   -json 0|1      1: one JSON object per line per file (file, type, name,
                  parameters: name, storage, type, array, output, default)
+  -check         check the command line only, reading and writing
+                 no file: exit 0 if it would run, 2 if not
   -h, --help     this help
   --version      version information
 
@@ -48,6 +50,7 @@ int run(const std::vector<std::string>& args) {
         }
     }
     if (files.empty()) throw sss::UsageError("missing input file");
+    if (sss::check_only()) return 0;
     for (std::size_t i = 0; i < files.size(); ++i) {
         sss::ScopedStage stage("reading " + files[i]);
         const sss::Program program = sss::read_program_file(files[i]);

@@ -79,6 +79,8 @@ Table:
 Running:
   -threads N                0 = all usable cores (default), <0 = all but N
   -progress 0|1             ALF_PROGRESS lines (-maketable)
+  -check                    check the command line only, reading and writing
+                            no file: exit 0 if it would run, 2 if not
   --help, --version
 
 Exit codes: 0 ok, 1 error, 2 bad command line.
@@ -223,6 +225,29 @@ int run_scene(const SceneArgs& sa, const sss::ProfileReportOptions& report,
     return 0;
 }
 
+/// The options that go together: -scene's with -scene, -maketable alone, the
+/// plots and tables with the comparison (UsageError otherwise).
+void check_modes(const SceneArgs& sa, const std::vector<std::string>& positional,
+                 const std::string& table_path, bool plots) {
+    if (!sa.scene.empty()) {
+        if (positional.size() != 2)
+            throw sss::UsageError("-scene needs the baked cloud and the output cloud");
+        if (!table_path.empty() || plots)
+            throw sss::UsageError(
+                "-scene writes a cloud (no -maketable, -csv, -svg or -tsv)");
+        return;
+    }
+    if (!sa.blockers.empty() || sa.spacing > 0.0 || !sa.compare.empty() ||
+        !sa.regions.empty() || sa.normal_incidence || sa.scattered_only)
+        throw sss::UsageError(
+            "-blocker, -spacing, -compare, -region, -incidence and -scattered belong to "
+            "-scene");
+    if (!positional.empty())
+        throw sss::UsageError("unexpected argument '" + positional.front() + "'");
+    if (!table_path.empty() && plots)
+        throw sss::UsageError("-maketable writes only the table (no -csv, -svg or -tsv)");
+}
+
 int run(const std::vector<std::string>& argv) {
     sss::ArgScanner args(argv);
     sss::ProfileReportOptions report;
@@ -273,27 +298,15 @@ int run(const std::vector<std::string>& argv) {
         else
             throw sss::UsageError("unknown option -" + o);
     }
+    check_modes(sa, positional, table_path, !csv.empty() || !svg.empty() || !tsv.empty());
+    // The table has no material; the comparisons and the walk check theirs.
+    if (table_path.empty()) report.material.validate();
+    if (sss::check_only()) return 0;
     sss::Job job(kTool, running);
-    if (!sa.scene.empty()) {
-        if (positional.size() != 2)
-            throw sss::UsageError("-scene needs the baked cloud and the output cloud");
-        if (!table_path.empty() || !csv.empty() || !svg.empty() || !tsv.empty())
-            throw sss::UsageError(
-                "-scene writes a cloud (no -maketable, -csv, -svg or -tsv)");
+    if (!sa.scene.empty())
         return run_scene(sa, report, positional, photons_given, photons, seed_given, seed,
                          job);
-    }
-    if (!sa.blockers.empty() || sa.spacing > 0.0 || !sa.compare.empty() ||
-        !sa.regions.empty() || sa.normal_incidence || sa.scattered_only)
-        throw sss::UsageError(
-            "-blocker, -spacing, -compare, -region, -incidence and -scattered belong to "
-            "-scene");
-    if (!positional.empty())
-        throw sss::UsageError("unexpected argument '" + positional.front() + "'");
     if (!table_path.empty()) {
-        if (!csv.empty() || !svg.empty() || !tsv.empty())
-            throw sss::UsageError(
-                "-maketable writes only the table (no -csv, -svg or -tsv)");
         if (photons_given) table.photons = photons;
         if (seed_given) table.seed = seed;
         sss::Progress* progress = job.progress();

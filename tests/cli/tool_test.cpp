@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <new>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -221,6 +222,45 @@ TEST(RunTool, UsageErrorExits2) {
     std::string err = testing::internal::GetCapturedStderr();
     EXPECT_EQ(rc, 2);
     EXPECT_EQ(err, "mytool ERROR: unknown option -bogus\nmytool: try 'mytool --help'\n");
+}
+
+TEST(RunTool, CheckIsTakenOutAndToldToTheBody) {
+    std::vector<std::string> seen;
+    bool checking = false;
+    std::optional<int> frame;
+    int rc = call_run_tool({"mytool", "-a", "-check", "b", "--check"},
+                           [&](const std::vector<std::string>& a) {
+                               seen = a;
+                               checking = sss::check_only();
+                               frame = sss::RunOptions().frame;
+                               return 0;
+                           });
+    EXPECT_EQ(rc, 0);
+    EXPECT_EQ(seen, (std::vector<std::string>{"-a", "b"}));
+    EXPECT_TRUE(checking);
+    EXPECT_EQ(frame, 0); // patterns expand without -frame under -check
+    EXPECT_FALSE(sss::check_only());
+    EXPECT_EQ(sss::RunOptions().frame, std::nullopt);
+    call_run_tool({"mytool", "-checks"}, [&](const std::vector<std::string>& a) {
+        seen = a;
+        checking = sss::check_only();
+        return 0;
+    });
+    EXPECT_EQ(seen, (std::vector<std::string>{"-checks"}));
+    EXPECT_FALSE(checking);
+}
+
+TEST(RunTool, EveryErrorOfACheckExits2) {
+    const auto body = [](const std::vector<std::string>&) -> int {
+        throw sss::ValueError("impossible value");
+    };
+    testing::internal::CaptureStderr();
+    const int checked = call_run_tool({"mytool", "-check"}, body);
+    const int run = call_run_tool({"mytool"}, body);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(checked, 2);
+    EXPECT_EQ(run, 1);
+    EXPECT_EQ(err, "mytool ERROR: impossible value\nmytool ERROR: impossible value\n");
 }
 
 TEST(RunTool, MissingFrameNamesTheOption) {

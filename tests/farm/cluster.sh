@@ -60,7 +60,9 @@ SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
 CredType=cred/munge
-AuthInfo=socket=$socket
+# cred_expire is also how long a requeued job waits (120 s by default): the
+# retries of test_slurm.sh start again after 10 s.
+AuthInfo=socket=$socket,cred_expire=10
 ProctrackType=proctrack/linuxproc
 TaskPlugin=task/none
 MpiDefault=none

@@ -73,7 +73,9 @@ import sys
 got = open(sys.argv[1], "rb").read().decode().split("\0")[:-1]
 sys.exit(got != ["-frame", "3", "-newer", "1", "-threads", "0", "-o", sys.argv[2] + ".exr", sys.argv[2]])
 EOF
-[[ "$(cat "$odd/.sss-farm/status/odd.render.3")" == done ]] || fail "odd names: status file: $(cat stubs/tasks.log)"
+python3 -c 'import json,sys; sys.exit(json.load(open(sys.argv[1]))["state"] != "done")' "$odd/.sss-farm/status/odd.render.3" ||
+    fail "odd names: status file: $(cat stubs/tasks.log)"
+grep -qF -- "+ $work/tools/render -frame 3 " "$odd/logs/odd-render.0003.log" || fail "odd names: no frame log"
 found="$(find "$work" "$HOME" -maxdepth 3 -name 'PWNED*' 2>/dev/null | head -n3 || true)"
 [[ -z "$found" ]] || fail "a file name ran code: $found"
 
@@ -83,7 +85,7 @@ mkdir "$pct"
 : >stubs/outputs.log
 run "$farm" submit --frames 3 --workdir "$pct" --name pct --render a.rib
 expect_rc 0 "submit from a folder with a %"
-grep -qxF "$work/100%%j done/logs/pct-render.%4a.log" stubs/outputs.log ||
+grep -qxF "$work/100%%j done/logs/pct-render.slurm.log" stubs/outputs.log ||
     fail "the log pattern of a folder with a %: $(cat stubs/outputs.log)"
 
 # --- huge ranges and counts: refused before anything is allocated ----------------------
@@ -151,6 +153,10 @@ for key, value in (("name", 5), ("name", "../../escape"), ("name", "a/b"), ("nam
                    ("split", {"points": "5", "parts": 2}), ("split", {"points": 5, "parts": 99999999}),
                    ("split", {"points": 5, "parts": True}), ("split", {"points": -1, "parts": 2}),
                    ("split", {"points": 10 ** 30, "parts": 2}), ("stages", {}), ("stages", []),
+                   ("retries", -1), ("retries", "2"), ("retries", 10 ** 6), ("retries", None),
+                   ("format", "sss-farm 1"), ("format", "sss-farm 3"),
+                   ("submissions", [{"jobs": {}, "frames": "a-b"}]),
+                   ("submissions", [{"jobs": {}, "frames": "1", "skipped": "1-" + "9" * 50}]),
                    ("stages", [None]), ("stages", [1] * 5), ("submissions", "x"), ("submissions", [None]),
                    ("submissions", [{"jobs": [1]}]), ("submissions", [{"jobs": {"a": 5}}])):
     spoil("bad-%s-%d" % (key, len(cases)), put(key, value))

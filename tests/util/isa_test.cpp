@@ -89,3 +89,25 @@ TEST(Isa, ResolveFollowsTheEnvironment) {
             EXPECT_THROW(sss::resolve_isa(isa), sss::UsageError);
         }
 }
+
+TEST(Isa, RequestedNamesThePathWithoutAskingTheCpu) {
+    {
+        IsaEnv env(nullptr);
+        EXPECT_EQ(sss::requested_isa(), sss::Isa::Auto);
+        EXPECT_EQ(sss::requested_isa(sss::Isa::Avx512), sss::Isa::Avx512);
+    }
+    {
+        IsaEnv env("avx512");
+        // Whatever this CPU has: a submit host checks a farm node's path.
+        EXPECT_EQ(sss::requested_isa(), sss::Isa::Avx512);
+        EXPECT_EQ(sss::requested_isa(sss::Isa::X86_64), sss::Isa::X86_64);
+    }
+    {
+        IsaEnv env("auto");
+        EXPECT_EQ(sss::requested_isa(), sss::Isa::Auto);
+    }
+    {
+        IsaEnv env("bogus");
+        EXPECT_THROW(sss::requested_isa(), sss::UsageError);
+    }
+}

@@ -14,13 +14,18 @@
 
 namespace sss {
 
+/// The frame a dry parse (-check, check_only() in tool.h) without -frame
+/// expands file names' patterns with, so that the names behind them are
+/// checked: 0. nullopt in a run, where a pattern needs -frame.
+std::optional<int> check_frame();
+
 /// The options of every tool that runs a job: -threads N, -progress 0|1|2
 /// and its alias -Progress (= 1), -frame N for frame patterns in paths
 /// (frame_pattern.h), and -newer 0|1 for the tools that take it.
 struct RunOptions {
     int threads = 0;
     int progress = 0;
-    std::optional<int> frame;
+    std::optional<int> frame = check_frame();
     bool newer = false;
 };
 /// Parses -threads, -progress, -Progress or -frame into run; false when opt

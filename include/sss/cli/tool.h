@@ -32,15 +32,31 @@ namespace sss {
 /// versions of the libraries it is built with (OpenEXR, OIIO, Embree, oneTBB, zlib).
 std::string version_report(const std::string& tool);
 
-/// Runs body(args) with the tools' uniform error handling. args excludes argv[0].
+/// Runs body(args) with the tools' uniform error handling. args excludes argv[0]
+/// and -check (check_only()).
 /// UsageError -> "<tool> ERROR: <what>" on stderr, exit 2; std::bad_alloc ->
 /// "<tool> ERROR: out of memory while <stage>" (limits.h), exit 1; any other
 /// exception -> "<tool> ERROR: <what>", exit 1. Every message is one line
 /// (control bytes escaped). A write error on standard output fails the job:
 /// "<tool> ERROR: cannot write to standard output: <reason>", exit 1.
-/// Returns body's result otherwise, after the warning summaries.
+/// Returns body's result otherwise, after the warning summaries. Under -check
+/// every error exits 2 (the command line is refused).
 int run_tool(const std::string& tool, int argc, char** argv,
              const std::function<int(const std::vector<std::string>&)>& body);
+
+/// Whether the command line asked for a dry parse: `-check` (or `--check`),
+/// anywhere on it. run_tool takes the word out before the tool parses the
+/// rest; the tool then parses and checks its whole command line as for a run
+/// (options and their values, the number of file arguments, frame patterns,
+/// the file names' extensions, materials) and returns 0 where its checks end,
+/// before it opens an input or touches an output: `if (sss::check_only())
+/// return 0;`. Every error of a -check run exits 2 (the command would be
+/// refused), with the usual ERROR line. What the file system holds (whether
+/// inputs exist, output folders are writable) is not looked at: a farm checks
+/// a frame's command line before any of its files exist. Without -frame, file
+/// names' frame patterns are expanded with frame 0 (check_frame()): checked
+/// as patterns, without asking for the frame a farm adds to each task.
+bool check_only();
 
 /// Handles the options every tool shares: "-h"/"help" prints usage and
 /// "version" prints version_report(tool), both on stdout. Returns true when

@@ -43,8 +43,12 @@ std::pair<uint32_t, uint32_t> parse_filter_part(const std::string& text);
 /// has a pattern and there is no frame), the output's extension for the mode
 /// (UsageError), the kernels' instruction set resolved (a run that asked for
 /// one must get it), and the whole material validated. Returns the material's
-/// description (describe_material()); nothing for Mode::Merge.
-std::vector<std::string> prepare_filter_job(FilterJob& job, std::optional<int> frame);
+/// description (describe_material()); nothing for Mode::Merge. With
+/// `this_machine` false (a dry parse, `ptfilter -check`, maybe on a farm's
+/// submit host) the instruction set's name is checked but not that this CPU
+/// has it (requested_isa()).
+std::vector<std::string> prepare_filter_job(FilterJob& job, std::optional<int> frame,
+                                            bool this_machine = true);
 
 /// What a run did, for its report.
 struct FilterJobReport {

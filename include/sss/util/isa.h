@@ -34,6 +34,12 @@ bool isa_supported(Isa isa);
 /// The best path this CPU supports.
 Isa best_isa();
 
+/// The path asked for: `requested`, or for Auto the one the SSS_ISA environment
+/// variable names (Auto when it is unset or "auto"). Throws UsageError for a
+/// name SSS_ISA cannot hold; whether this CPU runs the path is not checked (a
+/// dry parse on a machine that is not the one that will run).
+Isa requested_isa(Isa requested = Isa::Auto);
+
 /// The path to run: `requested`, or for Auto the SSS_ISA environment variable,
 /// or best_isa(). Throws UsageError when the path named is not supported by
 /// this CPU: a farm that asked for one path never silently gets another.

@@ -7,10 +7,16 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "sss/cli/tool.h"
 #include "sss/util/messages.h"
 #include "sss/util/parse.h"
 
 namespace sss {
+
+std::optional<int> check_frame() {
+    // A farm checks a stage's arguments before it adds each task's -frame.
+    return check_only() ? std::optional<int>(0) : std::nullopt;
+}
 
 bool run_option(ArgScanner& args, const std::string& o, RunOptions& run) {
     if (o == "threads") {

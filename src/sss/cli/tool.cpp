@@ -75,7 +75,36 @@ void print_error(const std::string& tool, const std::string& what) {
     print_line(tool, " ERROR: ", what);
 }
 
+/// -check was given: set by run_tool while the tool's body runs.
+bool g_check_only = false;
+
+/// The arguments without the -check words; sets g_check_only while alive when
+/// there was one.
+class CheckOption {
+public:
+    CheckOption(int argc, char** argv) {
+        for (int i = 1; i < argc; ++i) {
+            const std::string word = argv[i];
+            if (word == "-check" || word == "--check")
+                g_check_only = true;
+            else
+                m_args.push_back(word);
+        }
+    }
+    ~CheckOption() { g_check_only = false; }
+    CheckOption(const CheckOption&) = delete;
+    CheckOption& operator=(const CheckOption&) = delete;
+    const std::vector<std::string>& args() const { return m_args; }
+
+private:
+    std::vector<std::string> m_args;
+};
+
 } // namespace
+
+bool check_only() {
+    return g_check_only;
+}
 
 std::optional<std::string> option_wording(const std::exception& e) {
     // The library names settings; a tool names the options that set them.
@@ -103,10 +132,11 @@ std::optional<std::string> option_wording(const std::exception& e) {
 int run_tool(const std::string& tool, int argc, char** argv,
              const std::function<int(const std::vector<std::string>&)>& body) {
     install_signal_handlers();
+    const CheckOption check(argc, argv);
+    // A -check run that fails was refused, whatever the error's kind.
+    const auto failed = [](int code) { return g_check_only ? 2 : code; };
     try {
-        std::vector<std::string> args;
-        for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
-        int status = body(args);
+        int status = body(check.args());
         // A result nobody could read (closed pipe, full disk) is a failure,
         // --help and --version included (as in GNU coreutils).
         const std::string stdout_error = standard_output_error();
@@ -128,10 +158,10 @@ int run_tool(const std::string& tool, int argc, char** argv,
         return 1;
     } catch (const std::exception& e) {
         print_error(tool, option_wording(e).value_or(e.what()));
-        return 1;
+        return failed(1);
     } catch (...) {
         print_error(tool, "unknown exception");
-        return 1;
+        return failed(1);
     }
 }
 

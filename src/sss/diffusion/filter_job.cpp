@@ -158,10 +158,12 @@ std::pair<uint32_t, uint32_t> parse_filter_part(const std::string& text) {
     return {uint32_t(k), uint32_t(n)};
 }
 
-std::vector<std::string> prepare_filter_job(FilterJob& job, std::optional<int> frame) {
+std::vector<std::string> prepare_filter_job(FilterJob& job, std::optional<int> frame,
+                                            bool this_machine) {
     if (job.mode != FilterJob::Mode::Merge) {
         // The kernels' path: a farm that asked for one must get it or stop.
-        job.options.diffusion.isa = resolve_isa(job.options.diffusion.isa);
+        Isa& isa = job.options.diffusion.isa;
+        isa = this_machine ? resolve_isa(isa) : requested_isa(isa);
     }
     // The whole material before reading anything.
     std::vector<std::string> material;

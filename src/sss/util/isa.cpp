@@ -60,15 +60,17 @@ Isa best_isa() {
     return Isa::X86_64;
 }
 
+Isa requested_isa(Isa requested) {
+    if (requested != Isa::Auto) return requested;
+    const char* env = std::getenv("SSS_ISA");
+    if (!env || !*env) return Isa::Auto;
+    return parse_isa(env, "SSS_ISA");
+}
+
 Isa resolve_isa(Isa requested) {
-    std::string from = "-isa";
-    if (requested == Isa::Auto) {
-        const char* env = std::getenv("SSS_ISA");
-        if (!env || !*env) return best_isa();
-        requested = parse_isa(env, "SSS_ISA");
-        if (requested == Isa::Auto) return best_isa();
-        from = "SSS_ISA";
-    }
+    const std::string from = requested == Isa::Auto ? "SSS_ISA" : "-isa";
+    requested = requested_isa(requested);
+    if (requested == Isa::Auto) return best_isa();
     if (!isa_supported(requested))
         throw UsageError(from + " " + isa_name(requested) +
                          ": this CPU does not support that instruction set (best: " +
