@@ -148,7 +148,7 @@ set(CPACK_DEBIAN_RUNTIME_PACKAGE_RECOMMENDS "openimageio-tools")
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME sss-dev)
 set(CPACK_DEBIAN_DEV_PACKAGE_SECTION libdevel)
 set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS
-  "sss (= ${PROJECT_VERSION}), libglm-dev, libtbb-dev, zlib1g-dev, libopenexr-dev, libembree-dev, libopenimageio-dev")
+  "sss (= ${PROJECT_VERSION}), libglm-dev, libtbb-dev, zlib1g-dev, libopenexr-dev, libembree-dev, libopenimageio-dev, libopenvdb-dev")
 # python3-sss: the Python module (python/CMakeLists.txt installs it into
 # Debian's dist-packages), built for this machine's python3 (3.11 on Debian 12).
 set(CPACK_DEBIAN_PYTHON_PACKAGE_NAME python3-sss)
