@@ -2,8 +2,9 @@
 /// brickinfo: what is in a brick map (.bkm), pictures of it, and lookups
 /// over a point cloud to measure its error:
 ///   brickinfo [options] file.bkm
+///   brickinfo file.vdb
 /// Option parsing around sss::describe_brick_map, write_brick_map_picture
-/// and lookup_brick_map_cloud.
+/// and lookup_brick_map_cloud (sss::describe_vdb_file for OpenVDB files).
 
 #include <cctype>
 #include <cstdio>
@@ -20,16 +21,21 @@
 #include "sss/util/job_files.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
+#include "sss/vdb/vdb.h"
 
 namespace {
 
 const char* const kTool = "brickinfo";
 
 const char* const kUsage = R"(usage: brickinfo [options] file.bkm
+       brickinfo [-info 0|1] [-verify 0|1] file.vdb
 
 Prints the map's format version, channels, bounding box and root cube, build
 settings, provenance and, per level, the bricks and samples with data, after
 checking the whole file (checksums, masks, values). See docs/brickinfo.md.
+For an OpenVDB file (brickmake ... out.vdb, or any other): its metadata and
+grids (type, active voxels, voxel size, box, metadata), after reading every
+grid (-verify 0: the descriptions only).
 
 options:
   -info 0|1                print the report (default 1)
@@ -283,9 +289,39 @@ void lookup_cloud(const sss::BrickMap& map, Request& r, sss::Job& job, Messages&
                              " points have no map data around them (written as 0)");
 }
 
+/// brickinfo file.vdb: the report of an OpenVDB file, after reading every
+/// grid unless -verify 0.
+int describe_vdb(const Request& request) {
+    if (!request.picture_path.empty() || !request.lookup_in.empty())
+        throw sss::UsageError(request.map_path +
+                              " is an OpenVDB file: brickinfo only describes it "
+                              "(-picture and -lookup read .bkm brick maps)");
+    const sss::Job job(kTool, request.running);
+    std::size_t voxels = 0, grids = 0;
+    if (request.verify) {
+        const sss::ScopedStage stage("reading " + request.map_path);
+        for (const sss::VdbGrid& g : sss::read_vdb_grids(request.map_path)) {
+            voxels += g.coords.size();
+            ++grids;
+        }
+    }
+    std::string text = sss::describe_vdb_file(request.map_path);
+    if (request.verify)
+        append(text, "checked: %zu float and vec3s grids read, %zu voxels\n", grids,
+               voxels);
+    else
+        text += "checked: grid descriptions only (-verify 0)\n";
+    if (request.info) {
+        std::fputs(text.c_str(), stdout);
+        sss::flush_standard_output();
+    }
+    return 0;
+}
+
 int run(const std::vector<std::string>& argv) {
     std::optional<Request> request = parse_request(argv);
     if (!request) return 0;
+    if (sss::is_vdb_path(request->map_path)) return describe_vdb(*request);
     // No output replaces the map, the lookup's cloud or the other output.
     sss::JobFiles files;
     files.input(request->map_path, "the brick map \"" + request->map_path + "\"");

@@ -1,7 +1,8 @@
 /// \file main.cpp
 /// brickmake: PRMan-compatible brick map builder,
-///   brickmake [options] in.ptc [more.ptc ...] out.bkm
-/// Option parsing around sss::make_brick_map_from_files.
+///   brickmake [options] in.ptc [more.ptc ...] out.bkm|out.vdb
+/// Option parsing around sss::make_brick_map_from_files (or, for an OpenVDB
+/// output, sss::make_vdb_from_files).
 
 #include <cstdio>
 #include <filesystem>
@@ -15,16 +16,21 @@
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
 #include "sss/util/job_files.h"
+#include "sss/vdb/vdb.h"
 
 namespace {
 
 const char* const kTool = "brickmake";
 
-const char* const kUsage = R"(usage: brickmake [options] in.ptc [more.ptc ...] out.bkm
+const char* const kUsage =
+    R"(usage: brickmake [options] in.ptc [more.ptc ...] out.bkm|out.vdb
 
 Builds a brick map (sparse octrees of 8x8x8-sample bricks, see docs/brickmake.md)
 from point clouds (.ptc or .ply; several are merged, channels matched by name).
-The output is written atomically.
+An output ending in .vdb gets the map's channels as OpenVDB grids instead
+(one grid per channel, named after it, and its coarser levels as
+NAME_level1...), for Houdini, Blender and other volume tools. The output is
+written atomically.
 
 options:
   -maxerror E            largest error allowed when a brick is left out in favour
@@ -36,8 +42,8 @@ options:
                          sides of thin surfaces are kept apart)
   -omitgeometry 0|1      1: leave out occupancy data (default 0)
   -channels A,B,...      channels to store (default: every float and color)
-  -newer 0|1             1: do nothing when out.bkm is newer than every input
-                         and a readable current-version map
+  -newer 0|1             1: do nothing when the output is newer than every
+                         input and a readable current-version map (or .vdb)
   -frame N               frame number: expands %04d, #### and $F4 in file names
   -splitangle DEG        PRMan 12.5 option; accepted and ignored
   -threads N             worker threads, 0 = all usable cores (default 0)
@@ -94,13 +100,15 @@ int run(const std::vector<std::string>& argv) {
     if (sss::check_only()) return 0;
     sss::check_output_target(out_path);
 
+    const bool vdb = sss::is_vdb_path(out_path);
     sss::Job job(kTool, running);
     // -newer 1 keeps only a map this brickmake can read: one written by an
     // older version (no checksums) or a corrupt one is rebuilt.
     if (job.newer()) {
         std::error_code ec;
-        const std::string problem =
-            std::filesystem::exists(out_path, ec) ? sss::brick_map_problem(out_path) : "";
+        const std::string problem = !std::filesystem::exists(out_path, ec) ? ""
+                                    : vdb ? sss::vdb_file_problem(out_path)
+                                          : sss::brick_map_problem(out_path);
         if (problem.empty()) {
             if (job.up_to_date({out_path}, files)) return 0;
         } else {
@@ -111,6 +119,32 @@ int run(const std::vector<std::string>& argv) {
     opt.provenance =
         sss::quoted_command_line(std::string(kTool) + " " + sss::version_string(), argv);
 
+    if (vdb) {
+        const sss::VdbMakeReport report = [&] {
+            sss::ScopedStage stage("making the OpenVDB grids " + out_path);
+            return sss::make_vdb_from_files(files, opt, out_path);
+        }();
+        if (job.verbose()) {
+            std::size_t voxels = 0;
+            for (const sss::VdbGridInfo& g : report.vdb.grids) voxels += g.voxels;
+            std::printf("brickmake: %s: %zu points, %zu bricks, %zu grids (main grids at "
+                        "depth %d), %zu voxels, %llu bytes\n",
+                        out_path.c_str(), report.build.points,
+                        report.build.bricks_written, report.vdb.grids.size(),
+                        report.vdb.surface_depth, voxels,
+                        static_cast<unsigned long long>(report.vdb.file_size));
+            if (job.detailed()) {
+                for (const sss::VdbGridInfo& g : report.vdb.grids)
+                    std::printf("brickmake: grid %s: %s, %zu voxels, voxel size %g\n",
+                                g.name.c_str(), g.value_type.c_str(), g.voxels,
+                                g.voxel_size.x);
+            }
+            std::printf("brickmake: total %.3f s, threads %d\n", job.seconds(),
+                        job.threads());
+            sss::flush_standard_output();
+        }
+        return 0;
+    }
     const sss::BrickMapBuildReport report = [&] {
         sss::ScopedStage stage("making the brick map " + out_path);
         return sss::make_brick_map_from_files(files, opt, out_path);

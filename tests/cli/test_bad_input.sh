@@ -85,11 +85,12 @@ gz = load("good_gz.ptc")
 save("trunc_gz.ptc", gz[: len(gz) - 5])  # inside the CRC / length trailer
 b = gz[:]; b[len(gz) // 2] ^= 0x10; save("flip_gz.ptc", b)
 
-# .ply (binary, ours): header text, then records of 4 bytes per property.
+# .ply (binary, ours): header text, then records of 4 bytes per float property
+# and 1 per uchar (the display colour).
 ply = load("good.ply")
 head_end = ply.index(b"end_header\n") + len(b"end_header\n")
 text = bytes(ply[:head_end]).decode()
-stride = 4 * text.count("\nproperty float ")
+stride = 4 * text.count("\nproperty float ") + text.count("\nproperty uchar ")
 save("trunc.ply", ply[: head_end + (len(ply) - head_end) // 3])
 b = ply[:]; b[1] ^= 0x02; save("flip.ply", b)  # "ply" becomes "pny"
 b = ply[:]; struct.pack_into("<f", b, head_end + 7 * stride, float("nan")); save("nan.ply", b)

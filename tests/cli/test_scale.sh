@@ -170,17 +170,20 @@ def read_ply(path):
     with open(path, "rb") as f:
         data = f.read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
-    names, count = [], 0
+    names, codes, count = [], "<", 0
     for line in data[:end].decode().splitlines():
         w = line.split()
         if w[0] == "element" and w[1] == "vertex":
             count = int(w[2])
         elif w[0] == "property":
-            if w[1] != "float":
-                raise ValueError(f"property {w[2]} is {w[1]}, not float")
+            # floats, and the uchar display colour
+            if w[1] not in ("float", "uchar"):
+                raise ValueError(f"property {w[2]} is {w[1]}, not float or uchar")
             names.append(w[2])
+            codes += "f" if w[1] == "float" else "B"
     k = len(names)
-    flat = struct.unpack_from(f"<{count * k}f", data, end)
+    flat = [v for i in range(count)
+            for v in struct.unpack_from(codes, data, end + i * struct.calcsize(codes))]
     return count, {n: flat[i::k] for i, n in enumerate(names)}
 
 def finite(values):

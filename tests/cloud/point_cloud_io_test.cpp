@@ -715,8 +715,8 @@ TEST(PlyRoundTrip, HeaderNamesChannelsAndComments) {
           "property float m_15\n", "property float v_x\n", "property float v_z\n"}) {
         EXPECT_NE(header.find(line), std::string::npos) << line;
     }
-    // 7 + 3 + 16 + 3 floats per vertex.
-    EXPECT_EQ(all.size() - all.find("end_header\n") - 11, 29u * 4u);
+    // 7 + 3 + 16 + 3 floats and the 3 colour bytes of _ssdiffusion per vertex.
+    EXPECT_EQ(all.size() - all.find("end_header\n") - 11, 29u * 4u + 3u);
 }
 
 TEST(PlyRead, ForeignBinaryWithoutComments) {

@@ -575,9 +575,11 @@ TEST(ReaderSweep, NonFiniteValues) {
     const std::size_t n = s.cloud.size();
     const std::size_t ptc_record = 20 + 4 * static_cast<std::size_t>(s.cloud.data_size());
     const std::size_t ptc_data = s.ptc.size() - n * ptc_record;
-    // Our PLY: x y z nx ny nz radius, then the channel floats.
+    // Our PLY: x y z nx ny nz radius, the 3 bytes of the display colour (the
+    // cloud has a color channel), then the channel floats.
+    ASSERT_NE(sss::ply_display_channel(s.cloud), nullptr);
     const std::size_t ply_stride =
-        4 * (7 + static_cast<std::size_t>(s.cloud.data_size()));
+        4 * (7 + static_cast<std::size_t>(s.cloud.data_size())) + 3;
     const std::size_t ply_data = s.ply.size() - n * ply_stride;
     const float bad[] = {std::nanf(""), INFINITY, -INFINITY};
     for (float v : bad) {

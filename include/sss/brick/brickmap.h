@@ -141,6 +141,11 @@ public:
     /// level has data around p.
     bool lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
                 float* out) const;
+    /// lookup() of the data of one depth: trilinear over that depth's samples
+    /// at p, falling back to coarser depths where it has none (pruned bricks),
+    /// never reading finer ones. The voxels of a depth (brickmap_voxels.h).
+    bool lookup_depth(const glm::vec3& p, const glm::vec3& n, int depth,
+                      float* out) const;
 
     /// Reads one brick for inspection (brickinfo pictures, tests): the
     /// samples of node (tree, depth, ix, iy, iz); false if there is no such
@@ -151,6 +156,9 @@ public:
                     std::vector<float>& data, std::vector<uint8_t>& present) const;
     /// Node coordinates (ix, iy, iz) of every brick of a tree at a depth.
     std::vector<std::array<uint32_t, 3>> bricks_at(int tree, int depth) const;
+    /// Node coordinates of every node of a tree at a depth, data bricks and
+    /// occupancy-only nodes alike: where the map has geometry at that depth.
+    std::vector<std::array<uint32_t, 3>> nodes_at(int tree, int depth) const;
     /// The presence flags (which samples have geometry in them) of any node,
     /// data brick or occupancy-only; false if the file has no such node.
     bool read_occupancy(int tree, int depth, uint32_t ix, uint32_t iy, uint32_t iz,
@@ -167,6 +175,9 @@ public:
     std::size_t cached_bytes() const;
 
 private:
+    bool lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
+                int max_depth, float* out) const;
+
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };

@@ -46,6 +46,17 @@ void write_ptc(const PointCloud& cloud, const std::string& path,
 PointCloud read_ply(const std::string& path);
 void write_ply(const PointCloud& cloud, const std::string& path);
 
+/// The channel a .ply file shows as its vertex colours (uchar red, green,
+/// blue, which MeshLab and CloudCompare display): `_ssdiffusion` when it is
+/// a color channel, else the first color channel; nullptr when there is none
+/// (or when the cloud has channels of its own named red, green or blue).
+/// The channels are written as floats as well, so the file reads back exactly.
+const Channel* ply_display_channel(const PointCloud& cloud);
+/// One colour byte of a .ply display colour: the value clamped to [0, 1],
+/// sRGB-encoded (viewers send the bytes to the screen as they are) and
+/// rounded to the nearest of 0..255.
+uint8_t ply_display_byte(float value);
+
 /// Reads a point cloud a chunk of points at a time, so that a job that needs
 /// only some of its channels, or reads it twice, never holds it whole. A .ptc
 /// file is streamed; a .ply file is read whole when opened and handed out in

@@ -57,7 +57,4 @@ struct ImageFileSpec {
 void write_image_file(const std::string& path, const ImageFileSpec& spec, PixelType data,
                       const void* pixels);
 
-/// The sRGB transfer curve: linear [0, 1] -> encoded [0, 1].
-double srgb_encode(double linear);
-
 } // namespace sss

@@ -536,8 +536,10 @@ struct BrickMap::Impl {
         return -1;
     }
 
+    /// max_depth: the finest depth read (a filter radius 0 lookup: the
+    /// finest data there, or data no finer than max_depth).
     bool lookup_tree(int tree, const double u[3], float filter_radius, float* out,
-                     float* scratch) const {
+                     float* scratch, int max_depth = kBkmMaxDepth) const {
         const LookupTree& t = trees[tree];
         if (t.nodes.empty()) return false;
         uint32_t q[3];
@@ -572,7 +574,8 @@ struct BrickMap::Impl {
             }
         }
         if (!(filter_radius > 0.0f))
-            return eval_level(tree, path, deepest, u, q, 1.0, out) >= 0;
+            return eval_level(tree, path, std::min(deepest, max_depth), u, q, 1.0, out) >=
+                   0;
         // Level whose sample spacing side / (7 * 2^d) matches the filter's
         // diameter: the level brickmake splats a point of that radius into.
         const double level =
@@ -689,6 +692,16 @@ int BrickMap::channel_offset(const std::string& name) const {
 
 bool BrickMap::lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
                       float* out) const {
+    return lookup(p, n, filter_radius, kBkmMaxDepth, out);
+}
+
+bool BrickMap::lookup_depth(const glm::vec3& p, const glm::vec3& n, int depth,
+                            float* out) const {
+    return lookup(p, n, 0.0f, std::clamp(depth, 0, kBkmMaxDepth), out);
+}
+
+bool BrickMap::lookup(const glm::vec3& p, const glm::vec3& n, float filter_radius,
+                      int max_depth, float* out) const {
     const Impl& m = *m_impl;
     std::fill(out, out + m.ds, 0.0f);
     double u[3];
@@ -704,14 +717,15 @@ bool BrickMap::lookup(const glm::vec3& p, const glm::vec3& n, float filter_radiu
     float scratch[kBkmMaxDataSize];
     const Impl::Pin pin(m);
     if (first >= 0) {
-        if (m.lookup_tree(first, u, filter_radius, out, scratch)) return true;
+        if (m.lookup_tree(first, u, filter_radius, out, scratch, max_depth)) return true;
         std::fill(out, out + m.ds, 0.0f);
     }
     int order[4];
     const int count = tree_order(n, m.contents.info.ignore_normals, order);
     for (int k = 0; k < count; ++k) {
         if (order[k] == first) continue; // tried
-        if (m.lookup_tree(order[k], u, filter_radius, out, scratch)) return true;
+        if (m.lookup_tree(order[k], u, filter_radius, out, scratch, max_depth))
+            return true;
         std::fill(out, out + m.ds, 0.0f);
     }
     return false;
@@ -760,6 +774,15 @@ std::vector<std::array<uint32_t, 3>> BrickMap::bricks_at(int tree, int depth) co
     if (tree < 0 || tree >= kBkmTrees) return out;
     for (const BkmNode& n : m_impl->contents.trees[tree]) {
         if (n.depth == depth && n.has_data()) out.push_back({n.ix, n.iy, n.iz});
+    }
+    return out;
+}
+
+std::vector<std::array<uint32_t, 3>> BrickMap::nodes_at(int tree, int depth) const {
+    std::vector<std::array<uint32_t, 3>> out;
+    if (tree < 0 || tree >= kBkmTrees) return out;
+    for (const BkmNode& n : m_impl->contents.trees[tree]) {
+        if (n.depth == depth) out.push_back({n.ix, n.iy, n.iz});
     }
     return out;
 }

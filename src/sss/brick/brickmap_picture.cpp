@@ -22,6 +22,7 @@
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
 #include "sss/util/parse.h"
+#include "sss/util/srgb.h"
 #include "sss/util/version.h"
 
 namespace sss {

@@ -1,10 +1,12 @@
 /// \file ply_io.cpp
 /// PLY point clouds. We write binary little-endian PLY with one `vertex`
-/// element (x y z nx ny nz radius, then every channel component as a float)
-/// and record the real channel types in "comment sss_channel <type> <name>"
-/// lines. We read our own files exactly and other tools' files leniently:
-/// x/y/z required, nx/ny/nz and radius optional, every other scalar property
-/// becomes a float channel.
+/// element (x y z nx ny nz radius, the display colour as uchar red green
+/// blue, then every channel component as a float) and record the real
+/// channel types in "comment sss_channel <type> <name>" lines, and the
+/// channel the colour shows in "comment sss_display_color <name>". We read
+/// our own files exactly (the colour bytes, derived data, are skipped) and
+/// other tools' files leniently: x/y/z required, nx/ny/nz and radius
+/// optional, every other scalar property becomes a float channel.
 
 #include <algorithm>
 #include <charconv>
@@ -17,6 +19,7 @@
 #include "sss/cloud/point_cloud_io.h"
 #include "sss/util/atomic_output.h"
 #include "sss/util/error.h"
+#include "sss/util/srgb.h"
 #include "sss/util/version.h"
 
 namespace sss {
@@ -30,6 +33,9 @@ constexpr std::size_t kMaxHeaderBytes = 1 << 24;
 // Position, normal and radius, then at most 16 floats per channel.
 constexpr std::size_t kMaxProperties = 7 + 16 * static_cast<std::size_t>(kMaxChannels);
 constexpr const char* kChannelComment = "sss_channel";
+constexpr const char* kDisplayColorComment = "sss_display_color";
+/// The vertex colour properties MeshLab and CloudCompare show.
+constexpr const char* kColorProperties[3] = {"red", "green", "blue"};
 
 enum class PlyScalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
 
@@ -106,6 +112,8 @@ struct PlyHeader {
     std::vector<PlyProperty> props;
     std::size_t stride = 0;
     std::vector<DeclaredChannel> declared;
+    /// The channel red/green/blue were made from (sss_display_color).
+    std::optional<std::string> display_color;
     std::optional<std::array<float, 16>> world_to_eye, world_to_ndc;
     std::optional<std::array<float, 3>> format;
 };
@@ -232,6 +240,11 @@ PlyHeader read_header(ByteSource& in) {
                                "comment '" +
                                line + "'");
                 h.declared.push_back({*t, w[3]});
+            } else if (w.size() >= 2 && w[1] == kDisplayColorComment) {
+                if (w.size() != 3 || h.display_color)
+                    throw fail("malformed or repeated sss_display_color comment '" +
+                               line + "'");
+                h.display_color = w[2];
             } else if (w.size() >= 2 && w[1] == "sss_world_to_eye") {
                 h.world_to_eye = parse_float_list<16>(path, w, w[1]);
             } else if (w.size() >= 2 && w[1] == "sss_world_to_ndc") {
@@ -328,6 +341,19 @@ Mapping map_properties(const std::string& path, const PlyHeader& h, PointCloud& 
     }
     m.radius = find("radius");
     if (m.radius >= 0) used[m.radius] = true;
+    // Our display colour is derived from a channel: reading it back as
+    // channels of its own would duplicate that channel.
+    if (h.display_color) {
+        for (const char* name : kColorProperties) {
+            const int i = find(name);
+            if (i < 0) {
+                throw FormatError(path,
+                                  std::string("sss_display_color comment but no '") +
+                                      name + "' property");
+            }
+            used[i] = true;
+        }
+    }
 
     // Channels paired with the property index of their first component, so the
     // cloud lists them in file order whether declared or not.
@@ -496,10 +522,40 @@ PointCloud read_ply(const std::string& path) {
     return cloud;
 }
 
+const Channel* ply_display_channel(const PointCloud& cloud) {
+    // A cloud with its own float channels red, green or blue (a foreign PLY
+    // read in) keeps them and gets no display colour: the names would clash.
+    for (const char* name : kColorProperties) {
+        const Channel* c = cloud.find_channel(name);
+        if (c && c->type == ChannelType::Float) return nullptr;
+    }
+    const Channel* diffusion = cloud.find_channel("_ssdiffusion");
+    if (diffusion && diffusion->type == ChannelType::Color) return diffusion;
+    for (const Channel& c : cloud.channels)
+        if (c.type == ChannelType::Color) return &c;
+    return nullptr;
+}
+
+uint8_t ply_display_byte(float value) {
+    const double v = std::clamp(static_cast<double>(value), 0.0, 1.0);
+    return static_cast<uint8_t>(std::lround(255.0 * srgb_encode(v)));
+}
+
 void write_ply(const PointCloud& cloud, const std::string& path) {
     check_writable(cloud);
     // Every property name must be unique, or the file cannot be read back.
     std::set<std::string> props = {"x", "y", "z", "nx", "ny", "nz", "radius"};
+    std::ostringstream channel_props;
+    for (const Channel& c : cloud.channels) {
+        for (const std::string& comp : component_names(c.name, c.type)) {
+            if (!props.insert(comp).second) {
+                throw ValueError("cannot write channel '" + c.name +
+                                 "' to PLY: property '" + comp + "' already exists");
+            }
+            channel_props << "property float " << comp << "\n";
+        }
+    }
+    const Channel* shown = ply_display_channel(cloud);
     std::ostringstream head;
     head << "ply\nformat binary_little_endian 1.0\n";
     head << "comment written by sss " << version_string() << "\n";
@@ -521,26 +577,21 @@ void write_ply(const PointCloud& cloud, const std::string& path) {
         head << "comment " << kChannelComment << " " << channel_type_name(c.type) << " "
              << c.name << "\n";
     }
+    if (shown) head << "comment " << kDisplayColorComment << " " << shown->name << "\n";
     head << "element vertex " << cloud.size() << "\n";
     for (const char* p : {"x", "y", "z", "nx", "ny", "nz", "radius"}) {
         head << "property float " << p << "\n";
     }
-    for (const Channel& c : cloud.channels) {
-        for (const std::string& comp : component_names(c.name, c.type)) {
-            if (!props.insert(comp).second) {
-                throw ValueError("cannot write channel '" + c.name +
-                                 "' to PLY: property '" + comp + "' already exists");
-            }
-            head << "property float " << comp << "\n";
-        }
+    if (shown) {
+        for (const char* p : kColorProperties) head << "property uchar " << p << "\n";
     }
-    head << "end_header\n";
+    head << channel_props.str() << "end_header\n";
 
     const std::size_t floats = 7 + static_cast<std::size_t>(cloud.data_size());
     AtomicOutput out(path);
     ByteSink sink(out.temp_path(), path, false);
     sink.write(head.str());
-    std::vector<unsigned char> rec(4 * floats);
+    std::vector<unsigned char> rec(4 * floats + (shown ? 3 : 0));
     for (std::size_t i = 0; i < cloud.size(); ++i) {
         unsigned char* r = rec.data();
         auto put = [&r](float v) {
@@ -550,6 +601,10 @@ void write_ply(const PointCloud& cloud, const std::string& path) {
         for (int a = 0; a < 3; ++a) put(cloud.positions[i][a]);
         for (int a = 0; a < 3; ++a) put(cloud.normals[i][a]);
         put(cloud.radii[i]);
+        if (shown) {
+            for (std::size_t q = 0; q < 3; ++q)
+                *r++ = ply_display_byte(shown->data[3 * i + q]);
+        }
         for (const Channel& c : cloud.channels) {
             const std::size_t k = static_cast<std::size_t>(c.components());
             for (std::size_t q = 0; q < k; ++q) put(c.data[i * k + q]);

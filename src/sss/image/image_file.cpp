@@ -182,8 +182,4 @@ void write_image_file(const std::string& path, const ImageFileSpec& spec, PixelT
     file.commit();
 }
 
-double srgb_encode(double c) {
-    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-}
-
 } // namespace sss

@@ -23,6 +23,7 @@
 #include "sss/util/error.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
+#include "sss/util/srgb.h"
 
 namespace sss {
 
