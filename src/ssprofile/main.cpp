@@ -271,7 +271,7 @@ int run(const std::vector<std::string>& argv) {
         } else if (o == "scattered")
             sa.scattered_only = args.integer(o, 0, 1) == 1;
         else
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, usage());
     }
     sss::Job job(kTool, running);
     if (!sa.scene.empty()) {
