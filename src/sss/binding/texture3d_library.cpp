@@ -120,7 +120,7 @@ std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& f
             if (!std::filesystem::is_regular_file(file, ec))
                 throw IoError(file, std::filesystem::exists(file, ec)
                                         ? "not a regular file"
-                                        : "no such file or directory");
+                                        : "cannot open: No such file or directory");
             if (ends_with_nocase(file, ".ptc") || ends_with_nocase(file, ".ply")) {
                 f.cloud = std::make_unique<PointCloud>(read_point_cloud(file));
                 std::vector<std::string> names;
