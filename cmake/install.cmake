@@ -11,7 +11,7 @@
 #   share/sss/shaders/          the compiled standard shaders, their sources and headers
 #   share/sss/scenes/           the bundled scenes (their run scripts take SSS_BIN_DIR)
 #   <libdir>/sss/               the 2-D texture plugin
-#   share/man/man1/             one page per tool, gzipped
+#   share/man/man1/             one page per tool (man/), gzipped
 #   share/doc/<package>/        README, docs/, copyright, changelog.gz
 #   include/sss/<module>/       the library's public headers (not the command line's)
 #   <libdir>/libsss.so.*        the shared library (sss::sss)
@@ -44,53 +44,24 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}
   COMPONENT runtime USE_SOURCE_PERMISSIONS)
 
-# Man pages, generated at build time from each tool's --help: help2man runs
-# the tool (scripts/install-deps installs help2man). One line of description
-# per page, the NAME section.
-find_program(SSS_HELP2MAN help2man)
-set(SSS_MAN_NAMES
-  "ptbake|bake point clouds from a RIB scene"
-  "ptfilter|subsurface diffusion of baked point clouds"
-  "brickmake|build a brick map from point clouds"
-  "brickinfo|describe and check a brick map"
-  "render|ray-trace a RIB scene"
-  "ptinfo|describe point cloud files"
-  "ptsynth|write synthetic lit point clouds"
-  "ptview|pictures of point clouds"
-  "shader|compile RenderMan Shading Language shaders"
-  "sloinfo|describe compiled shaders and their parameters"
-  "envdome|light probes to domes of distant lights"
-  "ssprofile|diffusion profiles against a Monte-Carlo walk of the light"
-  "sss-farm|submit the sss chain to a Slurm farm")
-if(SSS_HELP2MAN)
-  set(pages)
-  foreach(entry ${SSS_MAN_NAMES})
-    string(REPLACE "|" ";" parts "${entry}")
-    list(GET parts 0 tool)
-    list(GET parts 1 what)
-    set(page ${CMAKE_BINARY_DIR}/man/man1/${tool}.1)
-    if(tool STREQUAL "sss-farm")
-      set(exe ${CMAKE_BINARY_DIR}/bin/sss-farm)
-      set(dep sss_farm)
-    else()
-      set(exe $<TARGET_FILE:${tool}>)
-      set(dep ${tool})
-    endif()
-    add_custom_command(OUTPUT ${page}
-      COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/man/man1
-      COMMAND ${SSS_HELP2MAN} --no-info --no-discard-stderr
-              --version-string=${PROJECT_VERSION} --name=${what}
-              --source=sss --section=1 --output=${page} ${exe}
-      DEPENDS ${dep}
-      COMMENT "Man page ${tool}.1"
-      VERBATIM)
-    list(APPEND pages ${page})
-  endforeach()
-  add_custom_target(sss_man ALL DEPENDS ${pages})
-  install(FILES ${pages} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1 COMPONENT runtime)
-else()
-  message(WARNING "sss: help2man not found, no man pages (scripts/install-deps installs it)")
-endif()
+# Man pages, written by hand in man/ (one per tool; tests/cli/test_man_pages.sh
+# holds each to its tool's --help), installed gzipped without a time stamp as
+# Debian's tools do.
+find_program(SSS_GZIP gzip REQUIRED)
+file(GLOB SSS_MAN_PAGES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/man/*.1)
+set(SSS_MAN_GZ "")
+foreach(page ${SSS_MAN_PAGES})
+  get_filename_component(name ${page} NAME)
+  set(gz ${CMAKE_BINARY_DIR}/man/man1/${name}.gz)
+  add_custom_command(OUTPUT ${gz}
+    COMMAND ${CMAKE_COMMAND} -E make_directory ${CMAKE_BINARY_DIR}/man/man1
+    COMMAND ${SSS_GZIP} -9n -c ${page} > ${gz}
+    DEPENDS ${page}
+    COMMENT "Man page ${name}.gz")
+  list(APPEND SSS_MAN_GZ ${gz})
+endforeach()
+add_custom_target(sss_man ALL DEPENDS ${SSS_MAN_GZ})
+install(FILES ${SSS_MAN_GZ} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1 COMPONENT runtime)
 
 # --- library: the shared library ----------------------------------------------
 # libsss0.1: libsss.so.0.1 alone (its own package, as Debian policy wants a
@@ -202,7 +173,6 @@ endif()
 # maintainer), gzipped without a time stamp as Debian's tools do.
 configure_file(${PROJECT_SOURCE_DIR}/packaging/debian/changelog.in
   ${CMAKE_BINARY_DIR}/packaging/changelog @ONLY)
-find_program(SSS_GZIP gzip REQUIRED)
 add_custom_command(OUTPUT ${CMAKE_BINARY_DIR}/packaging/changelog.gz
   COMMAND ${SSS_GZIP} -9nf -k ${CMAKE_BINARY_DIR}/packaging/changelog
   DEPENDS ${CMAKE_BINARY_DIR}/packaging/changelog VERBATIM)

@@ -176,7 +176,7 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
         } else if (sss::run_option(args, o, r.running)) {
             continue;
         } else {
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, kUsage);
         }
     }
     if (files.size() != 1)

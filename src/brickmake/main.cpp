@@ -78,7 +78,7 @@ int run(const std::vector<std::string>& argv) {
         } else if (sss::run_option(args, o, running)) {
             continue;
         } else {
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, kUsage);
         }
     }
     if (files.size() < 2)

@@ -159,7 +159,7 @@ int run(const std::vector<std::string>& args) {
         } else if (sss::run_option(scan, opt, running)) {
             continue;
         } else {
-            throw sss::UsageError("unknown option -" + opt);
+            throw sss::unknown_option(opt, kUsage);
         }
     }
     if (output.empty() && !files.empty()) {

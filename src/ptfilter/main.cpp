@@ -183,7 +183,7 @@ int run(const std::vector<std::string>& argv) {
         } else if (o == "organize") {
             args.integer(o, 0, 1);
         } else {
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, usage());
         }
     }
     if (merge) {

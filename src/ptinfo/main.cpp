@@ -45,7 +45,7 @@ int run(const std::vector<std::string>& args) {
         } else if (opt == "stats") {
             stats = scan.integer(opt, 0, 1) != 0;
         } else {
-            throw sss::UsageError("unknown option -" + opt);
+            throw sss::unknown_option(opt, kUsage);
         }
     }
     if (files.empty()) throw sss::UsageError("missing input file");

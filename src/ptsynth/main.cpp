@@ -96,7 +96,7 @@ int run(const std::vector<std::string>& args) {
         } else if (opt == "compress") {
             write_options.compress = scan.integer(opt, 0, 1) != 0;
         } else {
-            throw sss::UsageError("unknown option -" + opt);
+            throw sss::unknown_option(opt, kUsage);
         }
     }
     if (positional.empty()) throw sss::UsageError("missing output file");

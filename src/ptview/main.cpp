@@ -5,10 +5,15 @@
 ///   ptview [options] cloud.ptc... out.png
 /// Option parsing around sss::render_point_view and write_point_view_image.
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "sss/cli/tool.h"
 #include "sss/cloud/point_cloud_io.h"
@@ -23,8 +28,8 @@ namespace {
 
 const char* const kTool = "ptview";
 
-const char* const kUsage = R"(usage: ptview [options] cloud.ptc... out.png|out.exr
-       ptview [options] -o out.png|out.exr cloud.ptc...
+const char* const kUsage = R"(usage: ptview [options] cloud.ptc... out.png|out.exr|-
+       ptview [options] -o out.png|out.exr|- cloud.ptc...
 
 Draws point clouds (.ptc or .ply): each point a disc of its radius facing
 its normal, the nearest one in front, coloured by a channel. Several clouds
@@ -33,7 +38,9 @@ camera and one exposure. See docs/ptview.md.
 
 options:
   -o FILE                the picture: .png (8-bit sRGB) or .exr (float,
-                         linear); default: the last file argument
+                         linear); default: the last file argument; - or
+                         /dev/stdout: a PNG on standard output (the report
+                         then goes to standard error)
   -channel LIST          comma-separated channels shown, each NAME or
                          NAME:lum (a colour's luminance); N = the normals,
                          radius = the radii (default: each cloud's first
@@ -165,7 +172,7 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
         } else if (sss::run_option(args, o, r.running)) {
             continue;
         } else {
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, kUsage);
         }
     }
     if (r.output.empty()) {
@@ -187,13 +194,33 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
     if (have_orbit_option && r.camera == CameraChoice::File)
         throw sss::UsageError("-up and -fov are for the orbit camera, not -camera file");
     if (!sss::is_png_path(r.output) && !sss::is_exr_path(r.output) &&
-        !sss::writes_into_existing(r.output))
+        !sss::writes_into_existing(r.output) && r.output != "-" &&
+        !sss::is_standard_output(r.output))
         throw sss::UsageError("'" + r.output +
                               "' does not end in .png or .exr (the picture's format)");
     for (const std::string& f : files)
         r.inputs.push_back(sss::expand_frame_pattern(f, r.running.frame, "point cloud"));
     r.output = sss::expand_frame_pattern(r.output, r.running.frame, "output picture");
     return r;
+}
+
+/// Hands standard output to the picture ("-", /dev/stdout, or the file
+/// stdout is redirected to): the picture must be the only thing in that
+/// stream, so what the tool prints there (its report, ALF_PROGRESS lines)
+/// goes to standard error from now on. Returns the name the picture is
+/// written to (the original stdout, as /dev/fd/N: a pipe is written into, a
+/// file replaced as any output is).
+std::string picture_on_standard_output() {
+    if (::isatty(STDOUT_FILENO))
+        throw sss::UsageError("the picture would go to a terminal (standard output); "
+                              "redirect it to a file or a pipe");
+    sss::flush_standard_output();
+    const int fd = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 3);
+    if (fd < 0 || ::dup2(STDERR_FILENO, STDOUT_FILENO) < 0)
+        throw sss::IoError("standard output",
+                           std::string("cannot hand it to the picture: ") +
+                               std::strerror(errno));
+    return "/dev/fd/" + std::to_string(fd);
 }
 
 /// printf into a string.
@@ -208,12 +235,18 @@ int run(const std::vector<std::string>& argv) {
     std::optional<Request> request = parse_request(argv);
     if (!request) return 0;
     Request& r = *request;
+    // The file written: the output named, or standard output's file or pipe.
+    std::string target = r.output;
+    if (r.output == "-" || sss::is_standard_output(r.output)) {
+        target = picture_on_standard_output();
+        r.output = "standard output";
+    }
     sss::JobFiles files;
     for (const std::string& in : r.inputs)
         files.input(in, "the point cloud \"" + in + "\"");
-    files.output(r.output, "the picture \"" + r.output + "\"");
+    files.output(target, "the picture \"" + r.output + "\"");
     if (sss::check_only()) return 0;
-    sss::check_output_target(r.output);
+    sss::check_output_target(target);
     sss::Job job(kTool, r.running);
 
     std::vector<sss::PointCloud> clouds;
@@ -295,7 +328,7 @@ int run(const std::vector<std::string>& argv) {
     {
         const sss::ScopedStage stage("writing " + r.output);
         sss::OutputSet outputs;
-        sss::write_point_view_image(image, r.output,
+        sss::write_point_view_image(image, target,
                                     std::string("sss ptview ") + sss::version_string());
         // The report goes out before the picture is put in place: a report that
         // cannot be written fails the job with the picture unchanged.

@@ -139,7 +139,7 @@ int run(const std::vector<std::string>& argv) {
         } else if (sss::run_option(args, o, running)) {
             continue;
         } else {
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, usage());
         }
     }
     if (files.size() != 1)

@@ -150,7 +150,7 @@ int run(const std::vector<std::string>& args) {
         } else if (opt[0] == 'U') {
             options.undefines.push_back(attached_or_next(scan, opt));
         } else {
-            throw sss::UsageError("unknown option -" + opt);
+            throw sss::unknown_option(opt, kUsage);
         }
     }
     if (files.empty()) throw sss::UsageError("missing input file");

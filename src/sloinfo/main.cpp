@@ -46,7 +46,7 @@ int run(const std::vector<std::string>& args) {
         } else if (opt == "json") {
             json = scan.integer(opt, 0, 1) != 0;
         } else {
-            throw sss::UsageError("unknown option -" + opt);
+            throw sss::unknown_option(opt, kUsage);
         }
     }
     if (files.empty()) throw sss::UsageError("missing input file");

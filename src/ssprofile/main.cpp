@@ -296,7 +296,7 @@ int run(const std::vector<std::string>& argv) {
         } else if (o == "scattered")
             sa.scattered_only = args.integer(o, 0, 1) == 1;
         else
-            throw sss::UsageError("unknown option -" + o);
+            throw sss::unknown_option(o, usage());
     }
     check_modes(sa, positional, table_path, !csv.empty() || !svg.empty() || !tsv.empty());
     // The table has no material; the comparisons and the walk check theirs.

@@ -284,7 +284,7 @@ cd sub
 run "$render" paths.rib
 cd ..
 expect_rc 1 "paths.rib from another working folder" || true
-[[ "$err" == *'ball.rib: no such file along the archive search path "parts"'* ]] ||
+[[ "$err" == *'ball.rib: cannot open: No such file or directory (not found along the archive search path "parts"'* ]] ||
     fail "relative search folders are not the working folder's: $err"
 
 # ---------------------------------------------------------------------------

@@ -17,16 +17,21 @@ fail() {
 command -v script >/dev/null || fail "script(1) (bsdutils) is needed for a pseudo-terminal"
 
 cd "$work"
+"$bin/ptsynth" -n 8000 -light 1 1 1 big.ptc >/dev/null
 "$bin/ptsynth" -n 5000 -light 1 1 1 in.ptc >/dev/null
-# All pairs on one thread: a stage of a second or more (the line shows after 0.5 s).
+# All pairs on one thread: a stage of 3 s or more for big.ptc (the line shows
+# after 0.5 s, the time left after 2 s: sss::TimeLeftEstimator), 1 s for in.ptc.
 filter=("$bin/ptfilter" -ssdiffusion -exact -threads 1 in.ptc out.ptc)
 
 # On a terminal: stdout and stderr both go to the pseudo-terminal.
-script -qec "${filter[*]}" /dev/null >tty.txt || fail "ptfilter on a terminal failed: $(cat tty.txt)"
+script -qec "$bin/ptfilter -ssdiffusion -exact -threads 1 big.ptc out.ptc" /dev/null >tty.txt ||
+    fail "ptfilter on a terminal failed: $(cat tty.txt)"
 cr=$'\r'
 esc=$'\033'
 grep -q "${cr}ptfilter: evaluating the diffusion (all pairs) *[0-9]*%  [0-9.]* k\?M\?G\? \?points/s  [0-9]*:[0-9][0-9] left${esc}\[K" tty.txt ||
     fail "no progress line on the terminal: $(cat -v tty.txt | head -c 600)"
+# Never "0:00 left" while the work runs.
+grep -q " 0:00 left" tty.txt && fail "0:00 left shown: $(cat -v tty.txt | head -c 600)"
 # Erased at the end: the last thing the line wrote is the erase sequence.
 last="$(tr "$cr" '\n' <tty.txt | grep -v '^$' | tail -1)"
 [[ "$last" == "${esc}[K" ]] || fail "the progress line was not erased: last '$(cat -v <<<"$last")'"

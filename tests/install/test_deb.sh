@@ -85,7 +85,7 @@ if [[ -n "$py" ]]; then
 fi
 dpkg-deb -c "$deb" >"$tmp/deb.txt"
 dpkg-deb -c "$dev" >"$tmp/dev.txt"
-grep -q '\./usr/share/man/man1/ptfilter\.1' "$tmp/deb.txt" || fail "no man page in $deb"
+grep -q '\./usr/share/man/man1/ptfilter\.1\.gz' "$tmp/deb.txt" || fail "no man page in $deb"
 grep -q '\./usr/share/sss/shaders/bake_radiance_t\.slo' "$tmp/deb.txt" || fail "no shaders in $deb"
 grep -q '\./usr/.*/cmake/sss/sssConfig\.cmake' "$tmp/dev.txt" || fail "no CMake package in $dev"
 

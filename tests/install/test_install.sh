@@ -57,9 +57,10 @@ bin="$prefix/bin"
 for tool in ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview shader sloinfo envdome ssprofile sss-farm; do
     [[ -x "$bin/$tool" ]] || fail "$tool not installed"
     "$bin/$tool" --version >/dev/null || fail "$tool --version"
-    page="$prefix/share/man/man1/$tool.1"
-    grep -q '^\.TH' "$page" || fail "no man page $page"
-    grep -qF -- '\fB\-' "$page" || fail "man page $page lacks the options"
+    page="$prefix/share/man/man1/$tool.1.gz"
+    text="$(gzip -dc "$page")" || fail "no gzipped man page $page"
+    grep -q '^\.TH' <<<"$text" || fail "man page $page has no .TH"
+    grep -q '^\.SH EXAMPLES' <<<"$text" || fail "man page $page lacks EXAMPLES"
 done
 cd "$tmp"
 printf 'WorldBegin\nSurface "bake_radiance_t" "string filename" ["sphere.ptc"]\nSphere 1 -1 1 360\nWorldEnd\n' >bake.rib

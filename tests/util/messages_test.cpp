@@ -87,3 +87,33 @@ TEST(Messages, StandardOutputErrorIsEmptyWhenWritable) {
 }
 
 } // namespace
+
+TEST(Messages, EditDistanceCountsSwapsAsOneStep) {
+    EXPECT_EQ(sss::edit_distance("", ""), 0u);
+    EXPECT_EQ(sss::edit_distance("abc", ""), 3u);
+    EXPECT_EQ(sss::edit_distance("", "abc"), 3u);
+    EXPECT_EQ(sss::edit_distance("material", "material"), 0u);
+    EXPECT_EQ(sss::edit_distance("materail", "material"), 1u); // swap
+    EXPECT_EQ(sss::edit_distance("skin11", "skin1"), 1u);      // insertion
+    EXPECT_EQ(sss::edit_distance("kitten", "sitting"), 3u);
+    EXPECT_EQ(sss::edit_distance("ca", "abc"), 3u); // OSA: no edit of a swapped pair
+    EXPECT_EQ(sss::edit_distance("tread", "threads"), 2u);
+}
+
+TEST(Messages, ClosestMatchOnlyWhenClose) {
+    const std::vector<std::string> options = {"material", "maxerror", "threads",
+                                              "o",        "help",     "progress"};
+    EXPECT_EQ(sss::closest_match("materail", options), "material");
+    EXPECT_EQ(sss::closest_match("Material", options), "material"); // case ignored
+    EXPECT_EQ(sss::closest_match("thread", options), "threads");
+    EXPECT_EQ(sss::closest_match("progres", options), "progress");
+    // Nothing close: no guess.
+    EXPECT_EQ(sss::closest_match("bogus", options), "");
+    EXPECT_EQ(sss::closest_match("x", options), ""); // one letter is never guessed
+    EXPECT_EQ(sss::closest_match("mat", options), "");
+    EXPECT_EQ(sss::closest_match("", options), "");
+    EXPECT_EQ(sss::closest_match("material", {}), "");
+    // The nearest wins, then the first of equals.
+    EXPECT_EQ(sss::closest_match("skin3", {"skin1", "skin2"}), "skin1");
+    EXPECT_EQ(sss::closest_match("skin22", {"skin1", "skin2"}), "skin2");
+}

@@ -425,3 +425,17 @@ TEST(CheckOutputTarget, RefusesFoldersAndMissingFolders) {
     EXPECT_NO_THROW(sss::check_output_target("/dev/null"));
     EXPECT_TRUE(dir.entries() == std::vector<std::string>{"sub"});
 }
+
+TEST(Outputs, StandardOutputByAnyName) {
+    // Whatever stdout is here (a pipe, a file), /dev/stdout and /proc/self/fd/1
+    // name it; another file or a missing one does not.
+    TempDir dir;
+    EXPECT_TRUE(sss::is_standard_output("/dev/stdout"));
+    EXPECT_TRUE(sss::is_standard_output("/proc/self/fd/1"));
+    EXPECT_FALSE(sss::is_standard_output(dir.file("missing.png")));
+    const std::string other = dir.file("other.png");
+    std::FILE* f = std::fopen(other.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fclose(f);
+    EXPECT_FALSE(sss::is_standard_output(other));
+}

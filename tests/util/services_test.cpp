@@ -155,15 +155,17 @@ TEST(Progress, NoTerminalOffATerminal) {
 
 TEST(Progress, TerminalLineText) {
     EXPECT_EQ(sss::progress_line("ptfilter", "evaluating the diffusion", 43, 1234567.0,
-                                 "points", 65.4, 80),
+                                 "points", 63.4, 80),
               "ptfilter: evaluating the diffusion   43%  1.23 M points/s  1:05 left");
     // No unit: no rate; no estimate: no time left; hours.
     EXPECT_EQ(sss::progress_line("render", "rendering", 7, 10.0, "", -1.0, 80),
               "render: rendering    7%");
+    // Rounded up to a step that grows with the time (a minute beyond an
+    // hour), never "0:00" while the work runs.
     EXPECT_EQ(sss::progress_line("ptbake", "baking", 100, 512.0, "points", 3725.0, 80),
-              "ptbake: baking  100%  512 points/s  1:02:05 left");
+              "ptbake: baking  100%  512 points/s  1:03:00 left");
     EXPECT_EQ(sss::progress_line("brickmake", "b", 50, 2500.0, "lookups", 0.4, 80),
-              "brickmake: b   50%  2.5 k lookups/s  0:00 left");
+              "brickmake: b   50%  2.5 k lookups/s  0:01 left");
 }
 
 TEST(Progress, TerminalLineNeverWraps) {

@@ -8,6 +8,8 @@
 
 #include <glm/vec3.hpp>
 
+#include "sss/util/error.h"
+
 namespace sss {
 
 /// Walks a command line the RenderMan way: options start with one or two
@@ -49,6 +51,19 @@ private:
     std::vector<std::string> m_args;
     std::size_t m_pos = 0;
 };
+
+/// The options a tool's usage text lists, in order, each once, with its
+/// dashes as written ("-material", "--help"): every word of one or two
+/// dashes and a letter that starts a line or follows a space, '(', '[' or
+/// ',', up to the first character that is not a letter, digit, '_' or a
+/// dash between them ("-p:N" lists "-p", "--dry-run" itself).
+std::vector<std::string> usage_options(const std::string& usage);
+
+/// The error for an option `opt` (without its dashes) that a tool does not
+/// know: "unknown option -materail; did you mean -material?" when one of the
+/// options its usage text lists is close (closest_match in
+/// sss/util/messages.h), else "unknown option -opt".
+UsageError unknown_option(const std::string& opt, const std::string& usage);
 
 /// A word as a POSIX shell reads it back: unchanged when it is made of
 /// letters, digits and _./,:=+@%-#, else in single quotes (a quote itself

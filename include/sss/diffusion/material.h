@@ -32,6 +32,10 @@ const std::vector<NamedMaterial>& material_table();
 const NamedMaterial* find_material(std::string_view name);
 /// "apple, chicken1, ..." for error messages and --help.
 std::string material_names();
+/// The message for a material name not in the table: "unknown material
+/// 'skin11'; did you mean 'skin1'?" when a name is close (closest_match in
+/// sss/util/messages.h), else "unknown material 'x' (known: apple, ...)".
+std::string unknown_material_message(const std::string& name);
 
 /// JMLH01 fit of the internal diffuse Fresnel reflectance F_dr(eta), with the
 /// Egan-Hilgeman fit below eta = 1.

@@ -111,6 +111,11 @@ void check_output_target(const std::string& path);
 /// followed): an output written into, whose name says nothing about a format.
 bool writes_into_existing(const std::string& path);
 
+/// Whether `path` names the file, pipe or terminal that standard output is
+/// (/dev/stdout, /proc/self/fd/1, or the name of the file it was redirected
+/// to): an output that shares standard output with what the tool prints.
+bool is_standard_output(const std::string& path);
+
 /// Installs the SIGINT/SIGTERM/SIGHUP handlers (once per process) that remove
 /// every uncommitted AtomicOutput temporary and then die by the same signal.
 /// A signal the parent ignores (nohup) stays ignored.

@@ -36,6 +36,22 @@ std::string quoted(std::string_view text, std::size_t max_bytes = kMaxEcho);
 std::string truncated(std::string_view text, std::size_t max_bytes);
 
 // ---------------------------------------------------------------------------
+// Suggestions for misspelled names
+
+/// Edit distance between a and b: inserting, deleting or replacing a
+/// character, or swapping two neighbouring ones, costs 1 each (optimal string
+/// alignment; "materail" is 1 from "material").
+std::size_t edit_distance(std::string_view a, std::string_view b);
+
+/// The candidate that `word` was most likely meant to be, for a "did you
+/// mean" hint; "" when none is close. Case is ignored; a candidate is close
+/// when its edit distance to `word` is at most a third of the longer of the
+/// two (so one-letter names are never guessed). The first of equally close
+/// candidates wins.
+std::string closest_match(std::string_view word,
+                          const std::vector<std::string>& candidates);
+
+// ---------------------------------------------------------------------------
 // Warnings
 
 /// Warnings of one job, counted by kind: the first kKeptPerKind of each kind

@@ -9,8 +9,49 @@
 #include <mutex>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 namespace sss {
+
+/// `seconds` rounded up to the step the terminal line shows a time left in:
+/// 1 s below a minute, 5 s below ten minutes, 30 s below an hour, a minute
+/// beyond; at least 1 s (work that is still running never reads "0:00").
+double rounded_time_left(double seconds);
+
+/// The time left of a stage, estimated from how far it has come: the
+/// terminal line's "0:05 left". A function of what it is fed, with no clock
+/// of its own, so that it is tested without waiting.
+///
+/// The rate is measured over a recent window (a quarter of the stage's time,
+/// 1 s to 5 min), not since the stage began: the work per percent often
+/// changes within a stage (ptfilter's dark points are cheap and its lit
+/// ones dear), and an average since the start then promises the end far too
+/// soon. The estimated end time is smoothed (2 s), so the time left counts
+/// down instead of jumping with every update. There is no estimate in the
+/// first 2 s of a stage, nor while the window shows no progress (a stall);
+/// and a time left that reads the same for more than 3 steps of its
+/// rounding (at least 3 s) while the work goes on is one that time keeps
+/// disproving: it is withdrawn until the estimate moves.
+class TimeLeftEstimator {
+public:
+    /// Records that `fraction` (0 to 1) of the stage was done `elapsed`
+    /// seconds after it began (elapsed never decreasing) and returns the
+    /// time left to show, rounded_time_left(), or -1 for none.
+    double update(double elapsed, double fraction);
+
+    static constexpr double kWarmUpSeconds = 2.0;
+    static constexpr double kSmoothingSeconds = 2.0;
+
+private:
+    struct Sample {
+        double elapsed, fraction;
+    };
+    std::vector<Sample> m_samples; ///< at least 0.1 s apart, thinned when long
+    double m_finish = -1.0;        ///< smoothed end time (elapsed), < 0: none
+    double m_last = 0.0;           ///< elapsed of the last update
+    double m_shown = -1.0;         ///< the rounded time left last returned
+    double m_shown_since = 0.0;    ///< when m_shown was first returned
+};
 
 /// Thread-safe progress reporter. Two displays, independent of each other:
 /// - farm lines (`enabled`, -progress): "ALF_PROGRESS NN%" on stdout,
@@ -95,6 +136,7 @@ private:
     int64_t m_stage_start_ns = 0;
     std::atomic<int64_t> m_next_draw_ns{0};
     bool m_shown = false;
+    TimeLeftEstimator m_time_left; ///< of the current stage
 };
 
 /// Erases the terminal line of the job's Progress if one is shown (before a
@@ -103,7 +145,8 @@ void clear_terminal_progress();
 
 /// The terminal line's text: "<tool>: <stage>  43%  1.2 M points/s  0:05
 /// left", at most `width` columns (the stage is shortened with "..."). No
-/// rate without a unit or below 0; no time left when seconds_left < 0.
+/// rate without a unit or below 0; no time left when seconds_left < 0, else
+/// rounded_time_left(seconds_left).
 std::string progress_line(const std::string& tool, const std::string& stage, int percent,
                           double rate, const std::string& unit, double seconds_left,
                           std::size_t width);

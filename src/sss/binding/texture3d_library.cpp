@@ -51,7 +51,7 @@ std::shared_ptr<Texture3dFile> TextureLibrary::Impl::open3d(const std::string& f
             if (!std::filesystem::is_regular_file(file, ec)) {
                 if (std::filesystem::exists(file, ec))
                     throw IoError(file, "not a regular file");
-                throw IoError(file, "no such file or directory", ENOENT);
+                throw IoError(file, "cannot open: No such file or directory", ENOENT);
             }
             if (ends_with_nocase(file, ".ptc") || ends_with_nocase(file, ".ply")) {
                 f.cloud = std::make_unique<CloudTexture3d>(read_point_cloud(file));

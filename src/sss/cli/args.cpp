@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "sss/util/error.h"
+#include "sss/util/messages.h"
 #include "sss/util/parse.h"
 
 namespace sss {
@@ -118,6 +119,50 @@ glm::dvec3 ArgScanner::triple(const std::string& opt) {
 const std::string& ArgScanner::peek() const {
     static const std::string empty;
     return done() ? empty : m_args[m_pos];
+}
+
+std::vector<std::string> usage_options(const std::string& usage) {
+    std::vector<std::string> options;
+    std::unordered_set<std::string> seen;
+    auto is_name = [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    };
+    for (std::size_t i = 0; i < usage.size(); ++i) {
+        if (usage[i] != '-') continue;
+        const char before = i == 0 ? '\n' : usage[i - 1];
+        if (std::string_view(" \n([,").find(before) == std::string_view::npos) continue;
+        const std::size_t dashes = i + 1 < usage.size() && usage[i + 1] == '-' ? 2 : 1;
+        const std::size_t start = i + dashes;
+        if (start >= usage.size() ||
+            !std::isalpha(static_cast<unsigned char>(usage[start])))
+            continue;
+        std::size_t end = start;
+        while (end < usage.size() &&
+               (is_name(usage[end]) ||
+                (usage[end] == '-' && end + 1 < usage.size() && is_name(usage[end + 1]))))
+            ++end;
+        std::string option = usage.substr(i, end - i);
+        if (seen.insert(option).second) options.push_back(std::move(option));
+        i = end - 1;
+    }
+    return options;
+}
+
+UsageError unknown_option(const std::string& opt, const std::string& usage) {
+    // Compared without dashes: "--materail" is as close to "-material".
+    std::vector<std::string> names;
+    const std::vector<std::string> options = usage_options(usage);
+    for (const std::string& o : options)
+        names.push_back(o.substr(o.find_first_not_of('-')));
+    const std::string guess = closest_match(opt, names);
+    std::string what = "unknown option -" + opt;
+    // A listed option refused where it stands gets no hint of itself.
+    for (std::size_t i = 0; i < names.size() && !guess.empty() && guess != opt; ++i)
+        if (names[i] == guess) {
+            what += "; did you mean " + options[i] + "?";
+            break;
+        }
+    return UsageError(what);
 }
 
 std::string shell_quote(const std::string& word) {

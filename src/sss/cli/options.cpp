@@ -45,8 +45,7 @@ bool material_option(ArgScanner& args, const std::string& o, MaterialSpec& m,
     if (o == "material") {
         m.preset = args.value(o);
         if (!find_material(m.preset))
-            throw UsageError("option -material: unknown material '" + m.preset +
-                             "' (known: " + material_names() + ")");
+            throw UsageError("option -material: " + unknown_material_message(m.preset));
     } else if (o == "unitlength") {
         m.unitlength = args.positive(o);
     } else if (o == "scattering") {

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "sss/util/error.h"
+#include "sss/util/messages.h"
 
 namespace sss {
 
@@ -41,6 +42,15 @@ std::string material_names() {
         out += m.name;
     }
     return out;
+}
+
+std::string unknown_material_message(const std::string& name) {
+    std::vector<std::string> names;
+    for (const NamedMaterial& m : material_table()) names.emplace_back(m.name);
+    const std::string guess = closest_match(name, names);
+    if (!guess.empty())
+        return "unknown material '" + name + "'; did you mean '" + guess + "'?";
+    return "unknown material '" + name + "' (known: " + material_names() + ")";
 }
 
 double fresnel_diffuse_reflectance(double eta) {
@@ -143,9 +153,7 @@ void check_unitlength(double unitlength) {
 }
 
 void MaterialSpec::validate() const {
-    if (!find_material(preset))
-        throw UsageError("unknown material '" + preset + "' (known: " + material_names() +
-                         ")");
+    if (!find_material(preset)) throw UsageError(unknown_material_message(preset));
     if ((scattering || absorption) && uses_albedo_form()) throw MaterialFormError();
     auto check = [](const std::optional<glm::dvec3>& v, const char* what, bool positive,
                     double maxv) {

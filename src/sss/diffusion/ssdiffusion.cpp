@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <tuple>
@@ -431,7 +433,8 @@ struct FileIdentity {
 
 FileIdentity identify(const std::string& path) {
     struct stat st {};
-    if (::stat(path.c_str(), &st) != 0) throw IoError(path, "cannot stat the input");
+    if (::stat(path.c_str(), &st) != 0)
+        throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
     return {st.st_dev, st.st_ino, st.st_size,
             int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
 }

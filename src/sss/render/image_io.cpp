@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <limits>
@@ -740,10 +741,16 @@ void write_display(const Image& image, const DisplayTarget& target,
 
 namespace {
 
+/// An image that is not there, in the words of the other readers
+/// ("cannot open: No such file or directory"); ec: why exists() could not tell.
+IoError missing_image(const std::string& path, const std::error_code& ec) {
+    return IoError(path, "cannot open: " + (ec ? ec.message() : std::strerror(ENOENT)));
+}
+
 /// Opens an image for reading with alpha left as stored (no premultiplying).
 std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
     std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    if (!std::filesystem::exists(path, ec)) throw missing_image(path, ec);
     detail::require_regular_file(path); // a FIFO would block OpenImageIO
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
@@ -757,7 +764,7 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
 
 Image read_image(const std::string& path) {
     std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) throw IoError(path, "no such file");
+    if (!std::filesystem::exists(path, ec)) throw missing_image(path, ec);
     detail::require_regular_file(path);
     if (const std::optional<ImageHeader> h = check_image_file(path))
         check_memory(uint64_t(h->width) * uint64_t(h->height) * uint64_t(h->channels) * 4,

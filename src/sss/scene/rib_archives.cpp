@@ -50,10 +50,12 @@ std::string Reader::resolve_path(const Statement& s, const std::string& name,
     const std::string beside = (base / p).lexically_normal().string();
     std::error_code ec;
     if (fs::exists(beside, ec)) return beside;
-    throw IoError(name, std::string("no such file along the ") + kind +
-                            " search path \"" + search_path_text(path) +
-                            "\" (relative to the working folder) or beside " +
-                            sss::quoted(*s.file) + " (" + s.name + " at " + where(s) +
+    // In the words of the other readers, then where it was looked for.
+    throw IoError(name, "cannot open: " + std::string(std::strerror(ENOENT)) +
+                            " (not found along the " + kind + " search path \"" +
+                            search_path_text(path) +
+                            "\", relative to the working folder, nor beside " +
+                            sss::quoted(*s.file) + "; " + s.name + " at " + where(s) +
                             ")");
 }
 

@@ -670,6 +670,13 @@ bool writes_into_existing(const std::string& path) {
     return ::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
 }
 
+bool is_standard_output(const std::string& path) {
+    struct stat out {
+    }, st{};
+    return ::fstat(STDOUT_FILENO, &out) == 0 && ::stat(path.c_str(), &st) == 0 &&
+           out.st_dev == st.st_dev && out.st_ino == st.st_ino;
+}
+
 void check_output_target(const std::string& path) {
     check_file_name(path);
     const Destination dest = resolve_destination(path);

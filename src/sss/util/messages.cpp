@@ -4,11 +4,14 @@
 
 #include "sss/util/messages.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
 #include <mutex>
+#include <vector>
 
 namespace sss {
 
@@ -47,6 +50,48 @@ std::string quoted(std::string_view text, std::size_t max_bytes) {
     out += escape_control(truncated(text, max_bytes));
     out += '"';
     return out;
+}
+
+// ---------------------------------------------------------------------------
+// Suggestions for misspelled names
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+    // Three rows of the dynamic programme: the swap looks two rows back.
+    std::vector<std::size_t> two(b.size() + 1), one(b.size() + 1), row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) one[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t replace = one[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+            row[j] = std::min({one[j] + 1, row[j - 1] + 1, replace});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+                row[j] = std::min(row[j], two[j - 2] + 1);
+        }
+        std::swap(two, one);
+        std::swap(one, row);
+    }
+    return one[b.size()];
+}
+
+std::string closest_match(std::string_view word,
+                          const std::vector<std::string>& candidates) {
+    auto lower = [](std::string_view s) {
+        std::string out(s);
+        for (char& c : out)
+            if (c >= 'A' && c <= 'Z') c = char(c - 'A' + 'a');
+        return out;
+    };
+    const std::string w = lower(word);
+    std::string best;
+    std::size_t best_distance = SIZE_MAX;
+    for (const std::string& c : candidates) {
+        const std::size_t d = edit_distance(w, lower(c));
+        // Within a third of the longer name: "skin11" -> "skin1", never "x" -> "o".
+        if (d * 3 > std::max(w.size(), c.size()) || d >= best_distance) continue;
+        best = c;
+        best_distance = d;
+    }
+    return best;
 }
 
 // ---------------------------------------------------------------------------

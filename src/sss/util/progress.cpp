@@ -66,7 +66,65 @@ std::string si(double x) {
     return buf;
 }
 
+// The time left of a stage (TimeLeftEstimator).
+constexpr double kSampleSpacing = 0.1;    // seconds between kept samples
+constexpr std::size_t kMaxSamples = 1024; // then every other one goes
+constexpr double kStuckSteps = 3.0;       // a text kept longer than this many steps
+
+// The rounding step of a time left (rounded_time_left).
+double time_left_step(double seconds) {
+    return seconds < 60.0 ? 1.0 : seconds < 600.0 ? 5.0 : seconds < 3600.0 ? 30.0 : 60.0;
+}
+
 } // namespace
+
+double rounded_time_left(double seconds) {
+    const double s = std::clamp(seconds, 0.0, 359999.0);
+    const double step = time_left_step(s);
+    return std::max(1.0, std::ceil(s / step - 1e-9) * step);
+}
+
+double TimeLeftEstimator::update(double elapsed, double fraction) {
+    if (m_samples.empty() || elapsed - m_samples.back().elapsed >= kSampleSpacing) {
+        if (m_samples.size() == kMaxSamples) { // keep the span, at half the density
+            std::size_t kept = 0;
+            for (std::size_t i = 0; i < m_samples.size(); i += 2)
+                m_samples[kept++] = m_samples[i];
+            m_samples.resize(kept);
+        }
+        m_samples.push_back({elapsed, fraction});
+    }
+    const double last = m_last;
+    m_last = elapsed;
+    if (elapsed < kWarmUpSeconds || !(fraction < 1.0)) return -1.0;
+    // The rate over the recent window: from the last sample at or before its start.
+    const double window = std::clamp(0.25 * elapsed, 1.0, 300.0);
+    auto after =
+        std::upper_bound(m_samples.begin(), m_samples.end(), elapsed - window,
+                         [](double t, const Sample& s) { return t < s.elapsed; });
+    const Sample& from = after == m_samples.begin() ? m_samples.front() : *(after - 1);
+    const double span = elapsed - from.elapsed;
+    const double rate = span > 0.0 ? (fraction - from.fraction) / span : 0.0;
+    if (!(rate > 0.0)) { // a stall: nothing to extrapolate
+        m_finish = -1.0;
+        m_shown = -1.0;
+        return -1.0;
+    }
+    const double finish = elapsed + (1.0 - fraction) / rate;
+    if (m_finish < 0.0)
+        m_finish = finish;
+    else
+        m_finish +=
+            (1.0 - std::exp(-(elapsed - last) / kSmoothingSeconds)) * (finish - m_finish);
+    const double shown = rounded_time_left(m_finish - elapsed);
+    if (shown != m_shown) {
+        m_shown = shown;
+        m_shown_since = elapsed;
+    }
+    // The same text for several steps while time passes: the estimate is
+    // being disproved as fast as it is made.
+    return elapsed - m_shown_since > kStuckSteps * time_left_step(shown) ? -1.0 : shown;
+}
 
 std::string progress_line(const std::string& tool, const std::string& stage, int percent,
                           double rate, const std::string& unit, double seconds_left,
@@ -77,7 +135,7 @@ std::string progress_line(const std::string& tool, const std::string& stage, int
     if (!unit.empty() && rate >= 0 && std::isfinite(rate))
         tail += "  " + si(rate) + unit + "/s";
     if (seconds_left >= 0 && std::isfinite(seconds_left)) {
-        const long s = std::lround(std::min(seconds_left, 359999.0));
+        const long s = std::lround(rounded_time_left(seconds_left));
         char left[32];
         if (s >= 3600)
             std::snprintf(left, sizeof left, "  %ld:%02ld:%02ld left", s / 3600,
@@ -125,6 +183,8 @@ void Progress::draw(uint64_t done, uint64_t total, int64_t now) {
         m_stage_total.store(total, std::memory_order_relaxed);
         m_stage_done0 = done;
         m_stage_start_ns = now;
+        m_time_left = TimeLeftEstimator();
+        m_time_left.update(0.0, total > 0 ? double(done) / double(total) : 1.0);
         m_next_draw_ns.store(now + kShowAfterNs, std::memory_order_relaxed);
         return;
     }
@@ -140,7 +200,7 @@ void Progress::draw(uint64_t done, uint64_t total, int64_t now) {
     }
     const double seconds = double(now - m_stage_start_ns) * 1e-9;
     const double rate = double(done - std::min(done, m_stage_done0)) / seconds;
-    const double left = rate > 0 ? double(total - done) / rate : -1.0;
+    const double left = m_time_left.update(seconds, double(done) / double(total));
     const int pct = int((static_cast<unsigned __int128>(done) * 100u) / total);
     const std::string line = progress_line(m_tool, current_stage(), pct, rate, m_unit,
                                            left, terminal_width() - 1);

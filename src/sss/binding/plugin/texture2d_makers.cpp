@@ -32,8 +32,9 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& file,
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec)) {
         *error = file + ": " +
-                 (std::filesystem::exists(file, ec) ? "not a regular file"
-                                                    : "no such file or directory");
+                 (std::filesystem::exists(file, ec)
+                      ? "not a regular file"
+                      : "cannot open: No such file or directory");
         return nullptr;
     }
     auto in = OIIO::ImageInput::open(file);

@@ -353,10 +353,10 @@ std::shared_ptr<TextureFile> OiioTextures::open(const std::string& file) {
         // A missing file is told apart here: OIIO's words for it are long.
         std::error_code ec;
         if (!std::filesystem::is_regular_file(file, ec)) {
-            entry->error =
-                file + ": " +
-                (std::filesystem::exists(file, ec) ? "not a regular file"
-                                                   : "no such file or directory");
+            entry->error = file + ": " +
+                           (std::filesystem::exists(file, ec)
+                                ? "not a regular file"
+                                : "cannot open: No such file or directory");
             return;
         }
         OIIO::TextureSystem::Perthread* pt = ts->get_perthread_info();
