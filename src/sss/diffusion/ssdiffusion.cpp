@@ -433,8 +433,10 @@ struct FileIdentity {
 
 FileIdentity identify(const std::string& path) {
     struct stat st {};
-    if (::stat(path.c_str(), &st) != 0)
-        throw IoError(path, std::string("cannot open: ") + std::strerror(errno));
+    if (::stat(path.c_str(), &st) != 0) {
+        const int err = errno;
+        throw IoError(path, std::string("cannot open: ") + std::strerror(err), err);
+    }
     return {st.st_dev, st.st_ino, st.st_size,
             int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec};
 }

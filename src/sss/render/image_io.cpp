@@ -744,7 +744,8 @@ namespace {
 /// An image that is not there, in the words of the other readers
 /// ("cannot open: No such file or directory"); ec: why exists() could not tell.
 IoError missing_image(const std::string& path, const std::error_code& ec) {
-    return IoError(path, "cannot open: " + (ec ? ec.message() : std::strerror(ENOENT)));
+    return IoError(path, "cannot open: " + (ec ? ec.message() : std::strerror(ENOENT)),
+                   ec ? ec.value() : ENOENT);
 }
 
 /// Opens an image for reading with alpha left as stored (no premultiplying).

@@ -51,12 +51,13 @@ std::string Reader::resolve_path(const Statement& s, const std::string& name,
     std::error_code ec;
     if (fs::exists(beside, ec)) return beside;
     // In the words of the other readers, then where it was looked for.
-    throw IoError(name, "cannot open: " + std::string(std::strerror(ENOENT)) +
-                            " (not found along the " + kind + " search path \"" +
-                            search_path_text(path) +
-                            "\", relative to the working folder, nor beside " +
-                            sss::quoted(*s.file) + "; " + s.name + " at " + where(s) +
-                            ")");
+    throw IoError(name,
+                  "cannot open: " + std::string(std::strerror(ENOENT)) +
+                      " (not found along the " + kind + " search path \"" +
+                      search_path_text(path) +
+                      "\", relative to the working folder, nor beside " +
+                      sss::quoted(*s.file) + "; " + s.name + " at " + where(s) + ")",
+                  ENOENT);
 }
 
 // --- files -----------------------------------------------------------------
