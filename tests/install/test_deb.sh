@@ -56,9 +56,9 @@ fi
 # Dependencies: the libraries the tools load (found by dpkg-shlibdeps), each
 # a package this machine has installed at a version that satisfies it.
 depends="$(dpkg-deb -f "$deb" Depends)"
-for lib in libembree3-3 libopenimageio2.4 libtbb12 libstdc++6 python3; do
-    [[ ",$depends," == *" $lib"[\ ,]* || ",$depends," == *",$lib"[\ ,]* ]] ||
-        fail "sss's Depends lacks $lib: $depends"
+for needed in libembree3-3 libopenimageio2.4 libtbb12 libstdc++6 python3; do # not $lib: unpacked below
+    [[ ",$depends," == *" $needed"[\ ,]* || ",$depends," == *",$needed"[\ ,]* ]] ||
+        fail "sss's Depends lacks $needed: $depends"
 done
 check_depends() { # check_depends "a (>= 1), b, ..."
     local item name op ver have
