@@ -95,6 +95,10 @@ dpkg -x "$dev" "$root"
 dpkg -x "$lib" "$root"
 [[ -z "$py" ]] || dpkg -x "$py" "$root"
 
+# sss-farm from the unpacked package finds its modules (usr/share/sss/farm).
+[[ "$("$root/usr/bin/sss-farm" --version)" == "sss-farm (sss) "* ]] ||
+    fail "the unpacked sss-farm: $("$root/usr/bin/sss-farm" --version 2>&1)"
+
 # The teapot pipeline (quick version) from the installed tree alone: the
 # installed scene finds the installed tools by itself, and writes under the
 # current folder.
