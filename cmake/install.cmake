@@ -10,6 +10,7 @@
 #   bin/                        the tools and sss-farm
 #   share/sss/shaders/          the compiled standard shaders, their sources and headers
 #   share/sss/scenes/           the bundled scenes (their run scripts take SSS_BIN_DIR)
+#   share/sss/farm/sss_farm/    sss-farm's Python package (bin/sss-farm finds it)
 #   <libdir>/sss/               the 2-D texture plugin
 #   share/man/man1/             one page per tool (man/), gzipped
 #   share/doc/<package>/        README, docs/, copyright, changelog.gz
@@ -30,6 +31,9 @@ set(SSS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/sss)
 # --- runtime: tools, shaders, plugin, scenes, docs, man pages ---------------
 install(TARGETS ${SSS_TOOLS} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
 install(PROGRAMS ${CMAKE_BINARY_DIR}/bin/sss-farm DESTINATION ${CMAKE_INSTALL_BINDIR}
+  COMPONENT runtime)
+# sss-farm's package, the listed modules only (never a __pycache__).
+install(FILES ${SSS_FARM_PACKAGE_FILES} DESTINATION ${CMAKE_INSTALL_DATADIR}/sss/farm/sss_farm
   COMPONENT runtime)
 install(TARGETS sss_texture2d LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/sss
   COMPONENT runtime)

@@ -56,9 +56,9 @@ fi
 # Dependencies: the libraries the tools load (found by dpkg-shlibdeps), each
 # a package this machine has installed at a version that satisfies it.
 depends="$(dpkg-deb -f "$deb" Depends)"
-for lib in libembree3-3 libopenimageio2.4 libtbb12 libstdc++6 python3; do
-    [[ ",$depends," == *" $lib"[\ ,]* || ",$depends," == *",$lib"[\ ,]* ]] ||
-        fail "sss's Depends lacks $lib: $depends"
+for needed in libembree3-3 libopenimageio2.4 libtbb12 libstdc++6 python3; do # not $lib: unpacked below
+    [[ ",$depends," == *" $needed"[\ ,]* || ",$depends," == *",$needed"[\ ,]* ]] ||
+        fail "sss's Depends lacks $needed: $depends"
 done
 check_depends() { # check_depends "a (>= 1), b, ..."
     local item name op ver have
@@ -94,6 +94,10 @@ dpkg -x "$deb" "$root"
 dpkg -x "$dev" "$root"
 dpkg -x "$lib" "$root"
 [[ -z "$py" ]] || dpkg -x "$py" "$root"
+
+# sss-farm from the unpacked package finds its modules (usr/share/sss/farm).
+[[ "$("$root/usr/bin/sss-farm" --version)" == "sss-farm (sss) "* ]] ||
+    fail "the unpacked sss-farm: $("$root/usr/bin/sss-farm" --version 2>&1)"
 
 # The teapot pipeline (quick version) from the installed tree alone: the
 # installed scene finds the installed tools by itself, and writes under the

@@ -3,6 +3,8 @@
 # relocatable), used as a studio would (docs/install.md):
 #   - the installed tools run with nothing of the build tree: ptbake finds the
 #     standard shaders beside itself, ptfilter filters, man pages are there;
+#   - sss-farm finds its package (share/sss/farm), also through a link, and
+#     writes no __pycache__;
 #   - the library is in the multiarch folder; libsss.so has a soname and
 #     exports only the public API, under a symbol version; the command line's
 #     headers are not installed; the .slo files do not name the build folder;
@@ -62,6 +64,24 @@ for tool in ptbake ptfilter brickmake brickinfo render ptinfo ptsynth ptview sha
     grep -q '^\.TH' <<<"$text" || fail "man page $page has no .TH"
     grep -q '^\.SH EXAMPLES' <<<"$text" || fail "man page $page lacks EXAMPLES"
 done
+# sss-farm's package (share/sss/farm/sss_farm) is found from the moved tree
+# and through a link from elsewhere, leaves no __pycache__, and its absence is
+# one error line.
+farm_pkg="$prefix/share/sss/farm/sss_farm"
+[[ -f "$farm_pkg/cli.py" ]] || fail "sss-farm's package is not in $farm_pkg"
+ln -s "$bin/sss-farm" "$tmp/linked-sss-farm"
+# (Without PYTHONDONTWRITEBYTECODE, which a developer's shell may set: sss-farm must not need it.)
+[[ "$(env -u PYTHONDONTWRITEBYTECODE "$tmp/linked-sss-farm" --version)" == "sss-farm (sss) "* ]] ||
+    fail "sss-farm through a link"
+env -u PYTHONDONTWRITEBYTECODE "$bin/sss-farm" submit --help >/dev/null || fail "sss-farm submit --help"
+[[ -z "$(find "$prefix/share/sss/farm" -name __pycache__ -o -name '*.pyc')" ]] ||
+    fail "sss-farm wrote byte-compiled caches: $(find "$prefix/share/sss/farm" -name '*.pyc')"
+mv "$farm_pkg" "$tmp/farm_pkg"
+if "$bin/sss-farm" --version >/dev/null 2>"$tmp/farm.err"; then fail "sss-farm ran without its package"; fi
+grep -qF "sss-farm ERROR: its Python package sss_farm is not in $(realpath "$prefix")/share/sss/farm " \
+    "$tmp/farm.err" ||
+    fail "sss-farm without its package: $(cat "$tmp/farm.err")"
+mv "$tmp/farm_pkg" "$farm_pkg"
 cd "$tmp"
 printf 'WorldBegin\nSurface "bake_radiance_t" "string filename" ["sphere.ptc"]\nSphere 1 -1 1 360\nWorldEnd\n' >bake.rib
 "$bin/ptbake" bake.rib >/dev/null 2>ptbake.err || { cat ptbake.err >&2; fail "installed ptbake"; }
