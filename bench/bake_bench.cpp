@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // ptbake benchmark: a ~1M-point bake of a mesh lit by 25 shadowed distant
 // lights (a dome, as a light-probe conversion gives), timed by stage, with the
 // irradiance error against an exact reference.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file bench_util.h
 /// Small helpers the bench programs share: the thread's CPU time, a fixed

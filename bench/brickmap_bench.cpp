@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // brickmake benchmark: a 1M-point _ssdiffusion cloud (a lit marble sphere of
 // radius 50 mm, diffused by ptfilter's library call) -> brick map, for a few
 // -maxerror values: build time, file size, bricks, lookups per second on one

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Shared by the benches: a latitude-longitude mesh (north pole, rings-1 rings
 // of `segments` vertices, south pole) written as one RIB PointsPolygons with

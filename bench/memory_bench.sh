@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Time and peak memory of ptfilter -ssdiffusion against the point count: for
 # each count, a ptsynth sphere (radius 50, marble) filtered with the default
 # settings; prints wall time, peak resident memory of the whole process

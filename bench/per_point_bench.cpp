@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Per-point materials against one material: ptfilter's -albedo fromfile
 // -diffusemeanfreepath fromfile (the ssdiffusion() library call) on a lit
 // sphere whose albedo and mean free path vary smoothly over the surface, and

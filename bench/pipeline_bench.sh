@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Whole-pipeline benchmark: the marble teapot (scenes/teapot) at 600x450 with
 # 4x4 pixel samples, the four stages timed as a user runs them:
 #   ptbake -> ptfilter -ssdiffusion -> brickmake -> render

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Triangulation of many-sided polygons (issue 15): wall time of ptbake and
 # render on one Polygon of N vertices for N = 8000, 16000, 32000, 64000, and
 # of ptbake on an OBJ file whose only face has 200000 vertices. Two shapes:

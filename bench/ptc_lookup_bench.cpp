@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // texture3d on a point cloud against the brick map made from it: a
 // _ssdiffusion sphere (a lit marble sphere of radius 50 mm, diffused by
 // ptfilter's library call, 1M points by default) looked up with

@@ -1,4 +1,6 @@
 #!/usr/bin/python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """What the sss Python module costs over the C++ it calls (docs/python.md).
 
     PYTHONPATH=build/python /usr/bin/python3 bench/python_overhead.py \

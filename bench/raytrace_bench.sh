@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Ray-traced shadeops on the teapot (issue 14): rays per second next to the
 # image error against a high-sample reference, for
 #   1. occlusion(): the marble teapot rendered with read_ssdiffusion's

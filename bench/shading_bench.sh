@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # RSL shading against the built-in C++ shaders it replaced (issue 13): the
 # same jobs run by a build of the last revision with C++ shaders
 # (OLD_REV, default 499617c) and by this build.

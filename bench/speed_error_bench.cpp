@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Speed against error: the measurements behind docs/speed-vs-error.md.
 // scripts/speed-vs-error builds, runs this program and draws the report from
 // the tables it writes; see that document for what every column means.

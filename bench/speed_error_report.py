@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Draws the plots and writes docs/speed-vs-error.md from the tables that
 bench/speed_error_bench.cpp writes. Run by scripts/speed-vs-error.
 

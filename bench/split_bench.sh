@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Splitting one cloud (ptfilter -part K/N, issue 16): wall time and peak
 # resident memory of the single run against N parts run one after another,
 # and of the merge, on a ptsynth sphere (marble, defaults), with a check that

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Speed against error of ptfilter -ssdiffusion on a lit sphere.
 //
 //   build/bin/ssdiffusion_bench [-n 1000000] [-samples 1000] [-material marble]

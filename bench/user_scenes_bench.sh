@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Where users' scenes spend their time, side by side (docs/speed-vs-error.md,
 # "Per-point materials"; docs/render.md, "Shading rate"; docs/brickmaps.md,
 # "Point clouds as 3D textures"):

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Install rules, the CMake package and pkg-config files, man pages and the
 # Debian packages (docs/install.md). Included by the top-level CMakeLists.txt
 # after every target exists; not in the sanitizer build.

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """What the build needs to know of Python interpreters (python/CMakeLists.txt,
 scripts/build-python, docs/python.md).
 

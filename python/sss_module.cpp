@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file sss_module.cpp
 /// sss._sss: the Python binding of the sss library (docs/python.md). A front
 /// end like the cli: it turns Python values into the library's structs (and

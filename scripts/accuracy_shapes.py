@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The diffusion on real shapes against the light (scripts/accuracy-report --shapes).
 
 Every case is a scene: a RIB is written, baked with ptbake, filtered with ptfilter

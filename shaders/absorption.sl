@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* absorption: translucency without scattering, the absorption-only shader
  * of PRMan's subsurface scattering application note. Rays gathered into the
  * object (a cosine-weighted hemisphere about the inward normal) find where

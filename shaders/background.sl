@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* background: the standard background imager (RISpec 3.2, appendix A, imager
  * shaders). Every pixel gets `bgcolor` behind what was rendered: the pixel's
  * premultiplied colour plus bgcolor times its uncovered part (1 - alpha).

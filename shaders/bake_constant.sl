@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* bake_constant: bakes the surface colour Cs (per vertex when the object
  * gives one; negative values allowed) with each point's area: blockers
  * inside objects for ptfilter. `channel` names the colour channel. */

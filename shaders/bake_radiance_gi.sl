@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* bake_radiance_gi: bake_radiance_t with global illumination, the
  * application note's suggested extension: the light arriving at each
  * micropolygon is ambient() + diffuse(N) + indirectdiffuse(P, N, samples)

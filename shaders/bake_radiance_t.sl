@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* bake_radiance_t: the bake shader of PRMan's subsurface scattering
  * application note: the light arriving at each micropolygon (ambient plus
  * diffuse), times Kdt, baked with its area into a point cloud for

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* bake_sss_params: bake_radiance_t plus the material of each point
  * (_albedo, _diffusemeanfreepath in mm) for ptfilter -material fromfile.
  * The material is a preset (sss_materials.h) unless albedo and dmfp are

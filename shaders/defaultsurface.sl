@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* defaultsurface: PRMan's surface for objects without a Surface: a
  * headlight, no light sources. */
 surface defaultsurface(float Ka = .2, Kd = .8;

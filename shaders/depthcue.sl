@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* depthcue: the standard depth cue (RISpec 3.2, appendix A, volume shaders).
  * The colour moves linearly towards `background` (and the opacity towards 1)
  * with the point's depth: not at all at normalised depth `mindistance` or

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* distantlight: parallel light along to - from (RISpec 3.2, appendix A).
  * Extensions: shadowname ("raytrace": samples and angle (degrees, the
  * angular diameter of the light's disk) for soft shadows; a shadow map:

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* distantlight_rts: distantlight with ray-traced shadows always on (as in the RenderMan
  * application notes); the same parameters, shadowname defaults to
  * "raytrace". */

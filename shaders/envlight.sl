@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* envlight: image-based light (the classic PRMan environment light). It
  * runs at the surface point (illuminate(Ps + N): light arrives along the
  * surface normal, which the engine gives light shaders as N) and returns

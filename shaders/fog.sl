@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* fog: the standard exponential fog (RISpec 3.2, appendix A, volume shaders).
  * Light from the far end of the ray (Ci, Oi as the surface left them) is
  * attenuated by exp(-length/distance) over the ray's length, and the fog's

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* Shared by the standard lights: the shadow term. shadowname "raytrace"
  * traces shadow rays: samples > 1 with a light of non-zero size gives soft
  * shadows over the cone the emitter subtends (half-angle cone). Any other

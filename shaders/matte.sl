@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* matte: the standard diffuse surface (RISpec 3.2, appendix A), with the
  * toolchain's ambient-occlusion extension (occlusion_samples > 0 scales the
  * ambient term by the unoccluded fraction). The components also go to the

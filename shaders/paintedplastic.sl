@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* paintedplastic: plastic whose colour is multiplied by a texture map
  * (RISpec 3.2, appendix A); "" means no texture. */
 surface paintedplastic(float Ka = 1, Kd = .5, Ks = .5, roughness = .1;

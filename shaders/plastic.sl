@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* plastic: the standard plastic surface (RISpec 3.2, appendix A), with the
  * toolchain's ambient-occlusion extension and AOV outputs. */
 surface plastic(float Ka = 1, Kd = .5, Ks = .5, roughness = .1;

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* pointlight: light from a point, falling off with the squared distance
  * (RISpec 3.2, appendix A). Extensions: shadowname ("raytrace": samples and
  * radius (a spherical emitter, shader space) for soft shadows; a shadow

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* read_ssdiffusion: the final-render shader of PRMan's subsurface
  * scattering application note: the diffusion baked by ptfilter
  * (_ssdiffusion, looked up in a brick map or a point cloud with texture3d)

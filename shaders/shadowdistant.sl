@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* shadowdistant: PRMan's distantlight with a shadow map `shadowname`
  * (rendered with an orthographic camera looking along to - from; "raytrace"
  * traces rays instead), filtered by samples, blur, bias (< 0: the scene's

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* shadowpoint: PRMan's pointlight with six shadow maps, one per world axis
  * (sfpx sfnx sfpy sfny sfpz sfnz: 90-degree views from `from` along +x, -x,
  * +y, -y, +z, -z). Each point is looked up in the map of the axis its

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* shadowspot: PRMan's spotlight with a shadow map: the spotlight's cone and
  * beam, shadowed by the depth map `shadowname` (MakeShadow of a zfile
  * rendered from the light; "raytrace" traces rays instead). samples, blur,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* skin: subsurface diffusion from a brick map or point cloud (as
  * read_ssdiffusion) under a thin oily layer: a specular lobe whose weight
  * goes from Ksfacing (looking straight at the surface) to Ksglancing (at

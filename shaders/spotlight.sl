@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* spotlight: a cone of light from `from` towards `to` with a soft edge and
  * a beam falloff (RISpec 3.2, appendix A). Extensions: shadowname
  * ("raytrace": samples and radius (spherical emitter) for soft shadows; a

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* Jensen et al. 2001's measured materials as the albedo and diffuse mean
  * free path (mm) the classic dipole gives them: the presets of ptfilter's
  * -material, for bake shaders. Generated from the diffusion library's

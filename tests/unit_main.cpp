@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The main of sss_tests. Besides GoogleTest's own flags it takes
 //
 //   --sss_source=<module>/<file>_test.cpp   run only the tests defined in that file

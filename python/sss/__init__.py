@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """sss: point clouds, subsurface diffusion and brick maps from Python.
 
 The binding of the sss library (docs/python.md). Point clouds are dicts of

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The sss module's exceptions (docs/python.md, Errors).
 
 Each is an sss.Error and the builtin exception a Python caller would catch

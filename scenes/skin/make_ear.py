@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Writes ear.obj: an ear-like closed shell for the skin scene (scenes/skin), in cm.
 
 A cupped, leaf-shaped lobe about 4 x 6 cm in the xy plane, y up, its hollow side facing

@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Writes blob.obj: a lumpy closed mesh (a UV sphere with low-frequency bumps),
 quads with triangle caps, outward counter-clockwise faces and vertex normals."""
 import math

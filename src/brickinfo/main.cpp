@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// brickinfo: what is in a brick map (.bkm), pictures of it, and lookups
 /// over a point cloud to measure its error:

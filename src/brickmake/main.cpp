@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// brickmake: PRMan-compatible brick map builder,
 ///   brickmake [options] in.ptc [more.ptc ...] out.bkm|out.vdb

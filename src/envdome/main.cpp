@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// envdome: an HDR lat-long light probe -> a RIB archive of distant lights
 /// by Debevec's median cut (sss/light/light_dome.h), or (-sky) a procedural

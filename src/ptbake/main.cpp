@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// ptbake: reads a RIB scene and bakes the point clouds ptfilter reads
 /// (_area, _radiance_t and optionally _albedo, _diffusemeanfreepath).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // ptfilter: PRMan-compatible point-cloud filter (-ssdiffusion, -part K/N, -merge).
 // Option parsing and reporting; the work is one library call, sss::run_filter_job()
 // (sss/diffusion/filter_job.h), which the Python module's sss.ptfilter() makes too.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// ptinfo: prints what is in point cloud files (.ptc or .ply): format,
 /// point count, bounding box, header matrices, channels and per-channel

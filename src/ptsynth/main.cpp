@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// ptsynth: writes a synthetic lit point cloud (sphere, plane or box) with
 /// `_area` and `_radiance_t` channels, ready for `ptfilter -ssdiffusion`.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// ptview: pictures of point clouds (PRMan's ptviewer need): a channel of
 /// each cloud splatted as discs through the cloud's camera or an orbit

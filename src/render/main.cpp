@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// render: ray traces a RIB scene with the built-in surface shaders (brick-map
 /// and point-cloud _ssdiffusion lookups included) and writes its Displays,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Sanitizer settings of the SSS_SANITIZE build (docs/testing.md), compiled
 // into every executable of that build only, so that the tools check the same
 // way however they are started (CTest, the CLI test scripts, scenes/*/run, by

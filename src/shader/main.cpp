@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// shader: compiles RenderMan Shading Language sources (.sl) into .slo
 /// files, as PRMan's `shader` does: the C preprocessor first (-I, -D, -U),

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// sloinfo: what a compiled shader (.slo) takes: its type and name, and each
 /// parameter's storage class, type, array length, output flag and default,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file main.cpp
 /// ssprofile: a material's diffusion profiles held against the Monte-Carlo
 /// random walk on a half-space (docs/accuracy.md), and the writer of the

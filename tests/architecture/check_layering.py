@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The module layering, read from the sources (docs/architecture.md).
 
     check_layering.py SOURCE_DIR MODULES_TXT

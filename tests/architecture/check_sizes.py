@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Size limits on the C++ sources: no file over 1200 lines, no function over 150.
 
 Usage: check_sizes.py SOURCE_DIR

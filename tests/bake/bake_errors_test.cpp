@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file bake_errors_test.cpp
 /// The bake's typed errors: they name the scene object and the setting, never
 /// a command-line option (ptbake words them for its options).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // ptbake with ray-traced global illumination (issue 14): closed-form checks
 // of occlusion() and indirectdiffuse() on a plane under a sphere, and a
 // furnace (the inside of a glowing sphere) for the recursion of hit shaders.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // ptbake on diced grids: exact derivatives (area, calculatenormal, Du) from
 // the dicer's grids, and displacement shaders.
 #include <gtest/gtest.h>

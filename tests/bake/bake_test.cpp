@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // ptbake's library side: bake shaders, files, spacing, shadows, determinism.
 #include <gtest/gtest.h>
 

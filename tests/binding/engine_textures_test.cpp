@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_textures_test.cpp
 /// The shading engine's texture calls (texture, environment, texture3d)
 /// answered by the job's TextureLibrary, as ptbake and render run them:

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file environment_cube_test.cpp
 /// environment() on OpenEXR cube-face maps (six N x N faces stacked +X, -X,
 /// +Y, -Y, +Z, -Z in an N x 6N image, the "envmap" attribute = cube), which

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // SceneRays: secondary rays over a diced scene, hit shading with the hit
 // object's own shader, visibility, depth limits, hit modes and transmission.
 #include <gtest/gtest.h>

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file shadow_maps_test.cpp
 /// Depth maps and cube-face environments through the job's TextureLibrary:
 /// RSL's shadow() on a hand-made depth map (both forms, bias, a missing

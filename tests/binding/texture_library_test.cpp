@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file texture_library_test.cpp
 /// The shading module's texture library: RSL texture options, 2-D lookups
 /// through OpenImageIO (pixel centres, channels, fill, grey as colour, blur,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file bkm_integrity_test.cpp
 /// Brick maps under hostile input: every byte of a small map changed makes
 /// opening, verify() (what brickinfo runs) or the lookups that read the

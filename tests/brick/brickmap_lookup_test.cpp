@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_lookup_test.cpp
 /// BrickMap::lookup against a straightforward reference: the texture3d rules
 /// of docs/bkm-format.md written out plainly over bricks read with

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_test.cpp
 /// Brick maps: building from clouds, pruning against -maxerror, the 7
 /// normal-direction trees, texture3d lookups (levels, filter radius,

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Check helpers for CLI tests that run every check and report all failures
 # (sourced after lib.sh). Call finish_checks NAME at the end.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file did_you_mean_test.cpp
 /// The hints of command-line errors: an unknown option gets the closest
 /// option its tool's usage text lists, an unknown material the closest preset.

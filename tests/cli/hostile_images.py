@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Writes small hostile image files for the CLI tests (nothing is committed):
 headers that declare huge images, tiny tiles, corrupt and truncated data.
 

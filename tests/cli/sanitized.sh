@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Runs one CLI test script in the sanitizer build (SSS_SANITIZE=ON; CTest uses
 # this wrapper there, docs/testing.md): any AddressSanitizer, LeakSanitizer or
 # UndefinedBehaviorSanitizer report of a tool the script starts fails the test,

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Shared helpers of the CLI tests that signal a running tool
 # (test_interrupt.sh, test_kill.sh; sourced after lib.sh and checks.sh).
 # Needs $work (a scratch folder) and $case_timeout (seconds one tool run may

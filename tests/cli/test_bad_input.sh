@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of bad input files for every tool that reads .ptc, .ply, .bkm or
 # RIB files (ptinfo, ptfilter, brickmake, brickinfo, ptview, render, ptbake):
 # truncated, bit-flipped, NaN and huge-count files each give exit status 1, a

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of brick maps under hostile input (issue 15): brickinfo reads and
 # checks the whole map before it reports, so a changed byte in the header,
 # tables or any brick is exit 1 with one ERROR line naming the file, the

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # A Blobby's repelling ground plane (opcode 1003) through ptbake and render:
 # a depth map of a wall at z = 5 (a zfile render), a blob whose surface
 # reaches z = 5.15 on its own stays in front of the wall with the repeller

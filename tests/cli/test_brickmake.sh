@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of brickmake and brickinfo: PRMan command lines, the report, the
 # map's values at the input points (brickinfo -lookup -compare), -maxerror
 # against file size, pictures, -newer, frame patterns, channels, thread

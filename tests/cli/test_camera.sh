@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of render's camera and display options: -p, -p:N, -t:N; PNG
 # quantisation (round(255 v) without dither, within one step with it, the
 # same bytes for every thread count); DepthOfField, PixelFilter, Exposure and

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # -check, the dry parse every tool shares (docs/cli-conventions.md): each
 # tool accepts a good command line whose files do not exist (exit 0, nothing
 # printed, nothing written; frame patterns with and without -frame), refuses

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of point-cloud memory bombs (issue 15): tiny gzip .ptc and .ply
 # files whose headers claim about 2^31 points (tests/data/hostile/clouds,
 # made by make_clouds.py) make ptinfo, ptfilter and brickmake fail at once

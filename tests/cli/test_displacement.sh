@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of displacement shaders: a Displace-style shader (noise along N,
 # N = calculatenormal(P)) compiled on demand from the RIB's folder, through
 # ptbake (the baked points move off the sphere) and render (exit 0, an image);

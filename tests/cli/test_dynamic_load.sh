@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Procedural "DynamicLoad" through render and ptbake: a DSO written in C
 # against sss/scene/ri.h alone (tests/scene/procedural_dso.c, built by the
 # tests) and one compiled here the way a user compiles theirs, found along the

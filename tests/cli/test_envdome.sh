@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of envdome: help, the procedural sky, bad probes (exit 1, no
 # output), bad options (exit 2), and a dome the renderer reads: a sphere lit
 # by a sky whose sun is at +x is brighter on its +x side.

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # What the tools say when a command line or an input is wrong
 # (docs/cli-conventions.md, "Messages"): an unknown option gets the closest
 # option the tool's --help lists ("did you mean -material?"), an unknown

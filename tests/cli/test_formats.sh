@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of the formats other tools read: the display colours of .ply clouds
 # (uchar red/green/blue next to the float channels), read by CloudCompare and
 # MeshLab when they are installed, and OpenVDB output (brickmake out.vdb)

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of hostile geometry, cameras and rays (issue 15): render and ptbake
 # on the inputs of tests/data/hostile/geometry and on generated ones. Each
 # refused input ends within seconds with exit 1, a first ERROR line naming

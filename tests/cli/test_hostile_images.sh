@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of hostile images read by the tools (docs/limits.md, "Images
 # read"): textures, environment maps and envdome probes whose headers declare
 # huge images or tiny tiles, damaged and truncated PNG/OpenEXR/TIFF files

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test: every name a tool writes is one it can read back, and what the
 # tools say about hostile names stays one readable line. A file name with a
 # NUL (RSL's "\0", a RIB's Display) is refused instead of cut at the NUL; a

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of image writes on a full disk (docs/cli-conventions.md, "Outputs";
 # docs/images.md): every tool that writes an image (render's PNG, JPEG, TIFF
 # and OpenEXR, ptview's PNG and OpenEXR, brickinfo -picture, envdome -sky,

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of interrupted jobs (docs/cli-conventions.md, "Interrupted jobs"):
 # SIGTERM or SIGINT while a tool writes its output leaves the previous file,
 # if any, byte-identical (or no file at all), removes the temporary and ends

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of killed jobs, every tool that writes (docs/cli-conventions.md,
 # "Interrupted jobs"):
 #  - SIGTERM while shader and envdome write (the other tools:

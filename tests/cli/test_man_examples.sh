@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Every command line in the EXAMPLES of the man pages (man/*.1) runs and
 # exits 0: the pages are run in pipeline order (ptsynth, ptbake, ptfilter,
 # brickmake, ... ssprofile) in a copy of the bundled teapot scene, where each

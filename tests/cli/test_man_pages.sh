@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # The hand-written man pages (man/*.1) against the tools: one page per
 # installed tool and no other; every option a tool's --help lists (sss-farm:
 # its commands' too) appears in its page; every page has the sections a user

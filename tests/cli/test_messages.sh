@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of what the tools say about hostile scenes (issue 15): every error
 # is one "<tool> ERROR:" line naming the file and line (control bytes of
 # echoed input escaped, long echoes cut), a shader that does not compile is

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Motion blur (RIB MotionBegin/MotionEnd and Shutter) through render and
 # ptbake: a sphere moving across the frame covers each point for the share of
 # the shutter it spends there, a moving camera gives the same image as the

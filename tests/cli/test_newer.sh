@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of -newer 1 in ptbake, ptfilter, brickmake and render: an
 # up-to-date job does nothing (exit 0, outputs untouched, one line saying so);
 # a changed input (the RIB, an archive it reads, a cloud, a brick map a shader

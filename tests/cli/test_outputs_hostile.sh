@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of hostile outputs (issue 15; docs/cli-conventions.md, "Outputs"),
 # with the minimal inputs of tests/data/hostile/outputs:
 #  - outputs over inputs: a render Display or -o, a ptbake bake file or -o,

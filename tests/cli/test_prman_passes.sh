@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of RenderMan passes run as published: a bake RIB rendered bakes the
 # clouds ptbake bakes; prman's thread spellings; the null and framebuffer
 # displays; AOVs that are the user's; PRMan's leniency, loudly (unknown

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # The terminal progress line (sss/util/progress.h, docs/cli-conventions.md):
 # with stderr on a terminal (a pseudo-terminal from script(1)) a long stage
 # shows one line rewritten in place with the stage, percent, rate and time

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of ptbake: the bundled scenes bake, areas and values are right,
 # ptbake | ptfilter end to end, frame patterns, -o, progress, exit codes,
 # error lines, atomic output, thread independence.

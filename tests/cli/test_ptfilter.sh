@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of ptfilter -ssdiffusion: output, progress, exit codes, error lines,
 # atomic and in-place output, merging, thread independence, .ply output.
 # Needs SSS_BIN_DIR (the folder with ptfilter, ptsynth and ptinfo).

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of ptfilter's instruction-set paths (-isa, SSS_ISA): every path this
 # CPU has writes the same bytes; -progress 1 names the path that ran; unknown
 # names are usage errors (exit 2) and nothing is written.

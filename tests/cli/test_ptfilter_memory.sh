@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of ptfilter -ssdiffusion's memory, without timing anything: the
 # peak resident memory ptfilter reports with -progress 2 (getrusage) grows by
 # at most BYTES_PER_NODE per octree node and MAX_BYTES_PER_POINT per point

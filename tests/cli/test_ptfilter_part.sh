@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of ptfilter -part K/N and -merge: the merged cloud is byte-identical
 # to a single run with the same options, for several N, thread counts, output
 # formats and options; every bad part set is refused with one ERROR line and

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ptinfo on real files: report content, exit codes, error lines.
 # Needs SSS_BIN_DIR (the build's bin folder) and SSS_TEST_DATA_DIR (tests/data).
 set -euo pipefail

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of ptsynth: output, point counts, exit codes, error lines, atomic output.
 # Needs SSS_BIN_DIR (the folder with the built executables).
 set -euo pipefail

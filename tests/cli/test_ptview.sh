@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ptview on real clouds (ptsynth, ptfilter, an ASCII .ply with negative
 # values): image sizes, pixel values (read back with oiiotool), contact
 # sheets, false colour, the same bytes at any -threads, exit codes and error

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ptview writing its picture to standard output (`ptview in.ptc /dev/stdout >
 # x.png`, `ptview in.ptc - | ...`, `-o -`): the stream holds a valid PNG and
 # nothing else, byte for byte the picture a named .png gets; the report and

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of the ray-traced shadeops on bad input (issue 14): a missing or
 # corrupt environment map is an error naming the file (ptbake and render, no
 # output written); two mirrors that trace each other with no useful depth

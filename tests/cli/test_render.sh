@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of render: outputs and their channels, progress lines, exit codes,
 # error lines, atomic output, frame patterns, thread independence.
 # Needs SSS_BIN_DIR (the folder with ptbake, ptfilter, brickmake, render).

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # The RIB that users' scenes bring: gzip-compressed scenes and archives, a
 # scene on standard input, and the RISpec requests render and ptbake carry
 # out (each renders a non-empty image with exit 0 and no warning), or refuse

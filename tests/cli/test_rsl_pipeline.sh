@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of RSL shaders in the pipeline: a user's own bake shader (any
 # name, compiled on demand from the RIB's folder), a surface shader whose
 # output variables become AOVs, a compiled .slo found through

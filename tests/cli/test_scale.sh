@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Scene-scale invariance: the same small scene at scales s = 1e-6 ... 1e6
 # (geometry, camera and lights all scaled by s; ptfilter's -unitlength, scene
 # units per mm, times s) runs through the whole chain ptbake -> ptfilter

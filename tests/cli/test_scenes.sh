@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # End-to-end test of the bundled scenes: every scenes/*/run script in quick mode
 # (SSS_QUICK=1) into a scratch folder, ptbake -> ptfilter -> brickmake -> render
 # as a user types them. Checks that the images exist and are readable, and that

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # shader (the RSL compiler) on real files: .slo named after the shader, -o,
 # -I/-D through the preprocessor, error lines with file:line:column, exit codes.
 # Needs SSS_BIN_DIR (the build's bin folder).

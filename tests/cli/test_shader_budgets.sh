@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Hostile shaders through the real tools (docs/limits.md, "The limits"): a
 # runaway loop nest, string doubling, array growth, a bake3d flood and a
 # bake3d file per iteration, a regular-expression bomb and an invalid regular

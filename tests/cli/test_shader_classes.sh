@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # RSL 2.0 shader classes through the real tools: `shader` compiles classes
 # (surface, staged lighting, light, displacement and surface, co-shader),
 # sloinfo lists them under the type they run as; render draws a lit sphere

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Imager and volume shaders through the real tools: a lit sphere rendered
 # with the standard `background` imager (empty pixels get the colour and
 # alpha 1, the sphere keeps its colour, before Exposure, AOVs untouched),

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of shading at the ShadingRate (docs/render.md, "Shading rate"):
 # render shades each lattice point of the diced surfaces once, whatever the
 # pixel samples, and every sample that hits it takes its values. Checks:

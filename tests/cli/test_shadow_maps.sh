@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # Depth-map shadows the PRMan way: a shadow pass (Display "zfile", then
 # MakeShadow) and a beauty pass whose shadowspot reads the map, in one RIB of
 # two frames rendered frame by frame; a "shadow" display read directly; the

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # sloinfo on shaders compiled by `shader`: the type and name, each
 # parameter's storage class, type, array length, output flag and default in
 # PRMan's layout and as JSON; a computed default; several files; what is

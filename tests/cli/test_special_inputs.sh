@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of inputs that are not regular files and files that are not
 # scenes (issue 15, first part): every tool refuses a directory, a FIFO and a
 # character device as an input with one ERROR line that says what it is,

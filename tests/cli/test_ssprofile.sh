@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ssprofile: the profiles against the Monte-Carlo walk (numbers that fail when
 # a profile or the walk goes wrong), its outputs, the table writer, bad
 # options. Needs SSS_BIN_DIR (the build's bin folder).

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI stability test: ptfilter -ssdiffusion on degenerate clouds (10 000
 # identical points, points on a line, a single point, an empty cloud, zero
 # areas, mixed-sign irradiance), every profile, constant and per-point

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # CLI test of the standard-output policy (docs/cli-conventions.md, "Standard
 # output"): a write error on stdout is a failure, exit 1 with
 # "<tool> ERROR: cannot write to standard output: <reason>", for every tool

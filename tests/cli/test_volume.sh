@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ptfilter -volume 1 and -blocker on real files: a thin marble slab gives off
 # no more light than entered (the surface profile alone gives more), a slab of
 # skin transmits more blue under straight light than under diffuse light

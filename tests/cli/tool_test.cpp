@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file tool_test.cpp
 /// Tests of the command-line layer (sss/cli): option scanning, run_tool's
 /// error handling and exit codes, --version and the -newer test.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file cloud_part_test.cpp
 /// Part files (.ptpart) and their join: round trips, the merge in any order
 /// equal to the whole cloud, and every damaged, missing, repeated or foreign

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file cloud_texture3d_test.cpp
 /// CloudTexture3d, texture3d on a cloud as the renderer reads it: the nearest
 /// points' average near the data, a miss far from it (however large the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ply_color_test.cpp
 /// The display colour of .ply clouds: uchar red/green/blue made from the
 /// `_ssdiffusion` (or first color) channel, clamped and sRGB-encoded, next to

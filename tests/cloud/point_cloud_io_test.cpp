@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud_io_test.cpp
 /// PointCloud container operations and the .ptc / .ply readers and writers:
 /// round trips, the byte layout (pinned by hand-crafted files, not by our own

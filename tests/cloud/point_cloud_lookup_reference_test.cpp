@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud_lookup_reference_test.cpp
 /// PointCloudLookup against a brute-force reference: the k + 1 = 9 nearest
 /// qualifying points by sorting every point, weighted as documented

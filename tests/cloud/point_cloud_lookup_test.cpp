@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud_lookup_test.cpp
 /// PointCloudLookup, the reference brick maps are checked against: exact
 /// constants, linear fields between samples, the two sides of a thin plate,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud_stream_test.cpp
 /// PointCloudReader and PointCloudWriter: a cloud read or written a chunk at
 /// a time is the cloud read_point_cloud() returns and the file

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file synthetic_test.cpp
 /// Tests of the synthetic point clouds (sss/cloud/synthetic.h).
 

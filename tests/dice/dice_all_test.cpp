@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_all_test.cpp
 /// Tests of dice_all (sss/dice/dice.h): the same surfaces as dice_primitive
 /// whatever the thread count, empty surfaces for primitives not requested,

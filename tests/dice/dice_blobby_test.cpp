@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_blobby_test.cpp
 /// Tests of Blobby (blobby.h, dice_blobby.cpp): a lone ellipsoid is the
 /// sphere at the analytic iso-radius, closed, of area 4 pi r^2; segments

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_curves_test.cpp
 /// Tests of Points and Curves (dice_curves.cpp): disks and ribbons of the
 /// given width facing the camera (or oriented by "N"), their exact areas,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_estimate_test.cpp
 /// Tests of the dicing estimates and guards (sss/dice/dice.h, issue 15):
 /// estimate_primitive within a factor of two of what dice_primitive makes,

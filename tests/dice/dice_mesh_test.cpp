@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_mesh_test.cpp
 /// Tests of the dicing of polygons and Catmull–Clark subdivision meshes
 /// (sss/dice.h, src/sss/dice_mesh.cpp): exact areas, normal orientation,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_motion_test.cpp
 /// Tests of dicing a moving primitive (dice_moving, DiceJournal): one set of
 /// triangles for every time step, the vertices of each step on the surface

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_nurbs_test.cpp
 /// Tests of NuPatch and TrimCurve (dice_nurbs.cpp): a NuPatch with Bezier
 /// knots is the bicubic patch, a rational quadratic NuPatch is an exact

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_parametric_test.cpp
 /// Tests of the dicing of parametric primitives (sss/dice.h): quadric areas
 /// against closed forms and independent quadrature, normal orientation under

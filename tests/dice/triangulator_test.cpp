@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file triangulator_test.cpp
 /// Tests of the polygon triangulator (src/sss/dice/triangulator.h): for
 /// simple polygons, with and without holes, small (linear scans) and large

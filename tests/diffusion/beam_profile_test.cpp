@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file beam_profile_test.cpp
 /// The sampled profiles (photon beam diffusion and the Monte-Carlo table):
 /// their single-scattering part against an independent quadrature, the

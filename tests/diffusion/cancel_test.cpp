@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file cancel_test.cpp
 /// A program embedding the library cancels a diffusion run from its progress
 /// callback by returning false, without throwing anything itself.

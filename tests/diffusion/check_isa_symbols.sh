@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # The per-path block kernel objects (src/sss/diffusion/isa/block_kernels.inl)
 # must define nothing but their own namespace's symbols: an inline function or
 # template instance emitted there (a weak symbol) would carry AVX2/AVX-512

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file diffusion_memory_test.cpp
 /// Tests of the low-memory paths: the consuming evaluation (the problem's
 /// geometry freed once the octree holds it, the result written over the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file diffusion_subset_test.cpp
 /// Tests of evaluate_diffusion_at, evaluate_diffusion_part and the tolerance
 /// reference: any subset of the receivers (or any part of a split run),

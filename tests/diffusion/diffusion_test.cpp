@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file diffusion_test.cpp
 /// Tests of the diffusion evaluation (sss/diffusion.h) and of the
 /// ptfilter -ssdiffusion job (sss/ssdiffusion.h): the flat-plane energy

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file material_profile_test.cpp
 /// Tests of the material table, the albedo/dmfp <-> coefficient inversion,
 /// F_dr, and the three radial profiles (classic dipole, better dipole,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file slab_transport_test.cpp
 /// The slab transport solution against a random walk through the same slab
 /// (written here, one dimension, independent of the solver), for normal and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file stability_test.cpp
 /// Numerical stability suite (issue 7): every hard case of
 /// docs/algorithms.md "Hard cases and what the tests assert", for every

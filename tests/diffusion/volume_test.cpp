@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file volume_test.cpp
 /// The volume diffusion (ptfilter -volume 1, -blocker): the light it lets
 /// out never exceeds what entered and its fluxes balance, a shape thick

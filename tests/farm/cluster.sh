@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=bash
 # A throw-away single-node Slurm cluster for tests (sourced; bash).
 #

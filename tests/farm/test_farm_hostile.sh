@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # sss-farm against hostile input (any user, seconds, stub tools only): many
 # malformed specs (wrong types, huge numbers, deep nesting, non-UTF-8, NULs,
 # missing keys, names through '..'), specs that are FIFOs or links out of the

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # sss-farm for studios, against fake Slurm commands (any user, seconds):
 #   - frames: studio numbers (1001-1003), steps (1-9:2), lists (1,5,10-20:5):
 #     the array is 0..n-1 whatever the numbers, each task maps its index back

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # sss-farm on a real Slurm: brings up a throw-away single-node cluster
 # (munged, slurmctld, slurmd; everything in a temp folder, tests/farm/cluster.sh)
 # and checks, through sss-farm:

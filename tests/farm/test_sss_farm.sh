@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # sss-farm without a cluster (any user, seconds): the command line and its
 # errors, the dry run, `submit` against stub sbatch/squeue/scontrol commands
 # (the spec it writes, the sbatch options, the chaining of the job ids, a

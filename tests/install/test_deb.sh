@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # The Debian packages as a farm node gets them (docs/install.md): cpack makes
 # sss, libsss<major.minor>, sss-dev and (with the Python module) python3-sss
 # from the build tree; lintian reports no error on any of them; their

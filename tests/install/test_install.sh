@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # `cmake --install` of the build tree, moved after installing (the tree is
 # relocatable), used as a studio would (docs/install.md):
 #   - the installed tools run with nothing of the build tree: ptbake finds the

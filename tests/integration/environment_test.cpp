@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file environment_test.cpp
 /// environment() on lat-long maps made by maketx --envlatl: lookups along
 /// pixel-centre directions return those pixels, and the orientation agrees

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file name_table_test.cpp
 /// Tests of NameTable (sss/util/name_table.h) and of the tables built on it.
 

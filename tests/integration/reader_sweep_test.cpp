@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Bad-input sweeps over the four readers (.ptc plain and gzip, .ply, .bkm,
 // RIB): truncation at every offset (or a dense sample), seeded single-bit
 // flips, huge header counts under a tight address-space limit, wrong magic and

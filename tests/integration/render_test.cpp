@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file render_test.cpp
 /// Tests of the renderer (sss/render.h) and of light_samples (sss/lights.h):
 /// a matte pixel against its hand-computed value, camera framing

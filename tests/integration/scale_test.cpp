@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Scene-scale invariance at library level (docs/scene.md, "Scene scale"): the
 // same scene scaled by s -- geometry, camera and lights -- bakes to points at
 // s x the positions with the same irradiance, diffuses (unitlength x s) to the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file light_dome_test.cpp
 /// Tests of the median-cut light dome (sss/light/light_dome.h): energy
 /// conservation, light counts, a single bright pixel found, a constant map

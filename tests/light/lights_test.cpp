@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file lights_test.cpp
 /// Tests of the ray tracer (sss/ray_tracer.h), the standard light shaders and
 /// irradiance (sss/lights.h) and noise3(): hand-computed irradiance for every

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file shadow_map_test.cpp
 /// Tests of depth-map shadow lookups (sss/light/shadow_map.h) on hand-made
 /// maps: points in front of the stored depth are lit, behind it shadowed,

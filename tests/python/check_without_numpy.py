@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The sss package without numpy (CTest python.no_numpy and
 python.second.no_numpy; docs/python.md): run by tests/python/run_interpreter.py
 with -I -S, so that no site-packages (and so no numpy) is on the path, and

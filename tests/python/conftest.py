@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Fixtures of the sss Python module's tests (docs/python.md, docs/testing.md).
 
 CTest runs them with PYTHONPATH at the build's python/ folder (the built

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Runs the Python tests under a given interpreter (python/CMakeLists.txt):
 
     run_interpreter.py --python EXE --module-dir DIR [--borrow-from MAIN] pytest FILE

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Brick maps from Python: building (brickmake) and texture3d lookups."""
 
 import numpy as np

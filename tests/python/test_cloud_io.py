@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Reading and writing .ptc/.ply clouds as dicts of numpy arrays."""
 
 import gzip

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """sss.ssdiffusion / sss.ptfilter against the ptfilter executable."""
 
 import threading

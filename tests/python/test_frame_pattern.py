@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The frame-pattern helpers (sss/util/frame_pattern.h)."""
 
 import pytest

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The module as a Python package (docs/python.md): a namespace of the API
 only, a concise help(), exceptions that are the builtins a caller catches
 (errno and filename set, picklable), unknown extensions refused, single

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """sss.PointCloudLookup, texture3d on a point cloud (docs/python.md): the
 values and "found" flags of the renderer's own call
 (sss::TextureLibrary::texture3d, run as tests/python/texture3d_reference.cpp)

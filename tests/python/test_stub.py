@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The typing stub (python/sss/__init__.pyi) against the module: every public
 name of the module is in the stub and every name of the stub is in the
 module; the same for the public members of its classes; functions and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file texture3d_reference.cpp
 /// The renderer's texture3d, for the Python module's tests to compare with
 /// (tests/python/test_point_cloud_lookup.py):

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file camera_test.cpp
 /// Tests of the renderer's camera features (docs/render.md): the pixel
 /// filters against their RISpec formulas and on rendered images (a constant

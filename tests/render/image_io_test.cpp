@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file image_io_test.cpp
 /// Image output: Display resolution (types, extensions, modes, AOV layers,
 /// pixel types), OpenEXR round trips with layers and metadata, PNG/TIFF quantised

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file arrays_test.cpp
 /// The compiler's PRMan 13.5+ additions: fixed-length array parameters of
 /// functions (`float mx[16]`), resizable arrays (`float a[]`, arraylength,

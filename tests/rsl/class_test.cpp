@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file class_test.cpp
 /// RSL 2.0 shader classes in the compiler (codegen_class.cpp,
 /// codegen_coshader.cpp): the kind a class runs as, its methods and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file compiler_test.cpp
 /// The RSL front end (compiler.h): every construct of shading.md section 2
 /// parses and type-checks into the Program IR (program.h); errors carry

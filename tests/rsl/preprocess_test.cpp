@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file preprocess_test.cpp
 /// The shader preprocessor (sss/rsl/preprocess.h): every directive,
 /// macros, #if arithmetic, includes, the line map and error locations.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Helpers of the RSL compiler tests: source text compiled without the
 // preprocessor (one output line per input line of "test.sl").

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file slo_info_test.cpp
 /// sloinfo's descriptions (slo_info.h): PRMan's layout line by line, and
 /// JSON whose strings are escaped (quotes, backslashes, control bytes).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file obj_import_test.cpp
 /// Tests of the Wavefront OBJ import through its own interface
 /// (src/sss/scene/obj_import.h); rib_test.cpp covers it through ReadArchive.

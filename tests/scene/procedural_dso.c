@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* A DynamicLoad procedural for the tests, in C as such DSOs are written:
  * compiled against sss/scene/ri.h alone. The first word of the data string
  * picks what Subdivide makes:

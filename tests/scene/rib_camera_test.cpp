@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_camera_test.cpp
 /// The RIB reader's camera and display options: DepthOfField, PixelFilter,
 /// Exposure and Quantize, their defaults and their errors (file:line).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_dynamic_load_test.cpp
 /// Tests of Procedural "DynamicLoad" (rib_dynamic_load.cpp) and the Ri C
 /// binding (ri_api.cpp, ri_geometry.cpp) with a DSO written in C

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_motion_test.cpp
 /// Tests of motion blur in the RIB (rib_motion.cpp): Shutter, transformation
 /// blocks (a moving CTM, composed with later transformations and with

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_subdiv_tags_test.cpp
 /// Tests of subdivision mesh tags in the RIB (rib_subdiv_tags.cpp): the tags
 /// the dicer carries out are kept, the face-varying ones accepted, others an

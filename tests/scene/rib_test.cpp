@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_test.cpp
 /// Tests of the scene layer basics (sss/scene.h) and the RIB reader (sss/rib.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file scene_names_test.cpp
 /// Tests of the scene layer's name tables (sss/scene/scene.h): the RIB
 /// spellings of parameter types, storage classes and primitive kinds.

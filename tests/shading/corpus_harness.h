@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The RSL corpus harness (corpus_test.cpp, and the texture cases of
 // tests/binding/engine_textures_test.cpp): corpus files compiled from disk,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file corpus_test.cpp
 /// The RSL acceptance corpus (tests/shading/corpus/*.sl, docs/shading.md
 /// "Test corpus"): every construct and built-in of the language, each

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_arrays_test.cpp
 /// Arrays in the shading engine: resizable arrays (push, pop, resize,
 /// reserve, arraylength; varying elements, masked pushes, the length limit,

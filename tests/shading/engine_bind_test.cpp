@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_bind_test.cpp
 /// Every overload of the built-in table (builtins.cpp) binds in the engine:
 /// programs calling each prototype are built by hand and bound.

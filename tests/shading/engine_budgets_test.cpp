@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_budgets_test.cpp
 /// The shading engine's budgets (docs/limits.md): operations per batch,
 /// string and resizable-array lengths, bake3d points and files per job,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_class_test.cpp
 /// RSL 2.0 shader classes in the shading engine: the pipelines (a class's
 /// surface method gives what the classic shader gives; prelighting,

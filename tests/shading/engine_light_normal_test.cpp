@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_light_normal_test.cpp
 /// A light shader's N global is the surface normal at Ps (PRMan's
 /// convention, which envlight's `illuminate(Ps + N)` relies on): the surface

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_lighting_test.cpp
 /// Tests of the shading engine's lighting (illuminance, illuminate, solar,
 /// ambient/diffuse/specular, categories, ray-traced shadows), derivatives

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_messages_test.cpp
 /// Message passing between a surface and its lights: lightsource() inside
 /// illuminance, surface() in a light shader, and illuminance's PRMan 13+

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_raytrace_test.cpp
 /// The ray-tracing shadeops of the engine (engine_raytrace.cpp) against a
 /// fake ShadingServices whose trace() is an analytic world: gather's sample

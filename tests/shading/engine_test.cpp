@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_test.cpp
 /// Tests of the shading engine's core (engine.h): binding, parameters,
 /// operators with promotions, control flow under varying masks, uniform and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Helpers of the shading engine tests: a ShadingServices that records what
 // shaders send, RSL compiled from text, and batches of points.

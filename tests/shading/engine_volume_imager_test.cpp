@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_volume_imager_test.cpp
 /// Volume and imager shaders in the shading engine: they start from the Ci,
 /// Oi (and alpha) of their batch, write them back, leave alone what they do

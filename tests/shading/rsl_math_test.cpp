@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rsl_math_test.cpp
 /// The pure built-in functions of RSL (src/sss/shading/rsl_math.h): noise
 /// family, colour spaces, splines, format() and match().

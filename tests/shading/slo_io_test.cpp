@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file slo_io_test.cpp
 /// The .slo format (program.h write_program / read_program): a round trip
 /// keeps every field; damaged files are ValueErrors naming file:line.

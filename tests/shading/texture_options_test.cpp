@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file texture_options_test.cpp
 /// The token-value options of RSL's texture, texture3d and bake3d calls, as
 /// the engine reads them (texture_services.h, texture_options.h).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file half_space_test.cpp
 /// The half-space random walk against values it must reproduce: total
 /// reflectance from Chandrasekhar's H-function (eta = 1), the closed-form

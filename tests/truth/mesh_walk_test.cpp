@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file mesh_walk_test.cpp
 /// The random walk inside triangle meshes: energy bookkeeping with and
 /// without an absorbing blocker, light leaving through a hole counted as

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file profile_accuracy_test.cpp
 /// The profiles against the walk: the comparison's arithmetic on a walk made
 /// of a profile's own fluxes, then real walks where the classic dipole must

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file volume_truth_test.cpp
 /// The volume diffusion (ptfilter -volume 1) against the project's random
 /// walk in the same geometry: a 2 mm marble slab lit on top, where the

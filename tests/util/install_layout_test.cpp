@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The tools' data folders beside the running executable (install_layout.h):
 // sss_tests runs from <build>/bin, so it sees the build tree's layout.
 #include <filesystem>

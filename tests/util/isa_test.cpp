@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the instruction-set choice (sss/util/isa.h).
 
 #include <gtest/gtest.h>

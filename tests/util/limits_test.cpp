@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the resource limits, the memory budget and the stages.
 
 #include <gtest/gtest.h>

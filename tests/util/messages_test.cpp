@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Messages: input echoed on one line, quoted and cut; warnings counted by
 // kind (a flood keeps a few strings); the standard output error state.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file outputs_test.cpp
 /// Tests of output handling in sss/util: AtomicOutput onto symbolic links,
 /// FIFOs and devices, stale temporaries of killed writers, OutputSet (all

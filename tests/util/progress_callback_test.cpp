@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file progress_callback_test.cpp
 /// sss::Progress::set_callback: what the Python module's progress callbacks
 /// and cancellation rest on.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file services_test.cpp
 /// Tests of the runtime services every stage uses (sss/util): thread counts,
 /// progress lines, atomic output files and their signal cleanup, the stopwatch,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file time_left_test.cpp
 /// The terminal progress line's time left (sss::TimeLeftEstimator): fed
 /// (elapsed, fraction) as a stage would feed it, without a clock or sleeping.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // UninitVector: a std::vector in every respect except that resize() leaves
 // trivial elements uninitialised (not observable here); what is observable
 // must still hold: values given are kept, elements built with arguments are

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file vdb_test.cpp
 /// OpenVDB output of brick maps: the grids read back against the map's own
 /// bricks (the coarser levels, sample for sample) and lookups (the main

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Unit tests for the view module: where a disc lands and how large it is,
 // the z-buffer, false colour, contact sheets, thread-count independence and
 // channel errors.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file bake.h
 /// The bake module owns ptbake's job: baking lit micropolygons into point

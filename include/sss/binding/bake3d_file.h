@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file bake3d_file.h
 /// Module binding: the file side of RSL's bake3d: the records shaders hand to

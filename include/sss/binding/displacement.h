@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file displacement.h
 /// Displacement shaders for the dicer: a Displacer gives each primitive with

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file scene_rays.h
 /// The scene as secondary rays see it (issue 14): the diced surfaces in

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file scene_shaders.h
 /// Module binding: a scene's shaders bound for a job (this file), secondary

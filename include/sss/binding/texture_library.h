@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file texture_library.h
 /// Module binding: the job's TextureServices (shading/texture_services.h),

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file brickmap.h
 /// Module brick: brick maps (build, .bkm format, cached lookups, brickinfo

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file brickmap_tools.h
 /// What the brickmake and brickinfo tools do beyond the brick-map core

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file brickmap_voxels.h
 /// A brick map's samples as voxels on the lattice of one depth, for volume

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file args.h
 /// RenderMan-style command-line scanning for the tools' mains.

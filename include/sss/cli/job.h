@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file job.h
 /// What every tool that runs a job shares: the -threads, -progress, -frame and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file options.h
 /// Option groups shared by several tools (and the Python module): materials,

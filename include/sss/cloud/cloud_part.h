@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file cloud_part.h
 /// Parts of a point cloud computed on different machines (ptfilter -part K/N)

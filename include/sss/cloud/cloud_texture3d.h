@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file cloud_texture3d.h
 /// texture3d on a point cloud, as the renderer looks a .ptc or .ply file up

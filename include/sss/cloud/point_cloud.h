@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file point_cloud.h
 /// Module cloud: point clouds in memory, .ptc/.ply I/O, channel statistics,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file point_cloud_io.h
 /// Reading and writing point clouds: Pixar .ptc (versions 0-2, plain or gzip)

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file point_cloud_lookup.h
 /// texture3d-style lookups directly in a point cloud (the renderer's fallback

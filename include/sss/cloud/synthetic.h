@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file synthetic.h
 /// Synthetic lit point clouds with known geometry: for the demo, tests and

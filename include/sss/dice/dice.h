@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file dice.h
 /// The dice module owns dicing: primitives of the scene layer become

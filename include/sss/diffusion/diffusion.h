@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file diffusion.h
 /// Subsurface diffusion over a point cloud: M_o(x_i) = sum_j R(|x_i - P_j|) A_j E_j,

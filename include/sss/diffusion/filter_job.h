@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file filter_job.h
 /// ptfilter's job as one library call, as maketx is one call of OpenImageIO:

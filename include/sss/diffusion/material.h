@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file material.h
 /// Subsurface materials: Jensen et al. 2001 measured table, the three

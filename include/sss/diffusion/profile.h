@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file profile.h
 /// Radial diffusion profiles R(r): diffuse reflectance per unit area at

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file slab_transport.h
 /// The light a plane slab of a reduced isotropic medium sends back and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file ssdiffusion.h
 /// The ptfilter -ssdiffusion job as one library call: channels in, material

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file volume.h
 /// Diffusion in the volume a point cloud encloses (ptfilter -volume 1): the

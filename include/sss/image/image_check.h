@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file image_check.h
 /// Image files checked before OpenImageIO reads them (textures, environment

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file image_file.h
 /// Module image: writing image files through OpenImageIO, for every module

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file light_dome.h
 /// Image-based lighting without ray-traced environment sampling: a lat-long

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file lights.h
 /// The light module owns lights, noise and the ray tracer that shadows use.

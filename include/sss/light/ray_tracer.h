@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file ray_tracer.h
 /// Ray tracing over the diced scene with Embree 3: occlusion (shadow) queries

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file shadow_map.h
 /// Module light: depth-map shadows. A ShadowMap is the depth a light's

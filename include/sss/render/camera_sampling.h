@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file camera_sampling.h
 /// The renderer's camera sampling (docs/render.md): the pixel

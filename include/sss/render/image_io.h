@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file image_io.h
 /// Multi-channel float images and their output through OpenImageIO /

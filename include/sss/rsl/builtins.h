@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: the built-in functions of RSL, each
 // overload as a prototype string. The compiler resolves calls against this

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file compiler.h
 /// The RSL compiler: preprocessed source -> checked, typed Programs

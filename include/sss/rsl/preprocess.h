@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file preprocess.h
 /// The C preprocessor subset RSL shaders rely on (PRMan's `shader` runs cpp

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file program.h
 /// Module rsl: the RenderMan Shading Language compiler, in phases as OSL's

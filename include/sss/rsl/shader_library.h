@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file shader_library.h
 /// Finding compiled shaders as PRMan does: `<name>.slo` along the shader

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file slo_info.h
 /// What `sloinfo` prints about a compiled shader (.slo): its type and name,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file blobby.h
 /// The program of a RISpec `Blobby` (implicit surface): its code array

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #ifndef SSS_SCENE_RI_H
 #define SSS_SCENE_RI_H
 /* \file ri.h

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file rib.h
 /// Reader for ASCII RenderMan RIB files into the scene layer (scene.h).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file scene.h
 /// The scene module owns the scene description (primitives, attributes,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file engine.h
 /// Module shading: the engine that runs compiled shaders (module rsl) over

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file texture_services.h
 /// Module shading: what the engine asks of textures. RSL's texture(),

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file half_space.h
 /// Module truth: the Monte-Carlo reference of light in a scattering medium,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file mesh_walk.h
 /// The Monte-Carlo random walk of light inside real geometry: the reduced

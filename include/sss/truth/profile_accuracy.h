@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file profile_accuracy.h
 /// The diffusion profiles held against the half-space random walk, and the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file profile_report.h
 /// A material's profiles against the random walk, channel by channel: what

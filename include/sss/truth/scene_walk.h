@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file scene_walk.h
 /// The random walk in a scene's own geometry (mesh_walk.h), lit by a baked

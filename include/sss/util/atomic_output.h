@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file atomic_output.h
 /// Output files written atomically, sets of outputs replaced all together,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file byte_io.h
 /// Buffered byte input with transparent gzip, buffered byte output (plain or

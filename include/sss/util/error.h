@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file error.h
 /// Module util: the runtime services every stage uses (errors, atomic output,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file frame_pattern.h
 /// Frame-number patterns in file names, shared by every tool's path

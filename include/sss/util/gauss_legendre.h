@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file gauss_legendre.h
 /// Gauss-Legendre quadrature rules, shared by the stages that integrate

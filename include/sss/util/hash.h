@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Small deterministic hashes shared by the library (sample patterns, noise
 // permutations, jitter, temporary file names).

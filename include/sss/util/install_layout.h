@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file install_layout.h
 /// Where the tools find their data relative to their own location, so that an

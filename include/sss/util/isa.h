@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file isa.h
 /// Instruction-set paths for the hot kernels. The tools are built for baseline

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file job_files.h
 /// What one job (one tool run) reads and writes, so that no output replaces

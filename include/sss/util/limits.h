@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file limits.h
 /// Resource limits as policy (docs/limits.md): the documented ceilings every

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file messages.h
 /// What the tools say (docs/cli-conventions.md): input echoed in messages

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file name_table.h
 /// Enum <-> name tables: one list of (value, name) pairs gives both the name

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file parse.h
 /// Number parsing and text formatting shared by the readers and the command line.

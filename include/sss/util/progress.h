@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file progress.h
 /// Progress of a job: ALF_PROGRESS lines for render farms, one updating line

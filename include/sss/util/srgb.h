@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file srgb.h
 /// The sRGB transfer curve, shared by the pictures (brickinfo, ptview) and the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file subprocess.h
 /// Running a helper program as a filter: what RiProcedural "RunProgram"

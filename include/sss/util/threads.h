@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file threads.h
 /// Thread counts: the cores a job may use (CPU affinity and cgroup quota

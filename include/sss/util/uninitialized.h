@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file uninitialized.h
 /// Vectors whose resize() leaves trivial elements uninitialised, for large

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file vdb.h
 /// Module vdb: OpenVDB files (.vdb): a brick map's channels written as grids

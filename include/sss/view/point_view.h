@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file point_view.h
 /// Module view: pictures of point clouds (the ptview tool, PRMan's ptviewer

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """sss_farm: the code of sss-farm (docs/farm.md), which submits the sss chain
 (ptbake -> ptfilter -> brickmake -> render) over a list of frames to Slurm,
 one job array per stage, and reports on it. Python 3 standard library only.

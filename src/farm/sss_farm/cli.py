@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The command line: the options of submit, task and status, their help (the
 man page), and main(), which maps every error to one line and an exit code."""
 

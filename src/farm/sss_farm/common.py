@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The program's name and version, its defaults and limits, its two errors
 (Failure: exit 1; Usage: exit 2) and the lines it prints."""
 

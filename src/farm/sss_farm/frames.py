@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """Frame numbers and patterns (the tools' rules, include/sss/util/frame_pattern.h):
 --frames lists, their compact form, and frame patterns expanded."""
 

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The calls to Slurm: sbatch's array limit, what squeue, scontrol and sacct
 say of a submission's jobs, and a task's requeue of itself. (sbatch and
 scancel themselves are run by `submit`.)"""

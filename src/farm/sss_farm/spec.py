@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The spec: DIR/.sss-farm/NAME.json (and the task status files and logs
 beside it): its paths, reading it whole and checking it, writing it
 atomically, its stages."""

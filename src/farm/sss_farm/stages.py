@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """What a stage reads and writes (for the split decision and for `status`),
 and the tool's command a stage runs for a frame (for `task` and for the
 -check at submission)."""

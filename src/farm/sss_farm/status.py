@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """status: what happened to every frame of the latest submission, from Slurm,
 the tasks' status files and the outputs on disk; as text or JSON, with the
 exit code."""

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """submit: the stages and resources from the command line, the tools' -check,
 the frames that need work, and one sbatch array per stage."""
 

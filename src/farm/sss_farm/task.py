@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """task: what one array task runs: its frame, its log and status file, the
 tool (or a split filter's part or merge), signals passed on, and a failed
 attempt requeued."""

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file bake.cpp
 /// The ptbake job (bake.h): bake_clouds runs its phases in order (spacing,
 /// lights, jobs, dicing, spacing checks, occluders, lighting, point clouds),

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The file side of bake3d: records merged into point clouds and written.
 
 #include "sss/binding/bake3d_file.h"

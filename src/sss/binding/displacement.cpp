@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file displacement.cpp
 /// Displacement shaders run for the dicer (displacement.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file make_texture.cpp
 /// TextureLibrary::make_texture, make_shadow and make_cube_environment:
 /// RenderMan's texture-making requests through the OpenImageIO plugin,

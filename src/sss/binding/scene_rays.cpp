@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file scene_rays.cpp
 /// Secondary rays over the diced scene (scene_rays.h): tracers per kind of
 /// ray, hit finding, and the shading of hits by their own surface shaders in

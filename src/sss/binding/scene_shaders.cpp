@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file scene_shaders.cpp
 /// Binding a scene's Surface, Displacement, LightSource, Atmosphere,
 /// Interior, Exterior and Imager calls to compiled shaders (scene_shaders.h).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file shadow_library.cpp
 /// TextureLibrary's depth maps: zfiles and shadow maps read once through the
 /// OpenImageIO plugin (texture2d_backend.h), and RSL's shadow() on them

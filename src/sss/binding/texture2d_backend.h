@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the binding module (TextureLibrary and its plugin): the OpenImageIO side of
 // 2-D textures and environment maps, built as a plugin (libsss_texture2d.so, beside the

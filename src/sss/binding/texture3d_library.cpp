@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The texture library's 3-D side: texture3d on brick maps and point clouds,
 // as RenderMan looks them up: brick maps blend their levels by the filter
 // radius, point clouds average their nearest points (sss::CloudTexture3d).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The texture library: 2-D textures and
 // environment maps forwarded to the OpenImageIO plugin (texture2d_backend.h,
 // plugin/texture2d_oiio.cpp), loaded on first use. The 3-D side (texture3d)

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to binding's texture library (texture_library.cpp,
 // texture3d_library.cpp): the files it has opened, each once.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_build.cpp
 /// brickmake's core: splats the points of one or more clouds into per-depth
 /// sample lattices of 7 normal-direction trees, prunes bricks that their

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_file.cpp
 /// The .bkm byte layout (docs/bkm-format.md): encoding of everything before
 /// the bricks for the writer, and the reader's validation of the header,

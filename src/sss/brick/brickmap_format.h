@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file brickmap_format.h
 /// Internal: the .bkm byte layout of docs/bkm-format.md, shared by the writer

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_lookup.cpp
 /// BrickMap: opens a .bkm file (header and node tables validated at once),
 /// loads bricks on demand into a bounded cache and answers texture3d-style

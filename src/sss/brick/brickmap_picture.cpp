@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_picture.cpp
 /// brickinfo's pictures of a brick map: levels seen down an axis and slices
 /// of lookups, auto-exposed and written as 8-bit sRGB PNG through

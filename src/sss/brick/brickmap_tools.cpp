@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_tools.cpp
 /// The work of the brickmake and brickinfo tools around the brick-map core:
 /// building from files, the -newer check, brickinfo's report and evaluating a

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file brickmap_voxels.cpp
 /// A brick map's samples on the lattice of one depth (brickmap_voxels.h), for
 /// the grids of a .vdb file.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file args.cpp
 /// ArgScanner: options with a fixed number of values, positional words.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file job.cpp
 /// The job options (-threads, -progress, -frame, -newer) and Job.
 

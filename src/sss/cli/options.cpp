@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file options.cpp
 /// Shared option groups: materials and point-cloud output.
 

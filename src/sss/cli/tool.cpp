@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file tool.cpp
 /// Shared command-line behaviour: --version, error reporting and exit codes.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file cloud_part.cpp
 /// The .ptpart file: a little-endian header (counts, fingerprint, the whole
 /// cloud's header and channel table, CRC-32), then the part's arrays and their

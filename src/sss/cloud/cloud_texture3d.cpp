@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file cloud_texture3d.cpp
 /// CloudTexture3d: texture3d on a point cloud as the renderer reads it. The
 /// nearest-point average always finds something, so whether a query is near

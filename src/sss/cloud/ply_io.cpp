@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ply_io.cpp
 /// PLY point clouds. We write binary little-endian PLY with one `vertex`
 /// element (x y z nx ny nz radius, the display colour as uchar red green

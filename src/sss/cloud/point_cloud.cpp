@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud.cpp
 /// PointCloud container operations and channel type helpers.
 

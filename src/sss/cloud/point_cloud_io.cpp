@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud_io.cpp
 /// Format dispatch, write-time checks, channel statistics and the ptinfo
 /// report. The formats themselves live in ptc_io.cpp and ply_io.cpp, the byte

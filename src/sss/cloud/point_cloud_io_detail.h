@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file point_cloud_io_detail.h
 /// Internal helpers shared by the .ptc and .ply readers and writers: the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_cloud_lookup.cpp
 /// PointCloudLookup: texture3d-like lookups straight on a point cloud (the
 /// renderer's texture3d on .ptc/.ply files, and the reference brick maps are

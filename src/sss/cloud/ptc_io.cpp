@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ptc_io.cpp
 /// Pixar .ptc point clouds, versions 0-2, plain or gzip. The layout follows
 /// docs/file-formats.md: a little-endian binary header whose field offsets

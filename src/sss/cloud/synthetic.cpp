@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file synthetic.cpp
 /// Synthetic lit point clouds (sphere, plane, box) with exact per-point areas.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice.cpp
 /// The dispatcher: dice_primitive hands each primitive to the dicer of its
 /// family (dice_quadric.cpp, dice_patch.cpp, dice_polygon.cpp,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_blobby.cpp
 /// Blobby implicit surfaces (RISpec 3.2 5.6): the field of the decoded
 /// program (blobby.h) is polygonized by surface nets on a regular grid in

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_common.cpp
 /// What every dicer shares: how errors name a primitive, the normal rule and
 /// the dicing rate (DiceControl::edge_length_at).

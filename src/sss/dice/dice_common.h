@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file dice_common.h
 /// Internal: what every dicer of the module shares (how errors name a

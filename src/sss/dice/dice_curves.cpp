@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_curves.cpp
 /// Points and Curves, as RenderMan draws them: a point is a round disk of
 /// its width and a curve a flat ribbon of its width, both facing the camera

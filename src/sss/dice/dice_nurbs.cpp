@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_nurbs.cpp
 /// NuPatch: non-uniform rational B-spline patches of any order, one face of
 /// the REYES dicer per non-empty knot span within the patch's parameter

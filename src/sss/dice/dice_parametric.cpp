@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_parametric.cpp
 /// The REYES dicer of parametric surfaces, shared by quadrics and patches.
 ///

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file dice_parametric.h
 /// Internal: the REYES dicer of parametric surfaces (dice_parametric.cpp),

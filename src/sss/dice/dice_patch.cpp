@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_patch.cpp
 /// Patch ("bilinear" and "bicubic" in any basis), PatchMesh (periodic or
 /// not) and Geometry "teapot" (32 bicubic Bezier patches, teapot.cpp) as

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_polygon.cpp
 /// Dicing of polygons (Polygon, GeneralPolygon, PointsPolygons,
 /// PointsGeneralPolygons).

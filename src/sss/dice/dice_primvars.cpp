@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_primvars.cpp
 /// Primitive variables of the parametric surfaces (dice_parametric.h): Cs, N
 /// and the texture coordinates over one face, by storage class.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_quadric.cpp
 /// The RI quadrics (Sphere, Cylinder, Cone, Disk, Torus, Paraboloid,
 /// Hyperboloid) as parametric surfaces for the REYES dicer, their argument

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file dice_subdiv.cpp
 /// Dicing of Catmull–Clark subdivision meshes (the subdivision itself is in
 /// subdivision.cpp): the mesh is refined until its control edges are at most

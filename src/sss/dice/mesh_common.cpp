@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file mesh_common.cpp
 /// What the polygon and subdivision-mesh dicers share: reading positions and
 /// per-corner primitive variables, dicing lengths and budgets, and the

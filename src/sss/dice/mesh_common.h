@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file mesh_common.h
 /// Internal: what the polygon and subdivision-mesh dicers share

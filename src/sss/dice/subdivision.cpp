@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file subdivision.cpp
 /// Catmull–Clark subdivision of RenderMan SubdivisionMesh primitives: level-0
 /// topology and tags, one refinement step (smooth, boundary, crease and corner

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal: Catmull–Clark subdivision of a RenderMan SubdivisionMesh, used by
 // dice_subdiv.cpp. Object space throughout; dicing decisions (how many levels)

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file teapot.cpp
 /// The Newell teapot for `Geometry "teapot"`: Martin Newell's 1975 data set
 /// (306 control points, 32 bicubic Bezier patches; public domain), with the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal: the Newell teapot of `Geometry "teapot"` (teapot.cpp), diced by
 // dice_patch.cpp as 32 bicubic Bezier patches.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file triangulator.cpp
 /// Triangulation of a polygon with holes: the loops are linked into rings,
 /// every hole is bridged to the outer ring (rightmost holes first), and ears

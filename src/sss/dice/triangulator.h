@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file triangulator.h
 /// Internal: triangulation of one planar polygon with holes

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file beam_diffusion.cpp
 /// Photon beam diffusion and the cache of sampled curves.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file beam_diffusion.h
 /// Photon beam diffusion (Habel, Christensen and Jarosz 2013) for a normally

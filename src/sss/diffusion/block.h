@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file block.h
 /// The vectorised block kernels: one source or node against all receivers of

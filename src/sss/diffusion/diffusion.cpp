@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file diffusion.cpp
 /// The criterion names and evaluate_diffusion: profile tables, octree,
 /// tolerance and the bucket evaluation, in that order.

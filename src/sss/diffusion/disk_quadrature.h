@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file disk_quadrature.h
 /// Close sources as disks: when a source is integrated over its disk rather

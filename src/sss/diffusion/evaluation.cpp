@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file evaluation.cpp
 /// Evaluates receiver buckets: the bucket's traversal (once per bucket for the
 /// error criterion, once per receiver for the classic ones), then the

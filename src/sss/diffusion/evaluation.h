@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file evaluation.h
 /// The hierarchical evaluation proper: receiver buckets, and for each bucket

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file exact.cpp
 /// The exact evaluation: all pairs in double precision, with the same point
 /// model as the hierarchical path (exact self disk, disk quadrature of close

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file filter_job.cpp
 /// ptfilter's job: checks, reading or streaming, parts, the merge, writing.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file fresnel.cpp
 /// Fresnel reflectance inside the medium and its hemispherical moments.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file fresnel.h
 /// Fresnel terms of the diffusion boundary, for light inside a medium of

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file kernels.h
 /// The receiver-by-receiver path's inner loops: one receiver against a near

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file mc_table.cpp
 /// Reading and interpolating the Monte-Carlo profile table.
 

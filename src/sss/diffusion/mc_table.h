@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file mc_table.h
 /// The Monte-Carlo profile: photon beam diffusion corrected by the ratio of

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file octree.cpp
 /// Builds the octree: Morton codes and their sort, the sorted source arrays,
 /// the breadth-first node split and the node moments.

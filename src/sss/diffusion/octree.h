@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file octree.h
 /// The octree over the Morton-sorted sources: nodes with their bounds, area and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file profile_tables.cpp
 /// Builds the q = r^2 profile tables: finite-difference derivatives, the
 /// quadrupole remainder bound and the running maxima from the far end.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file profile_tables.h
 /// The channel profiles as float tables in q = r^2 (values, derivatives and the

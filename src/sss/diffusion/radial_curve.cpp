@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file radial_curve.cpp
 /// The sampled profile curve: spline construction and its integral.
 

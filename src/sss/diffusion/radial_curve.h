@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file radial_curve.h
 /// A profile known by its values: f(rho) = rho R(rho) with rho = r sigma_t'

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #include "sss/diffusion/slab_transport.h"
 
 #include <algorithm>

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ssdiffusion.cpp
 /// The ptfilter -ssdiffusion job in phases: the cloud read into a problem in mm,
 /// the materials as (quantised) profiles, the evaluation, the output cloud.

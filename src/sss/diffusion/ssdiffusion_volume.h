@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // ptfilter -volume / -blocker inside the -ssdiffusion job: the points the
 // volume diffusion needs, kept before the octree consumes the problem, and

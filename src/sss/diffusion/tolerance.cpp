@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file tolerance.cpp
 /// The error criterion's tolerance: the whole-cloud terms, each bucket's local
 /// reference level and the tolerance that follows for its receivers.

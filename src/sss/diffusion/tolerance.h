@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file tolerance.h
 /// The error criterion's tolerance: the whole-cloud terms it is relative to,

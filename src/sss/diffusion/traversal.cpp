@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file traversal.cpp
 /// The octree walk, and the per-node test of each criterion that steers it.
 

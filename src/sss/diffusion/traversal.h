@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file traversal.h
 /// Walks the octree for a box of receivers and sorts its nodes into far

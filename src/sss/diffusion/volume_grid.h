@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Voxel grids of the volume a cloud of oriented surface points encloses, for
 // the volume diffusion (volume.cpp): classification of voxels as medium,

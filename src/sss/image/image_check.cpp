@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file image_check.cpp
 /// Image checks without OpenImageIO: headers held against the limits, PNG
 /// files read whole (check_image_file, which reads other headers with

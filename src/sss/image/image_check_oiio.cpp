@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file image_check_oiio.cpp
 /// check_image_file(): the PNG check, else the header OpenImageIO reads, held
 /// against the limits. In a file of its own: only the tools that call it

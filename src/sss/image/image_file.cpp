@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file image_file.cpp
 /// write_image_file(): the one OpenImageIO writer of the library.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file light_dome.cpp
 /// Median-cut light domes and the procedural sky probe (light_dome.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file lights.cpp
 /// Light shaders resolved to world space, and the irradiance they give.
 ///

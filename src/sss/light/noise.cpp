@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file noise.cpp
 /// Improved gradient noise (Ken Perlin, SIGGRAPH 2002) in 1 to 4 dimensions:
 /// quintic fade curve, gradients to the edge midpoints of a cube (3-D; the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ray_tracer.cpp
 /// RayTracer over Embree 3: one device and one scene per tracer, one
 /// triangle geometry per mesh (geometry ID = mesh index).

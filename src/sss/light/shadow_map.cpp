@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file shadow_map.cpp
 /// Depth-map shadow lookups (shadow_map.h): the point projected with the
 /// map's matrices, then percentage-closer filtering (Reeves, Salesin and

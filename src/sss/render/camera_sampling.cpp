@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file camera_sampling.cpp
 /// Pixel filters (RISpec 3.2 appendix E) and thin-lens samples.
 

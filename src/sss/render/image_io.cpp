@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file image_io.cpp
 /// Images out and in through OpenImageIO: resolving RenderMan Display lines
 /// (type, mode, parameters) into files and channels, writing them atomically

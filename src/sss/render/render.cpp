@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file render.cpp
 /// The final renderer (docs/render.md): every primitive is diced into
 /// triangles with vertex normals and ray traced with Embree; camera samples

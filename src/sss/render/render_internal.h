@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the render module: the job shared by render.cpp (tiles,
 // pixels, render_image, render_scene), render_setup.cpp (the phases

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file render_setup.cpp
 /// The phases of render_image before the tiles (render.cpp): the camera, the
 /// shaders and the AOVs, the surfaces to dice, the dicing with its memory

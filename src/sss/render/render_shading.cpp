@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file render_shading.cpp
 /// The camera samples' surfaces: tracing each live sample to its next
 /// surface, shading the hits in batches per primitive and compositing them

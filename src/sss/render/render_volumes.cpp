@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file render_volumes.cpp
 /// The shaders render runs besides the surfaces' (docs/render.md, "Volume
 /// and imager shaders"): a primitive's Atmosphere on the camera rays that hit

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: the syntax tree the parser builds
 // (shading.md section 2) and the code generator walks.

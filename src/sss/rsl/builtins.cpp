@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file builtins.cpp
 /// The table of RSL built-in functions (builtins.h): RISpec 3.2 chapter 15
 /// and the PRMan extensions production shaders use.

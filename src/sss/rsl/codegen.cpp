@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen.cpp
 /// Type checking and code generation in one walk over the syntax tree:
 /// scopes, the globals of each shader kind (shading.md section 4), implicit

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: type checking and code generation from the
 // syntax tree (ast.h) to Programs (program.h).

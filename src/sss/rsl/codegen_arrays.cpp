@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_arrays.cpp
 /// The array functions of PRMan 13.5's RSL in the code generator:
 /// `arraylength(a)` (a constant for a fixed-length array), and for resizable

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_calls.cpp
 /// Calls in the code generator: argument costs, overload resolution against
 /// the built-in table (also by the expected result type) and against user

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_class.cpp
 /// RSL 2.0 shader classes in the code generator: `class name(params) {
 /// members; methods }`. The parameters are the shader's; member variables

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_coshader.cpp
 /// RSL 2.0 co-shaders in the code generator: `shader` handles from
 /// getshader("handle"), getlight("handle"), getshaders() and getlights()

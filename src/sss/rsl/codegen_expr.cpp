@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_expr.cpp
 /// Expressions in the code generator: names, tuples and casts, operators,
 /// the ternary and assignments (calls are in codegen_calls.cpp).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_stmt.cpp
 /// Statements in the code generator: declarations and parameters, return,
 /// break/continue, if and loops, illuminance/illuminate/solar and gather.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file codegen_types.cpp
 /// Types in the code generator: the built-in prototype letters, implicit
 /// conversions, the result types of operators, writability, and the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file compile_source.cpp
 /// compile_file and compile_text: the preprocessor (preprocess.cpp), then
 /// compile_preprocessed. A file of its own so that code calling only

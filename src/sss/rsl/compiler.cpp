@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file compiler.cpp
 /// compile_preprocessed: tokens, syntax tree, then checked Programs
 /// (lexer.cpp, parser.cpp, codegen.cpp). compile_file and compile_text,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file diagnostics.cpp
 /// Compiler messages: Diagnostic::format, ShaderCompileError and the
 /// collector that maps preprocessed positions back to the source files.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: source positions in preprocessed text and
 // the collector of compiler messages (compiler.h's Diagnostic).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file lexer.cpp
 /// The RSL tokenizer: identifiers and keywords, numbers (all floats: `1`,
 /// `1.`, `.5`, exponents, a trailing `f`), strings with C escapes (adjacent

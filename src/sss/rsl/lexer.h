@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: the RSL tokenizer (shading.md section 1).
 

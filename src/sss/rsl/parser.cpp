@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file parser.cpp
 /// Recursive-descent parser for RSL (shading.md section 2): shader and
 /// function definitions (nested too), declarations, statements and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file preprocess.cpp
 /// The C preprocessor for shaders (preprocess.h).
 ///

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file preprocess_directives.cpp
 /// Directives in the shader preprocessor (preprocess.cpp): conditionals,
 /// #define and #undef, #include, #line, #error and #pragma.

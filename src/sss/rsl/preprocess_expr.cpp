@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file preprocess_expr.cpp
 /// #if expressions in the shader preprocessor (preprocess.cpp): `defined`,
 /// macro expansion, then recursive descent in int64 with wrapping arithmetic.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: the C preprocessor for shaders shared by
 // preprocess.cpp (logical lines, tokens, files, the driver),

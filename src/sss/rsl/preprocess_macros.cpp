@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file preprocess_macros.cpp
 /// Macro expansion in the shader preprocessor (preprocess.cpp): Prosser's
 /// hide-set algorithm, macro invocation with its arguments, substitution,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file program.cpp
 /// Types and symbol tables of compiled shaders (program.h). The .slo file
 /// format is in slo_io.cpp.

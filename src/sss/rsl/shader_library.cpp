@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file shader_library.cpp
 /// The shader search path and on-demand loading (shader_library.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file slo_io.cpp
 /// The .slo text format (write_program / read_program, program.h):
 ///

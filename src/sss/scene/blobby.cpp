@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file blobby.cpp
 /// Decoding and checking of Blobby programs (blobby.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file camera.cpp
 /// The camera's rays in world space (CameraProjection) and the checks that
 /// a camera can generate them (check_camera), each failure naming the RIB

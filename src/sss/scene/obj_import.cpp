@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file obj_import.cpp
 /// Wavefront OBJ import: logical lines (with '\' continuations and '#'
 /// comments), vertices, normals and texture coordinates, faces with their

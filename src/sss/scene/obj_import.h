@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file obj_import.h
 /// Wavefront OBJ import: the mesh of an OBJ file (met through ReadArchive)

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ri_api.cpp
 /// The Ri C binding for DynamicLoad procedurals: each call made into the
 /// statement its RIB request is and carried out by the reader at once

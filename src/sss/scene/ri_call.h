@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file ri_call.h
 /// One Ri call of the C binding as the RIB statement it stands for: its

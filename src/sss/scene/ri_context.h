@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file ri_context.h
 /// Where the Ri C binding's calls go: the reader running a DynamicLoad

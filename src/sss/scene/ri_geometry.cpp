@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file ri_geometry.cpp
 /// The Ri C binding's geometry and procedurals: each primitive's positional
 /// arguments as its RIB request takes them, and the number of values each

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib.cpp
 /// ASCII RIB reader: read_rib and parse_rib, and the interpreter's core, which
 /// sends each statement to its request's handler (rib_reader.h lists the

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_archives.cpp
 /// The reader's files, frames and archives: RIB and OBJ files read through
 /// ReadArchive or DelayedReadArchive, inline archives recorded and replayed,

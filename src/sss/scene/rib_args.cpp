@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_args.cpp
 /// Positional arguments of a RIB statement and the reader's error messages.
 

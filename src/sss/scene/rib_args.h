@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file rib_args.h
 /// Positional arguments of a RIB statement: numbers, strings, integer and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_attributes.cpp
 /// The reader's attribute requests: colour, sides, orientation, shading,
 /// `Attribute`, the surface, displacement and volume shaders (Atmosphere,

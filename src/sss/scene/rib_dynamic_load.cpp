@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_dynamic_load.cpp
 /// Procedural "DynamicLoad" (RiProcedural's third protocol): the DSO is
 /// loaded once per read, its ConvertParameters turns the data string into

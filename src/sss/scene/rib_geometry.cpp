@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_geometry.cpp
 /// The reader's geometry requests: topology and parameter checks of every
 /// primitive, and the position parameter resolved from "P", "Pw" or "Pz".

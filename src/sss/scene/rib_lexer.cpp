@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_lexer.cpp
 /// The RIB tokenizer: white space and comments, numbers, strings with their
 /// escapes, words and bracketed arrays, grouped into statements.

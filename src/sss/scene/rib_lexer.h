@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file rib_lexer.h
 /// The RIB tokenizer: statements (a request name and its arguments) read from

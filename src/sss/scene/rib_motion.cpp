@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_motion.cpp
 /// Motion blur in the RIB (RISpec 3.2 section 4.3): `Shutter`, and
 /// `MotionBegin [times] ... MotionEnd` blocks of one request per time.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_options.cpp
 /// The reader's option requests: image format, camera projection and screen
 /// window, displays, the imager shader, hider, `Option` and the parameter

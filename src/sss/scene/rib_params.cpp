@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_params.cpp
 /// Parameter declarations: the declaration syntax ("[class] type[[n]] [name]")
 /// and the table of predeclared names, and the parameter lists of

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file rib_params.h
 /// Parameter declarations of the RIB reader: what a parameter name means

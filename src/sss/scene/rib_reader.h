@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file rib_reader.h
 /// The RIB interpreter: a Reader executes statements in order, keeps the RI

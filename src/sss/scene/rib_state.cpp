@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_state.cpp
 /// The reader's graphics state: the attribute snapshot, the block stack
 /// (World, Attribute, Transform, Solid, Motion and Object blocks) and the

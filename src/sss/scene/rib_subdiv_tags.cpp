@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rib_subdiv_tags.cpp
 /// The tags of SubdivisionMesh and HierarchicalSubdivisionMesh (PRMan's
 /// list): the ones the dicer carries out, the ones that change nothing it

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file scene.cpp
 /// The scene layer basics: typed parameter access, the RI spline bases and
 /// the camera's screen-window arithmetic.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine.cpp
 /// The shading engine (engine.h): frames (storage per symbol, constants,
 /// globals), the interpreter with its running mask and structured control

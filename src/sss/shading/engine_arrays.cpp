@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_arrays.cpp
 /// Resizable arrays (PRMan 13.5's dynamic arrays, `float a[]`): their
 /// storage, element access, and arraylength, resize, push, pop, reserve.

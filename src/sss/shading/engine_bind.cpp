@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_bind.cpp
 /// Binding in the shading engine (engine.h): a Program's ops resolved against
 /// the operator tables into a BoundProgram, a shader instance's RIB parameters

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_coshader.cpp
 /// RSL 2.0 shader objects in the shading engine: `shader` handles and the
 /// calls through them.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_geometry.cpp
 /// Geometric built-ins (RISpec 15.2-15.4): components, length, normalize
 /// (0 stays 0), distance, ptlined, rotate, faceforward (Nref defaults to Ng),

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_lighting.cpp
 /// Lights and local illumination (RISpec 15.5, shading.md 4 and 5.5):
 ///

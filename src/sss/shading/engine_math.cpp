@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_math.cpp
 /// Math built-ins (RISpec 15.1): component-by-component functions of floats
 /// and triples, min/max/clamp/mix/step/smoothstep/filterstep, spline,

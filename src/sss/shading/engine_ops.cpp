@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_ops.cpp
 /// The operators of program.h: assign, arithmetic (component by component, a
 /// float operand replicated; matrix products and A/B = A * inverse(B)),

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_raytrace.cpp
 /// Ray-tracing shadeops (RISpec 15.5, shading.md 5.5): every ray goes through
 /// ShadingServices::trace (rays that find and shade hits) or

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file engine_texture.cpp
 /// Texture built-ins through the TextureLibrary (texture, environment,
 /// textureinfo, texture3d), bake3d records (ShadingServices::bake3d), and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rsl_math.cpp
 /// RSL's colour spaces and spline() (rsl_math.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: the pure functions behind RSL built-ins
 // that the engine calls per point (noise family, colour spaces, splines,

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rsl_noise.cpp
 /// RSL's noise(), pnoise() and cellnoise() in 1 to 4 dimensions (rsl_math.h).
 ///

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file rsl_string.cpp
 /// RSL's format()/printf() patterns and match() (rsl_math.h).
 

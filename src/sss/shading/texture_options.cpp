@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The token-value options of RSL's texture calls (texture, environment,
 // shadow: texture_services.h), texture3d and bake3d (texture_options.h).
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the shading module: the token-value options of texture3d and
 // bake3d calls, as the engine reads them (texture_options.cpp; the 2-D

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The half-space random walk (half_space.h) and the closed-form single
 // scattering it is checked against.
 

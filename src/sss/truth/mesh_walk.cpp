@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The random walk in a medium bounded by triangle meshes (mesh_walk.h).
 
 #include "sss/truth/mesh_walk.h"

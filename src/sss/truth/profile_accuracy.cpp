@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Profiles against the half-space walk, and the Monte-Carlo profile table.
 
 #include "sss/truth/profile_accuracy.h"

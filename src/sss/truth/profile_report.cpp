@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // A material's profiles against the walk: the report, its CSV and its plot.
 
 #include "sss/truth/profile_report.h"

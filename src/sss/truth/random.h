@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file random.h
 /// The random numbers of the walks: a fast generator seeded per batch, and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The walk in a scene's own geometry, lit by a baked cloud.
 
 #include "sss/truth/scene_walk.h"

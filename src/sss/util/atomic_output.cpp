@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file atomic_output.cpp
 /// Atomic output files: a unique, locked temporary in the target's folder,
 /// renamed over the target on commit (or written into a device or FIFO

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file byte_io.cpp
 /// Buffered byte input (transparent gzip) and output for the binary formats.
 

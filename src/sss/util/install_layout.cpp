@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file install_layout.cpp
 /// The tools' data folders relative to the running executable or to
 /// libsss.so (install_layout.h).

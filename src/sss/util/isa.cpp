@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file isa.cpp
 /// CPU feature detection and the choice of kernel path.
 

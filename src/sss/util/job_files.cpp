@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file job_files.cpp
 /// The registry of a job's inputs and outputs (outputs over inputs are
 /// refused) and the output-name checks.

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file limits.cpp
 /// Resource limits, the memory budget and the job's current stage.
 

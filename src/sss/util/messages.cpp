@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file messages.cpp
 /// Quoting input in messages, warnings counted by kind, and the state of
 /// standard output.

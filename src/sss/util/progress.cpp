@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file progress.cpp
 /// ALF_PROGRESS lines, the terminal progress line and the stopwatch.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file subprocess.cpp
 /// run_filter: a child process with pipes on its standard input and output,
 /// driven by poll() against one deadline.

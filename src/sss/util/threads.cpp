@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file threads.cpp
 /// Usable CPU count (affinity mask, cgroup v1/v2 quotas) and ThreadLimit.
 

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file version.cpp
 /// The project version, from the build (CMakeLists.txt).
 

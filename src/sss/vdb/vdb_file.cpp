@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file vdb_file.cpp
 /// OpenVDB files: a brick map's grids written (brickmake out.vdb), .vdb files
 /// read and described (brickinfo). The layout of the grids is in vdb.h and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file point_view.cpp
 /// Pictures of point clouds: cameras, disc splatting with a z-buffer,
 /// exposure and false colour, contact sheets, PNG/EXR output (OpenImageIO).

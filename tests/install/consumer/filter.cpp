@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Filters a point cloud through the installed library, as
 // `ptfilter -ssdiffusion -material M -unitlength U in out` does:
 //   filter in.ptc out.ptc MATERIAL UNITLENGTH

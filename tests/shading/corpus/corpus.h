@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* corpus.h: conventions of the RSL acceptance corpus (docs/shading.md,
  * "Test corpus"). Every corpus shader declares one output parameter per
  * check with CHECK(name) and writes it once at the top level of its body:

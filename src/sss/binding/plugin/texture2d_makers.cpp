@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The 2-D texture plugin's file makers and readers besides maketx's:
 // depth maps (zfiles written by render, shadow maps by MakeShadow) and
 // cube-face environments (MakeCubeFaceEnvironment). The formats are in

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the 2-D texture plugin: depth maps (zfiles, shadow maps) and
 // cube-face environments, through OpenImageIO (texture2d_makers.cpp).

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // The 2-D texture plugin (texture2d_backend.h): texture(), environment()
 // and textureinfo() through one OpenImageIO TextureSystem per job. Built as
 // libsss_texture2d.so and loaded by TextureLibrary on first use.

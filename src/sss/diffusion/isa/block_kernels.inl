@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file block_kernels.inl
 /// The block kernels of block.h, compiled once per instruction-set path:
 /// src/sss/CMakeLists.txt generates one file per path that defines

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /* corpus_pp.h: a header found only through -I (tests/shading/corpus/include),
  * included by preprocessor.sl. */
 #ifndef CORPUS_PP_H
