@@ -234,6 +234,26 @@ set(CPACK_DEBIAN_LIBRARY_PACKAGE_CONTROL_EXTRA
   ${PROJECT_SOURCE_DIR}/packaging/debian/library/triggers
   ${PROJECT_SOURCE_DIR}/packaging/debian/library/postinst
   ${PROJECT_SOURCE_DIR}/packaging/debian/library/postrm)
+# The symbols file of libsss0.1: every exported symbol with the version that
+# brought it, made by dpkg-gensymbols from the built library (dpkg-dev), so
+# that a package built against it depends on the version it needs. Made at
+# build time, not kept in the tree: while the version is 0.x the exported
+# functions change with the code, and the soname changes with each minor.
+if(SSS_BUILD_SHARED)
+  find_program(SSS_GENSYMBOLS dpkg-gensymbols REQUIRED)
+  set(SSS_SYMBOLS_DIR ${CMAKE_BINARY_DIR}/packaging/gensymbols)
+  file(WRITE ${SSS_SYMBOLS_DIR}/debian/control
+    "Source: sss\n\nPackage: ${SSS_DEB_LIBRARY}\nArchitecture: any\n")
+  add_custom_command(OUTPUT ${CMAKE_BINARY_DIR}/packaging/symbols
+    COMMAND ${SSS_GENSYMBOLS} -q -p${SSS_DEB_LIBRARY} -v${PROJECT_VERSION}
+            -e$<TARGET_FILE:sss_shared> -O${CMAKE_BINARY_DIR}/packaging/symbols
+    WORKING_DIRECTORY ${SSS_SYMBOLS_DIR}
+    DEPENDS sss_shared
+    COMMENT "Debian symbols file of libsss"
+    VERBATIM)
+  add_custom_target(sss_symbols ALL DEPENDS ${CMAKE_BINARY_DIR}/packaging/symbols)
+  list(APPEND CPACK_DEBIAN_LIBRARY_PACKAGE_CONTROL_EXTRA ${CMAKE_BINARY_DIR}/packaging/symbols)
+endif()
 set(CPACK_DEBIAN_LIBRARY_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS_POLICY "=")
 set(CPACK_DEBIAN_DEV_PACKAGE_NAME sss-dev)

@@ -32,6 +32,8 @@ lib="$tmp/packages/${libname}_${version}_amd64.deb"
 [[ -f "$lib" ]] || { ls "$tmp/packages" >&2; fail "cpack made no $libname"; }
 grep -q "/libsss\\.so\\.${version%.*} -> " <<<"$(dpkg-deb -c "$lib")" ||
     fail "$libname lacks libsss.so.${version%.*}"
+grep -q "^ _ZN3sss11ssdiffusion.*@SSS_${version%.*} $version\$" <<<"$(dpkg-deb -I "$lib" symbols)" ||
+    fail "$libname's symbols file lacks sss::ssdiffusion"
 grep -q "^libsss ${version%.*} $libname" <<<"$(dpkg-deb -I "$lib" shlibs)" ||
     fail "$libname has no shlibs entry: $(dpkg-deb -I "$lib" shlibs)"
 [[ "$(dpkg-deb -f "$dev" Depends)" == *"$libname (= $version)"* ]] || fail "sss-dev must depend on $libname"
