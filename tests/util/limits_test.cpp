@@ -14,7 +14,8 @@ namespace {
 TEST(Limits, DefaultsEnvironmentAndOverride) {
     using sss::Limit;
     unsetenv("SSS_LIMIT_PRIMITIVE_VERTICES");
-    EXPECT_EQ(sss::limit(Limit::PrimitiveVertices), sss::limit_default(Limit::PrimitiveVertices));
+    EXPECT_EQ(sss::limit(Limit::PrimitiveVertices),
+              sss::limit_default(Limit::PrimitiveVertices));
     setenv("SSS_LIMIT_PRIMITIVE_VERTICES", "2K", 1);
     EXPECT_EQ(sss::limit(Limit::PrimitiveVertices), 2048u);
     setenv("SSS_LIMIT_PRIMITIVE_VERTICES", "1e3", 1);
@@ -38,8 +39,9 @@ TEST(Limits, ErrorNamesWhereWhatAndVariable) {
         FAIL() << "no LimitError";
     } catch (const sss::LimitError& e) {
         std::string what = e.what();
-        EXPECT_NE(what.find("a.rib:3: 5 levels of nested archives exceeds the limit of 4"),
-                  std::string::npos)
+        EXPECT_NE(
+            what.find("a.rib:3: 5 levels of nested archives exceeds the limit of 4"),
+            std::string::npos)
             << what;
         EXPECT_NE(what.find("SSS_LIMIT_ARCHIVE_DEPTH"), std::string::npos) << what;
         EXPECT_EQ(e.which(), Limit::ArchiveDepth);
