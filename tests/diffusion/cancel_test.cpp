@@ -23,13 +23,18 @@ sss::PointCloud sphere(std::size_t n) {
     return sss::make_synthetic_cloud(sp);
 }
 
+sss::SsDiffusionOptions skin1(sss::Progress* progress) {
+    sss::SsDiffusionOptions options;
+    options.material.preset = "skin1";
+    options.material.unitlength = 0.1;
+    options.diffusion.progress = progress;
+    return options;
+}
+
 } // namespace
 
 TEST(DiffusionCancel, CallbackReturningFalseStopsTheRun) {
     const sss::PointCloud cloud = sphere(20000);
-    sss::SsDiffusionOptions options;
-    options.material.preset = "skin1";
-    options.material.unitlength = 0.1;
     sss::Progress progress(false);
     int calls = 0;
     uint64_t last_done = 0, last_total = 0;
@@ -39,8 +44,7 @@ TEST(DiffusionCancel, CallbackReturningFalseStopsTheRun) {
         last_total = total;
         return done * 10 < total * 3; // cancel from 30 %
     });
-    options.diffusion.progress = &progress;
-    EXPECT_THROW(sss::ssdiffusion(cloud, options), sss::Cancelled);
+    EXPECT_THROW(sss::ssdiffusion(cloud, skin1(&progress)), sss::Cancelled);
     ASSERT_GT(calls, 1);
     // It stopped at the first step at or past 30 %, not at the end.
     EXPECT_GE(last_done * 10, last_total * 3);
@@ -49,9 +53,6 @@ TEST(DiffusionCancel, CallbackReturningFalseStopsTheRun) {
 
 TEST(DiffusionCancel, CallbackReturningTrueRunsToTheEnd) {
     const sss::PointCloud cloud = sphere(5000);
-    sss::SsDiffusionOptions options;
-    options.material.preset = "skin1";
-    options.material.unitlength = 0.1;
     sss::Progress progress(false);
     uint64_t last_done = 0, last_total = 1;
     progress.set_callback([&](uint64_t done, uint64_t total) {
@@ -59,8 +60,7 @@ TEST(DiffusionCancel, CallbackReturningTrueRunsToTheEnd) {
         last_total = total;
         return true;
     });
-    options.diffusion.progress = &progress;
-    const sss::PointCloud out = sss::ssdiffusion(cloud, options);
+    const sss::PointCloud out = sss::ssdiffusion(cloud, skin1(&progress));
     EXPECT_EQ(out.size(), cloud.size());
     EXPECT_EQ(last_done, last_total);
 }
