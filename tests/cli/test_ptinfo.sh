@@ -89,6 +89,13 @@ rc="$(run_status "$tmp/out" "$tmp/err" "$ptinfo" "$tmp/junk.ptc")"
 [ "$rc" = 1 ] || fail "bad magic: exit $rc, expected 1"
 grep -q "^ptinfo ERROR: .*junk.ptc.*magic" "$tmp/err" || fail "bad magic: no ERROR line"
 
+# An OpenVDB file (its magic " BDV") is named as one, with the tool that reads it.
+printf ' BDV\xdc\x00\x00\x00 an OpenVDB header follows' >"$tmp/grid.vdb"
+rc="$(run_status "$tmp/out" "$tmp/err" "$ptinfo" "$tmp/grid.vdb")"
+[ "$rc" = 1 ] || fail "a .vdb: exit $rc, expected 1"
+grep -q "^ptinfo ERROR: .*grid.vdb: an OpenVDB file, not a point cloud (brickinfo" "$tmp/err" ||
+    fail "a .vdb: $(cat "$tmp/err")"
+
 # --- usage errors: exit 2 ----------------------------------------------------
 for args in "-bogus $data/tiny_v0.ptc" "" "-stats 7 $data/tiny_v0.ptc" "-stats"; do
     # shellcheck disable=SC2086 # word splitting of args is intended

@@ -155,6 +155,9 @@ PtcReader::PtcReader(const std::string& path) : m_in(std::make_unique<ByteSource
         throw fail("file too short for a .ptc header (" + std::to_string(in.consumed()) +
                    " bytes)");
     }
+    // OpenVDB's files start with the bytes " BD V" (0x56444220, little-endian).
+    if (load_u32(head) == 0x56444220u)
+        throw fail("an OpenVDB file, not a point cloud (brickinfo describes .vdb files)");
     if (load_i32(head) != kPtcMagic) {
         char buf[64];
         std::snprintf(buf, sizeof buf, "not a .ptc file (bad magic 0x%08x)",
