@@ -41,8 +41,9 @@ PointCloud test_cloud(sss::SyntheticShape shape) {
     p.count = 4000;
     p.size = 1.0;
     PointCloud c = sss::make_synthetic_cloud(p);
-    auto& rad = c.find_channel("_radiance_t")->data;
+    // Added first: adding a channel may move the others.
     auto& tint = c.add_channel("tint", sss::ChannelType::Float).data;
+    auto& rad = c.find_channel("_radiance_t")->data;
     for (std::size_t i = 0; i < c.size(); ++i) {
         const glm::vec3 q = c.positions[i];
         rad[3 * i] = 0.5f + 0.4f * std::sin(3.0f * q.x);
