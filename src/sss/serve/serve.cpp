@@ -9,6 +9,8 @@
 #include <cstring>
 #include <new>
 
+#include <sys/socket.h>
+
 #include <httplib.h>
 
 #include "serve_internal.h"
@@ -331,6 +333,12 @@ ViewServer::ViewServer(ViewSession& session) : m_impl(std::make_unique<Impl>(ses
     s.server.new_task_queue = [] { return new httplib::ThreadPool(kThreads); };
     s.server.set_payload_max_length(kMaxBody);
     s.server.set_keep_alive_timeout(2);
+    // SO_REUSEADDR only: cpp-httplib also sets SO_REUSEPORT, with which a
+    // second server on a port in use would share it instead of failing.
+    s.server.set_socket_options([](int sock) {
+        const int yes = 1;
+        ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    });
     s.routes();
     const ServeOptions& o = session.options();
     const std::string where = o.bind_address + ":" + std::to_string(o.port);
