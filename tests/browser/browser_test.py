@@ -160,7 +160,6 @@ def main():
         if lit < 0.2:
             fail(f"the bake's tile is blank ({lit:.1%} of its pixels differ from the background)")
         log(f"page drawn without console errors; {lit:.0%} of the bake's tile covered")
-        browser.screenshot(os.path.join(SHOTS, "ptview-serve-live.png"))
 
         # The mean free path: the slider dragged (previews), then let go (the whole cloud).
         region = live_region(browser)
@@ -268,26 +267,48 @@ def main():
 
     # The teapot: its bake camera, its live diffusion, its brick map's voxels.
     server = Server("teapot.ptc", "teapot_ssd.bkm")
-    with Browser(1400, 900) as browser:
+    with Browser(1280, 860) as browser:
         browser.get(server.url)
         settle(browser, "the teapot", 60)
         check_console(browser, "teapot")
         if browser.run("return document.getElementById('camera').value") != "file":
             fail("the teapot is not seen through its bake camera")
+        if browser.run("return document.querySelectorAll('.label').length") != 3:
+            fail("the teapot's bake, its live diffusion and the brick map are not three tiles")
+        # The bake and its live diffusion (the brick map hidden), unit length 0.1.
+        browser.run("document.querySelectorAll('#source-list input[type=checkbox]')[2].click()")
         browser.run("const s=document.getElementById('unitlength'); s.value=0.1;"
                     "s.dispatchEvent(new Event('change'))")
         settle(browser, "the teapot's diffusion")
+        if "-unitlength 0.1 teapot.ptc" not in browser.run(
+                "return document.getElementById('command').textContent"):
+            fail("the unit length is not in the command line")
         browser.screenshot(os.path.join(SHOTS, "ptview-serve-teapot.png"))
         picture = canvas(browser)
-        if coverage(picture, BACKGROUND) < 0.1:
-            fail("the teapot's sheet is blank")
-        # The brick map's voxels, seen from an orbit.
-        browser.run("const c=document.getElementById('camera'); c.value='orbit';"
+        for x in (0, picture[0] // 2 + 1):
+            if coverage(picture, BACKGROUND, (x, 0, picture[0] // 2 - 1, picture[1])) < 0.1:
+                fail(f"the teapot's tile at x {x} is blank")
+        # The brick map's voxels at depth 3, alone, from an orbit.
+        browser.run("const boxes=document.querySelectorAll('#source-list input[type=checkbox]');"
+                    "boxes[0].click(); boxes[1].click(); boxes[2].click();"
+                    "const d=document.querySelector('#source-list select:last-of-type');"
+                    "const depths=document.querySelectorAll('#source-list select');"
+                    "const depth=depths[depths.length - 1]; depth.value='3';"
+                    "depth.dispatchEvent(new Event('change'));"
+                    "const c=document.getElementById('camera'); c.value='orbit';"
                     "c.dispatchEvent(new Event('change'))")
+        settle(browser, "the brick map's voxels")
+        drag(browser, "#canvas", -60, 30)
         settle(browser, "the orbit")
+        labels = browser.run("return [...document.querySelectorAll('.label')].map(l => l.textContent)")
+        if labels != ["teapot_ssd.bkm depth 3 · _ssdiffusion"]:
+            fail(f"the brick map's tile: {labels}")
+        if coverage(canvas(browser), BACKGROUND) < 0.05:
+            fail("the brick map's voxels are not drawn")
         browser.screenshot(os.path.join(SHOTS, "ptview-serve-brickmap.png"))
-        # Overlaid: one tile.
-        browser.run("const l=document.getElementById('layout'); l.value='overlay';"
+        # Overlaid: the bake and the voxels in one tile.
+        browser.run("document.querySelectorAll('#source-list input[type=checkbox]')[0].click();"
+                    "const l=document.getElementById('layout'); l.value='overlay';"
                     "l.dispatchEvent(new Event('change'))")
         settle(browser, "the overlay")
         if browser.run("return document.querySelectorAll('.label').length") != 1:

@@ -47,6 +47,18 @@
     return (h >>> 0).toString(16).padStart(8, '0');
   }
   const fmt = (x) => String(Number(Number(x).toPrecision(4)));
+  // A command line shown: lines break between its words only (its text, as
+  // copied, is unchanged).
+  function showCommand(element, text) {
+    element.textContent = '';
+    text.split(' ').forEach((word, i) => {
+      if (i) element.appendChild(document.createTextNode(' '));
+      const span = document.createElement('span');
+      span.className = 'word';
+      span.textContent = word;
+      element.appendChild(span);
+    });
+  }
 
   // --- state --------------------------------------------------------------------
   const S = {
@@ -360,7 +372,7 @@
   const quote = (w) => (/^[A-Za-z0-9_./,:=+@%#-]+$/.test(w) ? w : `'${w.replace(/'/g, "'\\''")}'`);
   function updateViewText(sheet) {
     view.batchCommand = batchCommand(sheet);
-    $('batch-command').textContent = view.batchCommand;
+    showCommand($('batch-command'), view.batchCommand);
     const e = typeof S.exposure === 'number' ? S.exposure : exposureStops[0] || 0;
     $('exposure-value').textContent = `${fmt(e)} stops${typeof S.exposure === 'number' ? '' : ' (auto)'}`;
     if (typeof S.exposure !== 'number') $('exposure').value = e;
@@ -416,7 +428,7 @@
       view.shownHash = hash;
       view.latencies.push({ seq: req.seq, preview: meta.stride > 1, ms, server: meta.seconds * 1000, points: meta.points,
                             answered: tFetched - req.t0, drawn: performance.now() - tFetched });
-      $('command').textContent = meta.command;
+      showCommand($('command'), meta.command);
       $('live-status').textContent = `${meta.stride > 1 ? `preview, 1 point in ${meta.stride}` : 'whole cloud'}: ` +
         `${meta.points} points, diffusion ${(meta.seconds * 1000).toFixed(0)} ms, shown after ${ms.toFixed(0)} ms` +
         (meta.warnings.length ? ' — ' + meta.warnings.join('; ') : '');
@@ -505,6 +517,7 @@
       show.addEventListener('change', async () => { tile.visible = show.checked; await refresh(); });
       const name = document.createElement('span');
       name.textContent = inputOf(tile.input).label + (tile.kind === 'live' ? ' (live)' : '');
+      name.title = name.textContent;
       const channel = document.createElement('select');
       for (const c of channelsOf(tile)) {
         option(channel, c.name, c.name);
@@ -522,7 +535,8 @@
       row.append(show, name, channel);
       if (tile.kind === 'brick') {
         const depth = document.createElement('select');
-        for (const l of inputOf(tile.input).levels) option(depth, l.depth, `depth ${l.depth} (${l.samples} samples)`);
+        for (const l of inputOf(tile.input).levels) option(depth, l.depth, `depth ${l.depth}: ${l.samples}`);
+        depth.title = 'the depth whose voxels are drawn: samples';
         depth.value = tile.depth;
         depth.addEventListener('change', async () => { tile.depth = +depth.value; exposureDirty = true; await refresh(); });
         row.append(depth);
