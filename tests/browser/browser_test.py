@@ -23,6 +23,7 @@ with its camera) with its brick map:
 SCREENSHOT_DIR: where the page's screenshots go (docs/images/ when the
 documentation's are made again: scripts/ptview-pictures --serve).
 """
+import atexit
 import os
 import re
 import shlex
@@ -34,7 +35,6 @@ import time
 import base64
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from png import compare, coverage, read_png, read_png_file  # noqa: E402
 from webdriver import Browser  # noqa: E402
 
 # The page against ptview (docs/ptview.md, "Interactive view"): the mean
@@ -66,6 +66,18 @@ def tool(name, *args, cwd=None):
                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True).stdout
 
 
+RUNNING = []
+
+
+@atexit.register
+def stop_servers():
+    """Servers a failed check left running."""
+    for p in RUNNING:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+
+
 class Server:
     """ptview -serve on a free port, stopped by its PID."""
 
@@ -73,6 +85,7 @@ class Server:
         self.out = open(os.path.join(WORK, f"serve{len(args)}.log"), "w+")
         self.process = subprocess.Popen([os.path.join(BIN, "ptview"), "-serve", "-port", "0", *args],
                                         cwd=WORK, stdout=subprocess.PIPE, stderr=self.out, text=True)
+        RUNNING.append(self.process)
         line = self.process.stdout.readline()
         m = re.search(r" at (http://127\.0\.0\.1:\d+/)", line)
         if not m:
@@ -91,10 +104,74 @@ class Server:
             fail(f"ptview -serve exited with {self.process.returncode}")
 
 
-def canvas(browser):
-    """The page's picture, as drawn (read_png's form)."""
-    url = browser.run("return document.getElementById('canvas').toDataURL('image/png')")
-    return read_png(base64.b64decode(url.split(",", 1)[1]))
+# Pictures are compared in the page: the browser decodes PNG files (without
+# colour conversion) and reads its own canvas back, so that the test needs no
+# image library. A picture is "canvas" or the base64 of a PNG file.
+PIXELS_JS = """
+window.sssPixels = async (picture) => {
+  if (picture === 'canvas') {
+    const c = document.getElementById('canvas'), gl = c.getContext('webgl2');
+    const w = c.width, h = c.height, flipped = new Uint8Array(4 * w * h), data = new Uint8Array(4 * w * h);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, flipped);
+    for (let y = 0; y < h; ++y) data.set(flipped.subarray(4 * w * (h - 1 - y), 4 * w * (h - y)), 4 * w * y);
+    return { w, h, data };
+  }
+  const bytes = Uint8Array.from(atob(picture), (ch) => ch.charCodeAt(0));
+  const bitmap = await createImageBitmap(new Blob([bytes], { type: 'image/png' }),
+                                         { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+  const c = new OffscreenCanvas(bitmap.width, bitmap.height), g = c.getContext('2d', { willReadFrequently: true });
+  g.drawImage(bitmap, 0, 0);
+  return { w: bitmap.width, h: bitmap.height, data: g.getImageData(0, 0, bitmap.width, bitmap.height).data };
+};
+"""
+
+
+def picture(path=None):
+    """A PNG file as compare() and coverage() take it; None: the canvas."""
+    if path is None:
+        return "canvas"
+    with open(path, "rb") as f:
+        return base64.b64encode(f.read()).decode()
+
+
+def picture_size(browser, a=None):
+    browser.run(PIXELS_JS)
+    return browser.run_async("const p = await sssPixels(args[0]); return [p.w, p.h];", picture(a))
+
+
+def compare(browser, a, b, region=None, threshold=8):
+    """How two pictures of one size differ in a region (x, y, w, h): the mean
+    absolute difference per channel (0..255), the largest, and the share of
+    pixels with a channel more than `threshold` apart. a, b: picture()."""
+    browser.run(PIXELS_JS)
+    return browser.run_async("""
+        const [a, b] = [await sssPixels(args[0]), await sssPixels(args[1])];
+        if (a.w !== b.w || a.h !== b.h) throw new Error(`sizes differ: ${a.w}x${a.h}, ${b.w}x${b.h}`);
+        const [x0, y0, w, h] = args[2] || [0, 0, a.w, a.h];
+        let total = 0, largest = 0, far = 0;
+        for (let y = y0; y < y0 + h; ++y)
+          for (let x = x0; x < x0 + w; ++x) {
+            let d = 0;
+            for (let c = 0; c < 3; ++c) {
+              const e = Math.abs(a.data[4 * (y * a.w + x) + c] - b.data[4 * (y * a.w + x) + c]);
+              total += e / 3; d = Math.max(d, e);
+            }
+            largest = Math.max(largest, d); far += d > args[3];
+          }
+        return [total / (w * h), largest, far / (w * h)];""", a, b, region, threshold)
+
+
+def coverage(browser, background, region=None):
+    """The share of the canvas's pixels in a region not within 2 of a colour."""
+    browser.run(PIXELS_JS)
+    return browser.run_async("""
+        const p = await sssPixels('canvas'), [x0, y0, w, h] = args[1] || [0, 0, p.w, p.h];
+        let n = 0;
+        for (let y = y0; y < y0 + h; ++y)
+          for (let x = x0; x < x0 + w; ++x)
+            n += [0, 1, 2].some((c) => Math.abs(p.data[4 * (y * p.w + x) + c] - args[0][c]) > 2);
+        return n / (w * h);""", background, region)
 
 
 def settle(browser, what, timeout=30):
@@ -126,6 +203,21 @@ def drag(browser, css, dx, dy, steps=6, start=(0, 0)):
     browser.actions(moves)
 
 
+def compare_with_batch(browser, what):
+    """The page's picture against the batch ptview command it shows."""
+    batch = browser.run("return sssView.batchCommand")
+    words = shlex.split(batch)
+    if words[0] != "ptview" or words[-1] != "view.png":
+        fail(f"no batch command: {batch}")
+    tool("ptview", *words[1:])
+    mean, largest, far = compare(browser, "canvas", picture(os.path.join(WORK, "view.png")))
+    log(f"page ({what}) against '{batch}': mean difference {mean:.3f}/255, {far:.2%} of the "
+        f"pixels more than 8/255 apart, largest {largest}")
+    if mean > MEAN_TOLERANCE or far > FAR_TOLERANCE:
+        fail(f"the page's picture differs from ptview's: mean {mean:.3f}, {far:.2%} far")
+    return batch
+
+
 def live_region(browser):
     """The live tile of a side-by-side sheet (x, y, w, h)."""
     return tuple(browser.run(
@@ -153,22 +245,22 @@ def main():
         browser.get(server.url + "#res=512x512&az=30&el=20")
         settle(browser, "the first view and the first live diffusion", 90)
         check_console(browser, "first view")
-        first = canvas(browser)
-        if first[0] != 1026 or first[1] != 512:
-            fail(f"the sheet is {first[0]} x {first[1]}, not 1026 x 512 (two 512 tiles)")
-        lit = coverage(first, BACKGROUND, (0, 0, 512, 512))
+        width, height = picture_size(browser)
+        if (width, height) != (1026, 512):
+            fail(f"the sheet is {width} x {height}, not 1026 x 512 (two 512 tiles)")
+        lit = coverage(browser, BACKGROUND, (0, 0, 512, 512))
         if lit < 0.2:
             fail(f"the bake's tile is blank ({lit:.1%} of its pixels differ from the background)")
         log(f"page drawn without console errors; {lit:.0%} of the bake's tile covered")
 
         # The mean free path: the slider dragged (previews), then let go (the whole cloud).
         region = live_region(browser)
-        before = canvas(browser)
+        browser.run("window.sssBefore = document.getElementById('canvas').toDataURL('image/png').split(',')[1]")
         n_before = len(browser.run("return sssView.latencies"))
         drag(browser, "#mfp-scale", 60, 0, steps=8)
         settle(browser, "the live diffusion after the drag")
-        after = canvas(browser)
-        mean, largest, _ = compare(before, after, region)
+        browser.run("window.sssAfter = document.getElementById('canvas').toDataURL('image/png').split(',')[1]")
+        mean, largest, _ = compare(browser, browser.run("return sssBefore"), "canvas", region)
         if mean < 1.0:
             fail(f"the live tile did not change with the mean free path (mean difference {mean:.2f})")
         lat = browser.run("return sssView.latencies")[n_before:]
@@ -216,6 +308,11 @@ def main():
                 open(os.path.join(WORK, "command_ssd.ptc"), "rb").read():
             fail(f"'{command}' does not reproduce the saved result")
         log(f"Save wrote the values drawn ({shown}); '{command}' writes the same bytes")
+        # Those releases changed only the values: drawn from the points' pixels
+        # (no point drawn again), which must still be ptview's picture.
+        if not all(x.get("resolved") for x in lat[-3:]):
+            fail(f"whole updates in an unchanged view drew the points again: {lat[-3:]}")
+        compare_with_batch(browser, "the live tile's values set at its pixels")
 
         # Orbit by dragging the picture, then the page against ptview.
         az0 = browser.run("return location.hash")
@@ -224,19 +321,9 @@ def main():
         browser.run("sssView.render()")
         if browser.run("return location.hash") == az0:
             fail("dragging the picture did not orbit")
-        rotated = canvas(browser)
-        if compare(after, rotated, (0, 0, 512, 512))[0] < 1.0:
+        if compare(browser, browser.run("return sssAfter"), "canvas", (0, 0, 512, 512))[0] < 1.0:
             fail("the picture did not change when orbiting")
-        batch = browser.run("return sssView.batchCommand")
-        words = shlex.split(batch)
-        if words[0] != "ptview" or words[-1] != "view.png":
-            fail(f"no batch command: {batch}")
-        tool("ptview", *words[1:])
-        mean, largest, far = compare(rotated, read_png_file(os.path.join(WORK, "view.png")))
-        log(f"page against '{batch}': mean difference {mean:.3f}/255, {far:.2%} of the pixels "
-            f"more than 8/255 apart, largest {largest}")
-        if mean > MEAN_TOLERANCE or far > FAR_TOLERANCE:
-            fail(f"the page's picture differs from ptview's: mean {mean:.3f}, {far:.2%} far")
+        batch = compare_with_batch(browser, "after the orbit")
         check_console(browser, "after the live diffusion, Save and the orbit")
 
         # A turntable: ptview's pictures of the orbit, and a video.
@@ -253,8 +340,8 @@ def main():
         orbit_words = re.sub(r"-exposure \S+ ", "", orbit_words)
         orbit_words = shlex.split(orbit_words)[1:-1] + ["-exposure", f"{tt['exposure']!r}", "frame2.png"]
         tool("ptview", *orbit_words)
-        frame = read_png_file(os.path.join(WORK, "spin", "spin.0002.png"))
-        mean, largest, _ = compare(frame, read_png_file(os.path.join(WORK, "frame2.png")))
+        mean, largest, _ = compare(browser, picture(os.path.join(WORK, "spin", "spin.0002.png")),
+                                   picture(os.path.join(WORK, "frame2.png")))
         if largest > 0:
             fail(f"turntable frame 2 is not ptview -orbit {az + 90:g} {el:g}: largest difference {largest}")
         if tt["video"]:
@@ -284,9 +371,9 @@ def main():
                 "return document.getElementById('command').textContent"):
             fail("the unit length is not in the command line")
         browser.screenshot(os.path.join(SHOTS, "ptview-serve-teapot.png"))
-        picture = canvas(browser)
-        for x in (0, picture[0] // 2 + 1):
-            if coverage(picture, BACKGROUND, (x, 0, picture[0] // 2 - 1, picture[1])) < 0.1:
+        width, height = picture_size(browser)
+        for x in (0, width // 2 + 1):
+            if coverage(browser, BACKGROUND, (x, 0, width // 2 - 1, height)) < 0.1:
                 fail(f"the teapot's tile at x {x} is blank")
         # The brick map's voxels at depth 3, alone, from an orbit.
         browser.run("const boxes=document.querySelectorAll('#source-list input[type=checkbox]');"
@@ -303,7 +390,7 @@ def main():
         labels = browser.run("return [...document.querySelectorAll('.label')].map(l => l.textContent)")
         if labels != ["teapot_ssd.bkm depth 3 · _ssdiffusion"]:
             fail(f"the brick map's tile: {labels}")
-        if coverage(canvas(browser), BACKGROUND) < 0.05:
+        if coverage(browser, BACKGROUND) < 0.05:
             fail("the brick map's voxels are not drawn")
         browser.screenshot(os.path.join(SHOTS, "ptview-serve-brickmap.png"))
         # Overlaid: the bake and the voxels in one tile.

@@ -102,6 +102,16 @@ class Browser:
         """Runs a function body in the page and returns its result."""
         return self._session("POST", "/execute/sync", {"script": script, "args": list(args)})
 
+    def run_async(self, script, *args):
+        """Runs an async function body (`await` allowed) and returns its result."""
+        wrapped = ("const done = arguments[arguments.length - 1];"
+                   f"(async (...args) => {{ {script} }})(...Array.from(arguments).slice(0, -1))"
+                   ".then(done, (e) => done({error: String(e && e.stack || e)}));")
+        value = self._session("POST", "/execute/async", {"script": wrapped, "args": list(args)})
+        if isinstance(value, dict) and set(value) == {"error"}:
+            raise WebDriverError(value["error"])
+        return value
+
     def wait(self, script, timeout=30, what="the page"):
         """Waits until a script returns a true value; returns it."""
         deadline = time.time() + timeout

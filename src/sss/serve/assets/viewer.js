@@ -197,7 +197,7 @@
     }
     if (tile.channel === 'N') return { ...layer, mode: 4 };
     if (tile.channel === 'radius') return { ...layer, mode: 5 };
-    if (live) return { ...layer, val: live.buf, comps: 3, mode: tile.lum ? 2 : 1 };
+    if (live) return { ...layer, val: live.buf, comps: 3, mode: tile.lum ? 2 : 1, keepIndex: live.stride > 1 };
     const list = inputOf(tile.input).channels;
     const k = list.findIndex((c) => c.name === tile.channel);
     const c = geo.channels.get(k);
@@ -280,6 +280,7 @@
   let exposureDirty = true;
   let dragging = false;
   let lastKey = '';
+  let indexKey = []; // per tile: the key of the view its index region was drawn in
   // Draws the sheet; `changed` (an input index): only that input's live
   // diffusion changed, so when nothing else did, only its tiles are drawn
   // again (the others keep their values); 'display': only the exposure or
@@ -295,13 +296,30 @@
     const key = JSON.stringify([width, height, Array.from(sheet[0] ? sheet[0].camera.raster : []),
       S.tiles.map((t) => [t.visible, t.channel, t.lum, t.depth]), S.radiusScale, S.voxelShape, S.layout,
       tiles.map((t) => t.layers.length)]);
-    let only = null;
+    let only = null, resolve = [];
     if (changed === 'display' && key === lastKey) only = [];
-    else if (changed !== null && key === lastKey)
+    else if (changed !== null && key === lastKey) {
       only = sheet.map((t, i) => (t.members.some((m) => m.kind === 'live' && m.input === changed) ? i : -1)).filter((i) => i >= 0);
+      // A whole result in a view whose points are drawn already: new values
+      // at the pixels, no point drawn again.
+      const live = liveShown[changed];
+      resolve = only.filter((i) => live && live.tex && indexKey[i] === key && tiles[i].layers.length === 1 &&
+                                   !tiles[i].layers[0].keepIndex && [1, 2].includes(tiles[i].layers[0].mode));
+      only = only.filter((i) => !resolve.includes(i));
+    }
     lastKey = key;
     const t0 = performance.now();
     renderer.drawValues(tiles, S.radiusScale, only);
+    for (const i of resolve) renderer.resolveTile(tiles[i], liveShown[changed].tex, tiles[i].layers[0].mode);
+    // Which tiles' index regions hold the points of their one layer, drawn whole.
+    if (indexKey.length !== tiles.length) indexKey = tiles.map(() => null);
+    tiles.forEach((t, i) => {
+      if (only && !only.includes(i)) return;
+      const l = t.layers.length === 1 ? t.layers[0] : null;
+      if (!l || !l.keepIndex) indexKey[i] = l ? key : null;
+      else if (!only) indexKey[i] = null;
+    });
+    view.resolved = resolve.length;
     // view.profile (set by a benchmark): the phases' times, each waited for.
     if (view.profile) { renderer.finish(); view.phases = { splat: performance.now() - t0, only }; }
     if (typeof S.exposure === 'number') {
@@ -418,8 +436,9 @@
       const hash = hashFloats(floats);
       if (hash !== meta.hash) throw new Error(`live values damaged on the way (hash ${hash}, sent ${meta.hash})`);
       const old = liveShown[req.cloud];
-      if (old) renderer.release(old.buf);
-      liveShown[req.cloud] = { buf: renderer.buffer(floats), stride: meta.stride, points: meta.points, hash, command: meta.command, words: req.words };
+      if (old) { renderer.release(old.buf); renderer.releaseTexture(old.tex); }
+      liveShown[req.cloud] = { buf: renderer.buffer(floats), stride: meta.stride, points: meta.points, hash, command: meta.command, words: req.words,
+                               tex: meta.stride === 1 ? renderer.valueTexture(floats, 3, meta.points) : null };
       view.shownLiveSeq = req.seq;
       exposureDirty = true;
       render(req.cloud);
@@ -427,7 +446,7 @@
       const ms = performance.now() - req.t0;
       view.shownHash = hash;
       view.latencies.push({ seq: req.seq, preview: meta.stride > 1, ms, server: meta.seconds * 1000, points: meta.points,
-                            answered: tFetched - req.t0, drawn: performance.now() - tFetched });
+                            answered: tFetched - req.t0, drawn: performance.now() - tFetched, resolved: view.resolved > 0 });
       showCommand($('command'), meta.command);
       $('live-status').textContent = `${meta.stride > 1 ? `preview, 1 point in ${meta.stride}` : 'whole cloud'}: ` +
         `${meta.points} points, diffusion ${(meta.seconds * 1000).toFixed(0)} ms, shown after ${ms.toFixed(0)} ms` +

@@ -127,6 +127,7 @@ flat out vec2 v_centre;
 flat out vec3 v_conic;
 flat out vec4 v_plane; // depth, d(depth)/dx, d(depth)/dy, max |change|
 flat out vec2 v_extent;
+flat out uint v_index;
 void cull() { gl_Position = vec4(2.0, 2.0, 2.0, 1.0); }
 void main() {
   vec4 h = u_raster * vec4(a_p, 1.0);
@@ -183,6 +184,7 @@ void main() {
   else v = vec3(a_r);
   v_value = v;
   v_kind = kind;
+  v_index = uint(gl_VertexID) + 1u;
 }`;
   const SPLAT_FS = `#version 300 es
 precision highp float;
@@ -196,7 +198,9 @@ flat in vec2 v_centre;
 flat in vec3 v_conic;
 flat in vec4 v_plane;
 flat in vec2 v_extent;
-out vec4 o_value;
+flat in uint v_index;
+layout(location = 0) out vec4 o_value;
+layout(location = 1) out uint o_index;
 void main() {
   vec2 pr = vec2(gl_FragCoord.x - u_origin.x, u_origin.y + u_size.y - gl_FragCoord.y);
   vec2 d = pr - v_centre;
@@ -208,6 +212,24 @@ void main() {
   float dz = clamp(v_plane.y * d.x + v_plane.z * d.y, -v_plane.w, v_plane.w);
   gl_FragDepth = clamp((v_plane.x + dz - u_depth.x) * u_depth.y, 0.0, 1.0);
   o_value = vec4(v_value, v_kind);
+  o_index = v_index;
+}`;
+  // A tile's values again from the point drawn at each pixel (the index
+  // target) and new per-point values: what a new live result needs when the
+  // view has not changed, without drawing a point.
+  const RESOLVE_FS = `#version 300 es
+precision highp float;
+precision highp int;
+uniform highp usampler2D u_index;
+uniform highp sampler2D u_values;
+uniform int u_mode, u_width;
+out vec4 o_value;
+void main() {
+  uint i = texelFetch(u_index, ivec2(gl_FragCoord.xy), 0).r;
+  if (i == 0u) { o_value = vec4(0.0); return; }
+  int k = int(i - 1u);
+  vec3 v = texelFetch(u_values, ivec2(k % u_width, k / u_width), 0).rgb;
+  o_value = u_mode == 2 ? vec4(vec3(dot(v, vec3(0.2126, 0.7152, 0.0722))), 1.0) : vec4(v, 2.0);
 }`;
   const SHOW_VS = `#version 300 es
 void main() {
@@ -287,6 +309,7 @@ void main() {
       this.canvas = canvas;
       this.splat = compile(gl, SPLAT_VS, SPLAT_FS);
       this.show = compile(gl, SHOW_VS, SHOW_FS);
+      this.resolve = compile(gl, SHOW_VS, RESOLVE_FS);
       this.vao = gl.createVertexArray();
       this.maxPointSize = gl.getParameter(gl.ALIASED_POINT_SIZE_RANGE)[1];
       this.width = this.height = 0;
@@ -298,20 +321,71 @@ void main() {
       this.canvas.width = width; this.canvas.height = height;
       this.canvas.style.width = width + 'px'; this.canvas.style.height = height + 'px';
       this.width = width; this.height = height;
-      if (this.fbo) { gl.deleteFramebuffer(this.fbo); gl.deleteTexture(this.values); gl.deleteRenderbuffer(this.depth); }
-      this.values = gl.createTexture();
-      gl.bindTexture(gl.TEXTURE_2D, this.values);
-      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, width, height);
-      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
-      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      if (this.fbo) {
+        gl.deleteFramebuffer(this.fbo); gl.deleteFramebuffer(this.valuesFbo);
+        gl.deleteTexture(this.values); gl.deleteTexture(this.index); gl.deleteRenderbuffer(this.depth);
+      }
+      const texture = (format) => {
+        const t = gl.createTexture();
+        gl.bindTexture(gl.TEXTURE_2D, t);
+        gl.texStorage2D(gl.TEXTURE_2D, 1, format, width, height);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+        return t;
+      };
+      this.values = texture(gl.RGBA32F); // value, kind (0: no point)
+      this.index = texture(gl.R32UI);    // the point drawn + 1 (0: none)
       this.depth = gl.createRenderbuffer();
       gl.bindRenderbuffer(gl.RENDERBUFFER, this.depth);
       gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT32F, width, height);
       this.fbo = gl.createFramebuffer();
       gl.bindFramebuffer(gl.FRAMEBUFFER, this.fbo);
       gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, this.values, 0);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT1, gl.TEXTURE_2D, this.index, 0);
       gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, this.depth);
       if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) !== gl.FRAMEBUFFER_COMPLETE) throw new Error('cannot render to a float texture');
+      this.valuesFbo = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.FRAMEBUFFER, this.valuesFbo);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, this.values, 0);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    }
+
+    // Per-point values as a texture (RGB, `width` texels a row), for resolve().
+    valueTexture(floats, comps, n) {
+      const gl = this.gl, width = 4096, rows = Math.max(1, Math.ceil(n / width));
+      const data = new Float32Array(width * rows * 3);
+      if (comps === 3) data.set(floats.subarray(0, 3 * n));
+      else for (let i = 0; i < n; ++i) data[3 * i] = data[3 * i + 1] = data[3 * i + 2] = floats[i];
+      const t = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, t);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB32F, width, rows, 0, gl.RGB, gl.FLOAT, data);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      return { texture: t, width };
+    }
+    releaseTexture(t) { if (t) this.gl.deleteTexture(t.texture); }
+
+    // Writes a tile's values from its index region and per-point values (a
+    // valueTexture()); mode 1 colour, 2 luminance.
+    resolveTile(t, values, mode) {
+      const gl = this.gl, u = this.resolve.uniforms, cam = t.camera;
+      const originY = this.height - t.y - cam.height;
+      gl.bindFramebuffer(gl.FRAMEBUFFER, this.valuesFbo);
+      gl.viewport(t.x, originY, cam.width, cam.height);
+      gl.useProgram(this.resolve.program);
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, this.index);
+      gl.activeTexture(gl.TEXTURE1);
+      gl.bindTexture(gl.TEXTURE_2D, values.texture);
+      gl.uniform1i(u.u_index, 0);
+      gl.uniform1i(u.u_values, 1);
+      gl.uniform1i(u.u_mode, mode);
+      gl.uniform1i(u.u_width, values.width);
+      gl.bindVertexArray(this.vao);
+      for (let i = 0; i < 4; ++i) gl.disableVertexAttribArray(i);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      gl.bindVertexArray(null);
+      gl.activeTexture(gl.TEXTURE0);
       gl.bindFramebuffer(gl.FRAMEBUFFER, null);
     }
 
@@ -332,8 +406,10 @@ void main() {
       gl.bindFramebuffer(gl.FRAMEBUFFER, this.fbo);
       gl.viewport(0, 0, this.width, this.height);
       gl.disable(gl.SCISSOR_TEST);
+      gl.drawBuffers([gl.COLOR_ATTACHMENT0, gl.COLOR_ATTACHMENT1]);
       if (!only) {
         gl.clearBufferfv(gl.COLOR, 0, [0, 0, 0, 0]);
+        gl.clearBufferuiv(gl.COLOR, 1, [0, 0, 0, 0]);
         gl.clearBufferfv(gl.DEPTH, 0, [1]);
       }
       gl.enable(gl.DEPTH_TEST);
@@ -348,7 +424,10 @@ void main() {
         gl.viewport(t.x, originY, cam.width, cam.height);
         gl.scissor(t.x, originY, cam.width, cam.height);
         if (only) {
+          gl.drawBuffers([gl.COLOR_ATTACHMENT0, gl.COLOR_ATTACHMENT1]);
           gl.clearBufferfv(gl.COLOR, 0, [0, 0, 0, 0]);
+          // A subsample keeps the whole cloud's indices (for resolveTile()).
+          if (!t.layers.some((l) => l.keepIndex)) gl.clearBufferuiv(gl.COLOR, 1, [0, 0, 0, 0]);
           gl.clearBufferfv(gl.DEPTH, 0, [1]);
         }
         gl.uniformMatrix4fv(u.u_raster, false, Float32Array.from(cam.raster));
@@ -359,6 +438,7 @@ void main() {
         gl.uniform1f(u.u_minw, cam.minW);
         gl.uniform1f(u.u_rscale, radiusScale);
         for (const l of t.layers) {
+          gl.drawBuffers([gl.COLOR_ATTACHMENT0, l.keepIndex ? gl.NONE : gl.COLOR_ATTACHMENT1]);
           gl.uniform1i(u.u_mode, l.mode);
           gl.uniform1i(u.u_square, l.square ? 1 : 0);
           const attribs = [[0, l.pos, 3], [1, l.nrm, 3], [2, l.rad, 1], [3, l.val || l.rad, l.val ? l.comps : 1]];
@@ -372,6 +452,7 @@ void main() {
         }
       });
       gl.bindVertexArray(null);
+      gl.drawBuffers([gl.COLOR_ATTACHMENT0]);
       gl.disable(gl.DEPTH_TEST);
       gl.disable(gl.SCISSOR_TEST);
       gl.bindFramebuffer(gl.FRAMEBUFFER, null);
