@@ -418,7 +418,8 @@
     return words;
   }
   function requestLive(preview) {
-    if (!S.live) return;
+    // Nothing to compute while no tile shows the live diffusion.
+    if (!S.live || !S.tiles.some((t) => t.kind === 'live' && t.visible && t.input === S.live.cloud)) return;
     const req = { seq: ++view.liveSeq, preview, words: liveWords(), cloud: S.live.cloud, name: S.live.name, t0: performance.now() };
     if (preview && inFlight) { pending = req; return; }
     if (!preview) pending = null;
@@ -533,7 +534,11 @@
       show.type = 'checkbox';
       show.checked = tile.visible;
       show.title = 'show';
-      show.addEventListener('change', async () => { tile.visible = show.checked; await refresh(); });
+      show.addEventListener('change', async () => {
+        tile.visible = show.checked;
+        await refresh();
+        if (tile.kind === 'live' && tile.visible && !liveShown[tile.input]) requestLive(false);
+      });
       const name = document.createElement('span');
       name.textContent = inputOf(tile.input).label + (tile.kind === 'live' ? ' (live)' : '');
       name.title = name.textContent;
