@@ -156,10 +156,10 @@ std::string live_diffusion_command(const std::vector<std::string>& words,
     return sss::quoted_command_line("ptfilter", args);
 }
 
-/// A number for the page's URL fragment.
-std::string fragment_number(double v) {
+/// A number for the page's URL fragment (a float with the digits it has).
+std::string fragment_number(double v, int digits = 9) {
     char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
     return buf;
 }
 

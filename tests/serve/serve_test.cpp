@@ -418,7 +418,7 @@ TEST(ServeServer, AnswersRefusesAndSurvivesMalformedRequests) {
           std::string("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: -5\r\n\r\n"),
           std::string("POST /api/diffuse HTTP/1.1\r\nContent-Length: 100\r\n\r\nshort"),
           std::string("GET /") + std::string(20000, 'a') + " HTTP/1.1\r\n\r\n",
-          std::string("\x00\xff\x16\x03\x01 binary", 14)})
+          std::string("\x00\xff\x16\x03\x01 binary", 12)})
         http_exchange(port, junk, true);
     EXPECT_EQ(status(get(port, "/api/scene")), 200);
     server.stop();

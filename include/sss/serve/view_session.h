@@ -194,7 +194,6 @@ public:
 
 private:
     struct Input;
-    struct Live;
     const Input& input(std::size_t i) const;
     std::shared_ptr<const PointCloud> source_cloud(const ViewSourceId& id) const;
     std::shared_ptr<const PointCloud> live_subsample(std::size_t cloud,

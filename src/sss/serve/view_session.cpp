@@ -49,8 +49,6 @@ namespace {
 /// large map would take gigabytes on the page).
 constexpr std::size_t kMaxLevelVoxels = std::size_t(16) << 20;
 
-const ChannelType kRadianceType = ChannelType::Color;
-
 bool is_brick_map_path(const std::string& path) {
     return has_extension_in(path, {".bkm"});
 }
@@ -260,7 +258,7 @@ ViewSession::ViewSession(ServeOptions options) : m_options(std::move(options)) {
             const Channel* area = cloud->find_channel("_area");
             const Channel* radiance = cloud->find_channel("_radiance_t");
             in->diffusable = area && area->type == ChannelType::Float && radiance &&
-                             radiance->type == kRadianceType && cloud->size() > 0;
+                             radiance->type == ChannelType::Color && cloud->size() > 0;
             in->cloud = std::move(cloud);
         }
         m_inputs.push_back(std::move(in));
