@@ -39,7 +39,8 @@ expect_exit() {
 start() {
     local log="$1"
     shift
-    "$ptview" -serve "$@" >"$log" 2>"$log.err" &
+    : >"$log"
+    "$ptview" -serve "$@" >>"$log" 2>"$log.err" &
     pid=$!
     pids+=("$pid")
     for _ in $(seq 100); do
@@ -53,7 +54,7 @@ start() {
 
 # stop: SIGTERM to $pid; it must be gone within 10 s.
 stop() {
-    kill -TERM "$pid"
+    kill -TERM "$pid" || fail "ptview -serve (pid $pid) was gone before it was stopped"
     for _ in $(seq 200); do
         kill -0 "$pid" 2>/dev/null || { wait "$pid" 2>/dev/null || true; return 0; }
         sleep 0.05
