@@ -81,11 +81,12 @@ if(SSS_BUILD_SHARED)
 endif()
 
 # --- dev: headers, archives, CMake package, pkg-config ----------------------
-# The public API's headers: every module's but the command line's (cli is the
-# tools' option parsing, not an API).
+# The public API's headers: every module's but the command line's and
+# ptview -serve's (cli is the tools' option parsing, serve ptview's web page:
+# front ends, not an API).
 get_property(SSS_MODULE_NAMES GLOBAL PROPERTY SSS_MODULE_NAMES)
 set(SSS_PUBLIC_MODULES ${SSS_MODULE_NAMES})
-list(REMOVE_ITEM SSS_PUBLIC_MODULES cli)
+list(REMOVE_ITEM SSS_PUBLIC_MODULES cli serve)
 foreach(module ${SSS_PUBLIC_MODULES})
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/sss/${module}
     DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/sss COMPONENT dev FILES_MATCHING PATTERN "*.h")

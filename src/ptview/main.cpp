@@ -5,12 +5,16 @@
 /// each cloud splatted as discs through the cloud's camera or an orbit
 /// camera, several clouds or channels as a contact sheet, PNG or EXR:
 ///   ptview [options] cloud.ptc... out.png
-/// Option parsing around sss::render_point_view and write_point_view_image.
+///   ptview -serve [options] cloud.ptc|map.bkm...
+/// Option parsing around sss::render_point_view and write_point_view_image,
+/// or, with -serve, around the interactive view's server (sss/serve).
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,8 +23,10 @@
 
 #include "sss/cli/tool.h"
 #include "sss/cloud/point_cloud_io.h"
+#include "sss/serve/serve.h"
 #include "sss/util/error.h"
 #include "sss/util/frame_pattern.h"
+#include "sss/util/isa.h"
 #include "sss/util/job_files.h"
 #include "sss/util/limits.h"
 #include "sss/util/messages.h"
@@ -32,11 +38,14 @@ const char* const kTool = "ptview";
 
 const char* const kUsage = R"(usage: ptview [options] cloud.ptc... out.png|out.exr|-
        ptview [options] -o out.png|out.exr|- cloud.ptc...
+       ptview -serve [-port N] [-bind ADDR] [options] cloud.ptc|map.bkm...
 
 Draws point clouds (.ptc or .ply): each point a disc of its radius facing
 its normal, the nearest one in front, coloured by a channel. Several clouds
 or channels make a contact sheet, one tile per cloud and channel, with one
-camera and one exposure. See docs/ptview.md.
+camera and one exposure. With -serve, an interactive view of the clouds
+and brick maps in a web browser, with the live diffusion of a baked cloud
+(docs/ptview.md, "Interactive view").
 
 options:
   -o FILE                the picture: .png (8-bit sRGB) or .exr (float,
@@ -70,6 +79,16 @@ options:
   -progress 0|1|2        ALF_PROGRESS lines, the exposure and per-tile counts
   -check                 check the command line only, reading and writing
                          no file: exit 0 if it would run, 2 if not
+interactive view:
+  -serve                 serve the page on http://127.0.0.1:PORT/ until
+                         stopped (Ctrl-C); the options above set its first view
+  -port N                the port (default 0: a free one, printed)
+  -bind ADDR             the address listened on (default 127.0.0.1: this
+                         machine only; 0.0.0.0: every network)
+  -savedir DIR           where Save and turntables write (default: the
+                         folder of the input)
+  -livepoints N          points of the live diffusion while a slider moves
+                         (default 50000; the whole cloud when it is let go)
   -h, --help             this help
   --version              version information
 
@@ -90,7 +109,117 @@ struct Request {
     int width = 0, height = 0; ///< 0: default
     sss::PointViewOptions view;
     sss::RunOptions running;
+    bool serve = false;
+    sss::ServeOptions server;
+    std::string fragment; ///< the page's first view (URL fragment)
 };
+
+/// The ptfilter options the live view offers: the material and the profile.
+/// Not -blocker (a file named by the page), nor -exact (all pairs: minutes),
+/// nor those that rename channels or change the output's layout.
+const std::set<std::string> kLiveOptions = {
+    "material", "unitlength",          "scattering", "absorption",
+    "albedo",   "diffusemeanfreepath", "ior",        "maxsolidangle",
+    "profile",  "criterion",           "volume",     "incidence"};
+
+/// The page's option words, parsed by ptfilter's own parser: the command
+/// line shown reproduces the result exactly. Errors in the options' words.
+sss::SsDiffusionOptions live_diffusion_options(const std::vector<std::string>& words) {
+    sss::ArgScanner args(words);
+    sss::SsDiffusionOptions options;
+    std::vector<std::string> stray;
+    std::string o;
+    while (args.next_option(o, stray)) {
+        if (!kLiveOptions.count(o) || !sss::ssdiffusion_option(args, o, options))
+            throw sss::UsageError("option -" + sss::escape_control(o) +
+                                  " is not one the live view offers");
+    }
+    if (!stray.empty())
+        throw sss::UsageError("unexpected word " + sss::quoted(stray.front()) +
+                              " among the options");
+    options.diffusion.isa = sss::resolve_isa(options.diffusion.isa);
+    try {
+        sss::describe_material(options);
+    } catch (const std::exception& e) {
+        if (const std::optional<std::string> worded = sss::option_wording(e))
+            throw sss::UsageError(*worded);
+        throw;
+    }
+    return options;
+}
+
+/// `ptfilter -ssdiffusion WORDS input output`, quoted for a shell.
+std::string live_diffusion_command(const std::vector<std::string>& words,
+                                   const std::string& input, const std::string& output) {
+    std::vector<std::string> args = {"-ssdiffusion"};
+    args.insert(args.end(), words.begin(), words.end());
+    args.push_back(input);
+    args.push_back(output);
+    return sss::quoted_command_line("ptfilter", args);
+}
+
+/// A number for the page's URL fragment (a float with the digits it has).
+std::string fragment_number(double v, int digits = 9) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    return buf;
+}
+
+/// The -serve request: every file argument is an input (clouds and brick
+/// maps); the picture's options set the page's first view.
+Request serve_request(Request r, const std::vector<std::string>& files,
+                      const std::vector<std::string>& sheet_only, bool have_orbit) {
+    if (!sheet_only.empty())
+        throw sss::UsageError("-" + sheet_only.front() +
+                              " is for pictures; -serve shows the files in a browser");
+    if (files.empty())
+        throw sss::UsageError("no file to show (usage: ptview -serve cloud.ptc)");
+    if (have_orbit && r.camera == CameraChoice::File)
+        throw sss::UsageError("-orbit and -camera file exclude each other");
+    for (const std::string& f : files)
+        r.inputs.push_back(sss::expand_frame_pattern(f, r.running.frame, "input"));
+    // The first view, in the page's URL fragment (docs/ptview.md).
+    std::string& h = r.fragment;
+    const auto add = [&h](const std::string& key, const std::string& value) {
+        h += (h.empty() ? "#" : "&") + key + "=";
+        for (unsigned char c : value) {
+            if (std::isalnum(c) || std::strchr("_-.,:", c)) {
+                h += char(c);
+            } else {
+                char buf[4];
+                std::snprintf(buf, sizeof buf, "%%%02X", c);
+                h += buf;
+            }
+        }
+    };
+    if (!r.view.channels.empty()) {
+        std::string list;
+        for (const sss::ViewChannel& c : r.view.channels) {
+            if (!list.empty()) list += ',';
+            list += sss::view_channel_text(c);
+        }
+        add("channel", list);
+    }
+    if (r.camera != CameraChoice::Auto || have_orbit)
+        add("camera", r.camera == CameraChoice::File ? "file" : "orbit");
+    if (have_orbit) {
+        add("az", fragment_number(r.azimuth));
+        add("el", fragment_number(r.elevation));
+    }
+    add("up", std::string(1, char('x' + r.up)));
+    add("fov", fragment_number(r.fov));
+    if (r.width > 0) add("res", std::to_string(r.width) + "x" + std::to_string(r.height));
+    if (r.view.exposure)
+        add("exposure", fragment_number(*r.view.exposure));
+    else if (r.view.exposure_per_tile)
+        add("exposure", "tile");
+    add("falsecolor", r.view.false_color ? "1" : "0");
+    add("radiusscale", fragment_number(r.view.radius_scale));
+    const glm::vec3& b = r.view.background;
+    add("background",
+        fragment_number(b.x) + "," + fragment_number(b.y) + "," + fragment_number(b.z));
+    return r;
+}
 
 /// Parses and checks the command line; nullopt after --help or --version.
 std::optional<Request> parse_request(const std::vector<std::string>& argv) {
@@ -98,11 +227,23 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
     Request r;
     std::vector<std::string> files;
     bool have_orbit = false, have_orbit_option = false;
+    std::vector<std::string> sheet_only; // options of pictures, refused with -serve
     std::string o;
     while (args.next_option(o, files)) {
         if (sss::standard_option(kTool, o, kUsage)) {
             return std::nullopt;
+        } else if (o == "serve") {
+            r.serve = true;
+        } else if (o == "port") {
+            r.server.port = args.integer(o, 0, 65535);
+        } else if (o == "bind") {
+            r.server.bind_address = args.value(o);
+        } else if (o == "savedir") {
+            r.server.save_dir = args.value(o);
+        } else if (o == "livepoints") {
+            r.server.live_points = std::size_t(args.integer(o, 1, 100000000));
         } else if (o == "o") {
+            sheet_only.push_back(o);
             r.output = args.value(o);
         } else if (o == "channel") {
             for (const std::string& spec : sss::split_channel_list(args.value(o), o)) {
@@ -168,8 +309,10 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
         } else if (o == "radiusscale") {
             r.view.radius_scale = float(args.positive(o));
         } else if (o == "columns") {
+            sheet_only.push_back(o);
             r.view.columns = args.integer(o, 1, 4096);
         } else if (o == "gap") {
+            sheet_only.push_back(o);
             r.view.gap = args.integer(o, 0, 256);
         } else if (sss::run_option(args, o, r.running)) {
             continue;
@@ -177,6 +320,7 @@ std::optional<Request> parse_request(const std::vector<std::string>& argv) {
             throw sss::unknown_option(o, kUsage);
         }
     }
+    if (r.serve) return serve_request(std::move(r), files, sheet_only, have_orbit);
     if (r.output.empty()) {
         if (files.size() < 2)
             throw sss::UsageError(files.empty()
@@ -233,10 +377,43 @@ void append(std::string& text, const char* format, Args... args) {
     text += buf;
 }
 
+/// ptview -serve: reads the inputs (their errors are the readers', before
+/// anything is served), then serves the page until the process is stopped.
+int serve(Request& r) {
+    sss::JobFiles files;
+    for (const std::string& in : r.inputs) files.input(in, "the file \"" + in + "\"");
+    if (sss::check_only()) return 0;
+    sss::Job job(kTool, r.running);
+    sss::ServeOptions& o = r.server;
+    o.inputs = r.inputs;
+    o.parse_diffusion = live_diffusion_options;
+    o.diffusion_command = live_diffusion_command;
+    o.software = std::string("sss ptview ") + sss::version_string();
+    if (job.verbose())
+        o.log = [](const std::string& line) {
+            std::printf("ptview: %s\n", line.c_str());
+            sss::flush_standard_output();
+        };
+    sss::ViewSession session(o);
+    sss::ViewServer server(session);
+    if (o.bind_address != "127.0.0.1" && o.bind_address != "localhost" &&
+        o.bind_address != "::1")
+        sss::warn(kTool, "-bind " + o.bind_address +
+                             ": whoever reaches this machine there sees these files and "
+                             "can save results next to them");
+    std::printf("ptview: serving %zu file%s at %s%s (stop with Ctrl-C)\n",
+                r.inputs.size(), r.inputs.size() == 1 ? "" : "s", server.url().c_str(),
+                r.fragment.c_str());
+    sss::flush_standard_output();
+    server.run();
+    return 0;
+}
+
 int run(const std::vector<std::string>& argv) {
     std::optional<Request> request = parse_request(argv);
     if (!request) return 0;
     Request& r = *request;
+    if (r.serve) return serve(r);
     // The file written: the output named, or standard output's file or pipe.
     std::string target = r.output;
     if (r.output == "-" || sss::is_standard_output(r.output)) {
