@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """The live diffusion of ptview -serve: how long from a moved control to the
 new picture, at 200k and 1M points (docs/ptview.md, "Latency").
 

@@ -1,4 +1,6 @@
 #!/usr/bin/env python3
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """ptview -serve in a real browser: Debian's headless Chromium driven through
 chromedriver (tests/browser/webdriver.py). Run by
 tests/cli/test_ptview_serve_browser.sh (CTest: cli.test_ptview_serve_browser).

@@ -1,3 +1,5 @@
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 """A small W3C WebDriver client for Debian's chromium and chromedriver.
 
 The browser tests (tests/browser/) and the latency benchmark

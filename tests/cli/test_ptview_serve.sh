@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ptview -serve without a browser: errors at start as the other tools give
 # them (exit 1 for a bad file, 2 for a bad command line, nothing served),
 # -check, the address printed for -port 0, a port in use, the page and the

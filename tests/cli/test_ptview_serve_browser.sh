@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# Copyright The sss Authors
+# SPDX-License-Identifier: Apache-2.0
 # ptview -serve in a real browser: Debian's headless Chromium, driven through
 # chromedriver by tests/browser/browser_test.py (what it checks is listed
 # there: the page without console errors, the live diffusion's picture and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 // Unit tests for the serve module (ptview -serve): sources and their arrays,
 // the live diffusion (the library's values bit for bit, the subsample,
 // cancellation by a newer request), Save, turntables, brick-map voxels, and

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file serve.h
 /// Module serve: `ptview -serve`, an interactive view of point clouds and

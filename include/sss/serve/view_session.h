@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file view_session.h
 /// What `ptview -serve` shows and computes, without the HTTP around it: the

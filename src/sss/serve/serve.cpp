@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file serve.cpp
 /// The HTTP side of `ptview -serve` (cpp-httplib): the page's files, the
 /// session's data as float arrays, the live diffusion, Save and turntables;

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 /// \file serve_internal.h
 /// What the serve module's sources share: a JSON writer for the page's

@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file serve_json.cpp
 /// The JSON writer of the page's answers and the program search.
 

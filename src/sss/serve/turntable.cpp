@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file turntable.cpp
 /// Turntables of `ptview -serve`: the frames of an orbit drawn with ptview's
 /// own renderer (each frame is the picture `ptview -orbit AZ EL` makes of

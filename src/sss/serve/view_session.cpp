@@ -1,3 +1,5 @@
+// Copyright The sss Authors
+// SPDX-License-Identifier: Apache-2.0
 /// \file view_session.cpp
 /// The files of `ptview -serve` and the page's requests on them: sources as
 /// float arrays, the live diffusion with cancellation, Save.
