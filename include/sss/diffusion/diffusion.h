@@ -56,6 +56,11 @@ struct DiffusionProblem {
     std::vector<Profile> profiles;
     /// Optional per-point channel -> profile index (receiver's material).
     std::vector<glm::u32vec3> profile_index;
+    /// Optional per-point factor on each channel of the point's result (empty:
+    /// 1). Per-point materials that share quantised profiles set it to the
+    /// point's own total reflectance over its profile's, which keeps the
+    /// quantisation's error second order.
+    std::vector<glm::vec3> receiver_gain;
 };
 
 /// The whole-cloud quantities the error criterion's tolerance is relative to.

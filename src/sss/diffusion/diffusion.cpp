@@ -68,6 +68,10 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
               DiffusionProblem* release = nullptr) {
     if (pb.profiles.size() < 3 && pb.profile_index.empty())
         throw ValueError("diffusion needs three channel profiles");
+    if (!pb.receiver_gain.empty() && pb.receiver_gain.size() != pb.irradiance.size())
+        throw ValueError("diffusion: " + std::to_string(pb.receiver_gain.size()) +
+                         " receiver gains for " + std::to_string(pb.irradiance.size()) +
+                         " points");
     Stopwatch watch;
     DiffusionStats stats;
     std::optional<ScopedStage> stage(std::in_place, "building the octree");

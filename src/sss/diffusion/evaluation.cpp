@@ -92,7 +92,14 @@ struct CoincidentSum {
 // Per-point materials through the block loops (each receiver reads its own
 // profiles' rows).
 bool per_point_rows(const EvaluationContext& cx) {
-    return !cx.pb.profile_index.empty() && !cx.tables.profile_rows.empty();
+    return !cx.tree.profile_index.empty() && !cx.tables.profile_rows.empty();
+}
+
+// The channels of the receiver at sorted position s.
+ReceiverChannels receiver_at(const EvaluationContext& cx, uint32_t s) {
+    return receiver_channels(cx.pb, cx.tables,
+                             cx.tree.profile_index.empty() ? glm::u32vec3(0, 1, 2)
+                                                           : cx.tree.profile_index[s]);
 }
 
 // Per-point materials: the local expansions about `centre`, one per distinct
@@ -147,7 +154,7 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
         seen[ch].reset(cx.tables.channels.size());
     }
     for (uint32_t r = 0; r < count; ++r) {
-        const glm::u32vec3 k = cx.pb.profile_index[cx.tree.order[first + r]];
+        const glm::u32vec3 k = cx.tree.profile_index[first + r];
         for (int ch = 0; ch < 3; ++ch) {
             auto& v = out.tables[ch];
             uint32_t i = seen[ch].find(k[ch]);
@@ -264,8 +271,7 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             __builtin_prefetch(&result[cx.slot(s, original)], 1, 1);
         }
         if (mixed) {
-            const ReceiverChannels& rc = w.rcs[r] =
-                receiver_channels(pb, tables, tree.order[s]);
+            const ReceiverChannels& rc = w.rcs[r] = receiver_at(cx, s);
             core2 = std::min(core2, rc.near_core2);
             block.core2[r] = rc.near_core2;
             for (int ch = 0; ch < 3; ++ch)
@@ -372,6 +378,7 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                 mixed ? mixed_value(w.bucket_local.coef[ch][w.le_index[ch][r]], d)
                       : local_value(le, ch, d);
             double v = double(block.acc[ch][r]) + l + self[ch];
+            if (!tree.receiver_gain.empty()) v *= double(tree.receiver_gain[s][ch]);
             out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
@@ -432,8 +439,7 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
     for (uint32_t s = bucket.first; s < bucket.first + bucket.count; ++s) {
         if (!cx.wants(s)) continue;
         uint32_t original = tree.order[s];
-        ReceiverChannels rc =
-            pb.profile_index.empty() ? first_rc : receiver_channels(pb, tables, original);
+        ReceiverChannels rc = tree.profile_index.empty() ? first_rc : receiver_at(cx, s);
         glm::vec3 x(tree.pos_rho2[s]);
         walk_receiver(cx, x, w.lists);
         double acc[3];
@@ -456,6 +462,7 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
         glm::vec3& out = result[cx.slot(s, original)];
         for (int ch = 0; ch < 3; ++ch) {
             double v = acc[ch];
+            if (!tree.receiver_gain.empty()) v *= double(tree.receiver_gain[s][ch]);
             out[ch] = std::isfinite(v) ? float(v) : 0.0f;
         }
     }
@@ -472,8 +479,7 @@ void evaluate_bucket(const EvaluationContext& cx, uint32_t bucket_node, Scratch&
                      const MixedLocal* inherited_mixed = nullptr) {
     const Tree& tree = cx.tree;
     const Node& bucket = tree.nodes[bucket_node];
-    ReceiverChannels first_rc =
-        receiver_channels(cx.pb, cx.tables, tree.order[bucket.first]);
+    ReceiverChannels first_rc = receiver_at(cx, bucket.first);
     if (cx.options.criterion == Criterion::Error) {
         BucketTolerance tol =
             bucket_tolerance(cx.tolerance, cx.pb, cx.tables, tree, bucket_node, first_rc);
@@ -518,7 +524,7 @@ constexpr uint32_t kMaxGroup = 4096;
 
 bool groups_allowed(const EvaluationContext& cx) {
     return cx.options.criterion == Criterion::Error &&
-           (cx.pb.profile_index.empty() || per_point_rows(cx));
+           (cx.tree.profile_index.empty() || per_point_rows(cx));
 }
 
 bool is_group(const EvaluationContext& cx, const Node& node) {
@@ -552,7 +558,7 @@ void evaluate_group(const EvaluationContext& cx, uint32_t k, std::size_t depth,
     }
     if (levels.size() <= depth) levels.resize(depth + 1);
     GroupLevel& lv = levels[depth];
-    ReceiverChannels rc = receiver_channels(cx.pb, cx.tables, tree.order[node.first]);
+    ReceiverChannels rc = receiver_at(cx, node.first);
     BucketTolerance tol = bucket_tolerance(cx.tolerance, cx.pb, cx.tables, tree, k, rc);
     traverse_group(tree, cx.tables, tol, node.lo, node.hi, start, w.lists);
     lv.start.swap(w.lists.near);

@@ -9,12 +9,14 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include <oneapi/tbb/parallel_for.h>
 
 #include <glm/geometric.hpp>
 
 #include "sss/diffusion/diffusion.h"
+#include "sss/util/error.h"
 #include "sss/util/math.h"
 #include "sss/util/progress.h"
 
@@ -32,6 +34,9 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
                          const std::vector<std::size_t>& receivers, Progress* progress,
                          ExactDisks disks) {
     const std::size_t n = pb.positions.size();
+    if (!pb.receiver_gain.empty() && pb.receiver_gain.size() != n)
+        throw ValueError("diffusion: " + std::to_string(pb.receiver_gain.size()) +
+                         " receiver gains for " + std::to_string(n) + " points");
     std::vector<std::size_t> rec = receivers;
     if (rec.empty()) {
         rec.resize(n);
@@ -93,6 +98,7 @@ evaluate_diffusion_exact(const DiffusionProblem& pb,
             for (int ch = 0; ch < 3; ++ch) acc[ch] += prof[ch]->eval(r) * a * e[ch];
         }
         out[r] = glm::dvec3(acc[0], acc[1], acc[2]);
+        if (!pb.receiver_gain.empty()) out[r] *= glm::dvec3(pb.receiver_gain[i]);
         if (progress) progress->update(done.fetch_add(1) + 1, rec.size());
     });
     return out;

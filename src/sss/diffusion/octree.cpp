@@ -171,6 +171,20 @@ void sort_sources(const DiffusionProblem& pb, const UninitVector<MortonKey>& key
         tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
     });
     if (release) std::vector<float>().swap(release->areas);
+    if (!pb.profile_index.empty()) {
+        tree.profile_index.resize(n);
+        gather([&](std::size_t s, uint32_t i) {
+            tree.profile_index[s] = pb.profile_index[i];
+        });
+    }
+    if (release) std::vector<glm::u32vec3>().swap(release->profile_index);
+    if (!pb.receiver_gain.empty()) {
+        tree.receiver_gain.resize(n);
+        gather([&](std::size_t s, uint32_t i) {
+            tree.receiver_gain[s] = pb.receiver_gain[i];
+        });
+    }
+    if (release) std::vector<glm::vec3>().swap(release->receiver_gain);
 }
 
 // Breadth-first construction: children are appended contiguously after

@@ -57,6 +57,11 @@ struct Tree {
     // Empty when no source disk can need the disk quadrature, the only reader
     // of the normals (see build_tree()).
     UninitVector<glm::vec3> normal;
+    // Per-point materials (else empty): the receivers' profile indices and
+    // gains (DiffusionProblem::profile_index, receiver_gain) in sorted order,
+    // so that a bucket reads its receivers' in one run.
+    UninitVector<glm::u32vec3> profile_index;
+    UninitVector<glm::vec3> receiver_gain;
 };
 
 // Sorts the sources into Morton order and builds the nodes (breadth first,

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <string>
 
+#include <oneapi/tbb/parallel_for.h>
+
 #include "sss/util/limits.h"
 
 namespace sss::diffusion_detail {
@@ -96,7 +98,8 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
                  "the tables of " + std::to_string(profiles.size()) + " profiles",
                  "give fewer distinct per-point materials");
     t.channels.resize(profiles.size());
-    for (std::size_t pi = 0; pi < profiles.size(); ++pi) {
+    // Each profile's table on its own (per-point materials make hundreds).
+    oneapi::tbb::parallel_for(std::size_t(0), profiles.size(), [&](std::size_t pi) {
         const Profile& p = profiles[pi];
         ChannelTable& ct = t.channels[pi];
         ct.entries.assign(t.count, TableEntry{0, 0, 0, 0});
@@ -105,7 +108,7 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
         ct.max_d1.assign(t.count, 0.0f);
         ct.max_d2.assign(t.count, 0.0f);
         ct.core2 = float(p.core_length() * p.core_length());
-        if (p.total() <= 0.0) continue;
+        if (p.total() <= 0.0) return;
         double rcut = p.cutoff_radius(1e-7);
         auto F = [&](double q) { return p.eval(std::sqrt(std::max(q, 0.0))); };
         std::vector<double> g(t.count, 0.0);
@@ -136,7 +139,7 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
             ct.max_d1[k] = float(std::min(d1max, 1e30));
             ct.max_d2[k] = float(std::min(d2max, 1e30));
         }
-    }
+    });
     if (t.channels.size() >= 3) {
         t.rows.assign(std::size_t(t.count) * kRowFloats, 0.0f);
         for (uint32_t k = 0; k < t.count; ++k) {

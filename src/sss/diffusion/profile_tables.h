@@ -133,12 +133,10 @@ inline bool uses_disk_means(const Profile* const profile[3]) {
     return true;
 }
 
-// The channels of the receiver at original index `original`.
+// The channels of a receiver whose profiles are pb.profiles[idx[ch]].
 inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
-                                          const Tables& tables, uint32_t original) {
+                                          const Tables& tables, glm::u32vec3 idx) {
     ReceiverChannels rc;
-    glm::u32vec3 idx =
-        pb.profile_index.empty() ? glm::u32vec3(0, 1, 2) : pb.profile_index[original];
     float core2 = std::numeric_limits<float>::max();
     for (int ch = 0; ch < 3; ++ch) {
         rc.table[ch] = &tables.channels[idx[ch]];
@@ -148,6 +146,14 @@ inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
     rc.near_core2 = core2;
     rc.disk_means = uses_disk_means(rc.profile);
     return rc;
+}
+
+// The channels of the receiver at original index `original`.
+inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
+                                          const Tables& tables, uint32_t original) {
+    return receiver_channels(pb, tables,
+                             pb.profile_index.empty() ? glm::u32vec3(0, 1, 2)
+                                                      : pb.profile_index[original]);
 }
 
 } // namespace sss::diffusion_detail

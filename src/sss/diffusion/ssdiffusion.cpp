@@ -13,9 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <map>
 #include <optional>
-#include <tuple>
 
 #include <sys/stat.h>
 
@@ -37,14 +35,21 @@ namespace {
 
 // Albedo at or above 1 is clamped here (with one warning), as PRMan does at 0.999.
 constexpr double kMaxAlbedo = 0.99999;
-// Per-point materials share profile tables; at most this many distinct ones.
-constexpr std::size_t kMaxDistinctProfiles = 1024;
+// Per-point materials share profile tables: at most this many distinct ones.
+// Each point's result is then scaled by its own albedo over its table's
+// (DiffusionProblem::receiver_gain), so that what the sharing leaves is the
+// small change of the profile's shape across a quantisation step.
+constexpr std::size_t kMaxDistinctProfiles = 256;
+// The finest quantisation: the mean free path in 2^(1/1024) steps, albedo in
+// 1/4096; each coarser level halves both. The shape changes with the mean
+// free path's scale, the total (which the gain restores) with the albedo, so
+// albedo steps are four times as coarse relative to their effect.
+constexpr int kFinestDmfpSteps = 1024, kAlbedoStepsPerDmfpStep = 4;
 
 // Per-point albedo quantisation: steps of 1/albedo_steps, except below 2^-8,
-// where such a step is a large fraction of the value (1/65536 made 1e-6 zero
-// and 1e-4 1.07e-4): there a + 2^-24 keeps log2(albedo_steps) - 8 significant
-// bits (0.2 % at full resolution; at most 16 x 256 extra keys). Small albedos
-// get negative keys.
+// where such a step is a large fraction of the value: there a + 2^-24 keeps
+// log2(albedo_steps) - 8 significant bits (at least one). Small albedos get
+// negative keys.
 constexpr double kSmallAlbedo = 1.0 / 256.0, kTinyAlbedo = 1.0 / 16777216.0;
 int small_albedo_drop(int albedo_steps) {
     int bits = std::max(1, int(std::bit_width(unsigned(albedo_steps))) - 1 - 8);
@@ -258,53 +263,120 @@ struct PointMaterialSource {
     const Channel* albedo = nullptr;
     const Channel* dmfp = nullptr;
     glm::dvec3 albedo0, dmfp0;
+    const SsDiffusionOptions* options = nullptr;
+
+    // Point i's albedo (clamped below 1; `clamped` notes it) and mean free
+    // path in channel ch, checked.
+    void values(std::size_t i, int ch, double& a, double& d, bool& clamped) const {
+        a = albedo ? albedo->data[3 * i + ch] : albedo0[ch];
+        d = dmfp ? dmfp->data[3 * i + ch] : dmfp0[ch];
+        if (!(a >= 0.0) || !std::isfinite(a))
+            throw ValueError("channel '" + options->albedo_channel +
+                             "': impossible albedo " + std::to_string(a) + " at point " +
+                             std::to_string(i));
+        if (!(d > 0.0) || !std::isfinite(d))
+            throw ValueError("channel '" + options->dmfp_channel +
+                             "': diffuse mean free path must be positive, got " +
+                             std::to_string(d) + " at point " + std::to_string(i));
+        if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
+    }
 };
 
-// One quantisation level of the per-point materials: sets pb.profile_index
-// and the distinct (albedo, dmfp) keys. False when the keys overflow
-// kMaxDistinctProfiles and a coarser level remains.
-bool quantise_materials(const PointMaterialSource& src, const SsDiffusionOptions& o,
-                        int albedo_steps, int dmfp_steps, DiffusionProblem& pb,
-                        std::vector<std::tuple<double, double>>& keys, bool& clamped) {
-    const std::size_t n = pb.positions.size();
-    std::map<std::tuple<int64_t, int64_t>, uint32_t> index;
-    keys.clear();
-    pb.profile_index.assign(n, glm::u32vec3(0));
-    bool overflow = false;
-    for (std::size_t i = 0; i < n && !overflow; ++i) {
-        for (int ch = 0; ch < 3; ++ch) {
-            double a = src.albedo ? src.albedo->data[3 * i + ch] : src.albedo0[ch];
-            double d = src.dmfp ? src.dmfp->data[3 * i + ch] : src.dmfp0[ch];
-            if (!(a >= 0.0) || !std::isfinite(a))
-                throw ValueError("channel '" + o.albedo_channel +
-                                 "': impossible albedo " + std::to_string(a) +
-                                 " at point " + std::to_string(i));
-            if (!(d > 0.0) || !std::isfinite(d))
-                throw ValueError("channel '" + o.dmfp_channel +
-                                 "': diffuse mean free path must be positive, got " +
-                                 std::to_string(d) + " at point " + std::to_string(i));
-            if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
-            int64_t ka = albedo_key(a, albedo_steps);
-            int64_t kd = std::llround(std::log2(d) * dmfp_steps);
-            auto [it, fresh] = index.try_emplace({ka, kd}, uint32_t(keys.size()));
-            if (fresh) {
-                keys.emplace_back(albedo_of_key(ka, albedo_steps),
-                                  std::exp2(double(kd) / dmfp_steps));
-                if (keys.size() > kMaxDistinctProfiles && albedo_steps > 16)
-                    overflow = true;
+// The distinct (albedo, dmfp) keys of one quantisation level and their
+// indices, in the order first met: open addressing in a table four times
+// the largest count (a level that would pass it is abandoned).
+class MaterialKeys {
+public:
+    explicit MaterialKeys(std::size_t most)
+        : m_most(most), m_slots(std::bit_ceil(4 * most + 4), kEmpty) {}
+    // The key's index, added if new; kFull when it would be one too many.
+    uint32_t find_or_add(int64_t ka, int64_t kd) {
+        const std::size_t mask = m_slots.size() - 1;
+        uint64_t h =
+            uint64_t(ka) * 0x9E3779B97F4A7C15ull ^ uint64_t(kd) * 0xC2B2AE3D27D4EB4Full;
+        for (std::size_t at = std::size_t(h >> 40) & mask;; at = (at + 1) & mask) {
+            const uint32_t k = m_slots[at];
+            if (k == kEmpty) {
+                if (m_keys.size() >= m_most) return kFull;
+                m_slots[at] = uint32_t(m_keys.size());
+                m_keys.push_back({ka, kd});
+                return m_slots[at];
             }
-            pb.profile_index[i][ch] = it->second;
+            if (m_keys[k].first == ka && m_keys[k].second == kd) return k;
         }
     }
-    return !(overflow && albedo_steps > 16);
+    const std::vector<std::pair<int64_t, int64_t>>& keys() const { return m_keys; }
+    static constexpr uint32_t kFull = UINT32_MAX - 1;
+
+private:
+    static constexpr uint32_t kEmpty = UINT32_MAX;
+    std::size_t m_most;
+    std::vector<uint32_t> m_slots;
+    std::vector<std::pair<int64_t, int64_t>> m_keys;
+};
+
+// x rounded to the nearest integer (llround's libm call was a tenth of the
+// quantisation's time).
+int64_t nearest(double x) {
+    const double y = x + 0.5;
+    const int64_t t = int64_t(y);
+    return double(t) > y ? t - 1 : t;
+}
+
+// One quantisation level of the per-point materials: sets pb.profile_index,
+// pb.receiver_gain (each point's albedo over its profile's: the albedo is
+// the profile's total reflectance, every kind is made so from it), the
+// distinct keys and each one's albedo. False when there would be more keys
+// than `keys` holds.
+bool quantise_materials(const PointMaterialSource& src, int albedo_steps, int dmfp_steps,
+                        DiffusionProblem& pb, MaterialKeys& keys,
+                        std::vector<double>& key_albedo, bool& clamped) {
+    const std::size_t n = pb.positions.size();
+    pb.profile_index.resize(n);
+    pb.receiver_gain.resize(n);
+    key_albedo.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int ch = 0; ch < 3; ++ch) {
+            double a, d;
+            src.values(i, ch, a, d, clamped);
+            const int64_t ka = albedo_key(a, albedo_steps);
+            const uint32_t k =
+                keys.find_or_add(ka, nearest(std::log2(d) * double(dmfp_steps)));
+            if (k == MaterialKeys::kFull) return false;
+            if (k == key_albedo.size())
+                key_albedo.push_back(albedo_of_key(ka, albedo_steps));
+            pb.profile_index[i][ch] = k;
+            const double table = key_albedo[k];
+            pb.receiver_gain[i][ch] = table > 0.0 ? float(a / table) : 1.0f;
+        }
+    }
+    return true;
+}
+
+// Whether the keys of every stride-th point fit `keys` at a level: a cheap
+// first guess of the level (the whole cloud has at least as many).
+bool sample_fits(const PointMaterialSource& src, std::size_t n, std::size_t stride,
+                 int albedo_steps, int dmfp_steps, MaterialKeys& keys) {
+    bool clamped = false;
+    for (std::size_t i = 0; i < n; i += stride)
+        for (int ch = 0; ch < 3; ++ch) {
+            double a, d;
+            src.values(i, ch, a, d, clamped);
+            if (keys.find_or_add(albedo_key(a, albedo_steps),
+                                 nearest(std::log2(d) * double(dmfp_steps))) ==
+                MaterialKeys::kFull)
+                return false;
+        }
+    return true;
 }
 
 // Per-point materials from the _albedo / _diffusemeanfreepath channels:
-// pb.profiles and pb.profile_index.
+// pb.profiles, pb.profile_index and pb.receiver_gain.
 void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
                         DiffusionProblem& pb, SsDiffusionReport& rep) {
     const MaterialSpec& m = o.material;
     PointMaterialSource src;
+    src.options = &o;
     src.albedo = m.albedo_from_file ? &require_channel(in, o.albedo_channel, 3,
                                                        MissingChannelError::Role::Albedo)
                                     : nullptr;
@@ -314,22 +386,36 @@ void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
     m.resolve_albedo_dmfp(src.albedo0, src.dmfp0);
     const double ior = m.resolved_ior();
     bool clamped = false;
-    // Quantise per-point values so points share tables; coarsen until the
-    // number of distinct profiles fits.
-    // dmfp_steps stays >= 1 (0 made the dmfp NaN); the last level keeps
-    // every distinct value rather than stopping half-way.
-    std::vector<std::tuple<double, double>> keys;
-    for (int albedo_steps = 65536, dmfp_steps = 1024;;
-         albedo_steps /= 2, dmfp_steps = std::max(1, dmfp_steps / 2)) {
-        if (!quantise_materials(src, o, albedo_steps, dmfp_steps, pb, keys, clamped))
+    // The finest level whose distinct profiles fit; the coarsest (one dmfp
+    // step per octave, albedo in quarters) keeps every distinct value
+    // rather than stopping half-way.
+    std::vector<double> key_albedo;
+    const std::size_t n = pb.positions.size();
+    int dmfp_steps = kFinestDmfpSteps;
+    for (; dmfp_steps > 1; dmfp_steps /= 2) {
+        MaterialKeys keys(kMaxDistinctProfiles);
+        if (sample_fits(src, n, 61, kAlbedoStepsPerDmfpStep * dmfp_steps, dmfp_steps,
+                        keys))
+            break;
+    }
+    for (;; dmfp_steps /= 2) {
+        const int albedo_steps = kAlbedoStepsPerDmfpStep * dmfp_steps;
+        const bool last = dmfp_steps == 1;
+        MaterialKeys keys(last ? 3 * n : kMaxDistinctProfiles);
+        if (!quantise_materials(src, albedo_steps, dmfp_steps, pb, keys, key_albedo,
+                                clamped))
             continue;
         pb.profiles.clear();
-        for (auto [a, d] : keys)
-            pb.profiles.push_back(
-                Profile::from_albedo_dmfp(o.profile, a, d, ior)); // in mm
-        rep.distinct_profiles = keys.size();
+        for (std::size_t k = 0; k < keys.keys().size(); ++k)
+            pb.profiles.push_back(Profile::from_albedo_dmfp(
+                o.profile, key_albedo[k],
+                std::exp2(double(keys.keys()[k].second) / dmfp_steps), ior)); // in mm
+        rep.distinct_profiles = keys.keys().size();
         break;
     }
+    if (std::all_of(pb.receiver_gain.begin(), pb.receiver_gain.end(),
+                    [](const glm::vec3& g) { return g == glm::vec3(1.0f); }))
+        pb.receiver_gain.clear();
     if (clamped)
         rep.warnings.push_back("albedo values >= 1 were clamped to " +
                                std::to_string(kMaxAlbedo));
@@ -584,7 +670,10 @@ void SsDiffusionFiles::filter(SsDiffusionReport* report) {
         claimed += in.reader->size();
     }
     // Before reading: the headers' counts say what the filter will hold.
-    check_filter_memory(claimed, 12 * material_channels.size(), join(m_paths));
+    // (Per-point materials: 12 bytes per channel read and 12 for the gains.)
+    check_filter_memory(
+        claimed, 12 * material_channels.size() + (material_channels.empty() ? 0 : 12),
+        join(m_paths));
     if (verified) points.reserve(std::size_t(claimed));
     PointCloud chunk;
     for (Input& in : m_inputs) {

@@ -90,12 +90,12 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
             model.reach[std::size_t(first_rc.profile[ch] - pb.profiles.data())];
         bt.tables[ch].assign(1, first_rc.table[ch]);
     }
-    if (!pb.profile_index.empty()) {
+    if (!tree.profile_index.empty()) {
         const bool envelopes = !tables.envelopes.empty();
-        const glm::u32vec3 first = pb.profile_index[tree.order[node.first]];
+        const glm::u32vec3 first = tree.profile_index[node.first];
         const Profile* last[3] = {nullptr, nullptr, nullptr};
         for (uint32_t s = node.first; s < node.first + node.count; ++s) {
-            const glm::u32vec3 idx = pb.profile_index[tree.order[s]];
+            const glm::u32vec3 idx = tree.profile_index[s];
             if (idx != first) bt.one_material = false;
             for (int ch = 0; ch < 3; ++ch) {
                 const Profile* p = &pb.profiles[idx[ch]];
@@ -113,7 +113,7 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
                 v.clear();
                 seen.reset(envelopes ? tables.envelopes.size() : tables.channels.size());
                 for (uint32_t s = node.first; s < node.first + node.count; ++s) {
-                    const uint32_t k = pb.profile_index[tree.order[s]][ch];
+                    const uint32_t k = tree.profile_index[s][ch];
                     const uint32_t key = envelopes ? tables.envelope_of[k] : k;
                     if (seen.find(key) != KeyPositions::kNone) continue;
                     seen.set(key, uint32_t(v.size()));
