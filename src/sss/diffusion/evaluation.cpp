@@ -155,6 +155,12 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
     }
     for (uint32_t r = 0; r < count; ++r) {
         const glm::u32vec3 k = cx.tree.profile_index[first + r];
+        // (Neighbours mostly share their material.)
+        if (r > 0 && k == cx.tree.profile_index[first + r - 1]) {
+            if (index)
+                for (int ch = 0; ch < 3; ++ch) index[ch][r] = index[ch][r - 1];
+            continue;
+        }
         for (int ch = 0; ch < 3; ++ch) {
             auto& v = out.tables[ch];
             uint32_t i = seen[ch].find(k[ch]);
@@ -271,7 +277,10 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
             __builtin_prefetch(&result[cx.slot(s, original)], 1, 1);
         }
         if (mixed) {
-            const ReceiverChannels& rc = w.rcs[r] = receiver_at(cx, s);
+            const ReceiverChannels& rc = w.rcs[r] =
+                r > 0 && tree.profile_index[s] == tree.profile_index[s - 1]
+                    ? w.rcs[r - 1]
+                    : receiver_at(cx, s);
             core2 = std::min(core2, rc.near_core2);
             block.core2[r] = rc.near_core2;
             for (int ch = 0; ch < 3; ++ch)

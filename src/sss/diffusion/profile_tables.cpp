@@ -42,31 +42,39 @@ void make_envelopes(const std::vector<Profile>& profiles, Tables& t) {
                    ? a.first < b.first
                    : profiles[a.second].total() < profiles[b.second].total();
     });
+    // The classes (each a run of `order`), then their bounds, class by class.
     t.envelope_of.assign(profiles.size(), 0);
+    std::vector<std::size_t> start; // each class's first position in `order`
     int64_t first_bin = 0;
     double first_total = 0.0;
-    for (auto [b, i] : order) {
-        if (t.envelopes.empty() || b != first_bin ||
+    for (std::size_t o = 0; o < order.size(); ++o) {
+        const auto [b, i] = order[o];
+        if (start.empty() || b != first_bin ||
             !(profiles[i].total() <= kEnvelopeTotal * first_total)) {
             first_bin = b;
             first_total = profiles[i].total();
-            ChannelTable e;
-            e.error_bound.assign(t.count, 0.0f);
-            e.max_value.assign(t.count, 0.0f);
-            e.max_d1.assign(t.count, 0.0f);
-            e.max_d2.assign(t.count, 0.0f);
-            t.envelopes.push_back(std::move(e));
+            start.push_back(o);
         }
-        ChannelTable& e = t.envelopes.back();
-        const ChannelTable& c = t.channels[i];
-        for (uint32_t k = 0; k < t.count; ++k) {
-            e.error_bound[k] = std::max(e.error_bound[k], c.error_bound[k]);
-            e.max_value[k] = std::max(e.max_value[k], c.max_value[k]);
-            e.max_d1[k] = std::max(e.max_d1[k], c.max_d1[k]);
-            e.max_d2[k] = std::max(e.max_d2[k], c.max_d2[k]);
-        }
-        t.envelope_of[i] = uint32_t(t.envelopes.size() - 1);
+        t.envelope_of[i] = uint32_t(start.size() - 1);
     }
+    start.push_back(order.size());
+    t.envelopes.resize(start.size() - 1);
+    oneapi::tbb::parallel_for(std::size_t(0), t.envelopes.size(), [&](std::size_t c) {
+        ChannelTable& e = t.envelopes[c];
+        e.error_bound.assign(t.count, 0.0f);
+        e.max_value.assign(t.count, 0.0f);
+        e.max_d1.assign(t.count, 0.0f);
+        e.max_d2.assign(t.count, 0.0f);
+        for (std::size_t o = start[c]; o < start[c + 1]; ++o) {
+            const ChannelTable& m = t.channels[order[o].second];
+            for (uint32_t k = 0; k < t.count; ++k) {
+                e.error_bound[k] = std::max(e.error_bound[k], m.error_bound[k]);
+                e.max_value[k] = std::max(e.max_value[k], m.max_value[k]);
+                e.max_d1[k] = std::max(e.max_d1[k], m.max_d1[k]);
+                e.max_d2[k] = std::max(e.max_d2[k], m.max_d2[k]);
+            }
+        }
+    });
 }
 
 } // namespace
@@ -163,7 +171,7 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
     const std::size_t per_profile = std::size_t(t.count) * kProfileRowFloats;
     if (per_point && per_profile * t.channels.size() < std::size_t(INT32_MAX)) {
         t.profile_rows.assign(per_profile * t.channels.size(), 0.0f);
-        for (std::size_t pi = 0; pi < t.channels.size(); ++pi) {
+        oneapi::tbb::parallel_for(std::size_t(0), t.channels.size(), [&](std::size_t pi) {
             const std::vector<TableEntry>& e = t.channels[pi].entries;
             for (uint32_t k = 0; k < t.count; ++k) {
                 float* row = t.profile_rows.data() + pi * per_profile +
@@ -177,7 +185,7 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
                 row[4] = a.d2f;
                 row[5] = b.d2f - a.d2f;
             }
-        }
+        });
     }
     return t;
 }

@@ -46,6 +46,14 @@ constexpr std::size_t kMaxDistinctProfiles = 256;
 // albedo steps are four times as coarse relative to their effect.
 constexpr int kFinestDmfpSteps = 1024, kAlbedoStepsPerDmfpStep = 4;
 
+// x rounded to the nearest integer (llround's libm call was a tenth of the
+// quantisation's time).
+int64_t nearest(double x) {
+    const double y = x + 0.5;
+    const int64_t t = int64_t(y);
+    return double(t) > y ? t - 1 : t;
+}
+
 // Per-point albedo quantisation: steps of 1/albedo_steps, except below 2^-8,
 // where such a step is a large fraction of the value: there a + 2^-24 keeps
 // log2(albedo_steps) - 8 significant bits (at least one). Small albedos get
@@ -56,7 +64,7 @@ int small_albedo_drop(int albedo_steps) {
     return 23 - bits;
 }
 int64_t albedo_key(double a, int albedo_steps) {
-    if (a >= kSmallAlbedo) return std::llround(a * albedo_steps);
+    if (a >= kSmallAlbedo) return nearest(a * albedo_steps);
     const int drop = small_albedo_drop(albedo_steps);
     uint32_t b = std::bit_cast<uint32_t>(float(a + kTinyAlbedo));
     return -1 - int64_t((b + (1u << (drop - 1))) >> drop);
@@ -266,19 +274,30 @@ struct PointMaterialSource {
     const SsDiffusionOptions* options = nullptr;
 
     // Point i's albedo (clamped below 1; `clamped` notes it) and mean free
-    // path in channel ch, checked.
-    void values(std::size_t i, int ch, double& a, double& d, bool& clamped) const {
+    // path in channel ch; false when either is impossible.
+    bool checked_values(std::size_t i, int ch, double& a, double& d,
+                        bool& clamped) const {
         a = albedo ? albedo->data[3 * i + ch] : albedo0[ch];
         d = dmfp ? dmfp->data[3 * i + ch] : dmfp0[ch];
-        if (!(a >= 0.0) || !std::isfinite(a))
-            throw ValueError("channel '" + options->albedo_channel +
-                             "': impossible albedo " + std::to_string(a) + " at point " +
-                             std::to_string(i));
-        if (!(d > 0.0) || !std::isfinite(d))
+        if (!(a >= 0.0) || !std::isfinite(a) || !(d > 0.0) || !std::isfinite(d))
+            return false;
+        if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
+        return true;
+    }
+    // Throws the error of point i's first impossible value in channels
+    // [ch, ch + count).
+    void values(std::size_t i, int ch, int count, bool& clamped) const {
+        for (int c = ch; c < ch + count && c < 3; ++c) {
+            double a, d;
+            if (checked_values(i, c, a, d, clamped)) continue;
+            if (!(a >= 0.0) || !std::isfinite(a))
+                throw ValueError("channel '" + options->albedo_channel +
+                                 "': impossible albedo " + std::to_string(a) +
+                                 " at point " + std::to_string(i));
             throw ValueError("channel '" + options->dmfp_channel +
                              "': diffuse mean free path must be positive, got " +
                              std::to_string(d) + " at point " + std::to_string(i));
-        if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
+        }
     }
 };
 
@@ -315,41 +334,78 @@ private:
     std::vector<std::pair<int64_t, int64_t>> m_keys;
 };
 
-// x rounded to the nearest integer (llround's libm call was a tenth of the
-// quantisation's time).
-int64_t nearest(double x) {
-    const double y = x + 0.5;
-    const int64_t t = int64_t(y);
-    return double(t) > y ? t - 1 : t;
-}
-
 // One quantisation level of the per-point materials: sets pb.profile_index,
 // pb.receiver_gain (each point's albedo over its profile's: the albedo is
 // the profile's total reflectance, every kind is made so from it), the
 // distinct keys and each one's albedo. False when there would be more keys
-// than `keys` holds.
+// than `keys` holds. In parallel over fixed chunks of points whose own keys,
+// joined in chunk order, are the keys in the order first met: the same
+// profiles, indices and errors whatever the thread count.
 bool quantise_materials(const PointMaterialSource& src, int albedo_steps, int dmfp_steps,
-                        DiffusionProblem& pb, MaterialKeys& keys,
+                        std::size_t most, DiffusionProblem& pb, MaterialKeys& keys,
                         std::vector<double>& key_albedo, bool& clamped) {
     const std::size_t n = pb.positions.size();
+    constexpr std::size_t kChunk = 16384;
+    key_albedo.clear();
+    struct Chunk {
+        std::optional<MaterialKeys> keys;
+        std::vector<uint32_t> global; // local key -> keys' index
+        bool full = false, clamped = false;
+        std::size_t bad = SIZE_MAX; // first point with an impossible value
+    };
+    std::vector<Chunk> chunks((n + kChunk - 1) / kChunk);
     pb.profile_index.resize(n);
     pb.receiver_gain.resize(n);
-    key_albedo.clear();
-    for (std::size_t i = 0; i < n; ++i) {
-        for (int ch = 0; ch < 3; ++ch) {
-            double a, d;
-            src.values(i, ch, a, d, clamped);
-            const int64_t ka = albedo_key(a, albedo_steps);
-            const uint32_t k =
-                keys.find_or_add(ka, nearest(std::log2(d) * double(dmfp_steps)));
+    oneapi::tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t c) {
+        Chunk& ck = chunks[c];
+        const std::size_t end = std::min(n, (c + 1) * kChunk);
+        ck.keys.emplace(std::min(most, 3 * kChunk));
+        for (std::size_t i = c * kChunk; i < end && !ck.full; ++i)
+            for (int ch = 0; ch < 3; ++ch) {
+                double a, d;
+                if (!src.checked_values(i, ch, a, d, ck.clamped)) {
+                    ck.bad = i;
+                    ck.full = true;
+                    break;
+                }
+                const uint32_t k =
+                    ck.keys->find_or_add(albedo_key(a, albedo_steps),
+                                         nearest(std::log2(d) * double(dmfp_steps)));
+                if (k == MaterialKeys::kFull) {
+                    ck.full = true;
+                    break;
+                }
+                pb.profile_index[i][ch] = k;
+            }
+    });
+    for (const Chunk& ck : chunks) {
+        if (ck.bad != SIZE_MAX) src.values(ck.bad, 0, 3, clamped); // throws its error
+        if (ck.full) return false;
+        clamped = clamped || ck.clamped;
+    }
+    for (Chunk& ck : chunks) {
+        for (auto [ka, kd] : ck.keys->keys()) {
+            const uint32_t k = keys.find_or_add(ka, kd);
             if (k == MaterialKeys::kFull) return false;
             if (k == key_albedo.size())
                 key_albedo.push_back(albedo_of_key(ka, albedo_steps));
-            pb.profile_index[i][ch] = k;
-            const double table = key_albedo[k];
-            pb.receiver_gain[i][ch] = table > 0.0 ? float(a / table) : 1.0f;
+            ck.global.push_back(k);
         }
+        ck.keys.reset();
     }
+    oneapi::tbb::parallel_for(std::size_t(0), chunks.size(), [&](std::size_t c) {
+        const std::size_t end = std::min(n, (c + 1) * kChunk);
+        bool unused = false;
+        for (std::size_t i = c * kChunk; i < end; ++i)
+            for (int ch = 0; ch < 3; ++ch) {
+                double a, d;
+                src.checked_values(i, ch, a, d, unused);
+                const uint32_t k = chunks[c].global[pb.profile_index[i][ch]];
+                pb.profile_index[i][ch] = k;
+                pb.receiver_gain[i][ch] =
+                    key_albedo[k] > 0.0 ? float(a / key_albedo[k]) : 1.0f;
+            }
+    });
     return true;
 }
 
@@ -361,7 +417,8 @@ bool sample_fits(const PointMaterialSource& src, std::size_t n, std::size_t stri
     for (std::size_t i = 0; i < n; i += stride)
         for (int ch = 0; ch < 3; ++ch) {
             double a, d;
-            src.values(i, ch, a, d, clamped);
+            // (The whole pass names the first impossible value.)
+            if (!src.checked_values(i, ch, a, d, clamped)) return true;
             if (keys.find_or_add(albedo_key(a, albedo_steps),
                                  nearest(std::log2(d) * double(dmfp_steps))) ==
                 MaterialKeys::kFull)
@@ -402,14 +459,16 @@ void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
         const int albedo_steps = kAlbedoStepsPerDmfpStep * dmfp_steps;
         const bool last = dmfp_steps == 1;
         MaterialKeys keys(last ? 3 * n : kMaxDistinctProfiles);
-        if (!quantise_materials(src, albedo_steps, dmfp_steps, pb, keys, key_albedo,
-                                clamped))
+        if (!quantise_materials(src, albedo_steps, dmfp_steps,
+                                last ? SIZE_MAX : kMaxDistinctProfiles, pb, keys,
+                                key_albedo, clamped))
             continue;
-        pb.profiles.clear();
-        for (std::size_t k = 0; k < keys.keys().size(); ++k)
-            pb.profiles.push_back(Profile::from_albedo_dmfp(
+        pb.profiles.assign(keys.keys().size(), Profile{});
+        oneapi::tbb::parallel_for(std::size_t(0), pb.profiles.size(), [&](std::size_t k) {
+            pb.profiles[k] = Profile::from_albedo_dmfp(
                 o.profile, key_albedo[k],
-                std::exp2(double(keys.keys()[k].second) / dmfp_steps), ior)); // in mm
+                std::exp2(double(keys.keys()[k].second) / dmfp_steps), ior); // in mm
+        });
         rep.distinct_profiles = keys.keys().size();
         break;
     }

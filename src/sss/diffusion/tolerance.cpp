@@ -93,35 +93,30 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
     if (!tree.profile_index.empty()) {
         const bool envelopes = !tables.envelopes.empty();
         const glm::u32vec3 first = tree.profile_index[node.first];
-        const Profile* last[3] = {nullptr, nullptr, nullptr};
+        // (A group's scan covers thousands of receivers, in runs that share
+        // one material: each run is looked at once.)
+        thread_local KeyPositions seen[3];
+        for (int ch = 0; ch < 3; ++ch) {
+            bt.tables[ch].clear();
+            seen[ch].reset(envelopes ? tables.envelopes.size() : tables.channels.size());
+        }
         for (uint32_t s = node.first; s < node.first + node.count; ++s) {
             const glm::u32vec3 idx = tree.profile_index[s];
+            if (s > node.first && idx == tree.profile_index[s - 1]) continue;
             if (idx != first) bt.one_material = false;
             for (int ch = 0; ch < 3; ++ch) {
-                const Profile* p = &pb.profiles[idx[ch]];
-                if (p == last[ch]) continue; // (neighbours often share one)
-                last[ch] = p;
-                tot_min[ch] = std::min(tot_min[ch], p->total());
-                reach_min[ch] = std::min(reach_min[ch], model.reach[idx[ch]]);
+                const uint32_t k = idx[ch];
+                const uint32_t key = envelopes ? tables.envelope_of[k] : k;
+                tot_min[ch] = std::min(tot_min[ch], pb.profiles[k].total());
+                reach_min[ch] = std::min(reach_min[ch], model.reach[k]);
+                if (seen[ch].find(key) != KeyPositions::kNone) continue;
+                seen[ch].set(key, uint32_t(bt.tables[ch].size()));
+                bt.tables[ch].push_back(envelopes ? &tables.envelopes[key]
+                                                  : &tables.channels[key]);
             }
         }
-        if (!bt.one_material) {
-            // (A group's scan covers thousands of receivers.)
-            thread_local KeyPositions seen;
-            for (int ch = 0; ch < 3; ++ch) {
-                auto& v = bt.tables[ch];
-                v.clear();
-                seen.reset(envelopes ? tables.envelopes.size() : tables.channels.size());
-                for (uint32_t s = node.first; s < node.first + node.count; ++s) {
-                    const uint32_t k = tree.profile_index[s][ch];
-                    const uint32_t key = envelopes ? tables.envelope_of[k] : k;
-                    if (seen.find(key) != KeyPositions::kNone) continue;
-                    seen.set(key, uint32_t(v.size()));
-                    v.push_back(envelopes ? &tables.envelopes[key]
-                                          : &tables.channels[key]);
-                }
-            }
-        }
+        if (bt.one_material)
+            for (int ch = 0; ch < 3; ++ch) bt.tables[ch].assign(1, first_rc.table[ch]);
     }
     const uint32_t up = reference_node(tree, bucket, model.region);
     // Area density of the region: its points' areas against a quarter
