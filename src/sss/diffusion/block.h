@@ -34,6 +34,8 @@ struct BucketBlock {
     // profile per channel, as its float offset into the profile rows (the
     // lanes past count up to a multiple of 8 hold 0).
     alignas(64) int32_t base[3][kMaxBucket];
+    // ... and its material's offset into BlockTables::material_rows.
+    alignas(64) int32_t mbase[kMaxBucket];
     alignas(64) float core2[kMaxBucket]; // each receiver's near_core2
 };
 
@@ -50,10 +52,15 @@ struct BlockTables {
     // BucketBlock::base; t and rows are then unused by far, mono, near and
     // near_disks), else null.
     const float* profile_rows = nullptr;
+    // With profile_rows: the materials' near rows (material_near_rows(),
+    // read through BucketBlock::mbase), or null.
+    const float* material_rows = nullptr;
     // local(): the channel whose node moments slot c of the output takes
     // with table t[c] (the identity but for per-point materials, which pack
     // any channel's tables three to a call).
     int32_t moment[3] = {0, 1, 2};
+    // local(): how many of the slots are used (the others' out is 0).
+    int32_t slots = 3;
 };
 
 struct BlockKernels {

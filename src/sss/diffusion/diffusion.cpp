@@ -86,6 +86,8 @@ void evaluate(const DiffusionProblem& pb, const DiffusionOptions& options,
     ToleranceModel tolerance = tolerance_model(pb, reference, options.max_solid_angle);
     std::vector<uint32_t> buckets = choose_buckets(tree);
     EvaluationContext cx{pb, options, tables, tree, tolerance};
+    const std::vector<float> material_rows = material_near_rows(tables, tree.materials);
+    if (!material_rows.empty()) cx.material_rows = material_rows.data();
     std::vector<uint8_t> wanted;
     if (selection.receivers) {
         // Wanted receivers by sorted position; only their buckets are evaluated.

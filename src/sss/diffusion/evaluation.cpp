@@ -92,14 +92,14 @@ struct CoincidentSum {
 // Per-point materials through the block loops (each receiver reads its own
 // profiles' rows).
 bool per_point_rows(const EvaluationContext& cx) {
-    return !cx.tree.profile_index.empty() && !cx.tables.profile_rows.empty();
+    return cx.tree.per_point() && !cx.tables.profile_rows.empty();
 }
 
 // The channels of the receiver at sorted position s.
 ReceiverChannels receiver_at(const EvaluationContext& cx, uint32_t s) {
     return receiver_channels(cx.pb, cx.tables,
-                             cx.tree.profile_index.empty() ? glm::u32vec3(0, 1, 2)
-                                                           : cx.tree.profile_index[s]);
+                             cx.tree.per_point() ? cx.tree.profiles_of(s)
+                                                 : glm::u32vec3(0, 1, 2));
 }
 
 // Per-point materials: the local expansions about `centre`, one per distinct
@@ -154,13 +154,13 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
         seen[ch].reset(cx.tables.channels.size());
     }
     for (uint32_t r = 0; r < count; ++r) {
-        const glm::u32vec3 k = cx.tree.profile_index[first + r];
         // (Neighbours mostly share their material.)
-        if (r > 0 && k == cx.tree.profile_index[first + r - 1]) {
+        if (r > 0 && cx.tree.material[first + r] == cx.tree.material[first + r - 1]) {
             if (index)
                 for (int ch = 0; ch < 3; ++ch) index[ch][r] = index[ch][r - 1];
             continue;
         }
+        const glm::u32vec3 k = cx.tree.profiles_of(first + r);
         for (int ch = 0; ch < 3; ++ch) {
             auto& v = out.tables[ch];
             uint32_t i = seen[ch].find(k[ch]);
@@ -206,6 +206,7 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
             t.t[slot] = out.tables[ch[slot]][j[slot]]->entries.data();
             t.moment[slot] = ch[slot];
         }
+        t.slots = int32_t(std::min<std::size_t>(3, pairs - first));
         double sums[3][10];
         cx.kernels.local(t, cx.tree.expansions.data(), nodes.data(), nodes.size(), c,
                          sums);
@@ -278,27 +279,31 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
         }
         if (mixed) {
             const ReceiverChannels& rc = w.rcs[r] =
-                r > 0 && tree.profile_index[s] == tree.profile_index[s - 1]
-                    ? w.rcs[r - 1]
-                    : receiver_at(cx, s);
+                r > 0 && tree.material[s] == tree.material[s - 1] ? w.rcs[r - 1]
+                                                                  : receiver_at(cx, s);
             core2 = std::min(core2, rc.near_core2);
             block.core2[r] = rc.near_core2;
             for (int ch = 0; ch < 3; ++ch)
                 block.base[ch][r] =
                     int32_t(std::size_t(rc.table[ch] - tables.channels.data()) *
                             tables.count * kProfileRowFloats);
+            block.mbase[r] =
+                int32_t(std::size_t(tree.material[s]) * tables.count * kProfileRowFloats);
         }
     }
     if (mixed)
-        for (uint32_t r = bucket.count; r < ((bucket.count + 7) & ~7u); ++r)
+        for (uint32_t r = bucket.count; r < ((bucket.count + 7) & ~7u); ++r) {
             for (int ch = 0; ch < 3; ++ch) block.base[ch][r] = 0;
+            block.mbase[r] = 0;
+        }
     const BlockTables t{{first_rc.table[0]->entries.data(),
                          first_rc.table[1]->entries.data(),
                          first_rc.table[2]->entries.data()},
                         int32_t(tables.bits0),
                         int32_t(tables.count) - 1,
                         mixed ? nullptr : rows_of(tables, first_rc),
-                        mixed ? tables.profile_rows.data() : nullptr};
+                        mixed ? tables.profile_rows.data() : nullptr,
+                        mixed ? cx.material_rows : nullptr};
     const auto rc_of = [&](uint32_t r) -> const ReceiverChannels& {
         return mixed ? w.rcs[r] : first_rc;
     };
@@ -448,7 +453,7 @@ void evaluate_each(const EvaluationContext& cx, const Node& bucket,
     for (uint32_t s = bucket.first; s < bucket.first + bucket.count; ++s) {
         if (!cx.wants(s)) continue;
         uint32_t original = tree.order[s];
-        ReceiverChannels rc = tree.profile_index.empty() ? first_rc : receiver_at(cx, s);
+        ReceiverChannels rc = tree.per_point() ? receiver_at(cx, s) : first_rc;
         glm::vec3 x(tree.pos_rho2[s]);
         walk_receiver(cx, x, w.lists);
         double acc[3];
@@ -533,7 +538,7 @@ constexpr uint32_t kMaxGroup = 4096;
 
 bool groups_allowed(const EvaluationContext& cx) {
     return cx.options.criterion == Criterion::Error &&
-           (cx.tree.profile_index.empty() || per_point_rows(cx));
+           (!cx.tree.per_point() || per_point_rows(cx));
 }
 
 bool is_group(const EvaluationContext& cx, const Node& node) {

@@ -42,6 +42,9 @@ struct EvaluationContext {
     // [range_first, range_end), written to result[s - range_first], so that a
     // part's result is the size of the part, not of the cloud.
     uint32_t range_first = 0, range_end = 0;
+    // Per-point materials: material_near_rows() of the tree's materials
+    // (null: the near pairs read each channel's profile rows).
+    const float* material_rows = nullptr;
 
     bool ranged() const { return range_end > range_first; }
     // Whether the receiver at sorted position s is evaluated.

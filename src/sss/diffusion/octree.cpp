@@ -135,6 +135,63 @@ UninitVector<MortonKey> sorted_morton(const std::vector<glm::vec3>& positions) {
     return keys;
 }
 
+// The distinct triples of profile indices, keyed by open addressing in a
+// table at least twice their number.
+class TripleIndex {
+public:
+    // The triple's index, added (as the next) if new.
+    uint32_t find_or_add(const glm::u32vec3& t, std::vector<glm::u32vec3>& triples) {
+        if (2 * (triples.size() + 1) > m_slots.size()) grow(triples);
+        const std::size_t at = place(t, triples);
+        if (m_slots[at] == kEmpty) {
+            m_slots[at] = uint32_t(triples.size());
+            triples.push_back(t);
+        }
+        return m_slots[at];
+    }
+
+private:
+    static constexpr uint32_t kEmpty = UINT32_MAX;
+    std::size_t place(const glm::u32vec3& t,
+                      const std::vector<glm::u32vec3>& triples) const {
+        const std::size_t mask = m_slots.size() - 1;
+        const uint64_t h = (uint64_t(t.x) * 0x9E3779B97F4A7C15ull) ^
+                           (uint64_t(t.y) * 0xC2B2AE3D27D4EB4Full) ^
+                           (uint64_t(t.z) * 0x165667B19E3779F9ull);
+        std::size_t at = std::size_t(h >> 32) & mask;
+        while (m_slots[at] != kEmpty && triples[m_slots[at]] != t) at = (at + 1) & mask;
+        return at;
+    }
+    void grow(const std::vector<glm::u32vec3>& triples) {
+        m_slots.assign(std::max<std::size_t>(64, 2 * m_slots.size()), kEmpty);
+        for (uint32_t k = 0; k < triples.size(); ++k)
+            m_slots[place(triples[k], triples)] = k;
+    }
+    std::vector<uint32_t> m_slots;
+};
+
+// Per-point materials: tree.material and tree.materials. The triples are
+// gathered in sorted order first (in parallel); the scan is then serial but
+// reads them in one run, and a receiver with its predecessor's material (the
+// usual case) costs one comparison.
+void sort_materials(const DiffusionProblem& pb, const UninitVector<MortonKey>& keys,
+                    Tree& tree) {
+    const std::size_t n = keys.size();
+    UninitVector<glm::u32vec3> sorted(n);
+    oneapi::tbb::parallel_for(oneapi::tbb::blocked_range<std::size_t>(0, n, 4096),
+                              [&](const oneapi::tbb::blocked_range<std::size_t>& range) {
+                                  for (std::size_t s = range.begin(); s != range.end();
+                                       ++s)
+                                      sorted[s] = pb.profile_index[keys[s].index];
+                              });
+    tree.material.resize(n);
+    TripleIndex index;
+    for (std::size_t s = 0; s < n; ++s)
+        tree.material[s] = s > 0 && sorted[s] == sorted[s - 1]
+                               ? tree.material[s - 1]
+                               : index.find_or_add(sorted[s], tree.materials);
+}
+
 // The sources in Morton order: tree.order and the sorted source arrays. With
 // `release`, each of the problem's arrays is freed as soon as its last sorted
 // copy is made, so that the problem and the tree are never held whole at once
@@ -171,12 +228,7 @@ void sort_sources(const DiffusionProblem& pb, const UninitVector<MortonKey>& key
         tree.power_area[s] = glm::vec4(pb.irradiance[i] * a, a);
     });
     if (release) std::vector<float>().swap(release->areas);
-    if (!pb.profile_index.empty()) {
-        tree.profile_index.resize(n);
-        gather([&](std::size_t s, uint32_t i) {
-            tree.profile_index[s] = pb.profile_index[i];
-        });
-    }
+    if (!pb.profile_index.empty()) sort_materials(pb, keys, tree);
     if (release) std::vector<glm::u32vec3>().swap(release->profile_index);
     if (!pb.receiver_gain.empty()) {
         tree.receiver_gain.resize(n);

@@ -57,11 +57,17 @@ struct Tree {
     // Empty when no source disk can need the disk quadrature, the only reader
     // of the normals (see build_tree()).
     UninitVector<glm::vec3> normal;
-    // Per-point materials (else empty): the receivers' profile indices and
-    // gains (DiffusionProblem::profile_index, receiver_gain) in sorted order,
-    // so that a bucket reads its receivers' in one run.
-    UninitVector<glm::u32vec3> profile_index;
+    // Per-point materials (else empty): each receiver's material in sorted
+    // order, an index into `materials`, the distinct triples of channel
+    // profile indices (DiffusionProblem::profile_index) in the order first
+    // met; and the receivers' gains (DiffusionProblem::receiver_gain).
+    UninitVector<uint32_t> material;
+    std::vector<glm::u32vec3> materials;
     UninitVector<glm::vec3> receiver_gain;
+
+    bool per_point() const { return !material.empty(); }
+    // The profile indices of the receiver at sorted position s.
+    glm::u32vec3 profiles_of(uint32_t s) const { return materials[material[s]]; }
 };
 
 // Sorts the sources into Morton order and builds the nodes (breadth first,

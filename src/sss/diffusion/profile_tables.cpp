@@ -61,23 +61,43 @@ void make_envelopes(const std::vector<Profile>& profiles, Tables& t) {
     t.envelopes.resize(start.size() - 1);
     oneapi::tbb::parallel_for(std::size_t(0), t.envelopes.size(), [&](std::size_t c) {
         ChannelTable& e = t.envelopes[c];
-        e.error_bound.assign(t.count, 0.0f);
-        e.max_value.assign(t.count, 0.0f);
-        e.max_d1.assign(t.count, 0.0f);
-        e.max_d2.assign(t.count, 0.0f);
+        e.bounds.assign(t.count, TableBounds{0, 0, 0, 0});
         for (std::size_t o = start[c]; o < start[c + 1]; ++o) {
             const ChannelTable& m = t.channels[order[o].second];
             for (uint32_t k = 0; k < t.count; ++k) {
-                e.error_bound[k] = std::max(e.error_bound[k], m.error_bound[k]);
-                e.max_value[k] = std::max(e.max_value[k], m.max_value[k]);
-                e.max_d1[k] = std::max(e.max_d1[k], m.max_d1[k]);
-                e.max_d2[k] = std::max(e.max_d2[k], m.max_d2[k]);
+                TableBounds& eb = e.bounds[k];
+                const TableBounds& mb = m.bounds[k];
+                eb.error_bound = std::max(eb.error_bound, mb.error_bound);
+                eb.max_value = std::max(eb.max_value, mb.max_value);
+                eb.max_d1 = std::max(eb.max_d1, mb.max_d1);
+                eb.max_d2 = std::max(eb.max_d2, mb.max_d2);
             }
         }
     });
 }
 
 } // namespace
+
+std::vector<float> material_near_rows(const Tables& tables,
+                                      const std::vector<glm::u32vec3>& materials) {
+    const std::size_t per_material = std::size_t(tables.count) * kProfileRowFloats;
+    if (tables.profile_rows.empty() ||
+        uint64_t(materials.size()) * per_material * sizeof(float) > kMaterialRowBytes)
+        return {};
+    std::vector<float> rows(materials.size() * per_material, 0.0f);
+    oneapi::tbb::parallel_for(std::size_t(0), materials.size(), [&](std::size_t m) {
+        for (int ch = 0; ch < 3; ++ch) {
+            const float* src =
+                tables.profile_rows.data() + materials[m][ch] * per_material;
+            float* dst = rows.data() + m * per_material;
+            for (uint32_t k = 0; k < tables.count; ++k) {
+                dst[k * kProfileRowFloats + 2 * ch] = src[k * kProfileRowFloats];
+                dst[k * kProfileRowFloats + 2 * ch + 1] = src[k * kProfileRowFloats + 1];
+            }
+        }
+    });
+    return rows;
+}
 
 Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
     Tables t;
@@ -111,10 +131,7 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
         const Profile& p = profiles[pi];
         ChannelTable& ct = t.channels[pi];
         ct.entries.assign(t.count, TableEntry{0, 0, 0, 0});
-        ct.error_bound.assign(t.count, 0.0f);
-        ct.max_value.assign(t.count, 0.0f);
-        ct.max_d1.assign(t.count, 0.0f);
-        ct.max_d2.assign(t.count, 0.0f);
+        ct.bounds.assign(t.count, TableBounds{0, 0, 0, 0});
         ct.core2 = float(p.core_length() * p.core_length());
         if (p.total() <= 0.0) return;
         double rcut = p.cutoff_radius(1e-7);
@@ -142,10 +159,8 @@ Tables build_tables(const std::vector<Profile>& profiles, bool per_point) {
             fmax = std::max(fmax, double(ct.entries[k].f));
             d1max = std::max(d1max, std::abs(double(ct.entries[k].df)));
             d2max = std::max(d2max, std::abs(double(ct.entries[k].d2f)));
-            ct.error_bound[k] = float(std::min(gmax, 1e30));
-            ct.max_value[k] = float(std::min(fmax, 1e30));
-            ct.max_d1[k] = float(std::min(d1max, 1e30));
-            ct.max_d2[k] = float(std::min(d2max, 1e30));
+            ct.bounds[k] = {float(std::min(gmax, 1e30)), float(std::min(fmax, 1e30)),
+                            float(std::min(d1max, 1e30)), float(std::min(d2max, 1e30))};
         }
     });
     if (t.channels.size() >= 3) {

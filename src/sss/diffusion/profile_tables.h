@@ -31,13 +31,19 @@ struct TableEntry {
     float f, df, d2f, pad; // F(q), F'(q), F''(q)
 };
 
+// What the error criterion's walk reads at an entry, together (one cache
+// line for a node's test).
+struct TableBounds {
+    float error_bound; // G(q): bound on the quadrupole remainder
+    float max_value;   // max_{q' >= q} F(q')
+    float max_d1;      // max_{q' >= q} |F'(q')|
+    float max_d2;      // max_{q' >= q} |F''(q')|
+};
+
 struct ChannelTable {
     std::vector<TableEntry> entries;
-    std::vector<float> error_bound; // G(q): bound on the quadrupole remainder
-    std::vector<float> max_value;   // max_{q' >= q} F(q')
-    std::vector<float> max_d1;      // max_{q' >= q} |F'(q')|
-    std::vector<float> max_d2;      // max_{q' >= q} |F''(q')|
-    float core2 = 0;                // core length squared
+    std::vector<TableBounds> bounds;
+    float core2 = 0; // core length squared
 };
 
 // The tables of channels 0, 1 and 2 (what every receiver of a cloud with one
@@ -113,6 +119,15 @@ private:
 // length squared out to where the widest profile has lost all but 1e-7.
 // With `per_point`, also the profile rows.
 Tables build_tables(const std::vector<Profile>& profiles, bool per_point = false);
+
+// Per-point materials: for each material (a triple of profile indices), its
+// three channels' {F, dF} interleaved as the one-material rows' first group
+// ({v0, s0, v1, s1, v2, s2, 0, 0}, kProfileRowFloats per entry), so that a
+// near pair reads a receiver's three channels with one load, as with one
+// material. Empty when they would take more than kMaterialRowBytes.
+constexpr uint64_t kMaterialRowBytes = uint64_t(64) << 20;
+std::vector<float> material_near_rows(const Tables& tables,
+                                      const std::vector<glm::u32vec3>& materials);
 
 // The tables and profiles one receiver reads, per channel.
 struct ReceiverChannels {

@@ -90,9 +90,9 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
             model.reach[std::size_t(first_rc.profile[ch] - pb.profiles.data())];
         bt.tables[ch].assign(1, first_rc.table[ch]);
     }
-    if (!tree.profile_index.empty()) {
+    if (tree.per_point()) {
         const bool envelopes = !tables.envelopes.empty();
-        const glm::u32vec3 first = tree.profile_index[node.first];
+        const uint32_t first = tree.material[node.first];
         // (A group's scan covers thousands of receivers, in runs that share
         // one material: each run is looked at once.)
         thread_local KeyPositions seen[3];
@@ -101,9 +101,9 @@ BucketTolerance bucket_tolerance(const ToleranceModel& model, const DiffusionPro
             seen[ch].reset(envelopes ? tables.envelopes.size() : tables.channels.size());
         }
         for (uint32_t s = node.first; s < node.first + node.count; ++s) {
-            const glm::u32vec3 idx = tree.profile_index[s];
-            if (s > node.first && idx == tree.profile_index[s - 1]) continue;
-            if (idx != first) bt.one_material = false;
+            if (s > node.first && tree.material[s] == tree.material[s - 1]) continue;
+            if (tree.material[s] != first) bt.one_material = false;
+            const glm::u32vec3 idx = tree.profiles_of(s);
             for (int ch = 0; ch < 3; ++ch) {
                 const uint32_t k = idx[ch];
                 const uint32_t key = envelopes ? tables.envelope_of[k] : k;

@@ -110,8 +110,9 @@ void traverse_error(const Tree& tree, const Tables& tables, const BucketToleranc
             float ratio = 0.0f;
             for (int ch = 0; ch < 3; ++ch)
                 for (const ChannelTable* ct : tol.tables[ch])
-                    ratio = std::max(ratio, float(double(ex.abs_phi[ch]) *
-                                                  ct->error_bound[i] * inv_tol[ch]));
+                    ratio =
+                        std::max(ratio, float(double(ex.abs_phi[ch]) *
+                                              ct->bounds[i].error_bound * inv_tol[ch]));
             // The local expansion's remainder: third order in the displacement
             // from the node's centroid plus the one from the box centre.
             const float rl = r + rb;
@@ -123,18 +124,21 @@ void traverse_error(const Tree& tree, const Tables& tables, const BucketToleranc
             const double wmax =
                 glm::length(glm::max(glm::abs(blo - ex.c), glm::abs(bhi - ex.c)));
             for (int ch = 0; ch < 3; ++ch) {
+                const double ap = ex.abs_phi[ch];
+                // Error of dropping the dipole and quadrupole terms: the same
+                // factors for every receiver table.
+                const double m2 = ap * r * r;
+                const float* dv = ex.d[ch];
+                const double d_norm =
+                    mono ? std::sqrt(double(dv[0]) * dv[0] + double(dv[1]) * dv[1] +
+                                     double(dv[2]) * dv[2])
+                         : 0.0;
                 for (const ChannelTable* ct : tol.tables[ch]) {
-                    double ap = ex.abs_phi[ch];
-                    if (ap * ct->max_value[i] > tol.skip[ch]) negligible = false;
+                    const TableBounds& b = ct->bounds[i];
+                    if (ap * b.max_value > tol.skip[ch]) negligible = false;
                     if (!mono) continue;
-                    // Error of dropping the dipole and quadrupole terms.
-                    double m2 = ap * r * r;
-                    const float* dv = ex.d[ch];
-                    const double d_norm =
-                        std::sqrt(double(dv[0]) * dv[0] + double(dv[1]) * dv[1] +
-                                  double(dv[2]) * dv[2]);
-                    double mono_err = ct->max_d1[i] * (m2 + 2.0 * wmax * d_norm) +
-                                      2.0 * ct->max_d2[i] * wmax * wmax * m2;
+                    double mono_err = b.max_d1 * (m2 + 2.0 * wmax * d_norm) +
+                                      2.0 * b.max_d2 * wmax * wmax * m2;
                     if (mono_err > 0.1 * tol.tol[ch]) mono = false;
                 }
             }
@@ -166,7 +170,7 @@ void traverse_group(const Tree& tree, const Tables& tables, const BucketToleranc
                 for (int ch = 0; ch < 3 && shared; ++ch)
                     for (const ChannelTable* ct : tol.tables[ch])
                         if (double(ex.abs_phi[ch]) * rl * rl * rl *
-                                ct->error_bound[l.index] >
+                                ct->bounds[l.index].error_bound >
                             tol.tol[ch])
                             shared = false;
                 if (shared) return Verdict::Local;

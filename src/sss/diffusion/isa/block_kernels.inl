@@ -224,12 +224,23 @@ inline void read_profile_rows4(const float* rows, BucketBlock& b, int32_t r0, in
 // The first Groups groups of every receiver's row into b.val: the interleaved
 // rows (PerLane false) or, per channel, each receiver's own profile rows.
 template <int Groups, bool PerLane = false>
-inline void read_rows(const BlockTables& tb, BucketBlock& b, int32_t n) {
+__attribute__((always_inline)) inline void read_rows(const BlockTables& tb,
+                                                     BucketBlock& b, int32_t n) {
 #if defined(__AVX2__)
     // (The AVX-512 path too: its kernels prefer 256-bit vectors, which were
     // faster than 512-bit ones here.)
     for (int32_t r0 = 0; r0 < n; r0 += 8) {
         if constexpr (PerLane) {
+            if (Groups == 1 && tb.material_rows) {
+                // The receivers' materials' rows: one load each, as one material's.
+                const float* p[8];
+                for (int i = 0; i < 8; ++i)
+                    p[i] = tb.material_rows + b.mbase[r0 + i] + b.idx[r0 + i];
+                __m256 col[6];
+                transpose8(p, col);
+                for (int c = 0; c < 6; ++c) _mm256_storeu_ps(b.val[c] + r0, col[c]);
+                continue;
+            }
             for (int ch = 0; ch < 3; ++ch)
                 read_profile_rows8(tb.profile_rows, b, r0, ch, Groups);
         } else {
@@ -564,14 +575,14 @@ void local(const BlockTables& tb, const Expansion* expansions, const uint32_t* n
             wyf[j] = oy - ex.c.y;
             wzf[j] = oz - ex.c.z;
             live[j] = j < m ? 1.0f : 0.0f;
-            for (int ch = 0; ch < 3; ++ch) {
+            for (int ch = 0; ch < tb.slots; ++ch) {
                 const int m = tb.moment[ch];
                 phi[ch][j] = ex.phi[m];
                 for (int a = 0; a < 3; ++a) D[ch][a][j] = ex.d[m][a];
                 for (int a = 0; a < 6; ++a) Q[ch][a][j] = ex.q[m][a];
             }
         }
-        for (int ch = 0; ch < 3; ++ch) {
+        for (int ch = 0; ch < tb.slots; ++ch) {
             const TableEntry* T = tb.t[ch];
             double* a0 = acc[ch][0];
             double *a1x = acc[ch][1], *a1y = acc[ch][2], *a1z = acc[ch][3];
