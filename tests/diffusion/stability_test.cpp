@@ -739,9 +739,9 @@ TEST_P(StabilityDegenerate, SinglePointIsItsOwnDisk) {
 }
 
 // Per-point materials with a continuum of albedos (0..1) and mean free paths
-// over 20 octaves: the 256-profile limit forces the quantisation down to its
-// last level, one dmfp step per octave (10 coarsenings), which keeps every
-// distinct value (the step count once reached 0 there: NaN dmfp,
+// over 20 octaves: the 128-profile limit forces the quantisation down to its
+// last level, one dmfp step per octave and albedo in quarters, which keeps
+// every distinct value (the step count once reached 0 there: NaN dmfp,
 // ValueError). Must run, stay finite and keep the result independent of the
 // point order (every point gets its own material).
 TEST_P(StabilityDegenerate, ManyDistinctPerPointMaterials) {
@@ -764,7 +764,7 @@ TEST_P(StabilityDegenerate, ManyDistinctPerPointMaterials) {
     sss::PointCloud out;
     ASSERT_NO_THROW(out = sss::ssdiffusion(sphere, o, &rep));
     // The last level: 21 octaves by albedo quarters (and the small-albedo
-    // keys); the one before it held more than 256.
+    // keys); the one before it held more than 128.
     EXPECT_GT(rep.distinct_profiles, 64u);
     EXPECT_LE(rep.distinct_profiles, 256u);
     std::vector<float> a = out.find_channel("_ssdiffusion")->data;

@@ -55,12 +55,15 @@ struct BlockTables {
     // With profile_rows: the materials' near rows (material_near_rows(),
     // read through BucketBlock::mbase), or null.
     const float* material_rows = nullptr;
-    // local(): the channel whose node moments slot c of the output takes
-    // with table t[c] (the identity but for per-point materials, which pack
-    // any channel's tables three to a call).
-    int32_t moment[3] = {0, 1, 2};
-    // local(): how many of the slots are used (the others' out is 0).
-    int32_t slots = 3;
+};
+
+// Per-point materials: the (channel, table) pairs whose local expansions a
+// node of receivers needs (plain data, as BlockTables).
+struct LocalPairs {
+    const TableEntry* const* table; // pairs of them
+    const int32_t* channel;         // each pair's channel (its moments)
+    int32_t pairs;
+    int32_t bits0, last; // as BlockTables
 };
 
 struct BlockKernels {
@@ -95,6 +98,12 @@ struct BlockKernels {
     void (*local)(const BlockTables& t, const Expansion* expansions,
                   const uint32_t* nodes, std::size_t n, const double centre[3],
                   double out[3][10]);
+    // local() for every pair of `p`, each with its channel's moments: out is
+    // p.pairs blocks of 10, overwritten; scratch holds p.pairs * 10 *
+    // kLocalLanes doubles. The nodes' moments are read once for all pairs.
+    void (*local_pairs)(const LocalPairs& p, const Expansion* expansions,
+                        const uint32_t* nodes, std::size_t n, const double centre[3],
+                        double* scratch, double* out);
 };
 constexpr int kLocalLanes = 8;
 

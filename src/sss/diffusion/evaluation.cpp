@@ -189,31 +189,31 @@ void mixed_level(const EvaluationContext& cx, const MixedLocal* parent,
         pairs += coef.size();
     }
     if (nodes.empty()) return;
-    // Every (channel, table) pair once, three to a kernel call whatever their
-    // channels (a call's slot takes its pair's channel's moments).
-    const auto pair = [&](std::size_t p, int& ch, std::size_t& j) {
-        for (ch = 0; p >= out.tables[ch].size(); ++ch) p -= out.tables[ch].size();
-        j = p;
-    };
-    const double c[3] = {centre.x, centre.y, centre.z};
-    for (std::size_t first = 0; first < pairs; first += 3) {
-        BlockTables t{
-            {}, int32_t(cx.tables.bits0), int32_t(cx.tables.count) - 1, nullptr};
-        int ch[3];
-        std::size_t j[3];
-        for (int slot = 0; slot < 3; ++slot) {
-            pair(std::min(first + std::size_t(slot), pairs - 1), ch[slot], j[slot]);
-            t.t[slot] = out.tables[ch[slot]][j[slot]]->entries.data();
-            t.moment[slot] = ch[slot];
+    // Every (channel, table) pair at once: the nodes' moments are read once.
+    thread_local std::vector<const TableEntry*> table;
+    thread_local std::vector<int32_t> channel;
+    thread_local std::vector<double> scratch, sums;
+    table.clear();
+    channel.clear();
+    for (int ch = 0; ch < 3; ++ch)
+        for (const ChannelTable* t : out.tables[ch]) {
+            table.push_back(t->entries.data());
+            channel.push_back(ch);
         }
-        t.slots = int32_t(std::min<std::size_t>(3, pairs - first));
-        double sums[3][10];
-        cx.kernels.local(t, cx.tree.expansions.data(), nodes.data(), nodes.size(), c,
-                         sums);
-        for (int slot = 0; slot < 3 && first + std::size_t(slot) < pairs; ++slot)
+    scratch.resize(pairs * 10 * kLocalLanes);
+    sums.resize(pairs * 10);
+    const LocalPairs lp{table.data(), channel.data(), int32_t(pairs),
+                        int32_t(cx.tables.bits0), int32_t(cx.tables.count) - 1};
+    const double c[3] = {centre.x, centre.y, centre.z};
+    cx.kernels.local_pairs(lp, cx.tree.expansions.data(), nodes.data(), nodes.size(), c,
+                           scratch.data(), sums.data());
+    std::size_t p = 0;
+    for (int ch = 0; ch < 3; ++ch)
+        for (std::array<double, 10>& coef : out.coef[ch]) {
             for (int a = 0; a < 10; ++a)
-                out.coef[ch[slot]][j[slot]][std::size_t(a)] += sums[slot][a];
-    }
+                coef[std::size_t(a)] += sums[10 * p + std::size_t(a)];
+            ++p;
+        }
 }
 
 // One thread's scratch, reused from bucket to bucket, and its counters.

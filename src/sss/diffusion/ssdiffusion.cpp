@@ -38,13 +38,25 @@ constexpr double kMaxAlbedo = 0.99999;
 // Per-point materials share profile tables: at most this many distinct ones.
 // Each point's result is then scaled by its own albedo over its table's
 // (DiffusionProblem::receiver_gain), so that what the sharing leaves is the
-// small change of the profile's shape across a quantisation step.
-constexpr std::size_t kMaxDistinctProfiles = 256;
-// The finest quantisation: the mean free path in 2^(1/1024) steps, albedo in
-// 1/4096; each coarser level halves both. The shape changes with the mean
-// free path's scale, the total (which the gain restores) with the albedo, so
-// albedo steps are four times as coarse relative to their effect.
-constexpr int kFinestDmfpSteps = 1024, kAlbedoStepsPerDmfpStep = 4;
+// small change of the profile's shape across a quantisation step. Every
+// profile costs time where it meets others (its own local expansions and
+// bounds) and in the set-up; 128 keeps a painted 1M-point cloud within 1.5
+// times one material's time (docs/speed-vs-error.md).
+constexpr std::size_t kMaxDistinctProfiles = 128;
+// The quantisation levels: the finest has the mean free path in 2^(1/1024)
+// steps and the albedo in 1/4096; each coarser level doubles the albedo's
+// step and the mean free path's in turn (the count of distinct values falls
+// about twofold a level), down to one step per octave and quarters of albedo.
+// The profile's shape changes with the mean free path's scale, its total
+// (which the gain restores) with the albedo, so albedo steps are two to four
+// times as coarse relative to their effect.
+struct QuantisationLevel {
+    int albedo_steps, dmfp_steps;
+};
+constexpr int kLastLevel = 20;
+QuantisationLevel quantisation_level(int level) {
+    return {4096 >> ((level + 1) / 2), 1024 >> (level / 2)};
+}
 
 // x rounded to the nearest integer (llround's libm call was a tenth of the
 // quantisation's time).
@@ -448,16 +460,16 @@ void per_point_profiles(const PointCloud& in, const SsDiffusionOptions& o,
     // rather than stopping half-way.
     std::vector<double> key_albedo;
     const std::size_t n = pb.positions.size();
-    int dmfp_steps = kFinestDmfpSteps;
-    for (; dmfp_steps > 1; dmfp_steps /= 2) {
+    int level = 0;
+    for (; level < kLastLevel; ++level) {
         MaterialKeys keys(kMaxDistinctProfiles);
-        if (sample_fits(src, n, 61, kAlbedoStepsPerDmfpStep * dmfp_steps, dmfp_steps,
-                        keys))
-            break;
+        const QuantisationLevel q = quantisation_level(level);
+        if (sample_fits(src, n, 61, q.albedo_steps, q.dmfp_steps, keys)) break;
     }
-    for (;; dmfp_steps /= 2) {
-        const int albedo_steps = kAlbedoStepsPerDmfpStep * dmfp_steps;
-        const bool last = dmfp_steps == 1;
+    for (;; ++level) {
+        const int albedo_steps = quantisation_level(level).albedo_steps;
+        const int dmfp_steps = quantisation_level(level).dmfp_steps;
+        const bool last = level == kLastLevel;
         MaterialKeys keys(last ? 3 * n : kMaxDistinctProfiles);
         if (!quantise_materials(src, albedo_steps, dmfp_steps,
                                 last ? SIZE_MAX : kMaxDistinctProfiles, pb, keys,

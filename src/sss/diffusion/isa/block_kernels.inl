@@ -575,14 +575,14 @@ void local(const BlockTables& tb, const Expansion* expansions, const uint32_t* n
             wyf[j] = oy - ex.c.y;
             wzf[j] = oz - ex.c.z;
             live[j] = j < m ? 1.0f : 0.0f;
-            for (int ch = 0; ch < tb.slots; ++ch) {
-                const int m = tb.moment[ch];
+            for (int ch = 0; ch < 3; ++ch) {
+                const int m = ch;
                 phi[ch][j] = ex.phi[m];
                 for (int a = 0; a < 3; ++a) D[ch][a][j] = ex.d[m][a];
                 for (int a = 0; a < 6; ++a) Q[ch][a][j] = ex.q[m][a];
             }
         }
-        for (int ch = 0; ch < tb.slots; ++ch) {
+        for (int ch = 0; ch < 3; ++ch) {
             const TableEntry* T = tb.t[ch];
             double* a0 = acc[ch][0];
             double *a1x = acc[ch][1], *a1y = acc[ch][2], *a1z = acc[ch][3];
@@ -644,8 +644,103 @@ void local(const BlockTables& tb, const Expansion* expansions, const uint32_t* n
         }
 }
 
+void local_pairs(const LocalPairs& lp, const Expansion* expansions, const uint32_t* nodes,
+                 std::size_t count, const double centre[3], double* scratch,
+                 double* out) {
+    constexpr int L = kLocalLanes;
+    const int32_t bits0 = lp.bits0, last = lp.last, pairs = lp.pairs;
+    const float ox = float(centre[0]), oy = float(centre[1]), oz = float(centre[2]);
+    for (int32_t p = 0; p < pairs * 10 * L; ++p) scratch[p] = 0.0;
+    for (std::size_t base = 0; base < count; base += L) {
+        const int m = count - base < std::size_t(L) ? int(count - base) : L;
+        // Per lane (node; lanes past the end repeat the first, weighted 0)
+        // and channel, the coefficients of F, F' and F'' in the node's sum
+        // about the centre to second order (see local()): each pair then
+        // adds its own table's values times them.
+        alignas(64) int32_t idx[L];
+        alignas(64) double frac[L], keep[L];
+        alignas(64) double cf[3][L], cdf[3][10][L], cd2f[3][10][L];
+        for (int j = 0; j < L; ++j) {
+            const Expansion& ex = expansions[nodes[base + std::size_t(j < m ? j : 0)]];
+            const float wxf = ox - ex.c.x, wyf = oy - ex.c.y, wzf = oz - ex.c.z;
+            const float q = wxf * wxf + wyf * wyf + wzf * wzf;
+            const int32_t off = imax(float_bits(q) - bits0, 0);
+            const int32_t i = imin(off >> kShift, last);
+            frac[j] = double(float(off & ((1 << kShift) - 1)) * kFracScale);
+            keep[j] = (i < last && j < m) ? 1.0 : 0.0;
+            idx[j] = imin(i, last - 1);
+            const double wx = wxf, wy = wyf, wz = wzf;
+            for (int ch = 0; ch < 3; ++ch) {
+                const double p = ex.phi[ch];
+                const double dx = ex.d[ch][0], dy = ex.d[ch][1], dz = ex.d[ch][2];
+                const float* Q = ex.q[ch];
+                const double q0 = Q[0], q1 = Q[1], q2 = Q[2], q3 = Q[3], q4 = Q[4],
+                             q5 = Q[5];
+                const double wd = wx * dx + wy * dy + wz * dz;
+                const double wqw = wx * (q0 * wx + q1 * wy + q2 * wz) +
+                                   wy * (q1 * wx + q3 * wy + q4 * wz) +
+                                   wz * (q2 * wx + q4 * wy + q5 * wz);
+                cf[ch][j] = p;
+                cdf[ch][0][j] = (q0 + q3 + q5) - 2.0 * wd;
+                cdf[ch][1][j] = 2.0 * (p * wx - dx);
+                cdf[ch][2][j] = 2.0 * (p * wy - dy);
+                cdf[ch][3][j] = 2.0 * (p * wz - dz);
+                cdf[ch][4][j] = p;
+                cdf[ch][5][j] = 0.0;
+                cdf[ch][6][j] = 0.0;
+                cdf[ch][7][j] = p;
+                cdf[ch][8][j] = 0.0;
+                cdf[ch][9][j] = p;
+                const double h = 2.0 * p, g = -4.0 * wd;
+                cd2f[ch][0][j] = 2.0 * wqw;
+                cd2f[ch][1][j] = g * wx;
+                cd2f[ch][2][j] = g * wy;
+                cd2f[ch][3][j] = g * wz;
+                cd2f[ch][4][j] = h * wx * wx;
+                cd2f[ch][5][j] = h * wx * wy;
+                cd2f[ch][6][j] = h * wx * wz;
+                cd2f[ch][7][j] = h * wy * wy;
+                cd2f[ch][8][j] = h * wy * wz;
+                cd2f[ch][9][j] = h * wz * wz;
+            }
+        }
+        for (int32_t pr = 0; pr < pairs; ++pr) {
+            const TableEntry* T = lp.table[pr];
+            const int ch = lp.channel[pr];
+            double* acc = scratch + std::size_t(pr) * 10 * L;
+            alignas(64) double f[L], df[L], d2f[L];
+            for (int j = 0; j < L; ++j) {
+                const TableEntry& a = T[idx[j]];
+                const TableEntry& b = T[idx[j] + 1];
+                f[j] = keep[j] * (double(a.f) + frac[j] * (double(b.f) - double(a.f)));
+                df[j] =
+                    keep[j] * (double(a.df) + frac[j] * (double(b.df) - double(a.df)));
+                d2f[j] =
+                    keep[j] * (double(a.d2f) + frac[j] * (double(b.d2f) - double(a.d2f)));
+            }
+            SSS_IVDEP
+            for (int j = 0; j < L; ++j) acc[j] += f[j] * cf[ch][j];
+            for (int c = 0; c < 10; ++c) {
+                double* ac = acc + c * L;
+                const double* a1 = cdf[ch][c];
+                const double* a2 = cd2f[ch][c];
+                SSS_IVDEP
+                for (int j = 0; j < L; ++j) ac[j] += df[j] * a1[j] + d2f[j] * a2[j];
+            }
+        }
+    }
+    for (int32_t pr = 0; pr < pairs; ++pr)
+        for (int c = 0; c < 10; ++c) {
+            double sum = 0.0;
+            for (int j = 0; j < L; ++j)
+                sum += scratch[(std::size_t(pr) * 10 + c) * L + j];
+            out[pr * 10 + c] = sum;
+        }
+}
+
 } // namespace
 
-extern const BlockKernels kernels{SSS_KERNEL_ISA, far, mono, near, near_disks, local};
+extern const BlockKernels kernels{SSS_KERNEL_ISA, far,   mono,       near,
+                                  near_disks,     local, local_pairs};
 
 } // namespace sss::diffusion_detail::SSS_KERNEL_NS
