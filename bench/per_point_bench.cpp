@@ -9,7 +9,7 @@
 // evaluation (each receiver with its own exact material, not the quantised
 // one) at -samples random points: RMS and max of |h - e| / mean|e|, worst
 // channel; then the time ratios (wall clock, and the CPU time of every
-// thread, which other jobs on the machine disturb less). docs/speed-vs-error.md
+// thread, which other jobs on the machine disturb less). docs/ptfilter.md
 // quotes it.
 //
 //   per_point_bench [-n 1000000] [-samples 300] [-threads 2] [-repeat 3]

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Copyright The sss Authors
 # SPDX-License-Identifier: Apache-2.0
-# Where users' scenes spend their time, side by side (docs/speed-vs-error.md,
-# "Per-point materials"; docs/render.md, "Shading rate"; docs/brickmaps.md,
-# "Point clouds as 3D textures"):
+# Where users' scenes spend their time, side by side (docs/ptfilter.md,
+# "Per-point materials: speed and error"; docs/render.md, "Shading rate" and
+# "texture3d on point clouds"):
 #   1. per-point materials: build/bin/per_point_bench (1M points: fromfile
 #      against one material, time and error against the exact evaluation),
 #      and ptfilter on the note's varying teapot, fromfile against three of
