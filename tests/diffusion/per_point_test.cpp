@@ -137,6 +137,26 @@ TEST(PerPointMaterials, WideRangesStayWithinTheQuantisationsError) {
                   0.025, 0.2);
 }
 
+// The quantisation reads the points in parallel chunks: an impossible value
+// is still reported at the first such point in the cloud's order.
+TEST(PerPointMaterials, FirstImpossibleValueIsNamed) {
+    const Variation v{
+        25.0, {0.6, 0.5, 0.4}, {0.8, 0.7, 0.6}, {3.0, 2.0, 1.5}, {8.0, 5.5, 4.0}, 4.0};
+    sss::PointCloud cloud = varying_sphere(60000, v);
+    std::vector<float>& d = cloud.find_channel("_diffusemeanfreepath")->data;
+    d[3 * 45000 + 2] = -1.0f;
+    d[3 * 20001 + 1] = 0.0f;
+    sss::SsDiffusionOptions o;
+    o.material.albedo_from_file = o.material.dmfp_from_file = true;
+    try {
+        sss::ssdiffusion(cloud, o);
+        FAIL() << "no error";
+    } catch (const sss::ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("at point 20001"), std::string::npos)
+            << e.what();
+    }
+}
+
 sss::DiffusionProblem lit_sphere_problem() {
     return sss::test::problem_from(
         sss::test::synthetic(sss::SyntheticShape::Sphere, 4000, 10.0),

@@ -41,7 +41,7 @@ constexpr double kMaxAlbedo = 0.99999;
 // small change of the profile's shape across a quantisation step. Every
 // profile costs time where it meets others (its own local expansions and
 // bounds) and in the set-up; 128 keeps a painted 1M-point cloud within 1.5
-// times one material's time (docs/speed-vs-error.md).
+// times one material's time (docs/ptfilter.md).
 constexpr std::size_t kMaxDistinctProfiles = 128;
 // The quantisation levels: the finest has the mean free path in 2^(1/1024)
 // steps and the albedo in 1/4096; each coarser level doubles the albedo's
@@ -363,7 +363,8 @@ bool quantise_materials(const PointMaterialSource& src, int albedo_steps, int dm
         std::optional<MaterialKeys> keys;
         std::vector<uint32_t> global; // local key -> keys' index
         bool full = false, clamped = false;
-        std::size_t bad = SIZE_MAX; // first point with an impossible value
+        // The first point with an impossible value (the chunk stops there).
+        std::size_t bad = SIZE_MAX;
     };
     std::vector<Chunk> chunks((n + kChunk - 1) / kChunk);
     pb.profile_index.resize(n);
@@ -372,12 +373,11 @@ bool quantise_materials(const PointMaterialSource& src, int albedo_steps, int dm
         Chunk& ck = chunks[c];
         const std::size_t end = std::min(n, (c + 1) * kChunk);
         ck.keys.emplace(std::min(most, 3 * kChunk));
-        for (std::size_t i = c * kChunk; i < end && !ck.full; ++i)
+        for (std::size_t i = c * kChunk; i < end && !ck.full && ck.bad == SIZE_MAX; ++i)
             for (int ch = 0; ch < 3; ++ch) {
                 double a, d;
                 if (!src.checked_values(i, ch, a, d, ck.clamped)) {
                     ck.bad = i;
-                    ck.full = true;
                     break;
                 }
                 const uint32_t k =
@@ -390,9 +390,12 @@ bool quantise_materials(const PointMaterialSource& src, int albedo_steps, int dm
                 pb.profile_index[i][ch] = k;
             }
     });
+    // A coarser level first (every chunk then reads up to its first impossible
+    // value, if any): the error names the first in the cloud's order.
+    for (const Chunk& ck : chunks)
+        if (ck.full) return false;
     for (const Chunk& ck : chunks) {
         if (ck.bad != SIZE_MAX) src.values(ck.bad, 0, 3, clamped); // throws its error
-        if (ck.full) return false;
         clamped = clamped || ck.clamped;
     }
     for (Chunk& ck : chunks) {
