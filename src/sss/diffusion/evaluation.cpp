@@ -287,8 +287,9 @@ void evaluate_block(const EvaluationContext& cx, const Node& bucket,
                 block.base[ch][r] =
                     int32_t(std::size_t(rc.table[ch] - tables.channels.data()) *
                             tables.count * kProfileRowFloats);
-            block.mbase[r] =
-                int32_t(std::size_t(tree.material[s]) * tables.count * kProfileRowFloats);
+            if (cx.material_rows)
+                block.mbase[r] = int32_t(std::size_t(tree.material[s]) * tables.count *
+                                         kProfileRowFloats);
         }
     }
     if (mixed)

@@ -576,10 +576,9 @@ void local(const BlockTables& tb, const Expansion* expansions, const uint32_t* n
             wzf[j] = oz - ex.c.z;
             live[j] = j < m ? 1.0f : 0.0f;
             for (int ch = 0; ch < 3; ++ch) {
-                const int m = ch;
-                phi[ch][j] = ex.phi[m];
-                for (int a = 0; a < 3; ++a) D[ch][a][j] = ex.d[m][a];
-                for (int a = 0; a < 6; ++a) Q[ch][a][j] = ex.q[m][a];
+                phi[ch][j] = ex.phi[ch];
+                for (int a = 0; a < 3; ++a) D[ch][a][j] = ex.d[ch][a];
+                for (int a = 0; a < 6; ++a) Q[ch][a][j] = ex.q[ch][a];
             }
         }
         for (int ch = 0; ch < 3; ++ch) {
