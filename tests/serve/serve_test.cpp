@@ -115,7 +115,7 @@ TEST(ServeJson, EscapesAndNumbers) {
     j.key("e").begin_array().end_array();
     j.end_object();
     EXPECT_EQ(j.text(),
-              R"({"s":"a\"b\\c\n\u0001","n":0.1,"f":[0.0500000007,1],"b":true,"e":[]})");
+              R"({"s":"a\"b\\c\u000a\u0001","n":0.1,"f":[0.0500000007,1],"b":true,"e":[]})");
 }
 
 TEST(ServeSession, BadInputsFailAtStartWithTheReadersErrors) {

@@ -3,8 +3,9 @@
 #include "sss/rsl/slo_info.h"
 
 #include <charconv>
-#include <cstdio>
 #include <sstream>
+
+#include "sss/util/json.h"
 
 namespace sss {
 
@@ -14,24 +15,6 @@ std::string number(float v) {
     char buf[32];
     const auto r = std::to_chars(buf, buf + sizeof buf, v);
     return std::string(buf, r.ptr);
-}
-
-std::string json_string(const std::string& s) {
-    std::string out = "\"";
-    for (const char ch : s) {
-        const unsigned char c = static_cast<unsigned char>(ch);
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += ch;
-        } else if (c < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += ch;
-        }
-    }
-    return out + "\"";
 }
 
 // A default the compiler could not fold into constants runs as ops when the
@@ -45,15 +28,20 @@ std::string kind_line(const Symbol& s) {
         s.kind == SymbolKind::OutputParam ? "output parameter " : "parameter ";
     t += s.varying ? "varying " : "uniform ";
     t += shading_type_name(s.type.type);
-    if (s.type.is_array()) t += "[" + std::to_string(s.type.array) + "]";
+    if (s.type.is_array()) {
+        // (Appended piece by piece: GCC 12 warns about "[" + string.)
+        t += '[';
+        t += std::to_string(s.type.array);
+        t += ']';
+    }
     return t;
 }
 
 // One element's default in PRMan's layout.
 std::string element(const Symbol& s, int i) {
     if (s.type.type == ShadingType::String)
-        return json_string(std::size_t(i) < s.strings.size() ? s.strings[std::size_t(i)]
-                                                             : "");
+        return json_quote(std::size_t(i) < s.strings.size() ? s.strings[std::size_t(i)]
+                                                            : "");
     const int nf = shading_type_floats(s.type.type);
     std::string v;
     for (int k = 0; k < nf; ++k) {
@@ -83,10 +71,10 @@ std::string default_text(const Symbol& s) {
 
 std::string describe_shader(const Program& p) {
     std::ostringstream out;
-    out << shader_kind_name(p.kind) << " " << json_string(p.name) << "\n";
+    out << shader_kind_name(p.kind) << " " << json_quote(p.name) << "\n";
     for (const int k : p.parameters()) {
         const Symbol& s = p.symbols[std::size_t(k)];
-        out << "    " << json_string(s.name) << " \"" << kind_line(s) << "\"\n";
+        out << "    " << json_quote(s.name) << " \"" << kind_line(s) << "\"\n";
         out << "\t\tDefault value: " << default_text(s) << "\n";
     }
     return out.str();
@@ -94,15 +82,15 @@ std::string describe_shader(const Program& p) {
 
 std::string describe_shader_json(const Program& p, const std::string& file) {
     std::ostringstream out;
-    out << "{\"file\": " << json_string(file)
-        << ", \"type\": " << json_string(shader_kind_name(p.kind))
-        << ", \"name\": " << json_string(p.name) << ", \"parameters\": [";
+    out << "{\"file\": " << json_quote(file)
+        << ", \"type\": " << json_quote(shader_kind_name(p.kind))
+        << ", \"name\": " << json_quote(p.name) << ", \"parameters\": [";
     bool first = true;
     for (const int k : p.parameters()) {
         const Symbol& s = p.symbols[std::size_t(k)];
-        out << (first ? "" : ", ") << "{\"name\": " << json_string(s.name)
+        out << (first ? "" : ", ") << "{\"name\": " << json_quote(s.name)
             << ", \"storage\": \"" << (s.varying ? "varying" : "uniform") << "\""
-            << ", \"type\": " << json_string(shading_type_name(s.type.type))
+            << ", \"type\": " << json_quote(shading_type_name(s.type.type))
             << ", \"array\": " << s.type.array
             << ", \"output\": " << (s.kind == SymbolKind::OutputParam ? "true" : "false")
             << ", \"default\": ";
@@ -114,7 +102,7 @@ std::string describe_shader_json(const Program& p, const std::string& file) {
         out << "[";
         if (s.type.type == ShadingType::String) {
             for (std::size_t i = 0; i < s.strings.size(); ++i)
-                out << (i ? ", " : "") << json_string(s.strings[i]);
+                out << (i ? ", " : "") << json_quote(s.strings[i]);
         } else {
             for (std::size_t i = 0; i < s.numbers.size(); ++i)
                 out << (i ? ", " : "") << number(s.numbers[i]);
@@ -126,7 +114,7 @@ std::string describe_shader_json(const Program& p, const std::string& file) {
         // RSL 2.0 classes: the public methods other shaders may call.
         out << ", \"methods\": [";
         for (std::size_t i = 0; i < p.methods.size(); ++i)
-            out << (i ? ", " : "") << json_string(p.methods[i].name);
+            out << (i ? ", " : "") << json_quote(p.methods[i].name);
         out << "]";
     }
     out << "}";

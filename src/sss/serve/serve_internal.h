@@ -38,9 +38,6 @@ private:
     bool m_after_key = false;
 };
 
-/// `text` as a JSON string literal, quotes included.
-std::string json_string(const std::string& text);
-
 /// The path of `program` (a name searched on PATH, or a path with a '/')
 /// when it is an executable file, else "".
 std::string find_program(const std::string& program);

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "serve_internal.h"
+#include "sss/util/json.h"
 
 namespace sss {
 
@@ -53,7 +54,7 @@ JsonWriter& JsonWriter::end_array() {
 
 JsonWriter& JsonWriter::key(const std::string& name) {
     value_start();
-    m_text += json_string(name);
+    m_text += json_quote(name);
     m_text += ':';
     m_after_key = true;
     return *this;
@@ -61,7 +62,7 @@ JsonWriter& JsonWriter::key(const std::string& name) {
 
 JsonWriter& JsonWriter::string(const std::string& value) {
     value_start();
-    m_text += json_string(value);
+    m_text += json_quote(value);
     return *this;
 }
 
@@ -114,38 +115,6 @@ JsonWriter& JsonWriter::strings(const std::vector<std::string>& values) {
     begin_array();
     for (const std::string& v : values) string(v);
     return end_array();
-}
-
-std::string json_string(const std::string& text) {
-    std::string out = "\"";
-    for (unsigned char c : text) {
-        switch (c) {
-        case '"':
-            out += "\\\"";
-            break;
-        case '\\':
-            out += "\\\\";
-            break;
-        case '\n':
-            out += "\\n";
-            break;
-        case '\t':
-            out += "\\t";
-            break;
-        case '\r':
-            out += "\\r";
-            break;
-        default:
-            if (c < 0x20 || c == 0x7f) {
-                char buf[8];
-                std::snprintf(buf, sizeof buf, "\\u%04x", c);
-                out += buf;
-            } else {
-                out += char(c);
-            }
-        }
-    }
-    return out + "\"";
 }
 
 std::string find_program(const std::string& program) {
