@@ -114,8 +114,9 @@ TEST(ServeJson, EscapesAndNumbers) {
     j.key("b").boolean(true);
     j.key("e").begin_array().end_array();
     j.end_object();
-    EXPECT_EQ(j.text(),
-              R"({"s":"a\"b\\c\u000a\u0001","n":0.1,"f":[0.0500000007,1],"b":true,"e":[]})");
+    EXPECT_EQ(
+        j.text(),
+        R"({"s":"a\"b\\c\u000a\u0001","n":0.1,"f":[0.0500000007,1],"b":true,"e":[]})");
 }
 
 TEST(ServeSession, BadInputsFailAtStartWithTheReadersErrors) {
