@@ -15,13 +15,9 @@ work="$(mktemp -d "${TMPDIR:-/tmp}/sss_test_feedback.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 # shellcheck source=lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+# shellcheck source=checks.sh
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 cd "$work"
-
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
 
 # says RC LINE TOOL ARGS...: TOOL ARGS exits RC and the first line of its
 # stderr is LINE exactly.
@@ -92,8 +88,4 @@ printf 'WorldBegin\nReadArchive "gone.rib"\nWorldEnd\n' >archive.rib
 run "$bin/render" archive.rib
 [[ "$rc" == 1 && "$err" == "render ERROR: gone.rib: $enoent (not found along the archive search path"* ]] ||
     fail "missing archive: exit $rc: $err"
-((failures == 0)) || {
-    echo "$failures feedback checks failed" >&2
-    exit 1
-}
-echo "all feedback CLI checks passed"
+finish_checks "feedback"

@@ -17,11 +17,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 work="$(mktemp -d "${TMPDIR:-/tmp}/sss_test_man_examples.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
+# shellcheck source=checks.sh
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
 mkdir -p "$work/teapot" "$work/orbit" "$work/share/sss/shaders"
 cp "$root/scenes/teapot/bake.rib" "$root/scenes/teapot/teapot.rib" "$work/teapot/"
@@ -75,8 +72,5 @@ for t in ptsynth ptbake ptfilter brickmake brickinfo ptinfo ptview render shader
     total=$((total + ran))
 done
 
-((failures == 0)) || {
-    echo "$failures man page examples failed" >&2
-    exit 1
-}
+finish_checks "man page example"
 echo "all $total man page examples ran"

@@ -18,11 +18,8 @@ trap 'rm -rf "$work"' EXIT
 command -v groff >/dev/null || { echo "FAIL: groff is needed (scripts/install-deps)" >&2; exit 1; }
 command -v man >/dev/null || { echo "FAIL: man (man-db) is needed (scripts/install-deps)" >&2; exit 1; }
 
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
+# shellcheck source=checks.sh
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
 # The tools cmake/install.cmake installs, and sss-farm.
 read -ra tools <<<"$(sed -n '/^set(SSS_TOOLS/,/)/p' "$root/cmake/install.cmake" |
@@ -80,8 +77,5 @@ PY
     [[ -z "$missing" ]] || fail "$t.1 lacks options its --help lists: $missing"
 done
 
-((failures == 0)) || {
-    echo "$failures man page checks failed" >&2
-    exit 1
-}
+finish_checks "man page"
 echo "all man page checks passed (${#tools[@]} pages)"

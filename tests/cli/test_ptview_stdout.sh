@@ -12,13 +12,9 @@ set -euo pipefail
 bin="${SSS_BIN_DIR:?SSS_BIN_DIR must name the folder with the executables}"
 work="$(mktemp -d "${TMPDIR:-/tmp}/sss_test_ptview_stdout.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
+# shellcheck source=checks.sh
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 cd "$work"
-
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
 
 # valid_png FILE: a PNG whose chunks all pass their CRC, IHDR first, IEND
 # last with nothing after it, and whose image data inflate to the size the
@@ -89,8 +85,4 @@ if command -v script >/dev/null; then
     grep -q "PNG" tty.txt && fail "PNG bytes written to a terminal"
 fi
 
-((failures == 0)) || {
-    echo "$failures ptview standard output checks failed" >&2
-    exit 1
-}
-echo "all ptview standard output checks passed"
+finish_checks "ptview standard output"
