@@ -163,12 +163,4 @@ inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
     return rc;
 }
 
-// The channels of the receiver at original index `original`.
-inline ReceiverChannels receiver_channels(const DiffusionProblem& pb,
-                                          const Tables& tables, uint32_t original) {
-    return receiver_channels(pb, tables,
-                             pb.profile_index.empty() ? glm::u32vec3(0, 1, 2)
-                                                      : pb.profile_index[original]);
-}
-
 } // namespace sss::diffusion_detail

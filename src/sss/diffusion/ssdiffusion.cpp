@@ -296,11 +296,11 @@ struct PointMaterialSource {
         if (a > kMaxAlbedo) a = kMaxAlbedo, clamped = true;
         return true;
     }
-    // Throws the error of point i's first impossible value in channels
-    // [ch, ch + count).
-    void values(std::size_t i, int ch, int count, bool& clamped) const {
-        for (int c = ch; c < ch + count && c < 3; ++c) {
+    // Throws the error of point i's first impossible value, if any.
+    void check_point(std::size_t i) const {
+        for (int c = 0; c < 3; ++c) {
             double a, d;
+            bool clamped = false;
             if (checked_values(i, c, a, d, clamped)) continue;
             if (!(a >= 0.0) || !std::isfinite(a))
                 throw ValueError("channel '" + options->albedo_channel +
@@ -395,7 +395,7 @@ bool quantise_materials(const PointMaterialSource& src, int albedo_steps, int dm
     for (const Chunk& ck : chunks)
         if (ck.full) return false;
     for (const Chunk& ck : chunks) {
-        if (ck.bad != SIZE_MAX) src.values(ck.bad, 0, 3, clamped); // throws its error
+        if (ck.bad != SIZE_MAX) src.check_point(ck.bad); // throws its error
         clamped = clamped || ck.clamped;
     }
     for (Chunk& ck : chunks) {
